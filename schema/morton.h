@@ -1,0 +1,59 @@
+// Morton (Z-order) interleaving of three 21-bit coordinates into 63 bits.
+//
+// Bit i of x goes to bit 3i, of y to 3i+1, of z to 3i+2 (x least significant).
+// This is fixed by DESIGN.md: keys on disk depend on it.
+//
+// Validity: every function here accepts coordinates in [0, 2^21), which
+// covers node coordinates in [0, 2^20] (far side included). Callers that hold
+// narrower classes (octant corners, pixels) may pass them unchanged.
+#pragma once
+
+#include <cstdint>
+
+namespace weaver {
+
+inline constexpr int kMortonBitsPerAxis = 21;
+inline constexpr uint32_t kMortonAxisMask = (1u << kMortonBitsPerAxis) - 1;
+
+struct Coord {
+  uint32_t x = 0, y = 0, z = 0;
+  friend bool operator==(const Coord&, const Coord&) = default;
+};
+
+namespace morton_detail {
+// Spreads the low 21 bits of v so that bit i lands on bit 3i.
+constexpr uint64_t spread3(uint64_t v) {
+  v &= kMortonAxisMask;
+  v = (v | (v << 32)) & 0x001f00000000ffffULL;
+  v = (v | (v << 16)) & 0x001f0000ff0000ffULL;
+  v = (v | (v << 8)) & 0x100f00f00f00f00fULL;
+  v = (v | (v << 4)) & 0x10c30c30c30c30c3ULL;
+  v = (v | (v << 2)) & 0x1249249249249249ULL;
+  return v;
+}
+// Inverse of spread3: gathers bits 0, 3, 6, ... into the low 21 bits.
+constexpr uint32_t compact3(uint64_t v) {
+  v &= 0x1249249249249249ULL;
+  v = (v | (v >> 2)) & 0x10c30c30c30c30c3ULL;
+  v = (v | (v >> 4)) & 0x100f00f00f00f00fULL;
+  v = (v | (v >> 8)) & 0x001f0000ff0000ffULL;
+  v = (v | (v >> 16)) & 0x001f00000000ffffULL;
+  v = (v | (v >> 32)) & kMortonAxisMask;
+  return static_cast<uint32_t>(v);
+}
+}  // namespace morton_detail
+
+// REQUIRES: x, y, z < 2^21.
+constexpr uint64_t morton_encode(uint32_t x, uint32_t y, uint32_t z) {
+  return morton_detail::spread3(x) | (morton_detail::spread3(y) << 1) |
+         (morton_detail::spread3(z) << 2);
+}
+constexpr uint64_t morton_encode(Coord c) { return morton_encode(c.x, c.y, c.z); }
+
+// REQUIRES: code < 2^63.
+constexpr Coord morton_decode(uint64_t code) {
+  return Coord{morton_detail::compact3(code), morton_detail::compact3(code >> 1),
+               morton_detail::compact3(code >> 2)};
+}
+
+}  // namespace weaver

@@ -1,0 +1,201 @@
+// Octants of the weaver address space and their arithmetic.
+//
+// The root octant spans 2^20 ticks per axis; an octant of level l (0..20) has
+// edge 2^(20-l) ticks and a lower corner that is a multiple of its edge.
+//
+// Validity classes (every function says which it accepts):
+//   octant   level <= kMaxLevel, corner < 2^20 per axis, corner aligned to
+//            the edge.  Checked by octant_is_valid().
+//   pixel    a tick point strictly inside the root: each axis < 2^20.
+//            Checked by pixel_is_valid().
+//   node     a tick point up to and including the far side: each axis
+//            <= 2^20 (21 bits).  Checked by node_is_valid().
+// Functions assert their REQUIRES clauses in debug builds.
+#pragma once
+
+#include <bit>
+#include <cassert>
+#include <cstdint>
+
+#include "schema/morton.h"
+
+namespace weaver {
+
+// The deepest level. 20 levels keep an octant corner within 60 bits of Morton
+// code, which lets an octant key pack into one 64-bit word (see octant_key).
+// Fixed by DESIGN.md: do not change, keys on disk depend on it.
+inline constexpr int kMaxLevel = 20;
+inline constexpr uint32_t kRootEdge = 1u << kMaxLevel;
+
+struct Octant {
+  uint32_t x = 0, y = 0, z = 0;
+  uint8_t level = 0;
+  friend bool operator==(const Octant&, const Octant&) = default;
+};
+
+// Edge length in ticks of an octant at `level`.  REQUIRES: 0 <= level <= 20.
+constexpr uint32_t octant_edge(int level) { return kRootEdge >> level; }
+constexpr uint32_t octant_edge(const Octant& o) { return octant_edge(o.level); }
+
+constexpr bool pixel_is_valid(Coord p) {
+  return p.x < kRootEdge && p.y < kRootEdge && p.z < kRootEdge;
+}
+constexpr bool node_is_valid(Coord p) {
+  return p.x <= kRootEdge && p.y <= kRootEdge && p.z <= kRootEdge;
+}
+constexpr bool octant_is_valid(const Octant& o) {
+  if (o.level > kMaxLevel) return false;
+  const uint32_t mask = octant_edge(o.level) - 1;
+  return pixel_is_valid({o.x, o.y, o.z}) && ((o.x | o.y | o.z) & mask) == 0;
+}
+
+constexpr Octant octant_root() { return {0, 0, 0, 0}; }
+constexpr Coord octant_corner(const Octant& o) { return {o.x, o.y, o.z}; }
+
+// Corner k (0..7) of the octant: x varies fastest.  Accepts: octant.
+// Returns: node.
+constexpr Coord octant_corner(const Octant& o, int k) {
+  const uint32_t s = octant_edge(o);
+  return {o.x + s * (k & 1), o.y + s * ((k >> 1) & 1), o.z + s * ((k >> 2) & 1)};
+}
+
+// The ancestor of `o` at `level`.  REQUIRES: octant, level <= o.level.
+constexpr Octant octant_ancestor(const Octant& o, int level) {
+  assert(level <= o.level);
+  const uint32_t mask = ~(octant_edge(level) - 1);
+  return {o.x & mask, o.y & mask, o.z & mask, static_cast<uint8_t>(level)};
+}
+
+// REQUIRES: octant, level > 0.
+constexpr Octant octant_parent(const Octant& o) {
+  assert(o.level > 0);
+  return octant_ancestor(o, o.level - 1);
+}
+
+// Child k (0..7), x fastest.  REQUIRES: octant, level < kMaxLevel.
+constexpr Octant octant_child(const Octant& o, int k) {
+  assert(o.level < kMaxLevel && k >= 0 && k < 8);
+  const uint32_t h = octant_edge(o.level + 1);
+  return {o.x + h * (k & 1), o.y + h * ((k >> 1) & 1), o.z + h * ((k >> 2) & 1),
+          static_cast<uint8_t>(o.level + 1)};
+}
+
+// Which child of its parent `o` is (0..7).  REQUIRES: octant, level > 0.
+constexpr int octant_child_id(const Octant& o) {
+  const int shift = kMaxLevel - o.level;
+  return static_cast<int>(((o.x >> shift) & 1) | (((o.y >> shift) & 1) << 1) |
+                          (((o.z >> shift) & 1) << 2));
+}
+
+// Whether tick point p lies in the half-open box [corner, corner + edge).
+// Accepts: octant, node.
+constexpr bool octant_contains_point(const Octant& o, Coord p) {
+  const uint32_t s = octant_edge(o);
+  // Unsigned subtraction wraps for p < corner, so one compare per axis suffices.
+  return p.x - o.x < s && p.y - o.y < s && p.z - o.z < s;
+}
+
+// Whether `a` is a strict ancestor of `b`.  Accepts: octants.
+constexpr bool octant_is_ancestor(const Octant& a, const Octant& b) {
+  if (a.level >= b.level) return false;
+  const int shift = kMaxLevel - a.level;  // up to 20: fine for uint32_t
+  return (a.x >> shift) == (b.x >> shift) && (a.y >> shift) == (b.y >> shift) &&
+         (a.z >> shift) == (b.z >> shift);
+}
+
+// Whether the two octants share any volume (equal, or one contains the other).
+constexpr bool octant_overlaps(const Octant& a, const Octant& b) {
+  return a == b || octant_is_ancestor(a, b) || octant_is_ancestor(b, a);
+}
+
+// The smallest octant containing both.  Accepts: octants.
+constexpr Octant octant_nearest_common_ancestor(const Octant& a, const Octant& b) {
+  const uint32_t diff = (a.x ^ b.x) | (a.y ^ b.y) | (a.z ^ b.z);
+  int level = kMaxLevel - static_cast<int>(std::bit_width(diff));
+  if (a.level < level) level = a.level;
+  if (b.level < level) level = b.level;
+  return octant_ancestor(a, level);
+}
+
+// The same-size neighbour across the face (one of dx, dy, dz non-zero), edge
+// (two) or corner (three); each d in {-1, 0, 1}, not all zero.  Returns false
+// when the neighbour lies outside the root.  Accepts: octant.
+constexpr bool octant_neighbour(const Octant& o, int dx, int dy, int dz, Octant* out) {
+  const int64_t s = octant_edge(o);
+  const int64_t nx = o.x + dx * s, ny = o.y + dy * s, nz = o.z + dz * s;
+  const int64_t lim = kRootEdge;
+  if (nx < 0 || ny < 0 || nz < 0 || nx >= lim || ny >= lim || nz >= lim) return false;
+  *out = {static_cast<uint32_t>(nx), static_cast<uint32_t>(ny), static_cast<uint32_t>(nz),
+          o.level};
+  return true;
+}
+
+// ---------------------------------------------------------------------------
+// Keys.
+//
+// The logical octant key is (Morton code of the lower corner, level), ordered
+// by Morton then level, so an ancestor sorts just before its descendants and
+// the leaves of an octree sort in preorder (Z-order).  On disk and in memory
+// it is packed into one 64-bit word with the same order:
+//
+//   key = (m >> 3) << 7  |  (level < 20 ? level : 20 + (m & 7))
+//
+// m < 2^60 and, below level 20, m's low 3 bits are zero, so each group of 8
+// Morton codes [8j, 8j+8) owns the 128 keys [128j, 128j+128): levels 0..19 at
+// 8j take slots 0..19 and the 8 level-20 octants take slots 20..27, in
+// (Morton, level) order.  Do not change: on disk.
+// ---------------------------------------------------------------------------
+
+inline constexpr uint64_t kKeyLevel20Slot = 20;
+
+constexpr uint64_t octant_morton(const Octant& o) { return morton_encode(o.x, o.y, o.z); }
+
+// Accepts: octant.
+constexpr uint64_t octant_key(const Octant& o) {
+  const uint64_t m = octant_morton(o);
+  const uint64_t slot = o.level < kMaxLevel ? o.level : kKeyLevel20Slot + (m & 7);
+  return ((m >> 3) << 7) | slot;
+}
+
+// Whether `key` is the packed key of some valid octant.
+constexpr bool octant_key_is_valid(uint64_t key) {
+  const uint64_t slot = key & 127;
+  if (slot >= kKeyLevel20Slot + 8) return false;
+  if (slot >= kKeyLevel20Slot) return true;
+  const uint64_t m = (key >> 7) << 3;
+  const int zeros = 3 * (kMaxLevel - static_cast<int>(slot));  // low Morton bits that must be 0
+  return zeros >= 64 ? m == 0 : (m & ((uint64_t{1} << zeros) - 1)) == 0;
+}
+
+// REQUIRES: octant_key_is_valid(key).
+constexpr Octant octant_from_key(uint64_t key) {
+  const uint64_t slot = key & 127;
+  uint64_t m = (key >> 7) << 3;
+  uint8_t level = static_cast<uint8_t>(slot);
+  if (slot >= kKeyLevel20Slot) {
+    m |= slot - kKeyLevel20Slot;
+    level = kMaxLevel;
+  }
+  const Coord c = morton_decode(m);
+  return {c.x, c.y, c.z, level};
+}
+
+// The key of the level-20 octant at pixel p; the floor of this key in a leaf
+// table is the leaf that contains p, if any (the "aggregate hit").
+// Accepts: pixel.
+constexpr uint64_t pixel_key(Coord p) { return octant_key({p.x, p.y, p.z, kMaxLevel}); }
+
+// The smallest key greater than every key in o's subtree; UINT64_MAX (never a
+// valid key) for the root.  Accepts: octant.
+constexpr uint64_t octant_subtree_key_end(const Octant& o) {
+  if (o.level == kMaxLevel) return octant_key(o) + 1;  // the next slot
+  const uint64_t span = uint64_t{1} << (3 * (kMaxLevel - o.level));
+  const uint64_t m_end = octant_morton(o) + span;  // a multiple of 8 below level 20
+  if (m_end >> (3 * kMaxLevel)) return UINT64_MAX;  // the subtree reaches the root's end
+  return (m_end >> 3) << 7;
+}
+
+// The node key of a node coordinate: its Morton code.  Accepts: node.
+constexpr uint64_t node_key(Coord p) { return morton_encode(p); }
+
+}  // namespace weaver

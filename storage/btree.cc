@@ -1,0 +1,197 @@
+// B+tree lifecycle: create, open, header, commit, page allocation.
+#include "storage/btree.h"
+
+#include <bit>
+#include <cstring>
+
+#include "storage/checksum.h"
+
+namespace weaver {
+namespace {
+
+Status validate_options(const TableOptions& o, const std::string& name) {
+  const uint32_t p = o.page_size;
+  if (p < page::kMinPageSize || p > page::kMaxPageSize || !std::has_single_bit(p)) {
+    return Status::InvalidArgument(name + ": page size " + std::to_string(p) +
+                                   " is not a power of two in [128, 65536]");
+  }
+  if (page::leaf_capacity(p, o.schema.record_size()) < 2) {
+    return Status::InvalidArgument(name + ": records of " +
+                                   std::to_string(o.schema.record_size()) +
+                                   " bytes do not fit two to a page of " + std::to_string(p));
+  }
+  const size_t var = o.schema.to_text().size() + o.metadata.size();
+  if (page::kHdrVarStart + var > page::kFileHeaderBytes) {
+    return Status::InvalidArgument(name + ": schema and metadata (" + std::to_string(var) +
+                                   " bytes) do not fit in the file header");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+BTree::BTree(std::unique_ptr<File> file, const TableOptions& options, uint64_t pool_bytes)
+    : file_(std::move(file)),
+      options_(options),
+      payload_(options.schema.record_size()),
+      leaf_cap_(page::leaf_capacity(options.page_size, payload_)),
+      internal_cap_(page::internal_capacity(options.page_size)),
+      pool_(std::make_unique<BufferPool>(file_.get(), options.page_size, pool_bytes)) {}
+
+BTree::~BTree() { drop_spine(); }
+
+std::string BTree::where(uint32_t page_no) const {
+  return file_->name() + ": page " + std::to_string(page_no);
+}
+
+Status BTree::create(std::unique_ptr<File> file, const TableOptions& options,
+                     uint64_t pool_bytes, std::unique_ptr<BTree>* out) {
+  WEAVER_RETURN_IF_ERROR(validate_options(options, file->name()));
+  std::unique_ptr<BTree> t(new BTree(std::move(file), options, pool_bytes));
+  WEAVER_RETURN_IF_ERROR(t->write_header());
+  *out = std::move(t);
+  return Status::Ok();
+}
+
+Status BTree::open(std::unique_ptr<File> file, uint64_t pool_bytes, std::unique_ptr<BTree>* out) {
+  const std::string name = file->name();
+  uint64_t size = 0;
+  WEAVER_RETURN_IF_ERROR(file->size(&size));
+  if (size < page::kFileHeaderBytes) {
+    return Status::Corruption(name + ": file is truncated (" + std::to_string(size) +
+                              " bytes, no complete header)");
+  }
+  std::byte hdr[page::kFileHeaderBytes];
+  WEAVER_RETURN_IF_ERROR(read_fully(*file, 0, hdr, sizeof hdr));
+  if (std::memcmp(hdr + page::kHdrMagic, page::kMagic, 8) != 0) {
+    return Status::Corruption(name + ": not a weaver B+tree file (bad magic)");
+  }
+  if (page::load32(hdr + page::kHdrChecksum) != checksum32(hdr + 4, sizeof hdr - 4)) {
+    return Status::Corruption(name + ": header checksum mismatch");
+  }
+  const uint32_t version = page::load32(hdr + page::kHdrVersion);
+  if (version != page::kFormatVersion) {
+    return Status::Corruption(name + ": unsupported format version " + std::to_string(version) +
+                              " (this build reads version " +
+                              std::to_string(page::kFormatVersion) + ")");
+  }
+  TableOptions o;
+  o.page_size = page::load32(hdr + page::kHdrPageSize);
+  o.key_kind = static_cast<KeyKind>(hdr[page::kHdrKeyKind]);
+  const uint32_t schema_len = page::load32(hdr + page::kHdrSchemaLen);
+  const uint32_t meta_len = page::load32(hdr + page::kHdrMetaLen);
+  if (uint64_t{schema_len} + meta_len + page::kHdrVarStart > page::kFileHeaderBytes) {
+    return Status::Corruption(name + ": header schema/metadata lengths out of range");
+  }
+  std::string error;
+  const auto schema = RecordSchema::parse(
+      std::string_view(reinterpret_cast<const char*>(hdr + page::kHdrVarStart), schema_len),
+      &error);
+  if (!schema) return Status::Corruption(name + ": bad schema in header: " + error);
+  o.schema = *schema;
+  o.metadata.assign(reinterpret_cast<const char*>(hdr + page::kHdrVarStart + schema_len),
+                    meta_len);
+  if (o.schema.record_size() != page::load32(hdr + page::kHdrPayloadSize)) {
+    return Status::Corruption(name + ": header payload size disagrees with its schema");
+  }
+  WEAVER_RETURN_IF_ERROR(validate_options(o, name));
+
+  std::unique_ptr<BTree> t(new BTree(std::move(file), o, pool_bytes));
+  t->height_ = page::load32(hdr + page::kHdrHeight);
+  t->root_ = page::load32(hdr + page::kHdrRoot);
+  t->page_count_ = page::load32(hdr + page::kHdrPageCount);
+  t->free_head_ = page::load32(hdr + page::kHdrFreeHead);
+  t->record_count_ = page::load64(hdr + page::kHdrRecordCount);
+  if (size < t->file_bytes()) {
+    return Status::Corruption(name + ": file is truncated: header lists " +
+                              std::to_string(t->page_count_) + " pages, file holds " +
+                              std::to_string((size - page::kFileHeaderBytes) / o.page_size));
+  }
+  if (t->height_ > kMaxHeight || (t->height_ == 0) != (t->root_ == 0) ||
+      t->root_ > t->page_count_ || t->free_head_ > t->page_count_) {
+    return Status::Corruption(name + ": header fields out of range");
+  }
+  *out = std::move(t);
+  return Status::Ok();
+}
+
+Status BTree::write_header() {
+  std::byte hdr[page::kFileHeaderBytes] = {};
+  page::store32(hdr + page::kHdrVersion, page::kFormatVersion);
+  std::memcpy(hdr + page::kHdrMagic, page::kMagic, 8);
+  page::store32(hdr + page::kHdrPageSize, options_.page_size);
+  page::store32(hdr + page::kHdrPayloadSize, payload_);
+  hdr[page::kHdrKeyKind] = static_cast<std::byte>(options_.key_kind);
+  page::store32(hdr + page::kHdrHeight, height_);
+  page::store32(hdr + page::kHdrRoot, root_);
+  page::store32(hdr + page::kHdrPageCount, page_count_);
+  page::store32(hdr + page::kHdrFreeHead, free_head_);
+  page::store64(hdr + page::kHdrRecordCount, record_count_);
+  const std::string schema = options_.schema.to_text();
+  page::store32(hdr + page::kHdrSchemaLen, static_cast<uint32_t>(schema.size()));
+  page::store32(hdr + page::kHdrMetaLen, static_cast<uint32_t>(options_.metadata.size()));
+  std::memcpy(hdr + page::kHdrVarStart, schema.data(), schema.size());
+  std::memcpy(hdr + page::kHdrVarStart + schema.size(), options_.metadata.data(),
+              options_.metadata.size());
+  page::store32(hdr + page::kHdrChecksum, checksum32(hdr + 4, sizeof hdr - 4));
+  return write_fully(*file_, 0, hdr, sizeof hdr);
+}
+
+Status BTree::commit() {
+  WEAVER_RETURN_IF_ERROR(pool_->flush());
+  WEAVER_RETURN_IF_ERROR(write_header());
+  return file_->sync();
+}
+
+Status BTree::fetch(uint32_t page_no, PageRef* ref) {
+  if (page_no == 0 || page_no > page_count_) {
+    return Status::Corruption(where(page_no) + ": page number out of range (file has " +
+                              std::to_string(page_count_) + " pages)");
+  }
+  Frame* f = nullptr;
+  WEAVER_RETURN_IF_ERROR(pool_->fetch(page_no, &f));
+  *ref = PageRef(pool_.get(), f);
+  return Status::Ok();
+}
+
+Status BTree::fetch_typed(uint32_t page_no, page::PageType type, PageRef* ref) {
+  WEAVER_RETURN_IF_ERROR(fetch(page_no, ref));
+  if (page::type(ref->data()) != type) {
+    const int found = static_cast<int>(page::type(ref->data()));
+    ref->reset();
+    return Status::Corruption(where(page_no) + ": expected page type " +
+                              std::to_string(static_cast<int>(type)) + ", found " +
+                              std::to_string(found));
+  }
+  return Status::Ok();
+}
+
+Status BTree::new_page(page::PageType type, bool at_end, PageRef* ref) {
+  uint32_t page_no;
+  if (!at_end && free_head_ != 0) {
+    PageRef f;
+    WEAVER_RETURN_IF_ERROR(fetch_typed(free_head_, page::PageType::kFree, &f));
+    page_no = free_head_;
+    free_head_ = page::load32(f.data() + page::kPgNextFree);
+  } else {
+    if (page_count_ == UINT32_MAX) return Status::IOError(file_->name() + ": file is full");
+    page_no = ++page_count_;
+  }
+  Frame* fr = nullptr;
+  WEAVER_RETURN_IF_ERROR(pool_->create(page_no, &fr));
+  *ref = PageRef(pool_.get(), fr);
+  ref->data()[page::kPgType] = static_cast<std::byte>(type);
+  return Status::Ok();
+}
+
+Status BTree::free_page(uint32_t page_no) {
+  Frame* fr = nullptr;
+  WEAVER_RETURN_IF_ERROR(pool_->create(page_no, &fr));
+  PageRef ref(pool_.get(), fr);
+  ref.data()[page::kPgType] = static_cast<std::byte>(page::PageType::kFree);
+  page::store32(ref.data() + page::kPgNextFree, free_head_);
+  free_head_ = page_no;
+  return Status::Ok();
+}
+
+}  // namespace weaver

@@ -1,0 +1,130 @@
+// A paged B+tree of fixed-size records (page format: storage/page_format.h).
+//
+// Sorted append fills leaves full from left to right and grows the index on
+// the right spine: no splits, about 1% index overhead.  Random inserts split
+// in place; a split at the right end of the tree keeps the left page full.
+// Deletes free pages that become empty (no merging of half-empty pages).
+// Internal entries carry subtree record counts, so rank and select are
+// O(log n): ids in weaver are ranks.
+//
+// Not thread-safe.  Changes reach the file on commit() (or when the buffer
+// pool evicts); commit() writes the header last and syncs.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "storage/btree_cursor.h"
+#include "storage/buffer_pool.h"
+#include "storage/file.h"
+#include "storage/page_format.h"
+#include "storage/store.h"
+
+namespace weaver {
+
+class BTree final : public Store {
+ public:
+  // Makes an empty tree in `file` (which should be empty).
+  static Status create(std::unique_ptr<File> file, const TableOptions& options,
+                       uint64_t pool_bytes, std::unique_ptr<BTree>* out);
+  // Opens an existing tree, verifying the header.
+  static Status open(std::unique_ptr<File> file, uint64_t pool_bytes, std::unique_ptr<BTree>* out);
+  ~BTree() override;
+
+  Status append(uint64_t key, const std::byte* payload) override;
+  Status put(uint64_t key, const std::byte* payload, bool* replaced) override;
+  Status erase(uint64_t key) override;
+  Status get(uint64_t key, std::byte* payload_out, bool* found) override;
+  Status floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, bool* found) override;
+  Status seek(uint64_t key, std::unique_ptr<Cursor>* out) override;
+  Status rank(uint64_t key, uint64_t* out) override;
+  Status select(uint64_t index, uint64_t* key_out, std::byte* payload_out) override;
+  uint64_t size() const override { return record_count_; }
+  uint32_t payload_size() const override { return payload_; }
+  Status commit() override;
+
+  // A concrete cursor (no virtual calls on the scan path).
+  Status seek_cursor(uint64_t key, BTreeCursor* cursor);
+
+  // Walks the whole tree and checks every invariant of page_format.h.
+  Status check_invariants();
+
+  const TableOptions& options() const { return options_; }
+  void set_metadata(std::string metadata) { options_.metadata = std::move(metadata); }
+  uint32_t height() const { return height_; }
+  uint32_t page_count() const { return page_count_; }
+  uint64_t file_bytes() const {
+    return page::kFileHeaderBytes + uint64_t{page_count_} * options_.page_size;
+  }
+  const std::string& file_name() const { return file_->name(); }
+  BufferPool& pool() { return *pool_; }
+
+ private:
+  friend class BTreeCursor;
+  using Path = TreePath;
+  static constexpr int kMaxHeight = TreePath::kMaxDepth;
+  struct Split {  // a new right sibling to hook into the parent
+    uint64_t key;
+    uint64_t count;
+    uint32_t page_no;
+    uint64_t left_count;
+  };
+
+  BTree(std::unique_ptr<File> file, const TableOptions& options, uint64_t pool_bytes);
+  Status read_header();
+  Status write_header();
+  std::string where(uint32_t page_no) const;
+
+  Status fetch(uint32_t page_no, PageRef* ref);
+  Status fetch_typed(uint32_t page_no, page::PageType type, PageRef* ref);
+  Status new_page(page::PageType type, bool at_end, PageRef* ref);
+  Status free_page(uint32_t page_no);
+  page::LeafView leaf(const PageRef& r) const { return {r.data(), leaf_cap_, payload_}; }
+  page::InternalView internal(const PageRef& r) const { return {r.data(), internal_cap_}; }
+
+  Status descend(uint64_t key, Path* path, PageRef* leaf);
+  Status descend_edge(uint32_t page_no, int level, bool rightmost, Path* path, PageRef* leaf);
+  Status add_to_path_counts(const Path& path, int upto, int64_t delta);
+  bool path_is_rightmost(const Path& path);
+
+  // insert
+  Status insert_new_root_leaf(uint64_t key, const std::byte* payload);
+  Status split_leaf(PageRef& leaf, uint32_t pos, uint64_t key, const std::byte* payload,
+                    bool rightmost, Split* split);
+  Status insert_into_parents(Path& path, Split split, bool rightmost);
+  Status split_internal(PageRef& node, uint32_t pos, const Split& entry, bool rightmost,
+                        Split* split);
+  Status grow_root(const Split& split, bool at_end, PageRef* root);
+
+  // append fast path: the right spine, pinned while appends run
+  Status load_spine();
+  void drop_spine();
+  Status append_new_leaf(uint64_t key, const std::byte* payload);
+
+  // erase
+  Status remove_empty_child(Path& path, int level);
+  Status collapse_root();
+
+  Status check_subtree(uint32_t page_no, int level, uint64_t lo, uint64_t hi, uint64_t* count,
+                       uint64_t* first_key, uint64_t* last_key);
+
+  std::unique_ptr<File> file_;
+  TableOptions options_;
+  uint32_t payload_ = 0;
+  uint32_t leaf_cap_ = 0;
+  uint32_t internal_cap_ = 0;
+  std::unique_ptr<BufferPool> pool_;
+
+  uint32_t height_ = 0;
+  uint32_t root_ = 0;
+  uint32_t page_count_ = 0;
+  uint32_t free_head_ = 0;
+  uint64_t record_count_ = 0;
+
+  bool spine_valid_ = false;
+  PageRef spine_[kMaxHeight];  // spine_[0] root ... spine_[height_-1] rightmost leaf
+  bool max_known_ = false;
+  uint64_t max_key_ = 0;
+};
+
+}  // namespace weaver

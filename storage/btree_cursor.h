@@ -1,0 +1,61 @@
+// The B+tree's concrete forward cursor.  It pins one leaf and remembers the
+// root-to-leaf path, so moving to the next leaf climbs only as far as needed
+// (no sibling links on disk).
+#pragma once
+
+#include <cstdint>
+
+#include "storage/buffer_pool.h"
+#include "storage/page_format.h"
+#include "storage/store.h"
+
+namespace weaver {
+
+class BTree;
+
+// A root-to-leaf path: for each internal level, the page and the child taken.
+struct TreePath {
+  static constexpr int kMaxDepth = 48;  // far beyond any tree 2^32 pages can hold
+  struct Entry {
+    uint32_t page_no;
+    uint32_t index;
+  };
+  Entry e[kMaxDepth];
+  int depth = 0;
+};
+
+class BTreeCursor final : public Cursor {
+ public:
+  BTreeCursor() = default;
+  BTreeCursor(BTreeCursor&&) = default;
+  BTreeCursor& operator=(BTreeCursor&&) = default;
+
+  bool valid() const override { return valid_; }
+  uint64_t key() const override {
+    return page::load64(leaf_.data() + page::kPageHeaderBytes + 8 * size_t{i_});
+  }
+  const std::byte* payload() const override {
+    return leaf_.data() + values_offset_ + size_t{payload_} * i_;
+  }
+  Status next() override {
+    if (++i_ < n_) return Status::Ok();
+    return next_leaf();
+  }
+
+ private:
+  friend class BTree;
+  Status next_leaf();
+  // Positions on `leaf` at index i, moving on to later leaves if i is past its end.
+  Status settle();
+
+  BTree* tree_ = nullptr;
+  PageRef leaf_;
+  TreePath path_;
+  uint32_t i_ = 0;
+  uint32_t n_ = 0;
+  uint32_t payload_ = 0;
+  uint32_t values_offset_ = 0;
+  bool valid_ = false;
+};
+
+}  // namespace weaver

@@ -1,0 +1,196 @@
+// B+tree lookups: descent, get, floor, rank, select, cursors.
+#include <cstring>
+
+#include "storage/btree.h"
+#include "storage/page_search.h"
+
+namespace weaver {
+
+using page::PageType;
+
+Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref) {
+  path->depth = 0;
+  uint32_t pg = root_;
+  for (uint32_t level = 0; level + 1 < height_; ++level) {
+    PageRef r;
+    WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kInternal, &r));
+    const uint32_t n = page::count(r.data());
+    if (n == 0) return Status::Corruption(where(pg) + ": empty internal page");
+    const page::InternalView v = internal(r);
+    const uint32_t idx = page::child_index(v.key_at(0), n, key);
+    path->e[path->depth++] = {pg, idx};
+    pg = v.child(idx);
+  }
+  return fetch_typed(pg, PageType::kLeaf, leaf_ref);
+}
+
+// Descends from page_no (at `level`) to a leaf along the leftmost or the
+// rightmost children, recording the path from `level` on.
+Status BTree::descend_edge(uint32_t page_no, int level, bool rightmost, Path* path,
+                           PageRef* leaf_ref) {
+  path->depth = level;
+  uint32_t pg = page_no;
+  for (uint32_t l = level; l + 1 < height_; ++l) {
+    PageRef r;
+    WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kInternal, &r));
+    const uint32_t n = page::count(r.data());
+    if (n == 0) return Status::Corruption(where(pg) + ": empty internal page");
+    const uint32_t idx = rightmost ? n - 1 : 0;
+    path->e[path->depth++] = {pg, idx};
+    pg = internal(r).child(idx);
+  }
+  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kLeaf, leaf_ref));
+  if (page::count(leaf_ref->data()) == 0 && height_ > 1) {
+    return Status::Corruption(where(pg) + ": empty leaf page");
+  }
+  return Status::Ok();
+}
+
+Status BTree::get(uint64_t key, std::byte* payload_out, bool* found) {
+  *found = false;
+  if (height_ == 0) return Status::Ok();
+  Path path;
+  PageRef lf;
+  WEAVER_RETURN_IF_ERROR(descend(key, &path, &lf));
+  const page::LeafView v = leaf(lf);
+  const uint32_t n = page::count(lf.data());
+  const uint32_t pos = page::lower_bound(v.key_at(0), n, key);
+  if (pos < n && v.key(pos) == key) {
+    *found = true;
+    if (payload_out != nullptr) std::memcpy(payload_out, v.value(pos), payload_);
+  }
+  return Status::Ok();
+}
+
+Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, bool* found) {
+  *found = false;
+  if (height_ == 0) return Status::Ok();
+  Path path;
+  PageRef lf;
+  WEAVER_RETURN_IF_ERROR(descend(key, &path, &lf));
+  uint32_t n = page::count(lf.data());
+  uint32_t ub = page::upper_bound(leaf(lf).key_at(0), n, key);
+  if (ub == 0) {
+    // Every key here is > key (a separator went stale when its key was
+    // erased): the floor is the last record of the preceding leaf.
+    int d = path.depth - 1;
+    while (d >= 0 && path.e[d].index == 0) --d;
+    if (d < 0) return Status::Ok();
+    uint32_t left_child;
+    {
+      PageRef p;
+      WEAVER_RETURN_IF_ERROR(fetch_typed(path.e[d].page_no, PageType::kInternal, &p));
+      left_child = internal(p).child(path.e[d].index - 1);
+    }
+    lf.reset();
+    WEAVER_RETURN_IF_ERROR(descend_edge(left_child, d + 1, true, &path, &lf));
+    n = page::count(lf.data());
+    ub = n;
+  }
+  const page::LeafView v = leaf(lf);
+  *found = true;
+  *key_out = v.key(ub - 1);
+  if (payload_out != nullptr) std::memcpy(payload_out, v.value(ub - 1), payload_);
+  return Status::Ok();
+}
+
+Status BTree::rank(uint64_t key, uint64_t* out) {
+  uint64_t r = 0;
+  *out = 0;
+  if (height_ == 0) return Status::Ok();
+  uint32_t pg = root_;
+  for (uint32_t level = 0; level + 1 < height_; ++level) {
+    PageRef p;
+    WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kInternal, &p));
+    const uint32_t n = page::count(p.data());
+    if (n == 0) return Status::Corruption(where(pg) + ": empty internal page");
+    const page::InternalView v = internal(p);
+    const uint32_t idx = page::child_index(v.key_at(0), n, key);
+    for (uint32_t i = 0; i < idx; ++i) r += v.subtree_count(i);
+    pg = v.child(idx);
+  }
+  PageRef lf;
+  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kLeaf, &lf));
+  r += page::lower_bound(leaf(lf).key_at(0), page::count(lf.data()), key);
+  *out = r;
+  return Status::Ok();
+}
+
+Status BTree::select(uint64_t index, uint64_t* key_out, std::byte* payload_out) {
+  if (index >= record_count_) {
+    return Status::InvalidArgument(file_->name() + ": position " + std::to_string(index) +
+                                   " is past the last record (" + std::to_string(record_count_) +
+                                   " records)");
+  }
+  uint32_t pg = root_;
+  for (uint32_t level = 0; level + 1 < height_; ++level) {
+    PageRef p;
+    WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kInternal, &p));
+    const uint32_t n = page::count(p.data());
+    const page::InternalView v = internal(p);
+    uint32_t i = 0;
+    while (i + 1 < n && index >= v.subtree_count(i)) index -= v.subtree_count(i++);
+    pg = v.child(i);
+  }
+  PageRef lf;
+  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kLeaf, &lf));
+  if (index >= page::count(lf.data())) {
+    return Status::Corruption(where(pg) + ": subtree counts disagree with leaf contents");
+  }
+  const page::LeafView v = leaf(lf);
+  *key_out = v.key(static_cast<uint32_t>(index));
+  if (payload_out != nullptr) {
+    std::memcpy(payload_out, v.value(static_cast<uint32_t>(index)), payload_);
+  }
+  return Status::Ok();
+}
+
+Status BTree::seek_cursor(uint64_t key, BTreeCursor* c) {
+  c->tree_ = this;
+  c->valid_ = false;
+  c->leaf_.reset();
+  c->payload_ = payload_;
+  c->values_offset_ = static_cast<uint32_t>(page::kPageHeaderBytes + 8 * size_t{leaf_cap_});
+  if (height_ == 0) return Status::Ok();
+  WEAVER_RETURN_IF_ERROR(descend(key, &c->path_, &c->leaf_));
+  c->n_ = page::count(c->leaf_.data());
+  c->i_ = page::lower_bound(leaf(c->leaf_).key_at(0), c->n_, key);
+  return c->settle();
+}
+
+Status BTree::seek(uint64_t key, std::unique_ptr<Cursor>* out) {
+  auto c = std::make_unique<BTreeCursor>();
+  WEAVER_RETURN_IF_ERROR(seek_cursor(key, c.get()));
+  *out = std::move(c);
+  return Status::Ok();
+}
+
+Status BTreeCursor::settle() {
+  if (i_ < n_) {
+    valid_ = true;
+    return Status::Ok();
+  }
+  return next_leaf();
+}
+
+Status BTreeCursor::next_leaf() {
+  leaf_.reset();
+  valid_ = false;
+  BTree& t = *tree_;
+  for (int d = path_.depth - 1; d >= 0; --d) {
+    PageRef p;
+    WEAVER_RETURN_IF_ERROR(t.fetch_typed(path_.e[d].page_no, PageType::kInternal, &p));
+    const uint32_t n = page::count(p.data());
+    if (path_.e[d].index + 1 >= n) continue;
+    const uint32_t child = t.internal(p).child(++path_.e[d].index);
+    p.reset();
+    WEAVER_RETURN_IF_ERROR(t.descend_edge(child, d + 1, false, &path_, &leaf_));
+    i_ = 0;
+    n_ = page::count(leaf_.data());
+    valid_ = true;
+    return Status::Ok();
+  }
+  return Status::Ok();
+}
+
+}  // namespace weaver

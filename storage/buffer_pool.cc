@@ -1,0 +1,205 @@
+#include "storage/buffer_pool.h"
+
+#include <algorithm>
+#include <cstring>
+#include <new>
+
+#include "storage/checksum.h"
+#include "storage/page_format.h"
+
+namespace weaver {
+namespace {
+
+size_t next_pow2(size_t v) {
+  size_t p = 1;
+  while (p < v) p <<= 1;
+  return p;
+}
+
+void seal_page(std::byte* pg, uint32_t page_no, uint32_t page_size) {
+  page::store32(pg + page::kPgNumber, page_no);
+  pg[page::kPgVersion] = static_cast<std::byte>(page::kFormatVersion);
+  page::store32(pg + page::kPgChecksum, checksum32(pg + 4, page_size - 4));
+}
+
+}  // namespace
+
+BufferPool::BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes)
+    : file_(file), page_size_(page_size) {
+  const uint64_t n = std::max<uint64_t>(kMinFrames, budget_bytes / page_size);
+  arena_.reset(new (std::align_val_t{64}) std::byte[n * page_size]);
+  staging_.reset(new (std::align_val_t{64}) std::byte[size_t{kMaxWriteRun} * page_size]);
+  frames_.resize(n);
+  for (uint64_t i = 0; i < n; ++i) frames_[i].data = arena_.get() + i * page_size;
+  table_.assign(next_pow2(2 * n), 0);
+  table_mask_ = table_.size() - 1;
+}
+
+BufferPool::~BufferPool() = default;
+
+uint64_t BufferPool::memory_bytes() const {
+  return frames_.size() * (page_size_ + sizeof(Frame)) + table_.size() * sizeof(uint32_t) +
+         size_t{kMaxWriteRun} * page_size_;
+}
+
+size_t BufferPool::slot_of(uint32_t page_no) const {
+  return (page_no * 0x9E3779B1u) & table_mask_;
+}
+
+Frame* BufferPool::lookup(uint32_t page_no) const {
+  for (size_t s = slot_of(page_no);; s = (s + 1) & table_mask_) {
+    const uint32_t v = table_[s];
+    if (v == 0) return nullptr;
+    Frame* f = const_cast<Frame*>(&frames_[v - 1]);
+    if (f->page_no == page_no) return f;
+  }
+}
+
+void BufferPool::table_insert(uint32_t page_no, uint32_t frame_index) {
+  size_t s = slot_of(page_no);
+  while (table_[s] != 0) s = (s + 1) & table_mask_;
+  table_[s] = frame_index + 1;
+}
+
+// Backward-shift deletion keeps probe chains intact without tombstones.
+void BufferPool::table_erase(uint32_t page_no) {
+  size_t s = slot_of(page_no);
+  while (frames_[table_[s] - 1].page_no != page_no) s = (s + 1) & table_mask_;
+  size_t hole = s;
+  for (size_t j = (hole + 1) & table_mask_; table_[j] != 0; j = (j + 1) & table_mask_) {
+    const size_t home = slot_of(frames_[table_[j] - 1].page_no);
+    // Move j into the hole if its home is not in the cyclic range (hole, j].
+    const bool home_in_range = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
+    if (!home_in_range) {
+      table_[hole] = table_[j];
+      hole = j;
+    }
+  }
+  table_[hole] = 0;
+}
+
+Status BufferPool::write_run_from(Frame* first) {
+  // Gather first and the dirty, unpinned pages that follow it in page order.
+  Frame* run[kMaxWriteRun];
+  uint32_t n = 0;
+  run[n++] = first;
+  while (n < kMaxWriteRun) {
+    Frame* f = lookup(first->page_no + n);
+    if (f == nullptr || !f->dirty) break;
+    run[n++] = f;
+  }
+  for (uint32_t i = 0; i < n; ++i) {
+    std::byte* dst = staging_.get() + size_t{i} * page_size_;
+    std::memcpy(dst, run[i]->data, page_size_);
+    seal_page(dst, run[i]->page_no, page_size_);
+  }
+  WEAVER_RETURN_IF_ERROR(write_fully(*file_, page::page_offset(first->page_no, page_size_),
+                                     staging_.get(), size_t{n} * page_size_));
+  for (uint32_t i = 0; i < n; ++i) run[i]->dirty = false;
+  stats_.pages_written += n;
+  stats_.write_calls += 1;
+  return Status::Ok();
+}
+
+Status BufferPool::find_victim(Frame** out) {
+  const size_t n = frames_.size();
+  for (size_t step = 0; step < 3 * n; ++step) {
+    Frame& f = frames_[clock_hand_];
+    clock_hand_ = clock_hand_ + 1 == n ? 0 : clock_hand_ + 1;
+    if (f.pins > 0) continue;
+    if (f.referenced) {
+      f.referenced = false;
+      continue;
+    }
+    if (f.dirty) WEAVER_RETURN_IF_ERROR(write_run_from(&f));
+    if (f.page_no != 0) table_erase(f.page_no);
+    f.page_no = 0;
+    *out = &f;
+    return Status::Ok();
+  }
+  return Status::Busy(file_->name() + ": buffer pool exhausted: every frame is pinned");
+}
+
+Status BufferPool::read_page(uint32_t page_no, Frame* f) {
+  const uint64_t off = page::page_offset(page_no, page_size_);
+  Status st = read_fully(*file_, off, f->data, page_size_);
+  const std::string where = file_->name() + ": page " + std::to_string(page_no);
+  if (!st.ok()) {
+    if (st.is_corruption()) return Status::Corruption(where + ": file is truncated");
+    return Status::IOError(where + ": " + st.message());
+  }
+  if (page::load32(f->data + page::kPgChecksum) != checksum32(f->data + 4, page_size_ - 4)) {
+    return Status::Corruption(where + ": checksum mismatch");
+  }
+  if (page::load32(f->data + page::kPgNumber) != page_no) {
+    return Status::Corruption(where + ": page holds the content of page " +
+                              std::to_string(page::load32(f->data + page::kPgNumber)));
+  }
+  if (static_cast<uint32_t>(f->data[page::kPgVersion]) != page::kFormatVersion) {
+    return Status::Corruption(where + ": unsupported page format version " +
+                              std::to_string(static_cast<int>(f->data[page::kPgVersion])));
+  }
+  stats_.pages_read += 1;
+  return Status::Ok();
+}
+
+Status BufferPool::fetch(uint32_t page_no, Frame** out) {
+  if (Frame* f = lookup(page_no)) {
+    ++stats_.hits;
+    ++f->pins;
+    f->referenced = true;
+    *out = f;
+    return Status::Ok();
+  }
+  ++stats_.misses;
+  Frame* f = nullptr;
+  WEAVER_RETURN_IF_ERROR(find_victim(&f));
+  Status st = read_page(page_no, f);
+  if (!st.ok()) return st;  // the frame stays empty
+  f->page_no = page_no;
+  f->pins = 1;
+  f->dirty = false;
+  f->referenced = true;
+  table_insert(page_no, static_cast<uint32_t>(f - frames_.data()));
+  *out = f;
+  return Status::Ok();
+}
+
+Status BufferPool::create(uint32_t page_no, Frame** out) {
+  Frame* f = lookup(page_no);
+  if (f == nullptr) {
+    WEAVER_RETURN_IF_ERROR(find_victim(&f));
+    f->page_no = page_no;
+    table_insert(page_no, static_cast<uint32_t>(f - frames_.data()));
+  }
+  std::memset(f->data, 0, page_size_);
+  f->pins += 1;
+  f->dirty = true;
+  f->referenced = true;
+  *out = f;
+  return Status::Ok();
+}
+
+Status BufferPool::flush() {
+  std::vector<Frame*> dirty;
+  for (Frame& f : frames_) {
+    if (f.dirty) dirty.push_back(&f);
+  }
+  std::sort(dirty.begin(), dirty.end(),
+            [](const Frame* a, const Frame* b) { return a->page_no < b->page_no; });
+  for (Frame* f : dirty) {
+    if (f->dirty) WEAVER_RETURN_IF_ERROR(write_run_from(f));
+  }
+  return Status::Ok();
+}
+
+void BufferPool::discard_all() {
+  for (Frame& f : frames_) {
+    if (f.pins > 0 || f.page_no == 0) continue;
+    table_erase(f.page_no);
+    f.page_no = 0;
+    f.dirty = false;
+  }
+}
+
+}  // namespace weaver

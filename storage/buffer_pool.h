@@ -1,0 +1,117 @@
+// A buffer pool of fixed-size pages over one File, bounded by a byte budget.
+//
+// Pages are cached in frames and replaced by CLOCK.  Every page read from
+// disk is verified (checksum, page number, format version) before anyone
+// sees it; every page written gets its checksum set.  Dirty pages are written
+// back when evicted or on flush(), coalescing runs of consecutive page
+// numbers into one write, so sequentially allocated pages stream to disk.
+//
+// Not thread-safe: one pool serves one thread.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "schema/status.h"
+#include "storage/file.h"
+
+namespace weaver {
+
+struct Frame {
+  std::byte* data = nullptr;
+  uint32_t page_no = 0;  // 0: the frame is empty
+  uint32_t pins = 0;
+  bool dirty = false;
+  bool referenced = false;
+};
+
+struct PoolStats {
+  uint64_t hits = 0, misses = 0, pages_read = 0, pages_written = 0, write_calls = 0;
+};
+
+class BufferPool {
+ public:
+  // The pool keeps at least kMinFrames frames whatever the budget, so that a
+  // root-to-leaf path plus split siblings always fits.
+  static constexpr uint32_t kMinFrames = 64;
+  // Longest run of consecutive dirty pages coalesced into one write.
+  static constexpr uint32_t kMaxWriteRun = 64;
+
+  BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes);
+  ~BufferPool();
+  BufferPool(const BufferPool&) = delete;
+  BufferPool& operator=(const BufferPool&) = delete;
+
+  // Pins page_no (>= 1), reading and verifying it on a miss.
+  Status fetch(uint32_t page_no, Frame** out);
+  // Pins a frame for a page that has no valid content on disk yet (a new or
+  // reused page): zero-filled and dirty.  REQUIRES: page_no not pinned.
+  Status create(uint32_t page_no, Frame** out);
+  void unpin(Frame* f) { --f->pins; }
+
+  // Writes every dirty page back (does not sync the file).
+  Status flush();
+  // Forgets every unpinned page without writing (after the file was replaced
+  // or rolled back).
+  void discard_all();
+
+  uint32_t page_size() const { return page_size_; }
+  uint64_t frame_count() const { return frames_.size(); }
+  uint64_t memory_bytes() const;
+  const PoolStats& stats() const { return stats_; }
+  File* file() const { return file_; }
+
+ private:
+  Status find_victim(Frame** out);
+  Status write_run_from(Frame* first);
+  Status read_page(uint32_t page_no, Frame* f);
+  Frame* lookup(uint32_t page_no) const;
+  void table_insert(uint32_t page_no, uint32_t frame_index);
+  void table_erase(uint32_t page_no);
+  size_t slot_of(uint32_t page_no) const;
+
+  File* file_;
+  uint32_t page_size_;
+  std::unique_ptr<std::byte[]> arena_;
+  std::unique_ptr<std::byte[]> staging_;  // kMaxWriteRun pages, for coalesced writes
+  std::vector<Frame> frames_;
+  std::vector<uint32_t> table_;  // open addressing: frame index + 1, 0 = empty
+  size_t table_mask_ = 0;
+  size_t clock_hand_ = 0;
+  PoolStats stats_;
+};
+
+// Pins a frame for its lifetime.
+class PageRef {
+ public:
+  PageRef() = default;
+  PageRef(BufferPool* pool, Frame* f) : pool_(pool), f_(f) {}
+  PageRef(PageRef&& o) noexcept : pool_(o.pool_), f_(o.f_) { o.f_ = nullptr; }
+  PageRef& operator=(PageRef&& o) noexcept {
+    if (this != &o) {
+      reset();
+      pool_ = o.pool_;
+      f_ = o.f_;
+      o.f_ = nullptr;
+    }
+    return *this;
+  }
+  ~PageRef() { reset(); }
+  void reset() {
+    if (f_ != nullptr) pool_->unpin(f_);
+    f_ = nullptr;
+  }
+  std::byte* data() const { return f_->data; }
+  uint32_t page_no() const { return f_->page_no; }
+  void mark_dirty() const { f_->dirty = true; }
+  explicit operator bool() const { return f_ != nullptr; }
+
+ private:
+  BufferPool* pool_ = nullptr;
+  Frame* f_ = nullptr;
+};
+
+}  // namespace weaver

@@ -1,0 +1,201 @@
+// The B+tree against std::map under long random mixes of every operation,
+// with tiny pages (deep trees), several payload sizes, several seeds, commits,
+// reopens and a small buffer pool that forces eviction.
+#include <gtest/gtest.h>
+
+#include <ext/pb_ds/assoc_container.hpp>
+#include <ext/pb_ds/tree_policy.hpp>
+#include <map>
+#include <random>
+#include <vector>
+
+#include "storage/btree.h"
+#include "test_util.h"
+
+namespace weaver {
+namespace {
+
+struct Params {
+  uint32_t page_size;
+  uint32_t payload;
+  uint64_t seed;
+  uint64_t pool_bytes;
+};
+
+class BTreeModel : public ::testing::TestWithParam<Params> {
+ protected:
+  using Map = std::map<uint64_t, std::vector<std::byte>>;
+  // The same key set with O(log n) rank and select, to check ours against.
+  using OrderTree = __gnu_pbds::tree<uint64_t, __gnu_pbds::null_type, std::less<uint64_t>,
+                                     __gnu_pbds::rb_tree_tag,
+                                     __gnu_pbds::tree_order_statistics_node_update>;
+
+  void SetUp() override {
+    const Params p = GetParam();
+    path_ = dir_.file("t.bt");
+    TableOptions o;
+    o.page_size = p.page_size;
+    std::string err;
+    std::string text;
+    if (p.payload > 0) text = "v:u8";
+    for (uint32_t i = 1; i < p.payload; ++i) text += ",f" + std::to_string(i) + ":u8";
+    o.schema = *RecordSchema::parse(text, &err);
+    std::unique_ptr<File> f;
+    ASSERT_OK(open_posix_file(path_, OpenMode::kCreateTruncate, &f));
+    ASSERT_OK(BTree::create(std::move(f), o, p.pool_bytes, &tree_));
+  }
+
+  void reopen() {
+    ASSERT_OK(tree_->commit());
+    tree_.reset();
+    std::unique_ptr<File> f;
+    ASSERT_OK(open_posix_file(path_, OpenMode::kReadWrite, &f));
+    ASSERT_OK(BTree::open(std::move(f), GetParam().pool_bytes, &tree_));
+  }
+
+  std::vector<std::byte> payload_for(uint64_t key, uint64_t version) const {
+    std::vector<std::byte> v(GetParam().payload);
+    for (size_t i = 0; i < v.size(); ++i) v[i] = std::byte((key * 31 + version * 7 + i) & 0xff);
+    return v;
+  }
+
+  void check_floor(uint64_t k) {
+    uint64_t got_key = 0;
+    bool found = false;
+    std::vector<std::byte> buf(GetParam().payload + 1);
+    ASSERT_OK(tree_->floor(k, &got_key, buf.data(), &found));
+    auto it = model_.upper_bound(k);
+    ASSERT_EQ(found, it != model_.begin()) << "floor " << k;
+    if (found) {
+      --it;
+      ASSERT_EQ(got_key, it->first);
+      ASSERT_TRUE(std::equal(it->second.begin(), it->second.end(), buf.begin()));
+    }
+  }
+
+  void check_scan(uint64_t from, int steps) {
+    BTreeCursor c;
+    ASSERT_OK(tree_->seek_cursor(from, &c));
+    auto it = model_.lower_bound(from);
+    for (int s = 0; s < steps; ++s) {
+      ASSERT_EQ(c.valid(), it != model_.end());
+      if (!c.valid()) return;
+      ASSERT_EQ(c.key(), it->first);
+      ASSERT_TRUE(std::equal(it->second.begin(), it->second.end(), c.payload()));
+      ASSERT_OK(c.next());
+      ++it;
+    }
+  }
+
+  void check_everything() {
+    ASSERT_OK(tree_->check_invariants());
+    ASSERT_EQ(tree_->size(), model_.size());
+    check_scan(0, static_cast<int>(model_.size()) + 1);
+  }
+
+  testing::TempDir dir_;
+  std::string path_;
+  std::unique_ptr<BTree> tree_;
+  Map model_;
+  OrderTree order_;
+};
+
+TEST_P(BTreeModel, RandomMixMatchesStdMap) {
+  const Params p = GetParam();
+  std::mt19937_64 rng(p.seed);
+  const uint64_t ops = testing::scaled(400'000, 40'000);
+  const uint64_t key_space = 200'000;
+  uint64_t version = 0;
+  std::vector<std::byte> buf(p.payload + 1);
+  for (uint64_t op = 0; op < ops; ++op) {
+    const uint64_t r = rng() % 100;
+    ++version;
+    if (r < 12) {  // append
+      const uint64_t k = model_.empty() ? rng() % 1000 : model_.rbegin()->first + 1 + rng() % 50;
+      const auto v = payload_for(k, version);
+      ASSERT_OK(tree_->append(k, v.data()));
+      model_[k] = v;
+      order_.insert(k);
+    } else if (r < 14 && !model_.empty()) {  // append out of order: rejected, no change
+      const uint64_t k = model_.rbegin()->first - rng() % 3;
+      const auto v = payload_for(k, version);
+      EXPECT_TRUE(tree_->append(k, v.data()).is_invalid_argument());
+    } else if (r < 45) {  // put (insert or update)
+      const uint64_t k = rng() % key_space;
+      const auto v = payload_for(k, version);
+      bool replaced = false;
+      ASSERT_OK(tree_->put(k, v.data(), &replaced));
+      ASSERT_EQ(replaced, model_.count(k) == 1);
+      model_[k] = v;
+      order_.insert(k);
+    } else if (r < 65) {  // erase, mostly of present keys
+      uint64_t k = rng() % key_space;
+      if (!model_.empty() && rng() % 4 != 0) {
+        auto it = model_.lower_bound(k);
+        if (it == model_.end()) it = model_.begin();
+        k = it->first;
+      }
+      const Status st = tree_->erase(k);
+      ASSERT_EQ(st.is_not_found(), model_.count(k) == 0) << st.to_string();
+      if (st.ok()) {
+        model_.erase(k);
+        order_.erase(k);
+      }
+    } else if (r < 75) {  // get
+      const uint64_t k = rng() % key_space;
+      bool found = false;
+      ASSERT_OK(tree_->get(k, buf.data(), &found));
+      ASSERT_EQ(found, model_.count(k) == 1);
+      if (found) {
+        ASSERT_TRUE(std::equal(model_[k].begin(), model_[k].end(), buf.begin()));
+      }
+    } else if (r < 85) {
+      ASSERT_NO_FATAL_FAILURE(check_floor(rng() % (key_space + 1000)));
+    } else if (r < 90) {
+      ASSERT_NO_FATAL_FAILURE(check_scan(rng() % key_space, 1 + rng() % 300));
+    } else if (r < 96) {  // rank
+      const uint64_t k = rng() % key_space;
+      uint64_t got = 0;
+      ASSERT_OK(tree_->rank(k, &got));
+      ASSERT_EQ(got, order_.order_of_key(k));
+    } else if (!model_.empty()) {  // select
+      const uint64_t i = rng() % model_.size();
+      uint64_t key = 0;
+      ASSERT_OK(tree_->select(i, &key, buf.data()));
+      ASSERT_EQ(key, *order_.find_by_order(i));
+    }
+    if (op % 20000 == 19999) {
+      ASSERT_NO_FATAL_FAILURE(check_everything());
+    }
+    if (op % 50000 == 49999) {
+      ASSERT_NO_FATAL_FAILURE(reopen());
+    }
+  }
+  ASSERT_NO_FATAL_FAILURE(reopen());
+  ASSERT_NO_FATAL_FAILURE(check_everything());
+  // Drain to empty and refill: the empty-tree paths.
+  while (!model_.empty()) {
+    ASSERT_OK(tree_->erase(model_.begin()->first));
+    model_.erase(model_.begin());
+  }
+  order_.clear();
+  ASSERT_NO_FATAL_FAILURE(check_everything());
+  ASSERT_EQ(tree_->height(), 0u);
+  for (uint64_t k = 0; k < 1000; ++k) ASSERT_OK(tree_->append(k * 3, payload_for(k, 0).data()));
+  ASSERT_NO_FATAL_FAILURE(reopen());
+  ASSERT_EQ(tree_->size(), 1000u);
+  ASSERT_OK(tree_->check_invariants());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    PagesPayloadsSeeds, BTreeModel,
+    ::testing::Values(Params{128, 0, 1, 1 << 20}, Params{128, 16, 2, 16 << 10},
+                      Params{256, 8, 3, 1 << 20}, Params{512, 3, 4, 64 << 10},
+                      Params{4096, 16, 5, 8 << 20}, Params{128, 24, 6, 1 << 20}),
+    [](const ::testing::TestParamInfo<Params>& info) {
+      return "page" + std::to_string(info.param.page_size) + "_payload" +
+             std::to_string(info.param.payload) + "_seed" + std::to_string(info.param.seed);
+    });
+
+}  // namespace
+}  // namespace weaver

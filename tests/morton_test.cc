@@ -1,0 +1,43 @@
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "reference/octant_reference.h"
+#include "schema/morton.h"
+#include "test_util.h"
+
+namespace weaver {
+namespace {
+
+TEST(Morton, MatchesReferenceExhaustivelyOnSmallCoordinates) {
+  for (uint32_t x = 0; x < 32; ++x)
+    for (uint32_t y = 0; y < 32; ++y)
+      for (uint32_t z = 0; z < 32; ++z) {
+        const uint64_t code = morton_encode(x, y, z);
+        ASSERT_EQ(code, reference::morton_encode(x, y, z));
+        ASSERT_EQ(morton_decode(code), (Coord{x, y, z}));
+      }
+}
+
+TEST(Morton, MatchesReferenceOnRandomCoordinates) {
+  std::mt19937_64 rng(1);
+  const uint64_t n = testing::scaled(2'000'000, 200'000);
+  for (uint64_t i = 0; i < n; ++i) {
+    const uint32_t x = rng() & kMortonAxisMask, y = rng() & kMortonAxisMask,
+                   z = rng() & kMortonAxisMask;
+    const uint64_t code = morton_encode(x, y, z);
+    ASSERT_EQ(code, reference::morton_encode(x, y, z));
+    const uint64_t any = rng() >> 1;  // any 63-bit code
+    ASSERT_EQ(morton_decode(any), reference::morton_decode(any));
+  }
+}
+
+TEST(Morton, EncodesTheFarSideOfTheRoot) {
+  const uint32_t far = 1u << 20;
+  EXPECT_EQ(morton_decode(morton_encode(far, far, far)), (Coord{far, far, far}));
+  EXPECT_EQ(morton_encode(far, 0, 0), uint64_t{1} << 60);
+  EXPECT_EQ(morton_encode(0, 0, far), uint64_t{1} << 62);
+}
+
+}  // namespace
+}  // namespace weaver

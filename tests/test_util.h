@@ -1,0 +1,47 @@
+// Helpers shared by the tests.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "schema/status.h"
+
+namespace weaver::testing {
+
+// WEAVER_TEST_SCALE=small (set for sanitizer runs) shrinks the long loops.
+inline bool small_scale() {
+  const char* s = std::getenv("WEAVER_TEST_SCALE");
+  return s != nullptr && std::string(s) == "small";
+}
+inline uint64_t scaled(uint64_t full, uint64_t small) { return small_scale() ? small : full; }
+
+// A fresh, empty directory removed at scope exit.
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (std::filesystem::temp_directory_path() / "weaver-test-XXXXXX").string();
+    path_ = ::mkdtemp(tmpl.data());
+  }
+  ~TempDir() { std::filesystem::remove_all(path_); }
+  const std::string& path() const { return path_; }
+  std::string file(const std::string& name) const { return path_ + "/" + name; }
+
+ private:
+  std::string path_;
+};
+
+}  // namespace weaver::testing
+
+#define ASSERT_OK(expr)                                   \
+  do {                                                    \
+    const ::weaver::Status _s = (expr);                   \
+    ASSERT_TRUE(_s.ok()) << #expr << ": " << _s.to_string(); \
+  } while (0)
+#define EXPECT_OK(expr)                                   \
+  do {                                                    \
+    const ::weaver::Status _s = (expr);                   \
+    EXPECT_TRUE(_s.ok()) << #expr << ": " << _s.to_string(); \
+  } while (0)
