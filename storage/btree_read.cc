@@ -17,11 +17,14 @@ Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref) {
     const uint32_t n = page::count(r.data());
     if (n == 0) return Status::Corruption(where(pg) + ": empty internal page");
     const page::InternalView v = internal(r);
+    page::prefetch_keys(v.key_at(0), n);
     const uint32_t idx = page::child_index(v.key_at(0), n, key);
     path->e[path->depth++] = {pg, idx};
     pg = v.child(idx);
   }
-  return fetch_typed(pg, PageType::kLeaf, leaf_ref);
+  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kLeaf, leaf_ref));
+  page::prefetch_keys(leaf_ref->data() + page::kPageHeaderBytes, page::count(leaf_ref->data()));
+  return Status::Ok();
 }
 
 // Descends from page_no (at `level`) to a leaf along the leftmost or the
@@ -174,7 +177,7 @@ Status BTreeCursor::settle() {
 }
 
 Status BTreeCursor::next_leaf() {
-  leaf_.reset();
+  leaf_.recycle();
   valid_ = false;
   BTree& t = *tree_;
   for (int d = path_.depth - 1; d >= 0; --d) {

@@ -1,5 +1,7 @@
 #include "storage/buffer_pool.h"
 
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <cstring>
 #include <new>
@@ -27,8 +29,17 @@ void seal_page(std::byte* pg, uint32_t page_no, uint32_t page_size) {
 BufferPool::BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes)
     : file_(file), page_size_(page_size) {
   const uint64_t n = std::max<uint64_t>(kMinFrames, budget_bytes / page_size);
-  arena_.reset(new (std::align_val_t{64}) std::byte[n * page_size]);
-  staging_.reset(new (std::align_val_t{64}) std::byte[size_t{kMaxWriteRun} * page_size]);
+  // 2 MiB alignment lets the kernel back the arena with huge pages: a large
+  // pool then takes far fewer TLB misses and page faults.
+  constexpr size_t kHugePage = size_t{2} << 20;
+  const size_t arena_bytes = n * page_size;
+  arena_ = AlignedBytes(new (std::align_val_t{kHugePage}) std::byte[arena_bytes],
+                        AlignedArrayDelete{kHugePage});
+#ifdef MADV_HUGEPAGE
+  if (arena_bytes >= kHugePage) ::madvise(arena_.get(), arena_bytes, MADV_HUGEPAGE);
+#endif
+  staging_ = AlignedBytes(new (std::align_val_t{64}) std::byte[size_t{kMaxWriteRun} * page_size],
+                          AlignedArrayDelete{64});
   frames_.resize(n);
   for (uint64_t i = 0; i < n; ++i) frames_[i].data = arena_.get() + i * page_size;
   table_.assign(next_pow2(2 * n), 0);
@@ -101,7 +112,24 @@ Status BufferPool::write_run_from(Frame* first) {
   return Status::Ok();
 }
 
+void BufferPool::unpin_recycle(Frame* f) {
+  if (--f->pins > 0) return;
+  f->referenced = false;  // a later hit sets it again and saves the page
+  // Bounded: a frame offered twice is harmless, the check below skips it.
+  if (recycle_.size() < frames_.size()) recycle_.push_back(static_cast<uint32_t>(f - frames_.data()));
+}
+
 Status BufferPool::find_victim(Frame** out) {
+  while (!recycle_.empty()) {
+    Frame& f = frames_[recycle_.back()];
+    recycle_.pop_back();
+    if (f.pins > 0 || f.referenced || f.page_no == 0) continue;
+    if (f.dirty) WEAVER_RETURN_IF_ERROR(write_run_from(&f));
+    table_erase(f.page_no);
+    f.page_no = 0;
+    *out = &f;
+    return Status::Ok();
+  }
   const size_t n = frames_.size();
   for (size_t step = 0; step < 3 * n; ++step) {
     Frame& f = frames_[clock_hand_];
@@ -194,6 +222,7 @@ Status BufferPool::flush() {
 }
 
 void BufferPool::discard_all() {
+  recycle_.clear();
   for (Frame& f : frames_) {
     if (f.pins > 0 || f.page_no == 0) continue;
     table_erase(f.page_no);

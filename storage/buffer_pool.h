@@ -32,6 +32,13 @@ struct PoolStats {
   uint64_t hits = 0, misses = 0, pages_read = 0, pages_written = 0, write_calls = 0;
 };
 
+// Frees memory from an aligned array new.
+struct AlignedArrayDelete {
+  size_t alignment;
+  void operator()(std::byte* p) const { ::operator delete[](p, std::align_val_t{alignment}); }
+};
+using AlignedBytes = std::unique_ptr<std::byte[], AlignedArrayDelete>;
+
 class BufferPool {
  public:
   // The pool keeps at least kMinFrames frames whatever the budget, so that a
@@ -51,6 +58,10 @@ class BufferPool {
   // reused page): zero-filled and dirty.  REQUIRES: page_no not pinned.
   Status create(uint32_t page_no, Frame** out);
   void unpin(Frame* f) { --f->pins; }
+  // Unpins a page the caller is done with for good (a scan moving on): it
+  // becomes the next victim, so a long scan recycles a few frames instead of
+  // flushing the pool, and never faults in fresh memory.
+  void unpin_recycle(Frame* f);
 
   // Writes every dirty page back (does not sync the file).
   Status flush();
@@ -75,9 +86,10 @@ class BufferPool {
 
   File* file_;
   uint32_t page_size_;
-  std::unique_ptr<std::byte[]> arena_;
-  std::unique_ptr<std::byte[]> staging_;  // kMaxWriteRun pages, for coalesced writes
+  AlignedBytes arena_{nullptr, AlignedArrayDelete{64}};
+  AlignedBytes staging_{nullptr, AlignedArrayDelete{64}};  // kMaxWriteRun pages, coalesced writes
   std::vector<Frame> frames_;
+  std::vector<uint32_t> recycle_;  // frame indices offered by unpin_recycle
   std::vector<uint32_t> table_;  // open addressing: frame index + 1, 0 = empty
   size_t table_mask_ = 0;
   size_t clock_hand_ = 0;
@@ -102,6 +114,11 @@ class PageRef {
   ~PageRef() { reset(); }
   void reset() {
     if (f_ != nullptr) pool_->unpin(f_);
+    f_ = nullptr;
+  }
+  // Like reset(), but tells the pool the page will not be needed again soon.
+  void recycle() {
+    if (f_ != nullptr) pool_->unpin_recycle(f_);
     f_ = nullptr;
   }
   std::byte* data() const { return f_->data; }

@@ -7,6 +7,13 @@
 
 namespace weaver::page {
 
+// Issues prefetches for the n-key column (and so the page header before it):
+// a binary search over a cold page then pays about one memory latency
+// instead of one per probe.
+inline void prefetch_keys(const std::byte* keys, uint32_t n) {
+  for (size_t off = 0; off < 8 * size_t{n}; off += 64) __builtin_prefetch(keys + off);
+}
+
 // The first i in [0, n) with key[i] >= k, or n.  Branch-free: the loop runs
 // log2(n) times whatever the data, which beats a branchy search on random keys.
 inline uint32_t lower_bound(const std::byte* keys, uint32_t n, uint64_t k) {

@@ -1,0 +1,145 @@
+// Shared benchmark plumbing: run a workload in a forked child (so peak RSS is
+// the workload's own), collect its JSON line through a pipe, and print a
+// table at the end.
+#pragma once
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace weaver::bench {
+
+inline double now_seconds() {
+  using clock = std::chrono::steady_clock;
+  return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
+}
+
+inline uint64_t peak_rss_bytes() {
+  struct rusage ru;
+  getrusage(RUSAGE_SELF, &ru);
+  return static_cast<uint64_t>(ru.ru_maxrss) * 1024;
+}
+
+// A flat JSON object built field by field, in insertion order.
+class Json {
+ public:
+  Json& add(const std::string& k, const std::string& v) {
+    fields_.emplace_back(k, "\"" + v + "\"");
+    return *this;
+  }
+  Json& add(const std::string& k, const char* v) { return add(k, std::string(v)); }
+  Json& add(const std::string& k, double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    fields_.emplace_back(k, buf);
+    return *this;
+  }
+  Json& add(const std::string& k, uint64_t v) {
+    fields_.emplace_back(k, std::to_string(v));
+    return *this;
+  }
+  Json& add(const std::string& k, int v) { return add(k, static_cast<uint64_t>(v)); }
+  std::string str() const {
+    std::string s = "{";
+    for (size_t i = 0; i < fields_.size(); ++i) {
+      if (i) s += ", ";
+      s += "\"" + fields_[i].first + "\": " + fields_[i].second;
+    }
+    return s + "}";
+  }
+  // The raw text of a field ("" if absent), for the table.
+  std::string get(const std::string& k) const {
+    for (const auto& f : fields_) {
+      if (f.first == k) return f.second;
+    }
+    return "";
+  }
+
+ private:
+  std::vector<std::pair<std::string, std::string>> fields_;
+};
+
+// Runs fn in a child process and returns its JSON line (with peak_rss_bytes
+// added), or "" if the child failed.
+inline std::string run_in_child(const std::function<bool(Json*)>& fn) {
+  int fds[2];
+  if (pipe(fds) != 0) return "";
+  std::fflush(stdout);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+    Json j;
+    const bool ok = fn(&j);
+    j.add("peak_rss_bytes", peak_rss_bytes());
+    const std::string s = j.str();
+    if (write(fds[1], s.data(), s.size()) != static_cast<ssize_t>(s.size())) _exit(2);
+    _exit(ok ? 0 : 1);
+  }
+  close(fds[1]);
+  std::string text;
+  char buf[4096];
+  ssize_t r;
+  while ((r = read(fds[0], buf, sizeof buf)) > 0) text.append(buf, static_cast<size_t>(r));
+  close(fds[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::fprintf(stderr, "workload failed: %s\n", text.c_str());
+    return "";
+  }
+  return text;
+}
+
+// Parses the flat objects Json::str() writes: {"k": value, ...}.
+inline std::map<std::string, std::string> parse_flat_json(const std::string& s) {
+  std::map<std::string, std::string> out;
+  size_t i = 0;
+  while ((i = s.find('"', i)) != std::string::npos) {
+    const size_t kend = s.find('"', i + 1);
+    const std::string key = s.substr(i + 1, kend - i - 1);
+    size_t v = s.find(':', kend) + 1;
+    while (s[v] == ' ') ++v;
+    size_t vend;
+    if (s[v] == '"') {
+      vend = s.find('"', v + 1) + 1;
+      out[key] = s.substr(v + 1, vend - v - 2);
+    } else {
+      vend = s.find_first_of(",}", v);
+      out[key] = s.substr(v, vend - v);
+    }
+    i = vend;
+  }
+  return out;
+}
+
+// Prints rows as an aligned text table with the given columns.
+inline void print_table(const std::vector<std::map<std::string, std::string>>& rows,
+                        const std::vector<std::string>& columns) {
+  std::vector<size_t> width(columns.size());
+  for (size_t c = 0; c < columns.size(); ++c) {
+    width[c] = columns[c].size();
+    for (const auto& r : rows) {
+      auto it = r.find(columns[c]);
+      if (it != r.end()) width[c] = std::max(width[c], it->second.size());
+    }
+  }
+  for (size_t c = 0; c < columns.size(); ++c) std::printf("%-*s  ", int(width[c]), columns[c].c_str());
+  std::printf("\n");
+  for (const auto& r : rows) {
+    for (size_t c = 0; c < columns.size(); ++c) {
+      auto it = r.find(columns[c]);
+      std::printf("%-*s  ", int(width[c]), it == r.end() ? "" : it->second.c_str());
+    }
+    std::printf("\n");
+  }
+}
+
+}  // namespace weaver::bench

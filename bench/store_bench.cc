@@ -1,0 +1,297 @@
+// Named workloads over the B+tree store, in the LevelDB tradition:
+//   fillseq      sorted append of n records, then commit (flush + fsync)
+//   readseq      cursor scan of every record
+//   getrandom    exact lookups of random present keys
+//   floorrandom  aggregate hits: the leaf containing a random pixel
+//   fillrandom   random-order inserts of n records, then commit
+// Records are octant keys (the first n level-8 octants in Z-order, so the
+// domain is their union) with a 16-byte payload.  Every workload runs in its
+// own child process, so its peak RSS is its own.  Prints one JSON object per
+// run, then a table of medians.
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "bench_util.h"
+#include "schema/octant.h"
+#include "storage/btree.h"
+
+namespace weaver::bench {
+namespace {
+
+constexpr uint32_t kPayload = 16;
+constexpr int kGridLevel = 8;  // 16.7M octants: room for 10M records
+
+struct Config {
+  std::vector<uint64_t> sizes = {1'000'000, 10'000'000};
+  uint64_t small_pool = 20ull << 20;
+  uint64_t large_pool = 512ull << 20;
+  uint64_t queries = 2'000'000;
+  int repeat = 3;
+  std::string dir = "/tmp/weaver-bench";
+  std::vector<std::string> workloads = {"fillseq", "readseq", "getrandom", "floorrandom",
+                                        "fillrandom"};
+};
+
+uint64_t key_of(uint64_t i) {
+  const Coord c = morton_decode(i << (3 * (kMaxLevel - kGridLevel)));
+  return octant_key({c.x, c.y, c.z, kGridLevel});
+}
+
+void payload_of(uint64_t i, std::byte* out) {
+  const uint64_t a = i, b = i * 0x9E3779B97F4A7C15ULL;
+  std::memcpy(out, &a, 8);
+  std::memcpy(out + 8, &b, 8);
+}
+
+uint64_t splitmix(uint64_t* s) {
+  uint64_t z = (*s += 0x9E3779B97F4A7C15ULL);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+TableOptions table_options() {
+  TableOptions o;
+  std::string err;
+  o.schema = *RecordSchema::parse("a:u64,b:u64", &err);
+  o.key_kind = KeyKind::kOctant;
+  return o;
+}
+
+bool create_tree(const std::string& path, uint64_t pool, std::unique_ptr<BTree>* t) {
+  std::unique_ptr<File> f;
+  if (!open_posix_file(path, OpenMode::kCreateTruncate, &f).ok()) return false;
+  return BTree::create(std::move(f), table_options(), pool, t).ok();
+}
+
+bool open_tree(const std::string& path, uint64_t pool, std::unique_ptr<BTree>* t) {
+  std::unique_ptr<File> f;
+  Status st = open_posix_file(path, OpenMode::kReadOnly, &f);
+  if (st.ok()) st = BTree::open(std::move(f), pool, t);
+  if (!st.ok()) std::fprintf(stderr, "%s\n", st.to_string().c_str());
+  return st.ok();
+}
+
+void describe(Json* j, const std::string& w, uint64_t n, uint64_t pool, double secs,
+              uint64_t ops, const char* rate_name) {
+  j->add("bench", "store").add("backend", "btree").add("workload", w).add("n", n);
+  j->add(rate_name, ops / secs).add("seconds", secs).add("pool_bytes", pool);
+}
+
+void describe_size(Json* j, const BTree& t, uint64_t n) {
+  const double bpr = double(t.file_bytes()) / double(n);
+  j->add("bytes_per_record", bpr).add("overhead_pct", 100.0 * (bpr / (8 + kPayload) - 1));
+  j->add("height", uint64_t{t.height()});
+}
+
+bool fill(const std::string& path, uint64_t n, uint64_t pool, bool random, Json* j) {
+  std::unique_ptr<BTree> t;
+  if (!create_tree(path, pool, &t)) return false;
+  // A permutation of [0, n): i -> (i * step) mod n, step coprime to n.
+  uint64_t step = 2654435761ull;
+  while (std::gcd(step, n) != 1) step += 2;
+  std::byte payload[kPayload];
+  const double t0 = now_seconds();
+  for (uint64_t i = 0; i < n; ++i) {
+    const uint64_t r = random ? static_cast<uint64_t>((unsigned __int128)i * step % n) : i;
+    payload_of(r, payload);
+    const Status st = random ? t->put(key_of(r), payload, nullptr) : t->append(key_of(r), payload);
+    if (!st.ok()) return false;
+  }
+  if (!t->commit().ok()) return false;
+  const double secs = now_seconds() - t0;
+  describe(j, random ? "fillrandom" : "fillseq", n, pool, secs, n, "records_per_s");
+  describe_size(j, *t, n);
+  return t->size() == n;
+}
+
+bool readseq(const std::string& path, uint64_t n, uint64_t pool, Json* j) {
+  std::unique_ptr<BTree> t;
+  if (!open_tree(path, pool, &t)) return false;
+  const double t0 = now_seconds();
+  BTreeCursor c;
+  if (!t->seek_cursor(0, &c).ok()) return false;
+  uint64_t count = 0, sum = 0;
+  while (c.valid()) {
+    sum += c.key() + page::load64(c.payload());
+    ++count;
+    if (!c.next().ok()) return false;
+  }
+  const double secs = now_seconds() - t0;
+  describe(j, "readseq", n, pool, secs, count, "records_per_s");
+  describe_size(j, *t, n);
+  j->add("checksum", sum & 0xffff);
+  return count == n;
+}
+
+// One pass of random lookups; returns false on an error or a wrong answer.
+bool lookup_pass(BTree& t, uint64_t n, uint64_t queries, bool floor, uint64_t seed) {
+  uint64_t wrong = 0;
+  std::byte payload[kPayload];
+  for (uint64_t q = 0; q < queries; ++q) {
+    const uint64_t i = splitmix(&seed) % n;
+    bool found = false;
+    if (floor) {
+      // A random pixel inside octant i: its Morton code shares i's prefix.
+      const uint64_t span_bits = 3 * (kMaxLevel - kGridLevel);
+      const uint64_t m = (i << span_bits) | (splitmix(&seed) & ((1ull << span_bits) - 1));
+      uint64_t k = 0;
+      if (!t.floor(pixel_key(morton_decode(m)), &k, payload, &found).ok()) return false;
+      wrong += !found || k != key_of(i);
+    } else {
+      if (!t.get(key_of(i), payload, &found).ok()) return false;
+      wrong += !found || page::load64(payload) != i;
+    }
+  }
+  return wrong == 0;
+}
+
+// A cold pass (fresh pool: reads and first-touch faults) and then a warm,
+// steady-state pass with other random keys; both rates are reported.
+bool lookups(const std::string& path, uint64_t n, uint64_t pool, uint64_t queries, bool floor,
+             Json* j) {
+  std::unique_ptr<BTree> t;
+  if (!open_tree(path, pool, &t)) return false;
+  const double t0 = now_seconds();
+  if (!lookup_pass(*t, n, queries, floor, 42)) return false;
+  const double t1 = now_seconds();
+  if (!lookup_pass(*t, n, queries, floor, 4242)) return false;
+  const double t2 = now_seconds();
+  describe(j, floor ? "floorrandom" : "getrandom", n, pool, t2 - t1, queries, "queries_per_s");
+  j->add("cold_queries_per_s", queries / (t1 - t0));
+  describe_size(j, *t, n);
+  j->add("pool_hit_pct", 100.0 * t->pool().stats().hits /
+                             double(t->pool().stats().hits + t->pool().stats().misses));
+  return true;
+}
+
+std::string median_of(std::vector<std::map<std::string, std::string>>& runs, const char* key) {
+  std::vector<double> v;
+  for (auto& r : runs) {
+    if (r.count(key)) v.push_back(std::stod(r[key]));
+  }
+  if (v.empty()) return "";
+  std::sort(v.begin(), v.end());
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4g", v[v.size() / 2]);
+  return buf;
+}
+
+uint64_t parse_size(const std::string& s) {
+  double v = std::stod(s);
+  const char u = s.empty() ? 0 : s.back();
+  if (u == 'K' || u == 'k') v *= 1e3;
+  if (u == 'M' || u == 'm') v *= 1e6;
+  if (u == 'G' || u == 'g') v *= 1e9;
+  return static_cast<uint64_t>(v);
+}
+
+uint64_t parse_bytes(const std::string& s) {
+  double v = std::stod(s);
+  const char u = s.empty() ? 0 : s.back();
+  if (u == 'K' || u == 'k') v *= 1024;
+  if (u == 'M' || u == 'm') v *= 1024 * 1024;
+  if (u == 'G' || u == 'g') v *= 1024.0 * 1024 * 1024;
+  return static_cast<uint64_t>(v);
+}
+
+std::vector<std::string> split_commas(const std::string& s) {
+  std::vector<std::string> out;
+  size_t i = 0;
+  while (i <= s.size()) {
+    const size_t c = s.find(',', i);
+    out.push_back(s.substr(i, c == std::string::npos ? std::string::npos : c - i));
+    if (c == std::string::npos) break;
+    i = c + 1;
+  }
+  return out;
+}
+
+int usage() {
+  std::printf(
+      "usage: store_bench [--sizes 1M,10M] [--workloads fillseq,readseq,getrandom,floorrandom,"
+      "fillrandom]\n"
+      "                   [--pool 20M] [--large-pool 512M] [--queries 2M] [--repeat 3]\n"
+      "                   [--dir /tmp/weaver-bench]\n"
+      "Lookups run twice: with the small pool and with the large one (which holds the tree).\n");
+  return 2;
+}
+
+}  // namespace
+}  // namespace weaver::bench
+
+int main(int argc, char** argv) {
+  using namespace weaver::bench;
+  Config c;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h" || i + 1 >= argc) return usage();
+    const std::string v = argv[++i];
+    if (a == "--sizes") {
+      c.sizes.clear();
+      for (const auto& s : split_commas(v)) c.sizes.push_back(parse_size(s));
+    } else if (a == "--workloads") {
+      c.workloads = split_commas(v);
+    } else if (a == "--pool") {
+      c.small_pool = parse_bytes(v);
+    } else if (a == "--large-pool") {
+      c.large_pool = parse_bytes(v);
+    } else if (a == "--queries") {
+      c.queries = parse_size(v);
+    } else if (a == "--repeat") {
+      c.repeat = std::stoi(v);
+    } else if (a == "--dir") {
+      c.dir = v;
+    } else {
+      return usage();
+    }
+  }
+  std::filesystem::create_directories(c.dir);
+  std::vector<std::map<std::string, std::string>> table;
+  bool all_ok = true;
+  for (uint64_t n : c.sizes) {
+    const std::string seq_path = c.dir + "/seq.bt", rnd_path = c.dir + "/rnd.bt";
+    for (const std::string& w : c.workloads) {
+      std::vector<uint64_t> pools = {c.small_pool};
+      if (w == "getrandom" || w == "floorrandom" || w == "readseq") pools.push_back(c.large_pool);
+      if (w == "fillrandom") pools = {c.large_pool};
+      for (uint64_t pool : pools) {
+        std::vector<std::map<std::string, std::string>> runs;
+        for (int r = 0; r < c.repeat; ++r) {
+          const std::string line = run_in_child([&](Json* j) {
+            if (w == "fillseq") return fill(seq_path, n, pool, false, j);
+            if (w == "fillrandom") return fill(rnd_path, n, pool, true, j);
+            if (w == "readseq") return readseq(seq_path, n, pool, j);
+            if (w == "getrandom") return lookups(seq_path, n, pool, c.queries, false, j);
+            if (w == "floorrandom") return lookups(seq_path, n, pool, c.queries, true, j);
+            return false;
+          });
+          if (line.empty()) {
+            all_ok = false;
+            continue;
+          }
+          std::printf("%s\n", line.c_str());
+          runs.push_back(parse_flat_json(line));
+        }
+        if (runs.empty()) continue;
+        auto row = runs[0];
+        for (const char* k : {"records_per_s", "queries_per_s", "cold_queries_per_s", "seconds",
+                              "peak_rss_bytes"}) {
+          row[k] = median_of(runs, k);
+        }
+        row["runs"] = std::to_string(runs.size());
+        table.push_back(row);
+      }
+    }
+    if (!std::getenv("WEAVER_BENCH_KEEP")) std::filesystem::remove(seq_path);
+    std::filesystem::remove(rnd_path);
+  }
+  std::printf("\nmedians (B+tree, octant key + %u-byte payload):\n", kPayload);
+  print_table(table, {"workload", "n", "pool_bytes", "records_per_s", "queries_per_s",
+                      "cold_queries_per_s", "bytes_per_record", "overhead_pct", "height", "peak_rss_bytes", "runs"});
+  return all_ok ? 0 : 1;
+}
