@@ -1,0 +1,26 @@
+// The weaver subcommands.  Each returns the process exit status: 0 success,
+// 1 failure (with a one-line message on stderr), 2 bad usage.
+#pragma once
+
+#include <string>
+
+#include "schema/status.h"
+#include "util/args.h"
+
+namespace weaver::cli {
+
+int cmd_generate(int argc, char** argv);
+int cmd_import(int argc, char** argv);
+int cmd_stat(int argc, char** argv);
+int cmd_query(int argc, char** argv);
+
+// Prints "weaver <command>: <message>" to stderr; returns 1 (2 for usage
+// errors, which are InvalidArgument statuses raised while parsing).
+int report(const std::string& command, const Status& st);
+int usage_error(const std::string& command, const std::string& message, const char* usage);
+
+// The default memory budget when --memory is absent.
+inline constexpr uint64_t kDefaultMemory = 256ull << 20;
+Status memory_option(const ParsedArgs& args, uint64_t* bytes);
+
+}  // namespace weaver::cli

@@ -1,0 +1,37 @@
+// weaver: an embedded mesh database for octree hexahedral meshes.
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "cli/cli.h"
+
+namespace {
+
+constexpr char kUsage[] =
+    "usage: weaver <command> [arguments]\n"
+    "\n"
+    "commands:\n"
+    "  generate FILE     write a sample octree as octant text\n"
+    "  import DB         load octant text into the octant table of database DB\n"
+    "  stat DB           table sizes, per-level counts and storage overhead\n"
+    "  query DB ...      locate a point, or list the leaves in a box\n"
+    "\n"
+    "Run 'weaver <command> --help' for the arguments of one command.\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace weaver::cli;
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
+      !std::strcmp(argv[1], "help")) {
+    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string cmd = argv[1];
+  if (cmd == "generate") return cmd_generate(argc, argv);
+  if (cmd == "import") return cmd_import(argc, argv);
+  if (cmd == "stat") return cmd_stat(argc, argv);
+  if (cmd == "query") return cmd_query(argc, argv);
+  std::fprintf(stderr, "weaver: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
+  return 2;
+}

@@ -1,0 +1,206 @@
+#include "db/database.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "storage/checksum.h"
+
+namespace fs = std::filesystem;
+
+namespace weaver {
+namespace {
+
+constexpr char kManifest[] = "MANIFEST";
+constexpr char kManifestTmp[] = "MANIFEST.tmp";
+constexpr char kLock[] = "LOCK";
+constexpr char kManifestHeader[] = "weaver-db 1";  // do not change: on disk
+
+std::string hex32(uint32_t v) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "%08x", v);
+  return buf;
+}
+
+Status sync_path(const std::string& path, bool directory) {
+  const int fd = ::open(path.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
+  if (fd < 0) return Status::IOError("cannot open " + path + ": " + std::strerror(errno));
+  const int r = ::fsync(fd);
+  ::close(fd);
+  if (r != 0) return Status::IOError("cannot sync " + path + ": " + std::strerror(errno));
+  return Status::Ok();
+}
+
+// "octants-12.bt" -> 12; 0 if the name has no number.
+uint64_t file_number(const std::string& file) {
+  const size_t dash = file.rfind('-'), dot = file.rfind('.');
+  if (dash == std::string::npos || dot == std::string::npos || dot < dash) return 0;
+  try {
+    return std::stoull(file.substr(dash + 1, dot - dash - 1));
+  } catch (...) {
+    return 0;
+  }
+}
+
+}  // namespace
+
+Database::~Database() {
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
+}
+
+Status Database::open(const std::string& dir, Mode mode, bool create_if_missing,
+                      std::unique_ptr<Database>* out) {
+  std::error_code ec;
+  const bool exists = fs::is_directory(dir, ec);
+  if (!exists) {
+    if (mode != Mode::kWrite || !create_if_missing) {
+      return Status::NotFound(dir + ": no such database directory");
+    }
+    fs::create_directories(dir, ec);
+    if (ec) return Status::IOError("cannot create " + dir + ": " + ec.message());
+  }
+  std::unique_ptr<Database> db(new Database(dir, mode));
+  if (mode == Mode::kWrite) {
+    const std::string lock = dir + "/" + kLock;
+    db->lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (db->lock_fd_ < 0) return Status::IOError("cannot open " + lock + ": " + std::strerror(errno));
+    if (::flock(db->lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+      return Status::Busy(dir + ": another weaver process is writing this database");
+    }
+  }
+  if (fs::exists(dir + "/" + kManifest)) {
+    WEAVER_RETURN_IF_ERROR(db->read_manifest());
+  } else if (mode == Mode::kRead) {
+    return Status::NotFound(dir + ": not a weaver database (no MANIFEST)");
+  }
+  if (mode == Mode::kWrite) WEAVER_RETURN_IF_ERROR(db->remove_leftovers());
+  *out = std::move(db);
+  return Status::Ok();
+}
+
+Status Database::read_manifest() {
+  const std::string path = dir_ + "/" + kManifest;
+  std::ifstream in(path);
+  if (!in) return Status::IOError("cannot read " + path);
+  std::string line, body;
+  std::getline(in, line);
+  if (line != kManifestHeader) {
+    return Status::Corruption(path + ": unknown manifest format '" + line + "'");
+  }
+  body = line + "\n";
+  bool have_checksum = false;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string kind, a, b;
+    fields >> kind >> a >> b;
+    if (kind == "table" && !a.empty() && !b.empty()) {
+      tables_[a] = b;
+      next_file_number_ = std::max(next_file_number_, file_number(b) + 1);
+      body += line + "\n";
+    } else if (kind == "checksum") {
+      if (a != hex32(checksum32(body.data(), body.size()))) {
+        return Status::Corruption(path + ": checksum mismatch");
+      }
+      have_checksum = true;
+      break;
+    } else {
+      return Status::Corruption(path + ": bad line '" + line + "'");
+    }
+  }
+  if (!have_checksum) return Status::Corruption(path + ": truncated (no checksum line)");
+  return Status::Ok();
+}
+
+Status Database::write_manifest(const std::map<std::string, std::string>& tables) {
+  std::string body = std::string(kManifestHeader) + "\n";
+  for (const auto& [name, file] : tables) body += "table " + name + " " + file + "\n";
+  body += "checksum " + hex32(checksum32(body.data(), body.size())) + "\n";
+  const std::string tmp = dir_ + "/" + kManifestTmp, final_path = dir_ + "/" + kManifest;
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    out << body;
+    out.flush();
+    if (!out) return Status::IOError("cannot write " + tmp);
+  }
+  WEAVER_RETURN_IF_ERROR(sync_path(tmp, false));
+  if (::rename(tmp.c_str(), final_path.c_str()) != 0) {
+    return Status::IOError("cannot rename " + tmp + ": " + std::strerror(errno));
+  }
+  return sync_path(dir_, true);
+}
+
+Status Database::remove_leftovers() {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir_, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name == kManifest || name == kLock) continue;
+    bool live = false;
+    for (const auto& [table, file] : tables_) live = live || file == name;
+    const bool ours = name == kManifestTmp || entry.path().extension() == ".bt" ||
+                      name.rfind("tmp-", 0) == 0;
+    if (live || !ours) continue;
+    next_file_number_ = std::max(next_file_number_, file_number(name) + 1);
+    fs::remove_all(entry.path(), ec);
+    cleaned_.push_back(name);
+  }
+  if (ec) return Status::IOError("cannot list " + dir_ + ": " + ec.message());
+  return Status::Ok();
+}
+
+std::vector<std::string> Database::table_names() const {
+  std::vector<std::string> names;
+  for (const auto& [name, file] : tables_) names.push_back(name);
+  return names;
+}
+
+std::string Database::table_path(const std::string& name) const {
+  auto it = tables_.find(name);
+  return it == tables_.end() ? "" : dir_ + "/" + it->second;
+}
+
+Status Database::open_table(const std::string& name, uint64_t pool_bytes,
+                            std::unique_ptr<BTree>* out) const {
+  if (!has_table(name)) return Status::NotFound(dir_ + ": no table '" + name + "'");
+  std::unique_ptr<File> f;
+  WEAVER_RETURN_IF_ERROR(open_posix_file(table_path(name), OpenMode::kReadOnly, &f));
+  return BTree::open(std::move(f), pool_bytes, out);
+}
+
+Status Database::create_table(const std::string& name, const TableOptions& options,
+                              uint64_t pool_bytes, std::unique_ptr<BTree>* out,
+                              std::string* file_name) {
+  if (mode_ != Mode::kWrite) return Status::InvalidArgument(dir_ + ": opened read-only");
+  *file_name = name + "-" + std::to_string(next_file_number_++) + ".bt";
+  std::unique_ptr<File> f;
+  WEAVER_RETURN_IF_ERROR(open_posix_file(dir_ + "/" + *file_name, OpenMode::kCreateTruncate, &f));
+  return BTree::create(std::move(f), options, pool_bytes, out);
+}
+
+Status Database::commit(const std::map<std::string, std::string>& table_files) {
+  if (mode_ != Mode::kWrite) return Status::InvalidArgument(dir_ + ": opened read-only");
+  std::map<std::string, std::string> next = tables_;
+  std::vector<std::string> replaced;
+  for (const auto& [name, file] : table_files) {
+    if (next.count(name)) replaced.push_back(next[name]);
+    next[name] = file;
+  }
+  WEAVER_RETURN_IF_ERROR(sync_path(dir_, true));  // the new files' directory entries
+  WEAVER_RETURN_IF_ERROR(write_manifest(next));
+  tables_ = std::move(next);
+  std::error_code ec;
+  for (const std::string& old : replaced) fs::remove(dir_ + "/" + old, ec);
+  return Status::Ok();
+}
+
+void Database::abandon(const std::string& file_name) {
+  std::error_code ec;
+  fs::remove(dir_ + "/" + file_name, ec);
+}
+
+}  // namespace weaver

@@ -1,0 +1,79 @@
+#include "gen/octree_gen.h"
+
+#include <algorithm>
+#include <random>
+
+namespace weaver {
+namespace {
+
+Status domain_blocks(const GenOptions& o, std::vector<Octant>* out) {
+  if (o.block_level < 0 || o.block_level > kMaxLevel) {
+    return Status::InvalidArgument("block level must be in [0, 20]");
+  }
+  const uint64_t per_axis = uint64_t{1} << o.block_level;
+  for (int a = 0; a < 3; ++a) {
+    if (o.blocks[a] == 0 || o.blocks[a] > per_axis) {
+      return Status::InvalidArgument("blocks per axis must be in [1, " + std::to_string(per_axis) +
+                                     "] at block level " + std::to_string(o.block_level));
+    }
+  }
+  const uint32_t e = octant_edge(o.block_level);
+  for (uint32_t k = 0; k < o.blocks[2]; ++k)
+    for (uint32_t j = 0; j < o.blocks[1]; ++j)
+      for (uint32_t i = 0; i < o.blocks[0]; ++i) {
+        out->push_back({i * e, j * e, k * e, static_cast<uint8_t>(o.block_level)});
+      }
+  return Status::Ok();
+}
+
+void refine_uniform(const Octant& o, int level, std::vector<Octant>* out) {
+  if (o.level == level) {
+    out->push_back(o);
+    return;
+  }
+  for (int k = 0; k < 8; ++k) refine_uniform(octant_child(o, k), level, out);
+}
+
+}  // namespace
+
+Status generate_octree(const GenOptions& o, std::vector<Octant>* leaves) {
+  std::vector<Octant> blocks;
+  WEAVER_RETURN_IF_ERROR(domain_blocks(o, &blocks));
+  leaves->clear();
+  std::mt19937_64 rng(o.seed);
+  if (o.kind == GenOptions::Kind::kUniform) {
+    if (o.level < o.block_level || o.level > kMaxLevel) {
+      return Status::InvalidArgument("uniform level must be in [block level, 20]");
+    }
+    const uint64_t count = blocks.size() << (3 * (o.level - o.block_level));
+    if (count > (uint64_t{1} << 31)) return Status::InvalidArgument("too many leaves to generate");
+    for (const Octant& b : blocks) refine_uniform(b, o.level, leaves);
+  } else {
+    if (o.max_level <= o.block_level) {
+      return Status::InvalidArgument("max level must exceed the block level");
+    }
+    // Split random leaves until there are enough; a leaf at max_level stays.
+    *leaves = blocks;
+    uint64_t stuck = 0;
+    while (leaves->size() < o.leaves && stuck < 1000) {
+      const size_t i = rng() % leaves->size();
+      const Octant leaf = (*leaves)[i];
+      if (leaf.level >= o.max_level) {
+        ++stuck;
+        continue;
+      }
+      stuck = 0;
+      (*leaves)[i] = octant_child(leaf, 0);
+      for (int k = 1; k < 8; ++k) leaves->push_back(octant_child(leaf, k));
+    }
+  }
+  if (o.shuffle) {
+    std::shuffle(leaves->begin(), leaves->end(), rng);
+  } else {
+    std::sort(leaves->begin(), leaves->end(),
+              [](const Octant& a, const Octant& b) { return octant_key(a) < octant_key(b); });
+  }
+  return Status::Ok();
+}
+
+}  // namespace weaver

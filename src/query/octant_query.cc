@@ -1,0 +1,112 @@
+#include "query/octant_query.h"
+
+#include <string>
+
+namespace weaver {
+namespace {
+
+bool intersects(const Octant& o, const TickBox& b) {
+  const uint32_t s = octant_edge(o);
+  return o.x <= b.hi.x && o.x + s > b.lo.x && o.y <= b.hi.y && o.y + s > b.lo.y &&
+         o.z <= b.hi.z && o.z + s > b.lo.z;
+}
+
+bool inside(const Octant& o, const TickBox& b) {
+  const uint32_t s = octant_edge(o) - 1;
+  return o.x >= b.lo.x && o.x + s <= b.hi.x && o.y >= b.lo.y && o.y + s <= b.hi.y &&
+         o.z >= b.lo.z && o.z + s <= b.hi.z;
+}
+
+struct RangeWalk {
+  BTree& t;
+  const TickBox& box;
+  const std::function<void(const Octant&, uint64_t)>& on_leaf;
+  uint64_t count = 0;
+
+  // Visits octant o, which intersects the box.
+  Status visit(const Octant& o) {
+    const uint64_t key = octant_key(o);
+    // A leaf equal to o or containing it is the floor of o's key.
+    uint64_t floor_key = 0;
+    bool found = false;
+    WEAVER_RETURN_IF_ERROR(t.floor(key, &floor_key, nullptr, &found));
+    if (found) {
+      const Octant leaf = octant_from_key(floor_key);
+      if (leaf == o || octant_is_ancestor(leaf, o)) return emit_one(leaf, floor_key);
+    }
+    uint64_t first = 0, end = 0;
+    WEAVER_RETURN_IF_ERROR(t.rank(key, &first));
+    WEAVER_RETURN_IF_ERROR(t.rank(octant_subtree_key_end(o), &end));
+    if (end == first) return Status::Ok();  // no leaves under o
+    if (inside(o, box)) return emit_all(key, first, end);
+    for (int k = 0; k < 8; ++k) {
+      const Octant c = octant_child(o, k);
+      if (intersects(c, box)) WEAVER_RETURN_IF_ERROR(visit(c));
+    }
+    return Status::Ok();
+  }
+
+  Status emit_one(const Octant& leaf, uint64_t key) {
+    ++count;
+    if (!on_leaf) return Status::Ok();
+    uint64_t id = 0;
+    WEAVER_RETURN_IF_ERROR(t.rank(key, &id));
+    on_leaf(leaf, id);
+    return Status::Ok();
+  }
+
+  Status emit_all(uint64_t key, uint64_t first, uint64_t end) {
+    count += end - first;
+    if (!on_leaf) return Status::Ok();
+    BTreeCursor c;
+    WEAVER_RETURN_IF_ERROR(t.seek_cursor(key, &c));
+    for (uint64_t id = first; id < end; ++id) {
+      if (!c.valid()) return Status::Corruption(t.file_name() + ": ranks disagree with a scan");
+      on_leaf(octant_from_key(c.key()), id);
+      WEAVER_RETURN_IF_ERROR(c.next());
+    }
+    return Status::Ok();
+  }
+};
+
+}  // namespace
+
+Status locate(BTree& octants, Coord p, LocateResult* out) {
+  *out = LocateResult{};
+  if (!pixel_is_valid(p)) {
+    return Status::InvalidArgument("point (" + std::to_string(p.x) + " " + std::to_string(p.y) +
+                                   " " + std::to_string(p.z) +
+                                   ") is outside the address space [0, 1048576)");
+  }
+  uint64_t key = 0;
+  bool found = false;
+  WEAVER_RETURN_IF_ERROR(octants.floor(pixel_key(p), &key, nullptr, &found));
+  if (!found) return Status::Ok();
+  const Octant leaf = octant_from_key(key);
+  if (!octant_contains_point(leaf, p)) return Status::Ok();
+  out->inside = true;
+  out->leaf = leaf;
+  return octants.rank(key, &out->element_id);
+}
+
+Status range_query(BTree& octants, const TickBox& box, uint64_t* count,
+                   const std::function<void(const Octant&, uint64_t)>& on_leaf) {
+  const uint32_t lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
+  for (int a = 0; a < 3; ++a) {
+    if (lo[a] > hi[a]) {
+      return Status::InvalidArgument("box lower corner exceeds its upper corner on axis " +
+                                     std::string(1, "xyz"[a]));
+    }
+  }
+  if (!pixel_is_valid(box.lo) || !pixel_is_valid(box.hi)) {
+    return Status::InvalidArgument("box reaches outside the address space [0, 1048576)");
+  }
+  RangeWalk walk{octants, box, on_leaf};
+  *count = 0;
+  if (octants.size() == 0) return Status::Ok();
+  WEAVER_RETURN_IF_ERROR(walk.visit(octant_root()));
+  *count = walk.count;
+  return Status::Ok();
+}
+
+}  // namespace weaver

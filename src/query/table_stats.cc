@@ -1,0 +1,82 @@
+#include "query/table_stats.h"
+
+#include <cstdio>
+
+#include "schema/octant.h"
+
+namespace weaver {
+
+Status table_stats(const std::string& name, BTree& table, TableStats* out) {
+  TableStats s;
+  s.name = name;
+  s.file = table.file_name();
+  s.key_kind = table.options().key_kind;
+  s.schema = table.options().schema.to_text();
+  s.records = table.size();
+  s.file_bytes = table.file_bytes();
+  s.page_size = table.options().page_size;
+  s.payload_bytes = table.payload_size();
+  s.depth = table.height();
+  if (s.key_kind == KeyKind::kOctant) {
+    BTreeCursor c;
+    WEAVER_RETURN_IF_ERROR(table.seek_cursor(0, &c));
+    while (c.valid()) {
+      if (!octant_key_is_valid(c.key())) {
+        return Status::Corruption(s.file + ": invalid octant key " + std::to_string(c.key()));
+      }
+      ++s.per_level[octant_from_key(c.key()).level];
+      WEAVER_RETURN_IF_ERROR(c.next());
+    }
+  }
+  *out = s;
+  return Status::Ok();
+}
+
+std::string stats_to_text(const TableStats& s) {
+  char buf[512];
+  std::string out;
+  std::snprintf(buf, sizeof buf,
+                "table %s (%s)\n  records          %llu\n  bytes on disk    %llu\n"
+                "  bytes per record %.3f (raw %u: 8-byte key + %u-byte payload)\n"
+                "  overhead         %+.2f%% over raw\n  tree depth       %u\n"
+                "  page size        %u\n  payload schema   %s\n",
+                s.name.c_str(), s.file.c_str(), (unsigned long long)s.records,
+                (unsigned long long)s.file_bytes, s.bytes_per_record(), 8 + s.payload_bytes,
+                s.payload_bytes, s.overhead_pct(), s.depth, s.page_size,
+                s.schema.empty() ? "(none)" : s.schema.c_str());
+  out += buf;
+  if (s.key_kind == KeyKind::kOctant) {
+    out += "  leaves per level\n";
+    for (int l = 0; l <= 20; ++l) {
+      if (s.per_level[l] == 0) continue;
+      std::snprintf(buf, sizeof buf, "    level %2d  %llu\n", l, (unsigned long long)s.per_level[l]);
+      out += buf;
+    }
+  }
+  return out;
+}
+
+std::string stats_to_json(const TableStats& s) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "{\"table\": \"%s\", \"file\": \"%s\", \"records\": %llu, \"bytes\": %llu, "
+                "\"bytes_per_record\": %.4f, \"raw_bytes_per_record\": %u, "
+                "\"overhead_pct\": %.4f, \"depth\": %u, \"page_size\": %u, \"schema\": \"%s\"",
+                s.name.c_str(), s.file.c_str(), (unsigned long long)s.records,
+                (unsigned long long)s.file_bytes, s.bytes_per_record(), 8 + s.payload_bytes,
+                s.overhead_pct(), s.depth, s.page_size, s.schema.c_str());
+  std::string out = buf;
+  if (s.key_kind == KeyKind::kOctant) {
+    out += ", \"per_level\": {";
+    bool first = true;
+    for (int l = 0; l <= 20; ++l) {
+      if (s.per_level[l] == 0) continue;
+      out += (first ? "\"" : ", \"") + std::to_string(l) + "\": " + std::to_string(s.per_level[l]);
+      first = false;
+    }
+    out += "}";
+  }
+  return out + "}";
+}
+
+}  // namespace weaver

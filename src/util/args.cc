@@ -1,0 +1,111 @@
+#include "util/args.h"
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+
+namespace weaver {
+
+Status parse_args(int argc, char** argv, int start, const std::set<std::string>& value_options,
+                  const std::set<std::string>& flag_options, ParsedArgs* out) {
+  for (int i = start; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      out->help = true;
+    } else if (a.rfind("--", 0) == 0) {
+      const std::string name = a.substr(2);
+      if (value_options.count(name)) {
+        if (i + 1 >= argc) return Status::InvalidArgument("option " + a + " needs a value");
+        out->values[name] = argv[++i];
+      } else if (flag_options.count(name)) {
+        out->flags.insert(name);
+      } else {
+        return Status::InvalidArgument("unknown option " + a);
+      }
+    } else {
+      out->positional.push_back(a);
+    }
+  }
+  return Status::Ok();
+}
+
+Status parse_u64(const std::string& text, const std::string& what, uint64_t* out) {
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), *out);
+  if (text.empty() || ec != std::errc() || ptr != text.data() + text.size()) {
+    return Status::InvalidArgument(what + " must be a non-negative integer, got '" + text + "'");
+  }
+  return Status::Ok();
+}
+
+Status parse_double(const std::string& text, const std::string& what, double* out) {
+  char* end = nullptr;
+  *out = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(*out)) {
+    return Status::InvalidArgument(what + " must be a number, got '" + text + "'");
+  }
+  return Status::Ok();
+}
+
+Status parse_bytes(const std::string& text, const std::string& what, uint64_t* out) {
+  size_t digits = 0;
+  while (digits < text.size() && (std::isdigit(static_cast<unsigned char>(text[digits])) ||
+                                  text[digits] == '.')) {
+    ++digits;
+  }
+  std::string unit = text.substr(digits);
+  for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  if (unit.size() > 1 && unit.back() == 'B') unit.pop_back();
+  if (unit.size() > 1 && unit.back() == 'I') unit.pop_back();
+  double scale = 0;
+  if (unit.empty() || unit == "B") scale = 1;
+  if (unit == "K") scale = 1024.0;
+  if (unit == "M") scale = 1024.0 * 1024;
+  if (unit == "G") scale = 1024.0 * 1024 * 1024;
+  if (unit == "T") scale = 1024.0 * 1024 * 1024 * 1024;
+  double value = 0;
+  if (digits == 0 || scale == 0 || !parse_double(text.substr(0, digits), what, &value).ok()) {
+    return Status::InvalidArgument(what + " must be a size like 256M or 2G, got '" + text + "'");
+  }
+  *out = static_cast<uint64_t>(value * scale);
+  return Status::Ok();
+}
+
+namespace {
+std::vector<std::string> split(const std::string& text) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (true) {
+    const size_t c = text.find(',', start);
+    parts.push_back(text.substr(start, c == std::string::npos ? std::string::npos : c - start));
+    if (c == std::string::npos) return parts;
+    start = c + 1;
+  }
+}
+}  // namespace
+
+Status parse_u64_list(const std::string& text, const std::string& what, size_t n,
+                      std::vector<uint64_t>* out) {
+  const auto parts = split(text);
+  if (parts.size() != n) {
+    return Status::InvalidArgument(what + " needs " + std::to_string(n) +
+                                   " comma-separated values, got '" + text + "'");
+  }
+  out->resize(n);
+  for (size_t i = 0; i < n; ++i) WEAVER_RETURN_IF_ERROR(parse_u64(parts[i], what, &(*out)[i]));
+  return Status::Ok();
+}
+
+Status parse_double_list(const std::string& text, const std::string& what, size_t n,
+                         std::vector<double>* out) {
+  const auto parts = split(text);
+  if (parts.size() != n) {
+    return Status::InvalidArgument(what + " needs " + std::to_string(n) +
+                                   " comma-separated values, got '" + text + "'");
+  }
+  out->resize(n);
+  for (size_t i = 0; i < n; ++i) WEAVER_RETURN_IF_ERROR(parse_double(parts[i], what, &(*out)[i]));
+  return Status::Ok();
+}
+
+}  // namespace weaver
