@@ -1,0 +1,94 @@
+// The weaver binary as a user runs it: exit codes, one-line errors, output.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <sys/wait.h>
+
+#include "test_util.h"
+
+namespace weaver {
+namespace {
+
+struct CommandRun {
+  int code;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+CommandRun run(const std::string& args) {
+  testing::TempDir tmp;
+  const std::string cmd = std::string(WEAVER_BINARY) + " " + args + " 2>" + tmp.file("err");
+  FILE* p = ::popen(cmd.c_str(), "r");
+  CommandRun r{};
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int status = ::pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream e(tmp.file("err"));
+  r.err.assign(std::istreambuf_iterator<char>(e), {});
+  return r;
+}
+
+int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+
+TEST(Cli, EveryCommandHasHelp) {
+  const CommandRun top = run("--help");
+  EXPECT_EQ(top.code, 0);
+  for (const char* cmd : {"generate", "import", "stat", "query"}) {
+    EXPECT_NE(top.out.find(cmd), std::string::npos);
+    const CommandRun r = run(std::string(cmd) + " --help");
+    EXPECT_EQ(r.code, 0) << cmd;
+    EXPECT_NE(r.out.find(std::string("usage: weaver ") + cmd), std::string::npos) << r.out;
+  }
+}
+
+TEST(Cli, UsageErrorsAreOneLineWithStatus2) {
+  for (const char* args : {"frobnicate", "import", "import db --octants x --memory lots",
+                           "query db locate 1 2", "query db locate 1 2 -3", "stat --bogus db",
+                           "generate f --kind fancy"}) {
+    const CommandRun r = run(args);
+    EXPECT_EQ(r.code, 2) << args;
+    if (std::string(args) != "frobnicate") {
+      EXPECT_EQ(lines(r.err), 1) << args << ": " << r.err;
+    }
+  }
+}
+
+TEST(Cli, ImportStatQueryRoundTrip) {
+  testing::TempDir d;
+  const CommandRun gen = run("generate " + d.file("o.txt") + " --kind uniform --level 3 --shuffle");
+  ASSERT_EQ(gen.code, 0) << gen.err;
+  const CommandRun imp = run("import " + d.file("db") + " --octants " + d.file("o.txt") + " --tick 2.5");
+  ASSERT_EQ(imp.code, 0) << imp.err;
+  EXPECT_NE(imp.out.find("imported 512 octants"), std::string::npos) << imp.out;
+  const CommandRun stat = run("stat " + d.file("db") + " --json");
+  ASSERT_EQ(stat.code, 0);
+  EXPECT_NE(stat.out.find("\"records\": 512"), std::string::npos) << stat.out;
+  EXPECT_NE(stat.out.find("\"per_level\": {\"3\": 512}"), std::string::npos) << stat.out;
+  const CommandRun loc = run("query " + d.file("db") + " locate 131072 0 5");
+  ASSERT_EQ(loc.code, 0);
+  EXPECT_NE(loc.out.find("element 1: leaf (131072 0 0 3), edge 131072 ticks = 327680 m"),
+            std::string::npos)
+      << loc.out;
+  const CommandRun range = run("query " + d.file("db") + " range 0 0 0 131072 0 0 --json --list");
+  ASSERT_EQ(range.code, 0);
+  EXPECT_NE(range.out.find("\"count\": 2"), std::string::npos) << range.out;
+}
+
+TEST(Cli, DataErrorsAreOneLineWithStatus1) {
+  testing::TempDir d;
+  std::ofstream(d.file("bad.txt")) << "0 0 0 1\n0 0 0 1\n";
+  const CommandRun imp = run("import " + d.file("db") + " --octants " + d.file("bad.txt"));
+  EXPECT_EQ(imp.code, 1);
+  EXPECT_EQ(lines(imp.err), 1) << imp.err;
+  EXPECT_NE(imp.err.find("bad.txt:2: duplicate"), std::string::npos) << imp.err;
+  const CommandRun q = run("query " + d.file("nothing") + " locate 1 2 3");
+  EXPECT_EQ(q.code, 1);
+  EXPECT_EQ(lines(q.err), 1) << q.err;
+}
+
+}  // namespace
+}  // namespace weaver
