@@ -98,10 +98,10 @@ Status BTree::split_leaf(PageRef& lf, uint32_t pos, uint64_t key, const std::byt
   for (uint32_t i = 0, j = 0; i < total; ++i) {
     if (i == pos) {
       keys[i] = key;
-      if (payload_ > 0) std::memcpy(&vals[size_t{i} * payload_], payload, payload_);
+      if (payload_ > 0) std::memcpy(vals.data() + size_t{i} * payload_, payload, payload_);
     } else {
       keys[i] = v.key(j);
-      std::memcpy(&vals[size_t{i} * payload_], v.value(j), payload_);
+      if (payload_ > 0) std::memcpy(vals.data() + size_t{i} * payload_, v.value(j), payload_);
       ++j;
     }
   }
@@ -112,7 +112,7 @@ Status BTree::split_leaf(PageRef& lf, uint32_t pos, uint64_t key, const std::byt
     const page::LeafView& dst = i < left_n ? v : rv;
     const uint32_t at = i < left_n ? i : i - left_n;
     dst.set_key(at, keys[i]);
-    std::memcpy(dst.value(at), &vals[size_t{i} * payload_], payload_);
+    if (payload_ > 0) std::memcpy(dst.value(at), vals.data() + size_t{i} * payload_, payload_);
   }
   page::set_count(lf.data(), left_n);
   page::set_count(right.data(), total - left_n);
