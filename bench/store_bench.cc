@@ -54,6 +54,38 @@ uint64_t splitmix(uint64_t* s) {
   return z ^ (z >> 31);
 }
 
+// A pseudo-random permutation of [0, n): a 4-round Feistel network over the
+// smallest even number of bits covering n, walking the cycle until the
+// result falls below n.  Every index comes out exactly once, in an order
+// with no arithmetic pattern (unlike i * step mod n).
+class Permutation {
+ public:
+  explicit Permutation(uint64_t n) : n_(n) {
+    while ((uint64_t{1} << (2 * half_bits_)) < n) ++half_bits_;
+    mask_ = (uint64_t{1} << half_bits_) - 1;
+  }
+  uint64_t operator()(uint64_t i) const {
+    do i = feistel(i); while (i >= n_);
+    return i;
+  }
+
+ private:
+  uint64_t feistel(uint64_t v) const {
+    uint64_t l = v >> half_bits_, r = v & mask_;
+    for (uint64_t round = 0; round < 4; ++round) {
+      uint64_t s = r * 0x9E3779B97F4A7C15ULL + round;
+      const uint64_t f = splitmix(&s) & mask_;
+      const uint64_t next = l ^ f;
+      l = r;
+      r = next;
+    }
+    return (l << half_bits_) | r;
+  }
+  uint64_t n_;
+  int half_bits_ = 1;
+  uint64_t mask_ = 1;
+};
+
 TableOptions table_options() {
   TableOptions o;
   std::string err;
@@ -91,13 +123,11 @@ void describe_size(Json* j, const BTree& t, uint64_t n) {
 bool fill(const std::string& path, uint64_t n, uint64_t pool, bool random, Json* j) {
   std::unique_ptr<BTree> t;
   if (!create_tree(path, pool, &t)) return false;
-  // A permutation of [0, n): i -> (i * step) mod n, step coprime to n.
-  uint64_t step = 2654435761ull;
-  while (std::gcd(step, n) != 1) step += 2;
+  const Permutation order(n);
   std::byte payload[kPayload];
   const double t0 = now_seconds();
   for (uint64_t i = 0; i < n; ++i) {
-    const uint64_t r = random ? static_cast<uint64_t>((unsigned __int128)i * step % n) : i;
+    const uint64_t r = random ? order(i) : i;
     payload_of(r, payload);
     const Status st = random ? t->put(key_of(r), payload, nullptr) : t->append(key_of(r), payload);
     if (!st.ok()) return false;

@@ -82,10 +82,23 @@ class BTree final : public Store {
   page::LeafView leaf(const PageRef& r) const { return {r.data(), leaf_cap_, payload_}; }
   page::InternalView internal(const PageRef& r) const { return {r.data(), internal_cap_}; }
 
-  Status descend(uint64_t key, Path* path, PageRef* leaf);
+  // Where a key is, or would be inserted: the pinned leaf, the path to it,
+  // the leaf's entry count and the slot (lower bound) of the key.
+  struct LeafSlot {
+    Path path;
+    PageRef leaf;
+    uint32_t n = 0;
+    uint32_t pos = 0;
+    bool exact = false;  // the key is present at pos
+  };
+  // REQUIRES: height_ > 0.  With rank_before, also counts the records in the
+  // subtrees left of the path.
+  Status descend(uint64_t key, Path* path, PageRef* leaf, uint64_t* rank_before = nullptr);
+  Status find(uint64_t key, LeafSlot* slot, uint64_t* rank_before = nullptr);
   Status descend_edge(uint32_t page_no, int level, bool rightmost, Path* path, PageRef* leaf);
   Status add_to_path_counts(const Path& path, int upto, int64_t delta);
   bool path_is_rightmost(const Path& path);
+  void bump_spine_counts(int levels);
 
   // insert
   Status insert_new_root_leaf(uint64_t key, const std::byte* payload);

@@ -51,13 +51,13 @@ Status BTree::put(uint64_t key, const std::byte* payload, bool* replaced) {
   if (replaced != nullptr) *replaced = false;
   drop_spine();
   if (height_ == 0) return insert_new_root_leaf(key, payload);
-  Path path;
-  PageRef lf;
-  WEAVER_RETURN_IF_ERROR(descend(key, &path, &lf));
+  LeafSlot s;
+  WEAVER_RETURN_IF_ERROR(find(key, &s));
+  Path& path = s.path;
+  PageRef& lf = s.leaf;
   const page::LeafView v = leaf(lf);
-  const uint32_t n = page::count(lf.data());
-  const uint32_t pos = page::lower_bound(v.key_at(0), n, key);
-  if (pos < n && v.key(pos) == key) {
+  const uint32_t n = s.n, pos = s.pos;
+  if (s.exact) {
     if (payload_ > 0) std::memcpy(v.value(pos), payload, payload_);
     lf.mark_dirty();
     if (replaced != nullptr) *replaced = true;
@@ -234,6 +234,16 @@ Status BTree::load_spine() {
   return Status::Ok();
 }
 
+// One more record under the last entry of spine levels [0, levels).
+void BTree::bump_spine_counts(int levels) {
+  for (int d = 0; d < levels; ++d) {
+    const page::InternalView iv = internal(spine_[d]);
+    const uint32_t last = page::count(spine_[d].data()) - 1;
+    iv.set_count(last, iv.subtree_count(last) + 1);
+    spine_[d].mark_dirty();
+  }
+}
+
 Status BTree::append(uint64_t key, const std::byte* payload) {
   if (height_ == 0) return insert_new_root_leaf(key, payload);
   if (!spine_valid_) WEAVER_RETURN_IF_ERROR(load_spine());
@@ -249,12 +259,7 @@ Status BTree::append(uint64_t key, const std::byte* payload) {
     if (payload_ > 0) std::memcpy(v.value(n), payload, payload_);
     page::set_count(lf.data(), n + 1);
     lf.mark_dirty();
-    for (uint32_t d = 0; d + 1 < height_; ++d) {
-      const page::InternalView iv = internal(spine_[d]);
-      const uint32_t last = page::count(spine_[d].data()) - 1;
-      iv.set_count(last, iv.subtree_count(last) + 1);
-      spine_[d].mark_dirty();
-    }
+    bump_spine_counts(static_cast<int>(height_) - 1);
   } else {
     WEAVER_RETURN_IF_ERROR(append_new_leaf(key, payload));
   }
@@ -282,12 +287,7 @@ Status BTree::append_new_leaf(uint64_t key, const std::byte* payload) {
       internal(spine_[d]).set(n, key, 1, entry_page);
       page::set_count(spine_[d].data(), n + 1);
       spine_[d].mark_dirty();
-      for (int u = d - 1; u >= 0; --u) {
-        const page::InternalView iv = internal(spine_[u]);
-        const uint32_t last = page::count(spine_[u].data()) - 1;
-        iv.set_count(last, iv.subtree_count(last) + 1);
-        spine_[u].mark_dirty();
-      }
+      bump_spine_counts(d);
       return Status::Ok();
     }
     PageRef up;

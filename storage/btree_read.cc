@@ -8,7 +8,7 @@ namespace weaver {
 
 using page::PageType;
 
-Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref) {
+Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref, uint64_t* rank_before) {
   path->depth = 0;
   uint32_t pg = root_;
   for (uint32_t level = 0; level + 1 < height_; ++level) {
@@ -19,11 +19,23 @@ Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref) {
     const page::InternalView v = internal(r);
     page::prefetch_keys(v.key_at(0), n);
     const uint32_t idx = page::child_index(v.key_at(0), n, key);
+    if (rank_before != nullptr) {
+      for (uint32_t i = 0; i < idx; ++i) *rank_before += v.subtree_count(i);
+    }
     path->e[path->depth++] = {pg, idx};
     pg = v.child(idx);
   }
   WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kLeaf, leaf_ref));
   page::prefetch_keys(leaf_ref->data() + page::kPageHeaderBytes, page::count(leaf_ref->data()));
+  return Status::Ok();
+}
+
+Status BTree::find(uint64_t key, LeafSlot* s, uint64_t* rank_before) {
+  WEAVER_RETURN_IF_ERROR(descend(key, &s->path, &s->leaf, rank_before));
+  const page::LeafView v = leaf(s->leaf);
+  s->n = page::count(s->leaf.data());
+  s->pos = page::lower_bound(v.key_at(0), s->n, key);
+  s->exact = s->pos < s->n && v.key(s->pos) == key;
   return Status::Ok();
 }
 
@@ -52,16 +64,10 @@ Status BTree::descend_edge(uint32_t page_no, int level, bool rightmost, Path* pa
 Status BTree::get(uint64_t key, std::byte* payload_out, bool* found) {
   *found = false;
   if (height_ == 0) return Status::Ok();
-  Path path;
-  PageRef lf;
-  WEAVER_RETURN_IF_ERROR(descend(key, &path, &lf));
-  const page::LeafView v = leaf(lf);
-  const uint32_t n = page::count(lf.data());
-  const uint32_t pos = page::lower_bound(v.key_at(0), n, key);
-  if (pos < n && v.key(pos) == key) {
-    *found = true;
-    if (payload_out != nullptr) std::memcpy(payload_out, v.value(pos), payload_);
-  }
+  LeafSlot s;
+  WEAVER_RETURN_IF_ERROR(find(key, &s));
+  *found = s.exact;
+  if (s.exact && payload_out != nullptr) std::memcpy(payload_out, leaf(s.leaf).value(s.pos), payload_);
   return Status::Ok();
 }
 
@@ -98,24 +104,12 @@ Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, boo
 }
 
 Status BTree::rank(uint64_t key, uint64_t* out) {
-  uint64_t r = 0;
   *out = 0;
   if (height_ == 0) return Status::Ok();
-  uint32_t pg = root_;
-  for (uint32_t level = 0; level + 1 < height_; ++level) {
-    PageRef p;
-    WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kInternal, &p));
-    const uint32_t n = page::count(p.data());
-    if (n == 0) return Status::Corruption(where(pg) + ": empty internal page");
-    const page::InternalView v = internal(p);
-    const uint32_t idx = page::child_index(v.key_at(0), n, key);
-    for (uint32_t i = 0; i < idx; ++i) r += v.subtree_count(i);
-    pg = v.child(idx);
-  }
-  PageRef lf;
-  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kLeaf, &lf));
-  r += page::lower_bound(leaf(lf).key_at(0), page::count(lf.data()), key);
-  *out = r;
+  uint64_t before = 0;
+  LeafSlot s;
+  WEAVER_RETURN_IF_ERROR(find(key, &s, &before));
+  *out = before + s.pos;
   return Status::Ok();
 }
 

@@ -40,6 +40,14 @@ class ImportTest : public ::testing::Test {
     }
     return keys;
   }
+  std::vector<std::string> db_files() const {
+    std::vector<std::string> names;
+    for (auto& e : std::filesystem::directory_iterator(db_path())) {
+      names.push_back(e.path().filename().string());
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+  }
   // Expects an InvalidArgument naming `line` of `path` and containing `words`.
   void expect_rejected(const std::string& body, int line, const std::string& words) {
     const std::string path = write_text(body);
@@ -100,19 +108,10 @@ TEST_F(ImportTest, FailedImportLeavesTheDatabaseAsItWas) {
   // A failed import over a good table keeps the good table, byte for byte.
   ASSERT_OK(run(write_text("0 0 0 0\n")));
   const auto before = table_keys();
-  std::vector<std::string> files_before;
-  for (auto& e : std::filesystem::directory_iterator(db_path())) {
-    files_before.push_back(e.path().filename().string());
-  }
+  const auto files_before = db_files();
   EXPECT_FALSE(run(write_text("0 0 0 1\n0 0 0 1\n")).ok());
   EXPECT_EQ(table_keys(), before);
-  std::vector<std::string> files_after;
-  for (auto& e : std::filesystem::directory_iterator(db_path())) {
-    files_after.push_back(e.path().filename().string());
-  }
-  std::sort(files_before.begin(), files_before.end());
-  std::sort(files_after.begin(), files_after.end());
-  EXPECT_EQ(files_after, files_before);
+  EXPECT_EQ(db_files(), files_before);
 }
 
 TEST_F(ImportTest, SecondWriterGetsBusy) {
@@ -139,10 +138,7 @@ TEST_F(ImportTest, OutOfCoreSortMatchesInMemorySort) {
   for (const Octant& o : leaves) expected.push_back(octant_key(o));
   std::sort(expected.begin(), expected.end());
   EXPECT_EQ(table_keys(), expected);
-  // Scratch files are gone.
-  for (auto& e : std::filesystem::directory_iterator(db_path())) {
-    EXPECT_EQ(e.path().filename().string().rfind("tmp-", 0), std::string::npos);
-  }
+  for (const std::string& name : db_files()) EXPECT_NE(name.rfind("tmp-", 0), 0u) << name;
 }
 
 TEST_F(ImportTest, OutOfCoreSortStillFindsOverlaps) {

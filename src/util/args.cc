@@ -84,28 +84,27 @@ std::vector<std::string> split(const std::string& text) {
 }
 }  // namespace
 
-Status parse_u64_list(const std::string& text, const std::string& what, size_t n,
-                      std::vector<uint64_t>* out) {
+template <typename T>
+Status parse_list(const std::string& text, const std::string& what, size_t n, std::vector<T>* out,
+                  Status (*parse_one)(const std::string&, const std::string&, T*)) {
   const auto parts = split(text);
   if (parts.size() != n) {
     return Status::InvalidArgument(what + " needs " + std::to_string(n) +
                                    " comma-separated values, got '" + text + "'");
   }
   out->resize(n);
-  for (size_t i = 0; i < n; ++i) WEAVER_RETURN_IF_ERROR(parse_u64(parts[i], what, &(*out)[i]));
+  for (size_t i = 0; i < n; ++i) WEAVER_RETURN_IF_ERROR(parse_one(parts[i], what, &(*out)[i]));
   return Status::Ok();
+}
+
+Status parse_u64_list(const std::string& text, const std::string& what, size_t n,
+                      std::vector<uint64_t>* out) {
+  return parse_list(text, what, n, out, &parse_u64);
 }
 
 Status parse_double_list(const std::string& text, const std::string& what, size_t n,
                          std::vector<double>* out) {
-  const auto parts = split(text);
-  if (parts.size() != n) {
-    return Status::InvalidArgument(what + " needs " + std::to_string(n) +
-                                   " comma-separated values, got '" + text + "'");
-  }
-  out->resize(n);
-  for (size_t i = 0; i < n; ++i) WEAVER_RETURN_IF_ERROR(parse_double(parts[i], what, &(*out)[i]));
-  return Status::Ok();
+  return parse_list(text, what, n, out, &parse_double);
 }
 
 }  // namespace weaver
