@@ -13,6 +13,17 @@ namespace weaver {
 namespace {
 
 constexpr uint64_t kProgressEvery = 1 << 20;
+// Memory outside the sorter and the pool: the 1 MiB text read chunk, code
+// and allocator slack.
+constexpr uint64_t kFixedOverhead = 4ull << 20;
+
+// The B+tree pool for the sorted append: it needs only the right spine, so a
+// small pool suffices; the sorter gets the rest of the budget.
+uint64_t append_pool_bytes(uint64_t budget) { return std::min<uint64_t>(budget / 8, 8ull << 20); }
+uint64_t sorter_bytes(uint64_t budget) {
+  const uint64_t reserved = append_pool_bytes(budget) + kFixedOverhead;
+  return budget > 2 * reserved ? budget - reserved : budget / 2;
+}
 
 std::string describe(const Octant& o) {
   return "(" + std::to_string(o.x) + " " + std::to_string(o.y) + " " + std::to_string(o.z) + " " +
@@ -51,9 +62,9 @@ Status build_table(Database& db, const std::string& text_path, const ImportOptio
   topt.key_kind = KeyKind::kOctant;
   topt.metadata = units_to_metadata(options.units);
   std::unique_ptr<BTree> table;
-  // Append needs only the right spine in memory: a small pool suffices.
-  const uint64_t pool = std::min<uint64_t>(options.memory_bytes / 8, 8ull << 20);
-  WEAVER_RETURN_IF_ERROR(db.create_table(kOctantTable, topt, pool, &table, file_name));
+  WEAVER_RETURN_IF_ERROR(db.create_table(kOctantTable, topt,
+                                         append_pool_bytes(options.memory_bytes), &table,
+                                         file_name));
   KeyTag prev{}, cur{};
   bool done = false, first = true;
   while (true) {
@@ -88,7 +99,7 @@ Status import_octants(const std::string& db_dir, const std::string& text_path,
   std::string file_name;
   Status st;
   {
-    ExternalSorter sorter(scratch, options.memory_bytes);
+    ExternalSorter sorter(scratch, sorter_bytes(options.memory_bytes));
     uint64_t count = 0;
     st = sort_input(text_path, options, &sorter, &count);
     if (st.ok()) st = build_table(*db, text_path, options, sorter, &file_name, result);
