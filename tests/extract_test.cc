@@ -1,0 +1,213 @@
+// The sort-based extractor against the brute-force reference, node for node
+// (id, coordinate, kind, anchors), on many generated balanced octrees.
+#include "extract/extract.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "db/database.h"
+#include "db/node_table.h"
+#include "gen/octree_gen.h"
+#include "import/import.h"
+#include "import/octant_text.h"
+#include "reference/reference_mesh.h"
+#include "test_util.h"
+
+namespace weaver {
+namespace {
+
+struct Case {
+  std::string name;
+  std::vector<Octant> leaves;  // balanced
+};
+
+// Random refinement of a block domain, made balanced by the reference.
+std::vector<Octant> random_balanced(uint64_t seed, uint32_t bx, uint32_t by, uint32_t bz,
+                                    int block_level, uint64_t leaves, int max_level) {
+  GenOptions g;
+  g.seed = seed;
+  g.blocks[0] = bx, g.blocks[1] = by, g.blocks[2] = bz;
+  g.block_level = block_level;
+  g.leaves = leaves;
+  g.max_level = max_level;
+  std::vector<Octant> out;
+  EXPECT_OK(generate_octree(g, &out));
+  return reference::balance(out);
+}
+
+// Refines every leaf that touches a sphere, to `depth` levels (grading).
+std::vector<Octant> graded_sphere(int base, int depth, double radius_frac) {
+  std::vector<Octant> leaves;
+  std::vector<Octant> todo = {octant_root()};
+  const double r = radius_frac * kRootEdge, cx = kRootEdge / 2.0;
+  while (!todo.empty()) {
+    const Octant o = todo.back();
+    todo.pop_back();
+    const double e = octant_edge(o);
+    // Distance range from the centre to the box decides whether it meets the sphere.
+    double dmin = 0, dmax = 0;
+    const double lo[3] = {double(o.x), double(o.y), double(o.z)};
+    for (int a = 0; a < 3; ++a) {
+      const double near = std::max(lo[a] - cx, std::max(0.0, cx - (lo[a] + e)));
+      const double far = std::max(std::abs(lo[a] - cx), std::abs(lo[a] + e - cx));
+      dmin += near * near;
+      dmax += far * far;
+    }
+    const bool meets = std::sqrt(dmin) <= r && r <= std::sqrt(dmax);
+    if (o.level < base || (meets && o.level < base + depth)) {
+      for (int k = 0; k < 8; ++k) todo.push_back(octant_child(o, k));
+    } else {
+      leaves.push_back(o);
+    }
+  }
+  return reference::balance(leaves);
+}
+
+class ExtractTest : public ::testing::Test {
+ protected:
+  // Imports leaves into a fresh database and extracts with the options.
+  Status extract(const std::vector<Octant>& leaves, const ExtractOptions& o, ExtractResult* r) {
+    db_ = dir_.file("db" + std::to_string(count_++));
+    const std::string text = db_ + ".txt";
+    WEAVER_RETURN_IF_ERROR(write_octant_text(text, leaves, ""));
+    ImportResult ir;
+    WEAVER_RETURN_IF_ERROR(import_octants(db_, text, ImportOptions{}, &ir));
+    return extract_mesh(db_, o, r);
+  }
+
+  void compare_with_reference(const std::vector<Octant>& leaves, const ExtractOptions& o) {
+    ExtractResult r;
+    ASSERT_OK(extract(leaves, o, &r));
+    const reference::Mesh ref = reference::extract(leaves);
+    ASSERT_EQ(r.elements, ref.elements.size());
+    ASSERT_EQ(r.nodes, ref.nodes.size());
+    std::unique_ptr<Database> db;
+    std::unique_ptr<BTree> nodes;
+    ASSERT_OK(Database::open(db_, Database::Mode::kRead, false, &db));
+    ASSERT_OK(db->open_table(kNodeTable, 1 << 20, &nodes));
+    BTreeCursor c;
+    ASSERT_OK(nodes->seek_cursor(0, &c));
+    uint64_t anchored = 0, edge = 0, face = 0;
+    for (uint64_t id = 0; id < ref.nodes.size(); ++id) {
+      ASSERT_TRUE(c.valid());
+      const reference::MeshNode& want = ref.nodes[id];
+      const Coord got = morton_decode(c.key());
+      ASSERT_EQ(got, want.c) << "node " << id;
+      const auto kind = static_cast<NodeKind>(c.payload()[0]);
+      ASSERT_EQ(kind, want.kind) << "node " << id << " at " << got.x << " " << got.y << " "
+                                 << got.z;
+      Coord anchors[4];
+      const int n = node_anchors(got, kind, anchors);
+      ASSERT_EQ(static_cast<size_t>(n), want.anchors.size());
+      for (int i = 0; i < n; ++i) {
+        uint64_t anchor_id = 0;
+        ASSERT_OK(nodes->rank(node_key(anchors[i]), &anchor_id));
+        ASSERT_EQ(anchor_id, want.anchors[i]) << "anchor " << i << " of node " << id;
+      }
+      anchored += kind == NodeKind::kAnchored;
+      edge += kind == NodeKind::kEdge;
+      face += kind == NodeKind::kFace;
+      ASSERT_OK(c.next());
+    }
+    EXPECT_FALSE(c.valid());
+    EXPECT_EQ(r.anchored, anchored);
+    EXPECT_EQ(r.edge, edge);
+    EXPECT_EQ(r.face, face);
+  }
+
+  testing::TempDir dir_;
+  std::string db_;
+  int count_ = 0;
+};
+
+TEST_F(ExtractTest, SingleElementAndUniformGrids) {
+  for (int level : {0, 1, 2, 3}) {
+    GenOptions g;
+    g.kind = GenOptions::Kind::kUniform;
+    g.level = level;
+    std::vector<Octant> leaves;
+    ASSERT_OK(generate_octree(g, &leaves));
+    ExtractOptions o;
+    ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
+  }
+}
+
+TEST_F(ExtractTest, LeavesAtLevel20) {
+  // A tiny corner refined all the way down.
+  std::vector<Octant> leaves = {octant_root()};
+  for (int step = 0; step < 20; ++step) {
+    const Octant o = leaves.front();
+    leaves.erase(leaves.begin());
+    for (int k = 7; k >= 0; --k) leaves.insert(leaves.begin(), octant_child(o, k));
+  }
+  ExtractOptions o;
+  ASSERT_NO_FATAL_FAILURE(compare_with_reference(reference::balance(leaves), o));
+}
+
+TEST_F(ExtractTest, RandomBalancedOctreesAcrossDomainsAndBudgets) {
+  std::mt19937_64 rng(99);
+  const int cases = static_cast<int>(testing::scaled(120, 25));
+  for (int t = 0; t < cases; ++t) {
+    const int block_level = static_cast<int>(rng() % 3);
+    const uint32_t per_axis = 1u << block_level;
+    const uint32_t bx = 1 + rng() % per_axis, by = 1 + rng() % per_axis, bz = 1 + rng() % per_axis;
+    const uint64_t target = 20 + rng() % 400;
+    const int max_level = block_level + 1 + static_cast<int>(rng() % 8);
+    const auto leaves = random_balanced(rng(), bx, by, bz, block_level, target, max_level);
+    ExtractOptions o;
+    o.bucket_level = static_cast<int>(rng() % (max_level + 2));  // from one bucket to tiny ones
+    o.memory_bytes = 1 << 16;  // forces spill files
+    SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) +
+                 " leaves, blocks " + std::to_string(bx) + "x" + std::to_string(by) + "x" +
+                 std::to_string(bz) + " at level " + std::to_string(block_level) +
+                 ", bucket level " + std::to_string(o.bucket_level));
+    ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
+  }
+}
+
+TEST_F(ExtractTest, GradedAroundASphereWithManyBucketsAndSpillFiles) {
+  const auto leaves = graded_sphere(2, testing::small_scale() ? 3 : 4, 0.3);
+  for (int bucket_level : {-1, 3, 5}) {
+    ExtractOptions o;
+    o.bucket_level = bucket_level;
+    o.memory_bytes = 1 << 14;  // a tiny cap: spills go through files
+    ExtractResult r;
+    ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
+  }
+  ExtractOptions o;
+  o.bucket_level = 5;
+  o.memory_bytes = 1 << 14;
+  ExtractResult r;
+  ASSERT_OK(extract(leaves, o, &r));
+  EXPECT_GT(r.buckets, 1000u);
+  EXPECT_GT(r.spilled_to_disk, 0u);
+  EXPECT_GT(r.edge + r.face, 0u);
+}
+
+TEST_F(ExtractTest, RefusesUnbalancedOctreesNamingTwoOctants) {
+  // The root split once, then one child refined two more levels: 4x jump.
+  std::vector<Octant> leaves;
+  for (int k = 1; k < 8; ++k) leaves.push_back(octant_child(octant_root(), k));
+  const Octant first = octant_child(octant_root(), 0);
+  for (int k = 0; k < 8; ++k) {
+    const Octant c = octant_child(first, k);
+    if (k == 7) {
+      for (int j = 0; j < 8; ++j) leaves.push_back(octant_child(c, j));
+    } else {
+      leaves.push_back(c);
+    }
+  }
+  ExtractResult r;
+  const Status st = extract(leaves, ExtractOptions{}, &r);
+  ASSERT_TRUE(st.is_invalid_argument()) << st.to_string();
+  EXPECT_NE(st.message().find("not 2:1 balanced"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("(524288"), std::string::npos) << st.message();
+  // The database keeps no node table.
+  std::unique_ptr<Database> db;
+  ASSERT_OK(Database::open(db_, Database::Mode::kRead, false, &db));
+  EXPECT_FALSE(db->has_table(kNodeTable));
+}
+
+}  // namespace
+}  // namespace weaver
