@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "schema/node.h"
 #include "schema/octant.h"
 
 namespace weaver {
@@ -17,6 +18,17 @@ Status table_stats(const std::string& name, BTree& table, TableStats* out) {
   s.page_size = table.options().page_size;
   s.payload_bytes = table.payload_size();
   s.depth = table.height();
+  const Field* kind = table.options().schema.find("kind");
+  if (s.key_kind == KeyKind::kNode && kind != nullptr) {
+    BTreeCursor c;
+    WEAVER_RETURN_IF_ERROR(table.seek_cursor(0, &c));
+    while (c.valid()) {
+      const uint64_t k = RecordSchema::get_uint(c.payload(), *kind);
+      if (k > 2) return Status::Corruption(s.file + ": bad node kind " + std::to_string(k));
+      ++s.per_kind[k];
+      WEAVER_RETURN_IF_ERROR(c.next());
+    }
+  }
   if (s.key_kind == KeyKind::kOctant) {
     BTreeCursor c;
     WEAVER_RETURN_IF_ERROR(table.seek_cursor(0, &c));
@@ -53,6 +65,13 @@ std::string stats_to_text(const TableStats& s) {
       out += buf;
     }
   }
+  if (s.key_kind == KeyKind::kNode) {
+    std::snprintf(buf, sizeof buf,
+                  "  anchored         %llu\n  edge-dangling    %llu\n  face-dangling    %llu\n",
+                  (unsigned long long)s.per_kind[0], (unsigned long long)s.per_kind[1],
+                  (unsigned long long)s.per_kind[2]);
+    out += buf;
+  }
   return out;
 }
 
@@ -75,6 +94,11 @@ std::string stats_to_json(const TableStats& s) {
       first = false;
     }
     out += "}";
+  }
+  if (s.key_kind == KeyKind::kNode) {
+    out += ", \"anchored\": " + std::to_string(s.per_kind[0]) +
+           ", \"edge_dangling\": " + std::to_string(s.per_kind[1]) +
+           ", \"face_dangling\": " + std::to_string(s.per_kind[2]);
   }
   return out + "}";
 }

@@ -21,6 +21,7 @@ struct TableStats {
   uint32_t payload_bytes = 0;
   uint32_t depth = 0;
   std::array<uint64_t, 21> per_level{};  // octant tables only
+  std::array<uint64_t, 3> per_kind{};    // node tables: anchored, edge, face
 
   // Raw size: an 8-byte key and the payload per record, nothing else.
   uint64_t raw_bytes() const { return records * (8 + uint64_t{payload_bytes}); }
