@@ -34,7 +34,11 @@ namespace {
 
 // Bytes of memory per finest-level leaf in the active bucket: its key, about
 // one node in a half-full hash table (9 bytes / 0.5), and the sort vector.
-constexpr uint64_t kBytesPerLeaf = 8 + 24 + 8;
+constexpr uint64_t kBytesPerLeaf = 8 + 24 + 16;
+// No bucket holds more than 8^kMaxBucketDepth finest leaves whatever the
+// budget: its hash table then stays in the CPU caches.  Larger buckets only
+// save spills, which cost far less than cache misses on every corner.
+constexpr int kMaxBucketDepth = 6;
 
 std::string describe(const Octant& o) {
   return "(" + std::to_string(o.x) + " " + std::to_string(o.y) + " " + std::to_string(o.z) + " " +
@@ -80,11 +84,12 @@ class BucketExtractor {
     WEAVER_RETURN_IF_ERROR(spills_.take(bucket, &incoming_));
     for (const SpillRecord& r : incoming_) hash_.add(r.key, r.mask);
     order_.resize(hash_.size());
-    for (size_t i = 0; i < hash_.size(); ++i) order_[i] = hash_.key_at(i);
-    std::sort(order_.begin(), order_.end());
-    for (uint64_t key : order_) {
+    for (size_t i = 0; i < hash_.size(); ++i) order_[i] = {hash_.key_at(i), hash_.mask_at(i)};
+    std::sort(order_.begin(), order_.end(),
+              [](const SpillRecord& a, const SpillRecord& b) { return a.key < b.key; });
+    for (const auto& [key, mask] : order_) {
       NodeKind kind = NodeKind::kAnchored;
-      WEAVER_RETURN_IF_ERROR(classify(key, hash_.mask_of(key), &kind));
+      WEAVER_RETURN_IF_ERROR(classify(key, mask, &kind));
       const std::byte payload{static_cast<uint8_t>(kind)};
       WEAVER_RETURN_IF_ERROR(nodes_.append(key, &payload));
       count(kind);
@@ -214,7 +219,7 @@ class BucketExtractor {
   const std::vector<uint64_t>* leaf_keys_ = nullptr;
   NodeHash hash_;
   std::vector<SpillRecord> incoming_;
-  std::vector<uint64_t> order_;
+  std::vector<SpillRecord> order_;  // (key, mask) of the bucket's nodes
 };
 
 // One pass over the octant table: the finest level, and no two octants overlap.
@@ -246,7 +251,10 @@ Status scan_octants(BTree& octants, int* max_level) {
 // half the budget (S2 of the paper).
 int bucket_level_for(uint64_t budget, int max_level) {
   int level = max_level;
-  while (level > 0 && (kBytesPerLeaf << (3 * (max_level - level + 1))) <= budget / 2) --level;
+  while (level > 0 && max_level - level < kMaxBucketDepth &&
+         (kBytesPerLeaf << (3 * (max_level - level + 1))) <= budget / 2) {
+    --level;
+  }
   return level;
 }
 
