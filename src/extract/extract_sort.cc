@@ -261,7 +261,7 @@ int bucket_level_for(uint64_t budget, int max_level) {
 Status run_buckets(BTree& octants, BTree& nodes, const ExtractOptions& options,
                    const std::string& scratch, ExtractResult* result) {
   Bucketing b{result->bucket_level, 3 * (kMaxLevel - result->bucket_level)};
-  SpillStore spills(scratch, std::max<uint64_t>(options.memory_bytes / 8, 1 << 16));
+  SpillStore spills(scratch, std::max<uint64_t>(options.memory_bytes / 8, 1 << 12));
   BucketExtractor extractor(octants, nodes, spills, b, result);
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(octants.seek_cursor(0, &c));
