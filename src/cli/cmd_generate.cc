@@ -8,9 +8,9 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver generate FILE [--kind random|uniform] [--leaves N] [--level L]\n"
+    "usage: weaver generate FILE [--kind random|uniform|sphere] [--leaves N] [--level L]\n"
     "                            [--max-level L] [--blocks BX,BY,BZ] [--block-level L]\n"
-    "                            [--seed S] [--shuffle]\n"
+    "                            [--radius R] [--seed S] [--shuffle]\n"
     "\n"
     "Writes a sample octree as octant text ('x y z level' per line, ticks).\n"
     "The domain is BX x BY x BZ blocks of level --block-level (default 1,1,1 at 0:\n"
@@ -19,6 +19,10 @@ constexpr char kUsage[] =
     "  --kind random   split random leaves until there are at least --leaves\n"
     "                  (default 100000), none finer than --max-level (default 20)\n"
     "  --kind uniform  every leaf at --level (default 6)\n"
+    "  --kind sphere   graded: octants within 2 edges of a sphere of radius 0.3 x\n"
+    "                  root are refined from --level down to --max-level; 2:1\n"
+    "                  balanced by construction; --radius R (default 0.3) sets\n"
+    "                  the sphere's radius as a fraction of the root edge\n"
     "  --shuffle       write the leaves in random order instead of key order\n";
 
 }  // namespace
@@ -26,7 +30,7 @@ constexpr char kUsage[] =
 int cmd_generate(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(argc, argv, 2,
-                         {"kind", "leaves", "level", "max-level", "blocks", "block-level", "seed"},
+                         {"kind", "leaves", "level", "max-level", "blocks", "block-level", "seed", "radius"},
                          {"shuffle"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("generate", st.message(), kUsage);
@@ -37,8 +41,10 @@ int cmd_generate(int argc, char** argv) {
     const std::string& k = args.values["kind"];
     if (k == "uniform") {
       o.kind = GenOptions::Kind::kUniform;
+    } else if (k == "sphere") {
+      o.kind = GenOptions::Kind::kSphere;
     } else if (k != "random") {
-      return usage_error("generate", "--kind must be random or uniform", kUsage);
+      return usage_error("generate", "--kind must be random, uniform or sphere", kUsage);
     }
   }
   auto number = [&](const char* name, uint64_t max, auto* field) -> Status {
@@ -57,6 +63,9 @@ int cmd_generate(int argc, char** argv) {
     std::vector<uint64_t> b;
     st = parse_u64_list(args.values["blocks"], "--blocks", 3, &b);
     for (size_t a = 0; st.ok() && a < 3; ++a) o.blocks[a] = static_cast<uint32_t>(std::min<uint64_t>(b[a], UINT32_MAX));
+  }
+  if (st.ok() && args.values.count("radius")) {
+    st = parse_double(args.values["radius"], "--radius", &o.radius);
   }
   o.shuffle = args.flags.count("shuffle") != 0;
   if (!st.ok()) return usage_error("generate", st.message(), kUsage);

@@ -1,6 +1,7 @@
 #include "gen/octree_gen.h"
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 namespace weaver {
@@ -34,6 +35,35 @@ void refine_uniform(const Octant& o, int level, std::vector<Octant>* out) {
   for (int k = 0; k < 8; ++k) refine_uniform(octant_child(o, k), level, out);
 }
 
+double distance_to_sphere(const Octant& o, double radius) {
+  const double c = kRootEdge / 2.0, e = octant_edge(o);
+  const double lo[3] = {double(o.x), double(o.y), double(o.z)};
+  double near = 0, far = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double dn = std::max({lo[a] - c, c - (lo[a] + e), 0.0});
+    const double df = std::max(std::abs(lo[a] - c), std::abs(lo[a] + e - c));
+    near += dn * dn;
+    far += df * df;
+  }
+  // The box spans distances [sqrt(near), sqrt(far)] from the centre.
+  const double r = radius * kRootEdge;
+  if (r < std::sqrt(near)) return std::sqrt(near) - r;
+  if (r > std::sqrt(far)) return r - std::sqrt(far);
+  return 0;
+}
+
+// Depth-first in child order, so leaves come out in key order.
+void refine_sphere(const Octant& o, const GenOptions& g, std::vector<Octant>* out) {
+  const bool refine = o.level < g.level ||
+                      (o.level < g.max_level &&
+                       distance_to_sphere(o, g.radius) < 2.0 * octant_edge(o));
+  if (!refine) {
+    out->push_back(o);
+    return;
+  }
+  for (int k = 0; k < 8; ++k) refine_sphere(octant_child(o, k), g, out);
+}
+
 }  // namespace
 
 Status generate_octree(const GenOptions& o, std::vector<Octant>* leaves) {
@@ -48,6 +78,11 @@ Status generate_octree(const GenOptions& o, std::vector<Octant>* leaves) {
     const uint64_t count = blocks.size() << (3 * (o.level - o.block_level));
     if (count > (uint64_t{1} << 31)) return Status::InvalidArgument("too many leaves to generate");
     for (const Octant& b : blocks) refine_uniform(b, o.level, leaves);
+  } else if (o.kind == GenOptions::Kind::kSphere) {
+    if (o.max_level < o.level || o.max_level > kMaxLevel || !(o.radius > 0)) {
+      return Status::InvalidArgument("sphere needs level <= max level <= 20 and a radius > 0");
+    }
+    for (const Octant& b : blocks) refine_sphere(b, o, leaves);
   } else {
     if (o.max_level <= o.block_level) {
       return Status::InvalidArgument("max level must exceed the block level");
