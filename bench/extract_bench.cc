@@ -1,0 +1,107 @@
+// Extraction throughput: sphere-graded octrees (2:1 balanced by
+// construction) are generated, imported, then extracted in a child process
+// per run, so peak RSS is the extraction's own.  Prints one JSON object per
+// run, then a table of medians laid out like the paper's Figure 12.
+// Only the sort-based algorithm exists so far.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "bench_util.h"
+#include "extract/extract.h"
+#include "gen/octree_gen.h"
+#include "import/import.h"
+#include "import/octant_text.h"
+
+namespace weaver::bench {
+namespace {
+
+struct Mesh {
+  std::string name;
+  int max_level;
+  double radius;
+};
+
+std::string median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v[v.size() / 2]);
+  return buf;
+}
+
+}  // namespace
+}  // namespace weaver::bench
+
+int main(int argc, char** argv) {
+  using namespace weaver;
+  using namespace weaver::bench;
+  std::string dir = "/tmp/weaver-extract-bench";
+  uint64_t memory = 256ull << 20;
+  int repeat = 3;
+  std::vector<Mesh> meshes = {{"graded-1M", 8, 0.3}, {"graded-8M", 10, 0.22}};
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--small") meshes = {{"graded-1M", 8, 0.3}};
+    else if (a == "--repeat" && i + 1 < argc) repeat = std::stoi(argv[++i]);
+    else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
+    else {
+      std::printf("usage: extract_bench [--small] [--repeat N] [--dir DIR]\n");
+      return 2;
+    }
+  }
+  std::filesystem::create_directories(dir);
+  std::vector<std::map<std::string, std::string>> table;
+  for (const Mesh& m : meshes) {
+    GenOptions g;
+    g.kind = GenOptions::Kind::kSphere;
+    g.level = 3;
+    g.max_level = m.max_level;
+    g.radius = m.radius;
+    std::vector<Octant> leaves;
+    const std::string text = dir + "/" + m.name + ".txt", db = dir + "/" + m.name + ".db";
+    std::filesystem::remove_all(db);
+    ImportResult ir;
+    if (!generate_octree(g, &leaves).ok() || !write_octant_text(text, leaves, "").ok() ||
+        !import_octants(db, text, ImportOptions{}, &ir).ok()) {
+      std::fprintf(stderr, "cannot build %s\n", m.name.c_str());
+      return 1;
+    }
+    leaves.clear();
+    leaves.shrink_to_fit();
+    std::vector<double> rates, secs, rss;
+    std::map<std::string, std::string> last;
+    for (int r = 0; r < repeat; ++r) {
+      const std::string line = run_in_child([&](Json* j) {
+        ExtractOptions o;
+        o.memory_bytes = memory;
+        ExtractResult res;
+        const double t0 = now_seconds();
+        if (!extract_mesh(db, o, &res).ok()) return false;
+        const double t = now_seconds() - t0;
+        j->add("bench", "extract").add("algorithm", "sort").add("mesh", m.name);
+        j->add("elements", res.elements).add("nodes", res.nodes);
+        j->add("dangling", res.edge + res.face).add("seconds", t);
+        j->add("nodes_per_s", res.nodes / t);
+        j->add("bytes_per_node", double(res.node_table_bytes) / res.nodes);
+        j->add("threads", 1).add("memory_budget", memory).add("buckets", res.buckets);
+        return true;
+      });
+      if (line.empty()) return 1;
+      std::printf("%s\n", line.c_str());
+      last = parse_flat_json(line);
+      rates.push_back(std::stod(last["nodes_per_s"]));
+      secs.push_back(std::stod(last["seconds"]));
+      rss.push_back(std::stod(last["peak_rss_bytes"]));
+    }
+    last["nodes_per_s"] = median(rates);
+    last["seconds"] = median(secs);
+    last["peak_rss_bytes"] = median(rss);
+    table.push_back(last);
+    std::filesystem::remove_all(db);
+    std::filesystem::remove(text);
+  }
+  std::printf("\nmedians of %d runs (Figure 12 layout: T and rho per mesh):\n", repeat);
+  print_table(table, {"mesh", "algorithm", "elements", "nodes", "dangling", "seconds",
+                      "nodes_per_s", "bytes_per_node", "peak_rss_bytes", "memory_budget"});
+  return 0;
+}
