@@ -43,6 +43,9 @@ class BTree final : public Store {
   uint32_t payload_size() const override { return payload_; }
   Status commit() override;
 
+  // rank() and get() in one descent: the key's position, and whether it is there.
+  Status rank_exact(uint64_t key, uint64_t* rank, bool* present);
+
   // A concrete cursor (no virtual calls on the scan path).
   Status seek_cursor(uint64_t key, BTreeCursor* cursor);
 

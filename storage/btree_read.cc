@@ -104,12 +104,19 @@ Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, boo
 }
 
 Status BTree::rank(uint64_t key, uint64_t* out) {
-  *out = 0;
+  bool present = false;
+  return rank_exact(key, out, &present);
+}
+
+Status BTree::rank_exact(uint64_t key, uint64_t* rank, bool* present) {
+  *rank = 0;
+  *present = false;
   if (height_ == 0) return Status::Ok();
   uint64_t before = 0;
   LeafSlot s;
   WEAVER_RETURN_IF_ERROR(find(key, &s, &before));
-  *out = before + s.pos;
+  *rank = before + s.pos;
+  *present = s.exact;
   return Status::Ok();
 }
 

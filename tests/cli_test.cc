@@ -37,7 +37,7 @@ int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), 
 TEST(Cli, EveryCommandHasHelp) {
   const CommandRun top = run("--help");
   EXPECT_EQ(top.code, 0);
-  for (const char* cmd : {"generate", "import", "stat", "query"}) {
+  for (const char* cmd : {"generate", "import", "extract", "export", "stat", "query"}) {
     EXPECT_NE(top.out.find(cmd), std::string::npos);
     const CommandRun r = run(std::string(cmd) + " --help");
     EXPECT_EQ(r.code, 0) << cmd;

@@ -14,6 +14,7 @@ constexpr char kUsage[] =
     "  generate FILE     write a sample octree as octant text\n"
     "  import DB         load octant text into the octant table of database DB\n"
     "  extract DB        extract the mesh nodes of a balanced octree\n"
+    "  export DB         write the mesh as nodes.csv / elements.csv\n"
     "  stat DB           table sizes, per-level counts and storage overhead\n"
     "  query DB ...      locate a point, or list the leaves in a box\n"
     "\n"
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
   if (cmd == "generate") return cmd_generate(argc, argv);
   if (cmd == "import") return cmd_import(argc, argv);
   if (cmd == "extract") return cmd_extract(argc, argv);
+  if (cmd == "export") return cmd_export(argc, argv);
   if (cmd == "stat") return cmd_stat(argc, argv);
   if (cmd == "query") return cmd_query(argc, argv);
   std::fprintf(stderr, "weaver: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
