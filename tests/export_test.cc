@@ -40,13 +40,19 @@ const char* kind_name(NodeKind k) {
   return k == NodeKind::kAnchored ? "anchored" : k == NodeKind::kEdge ? "edge" : "face";
 }
 
-void check_export(const std::vector<Octant>& leaves, const testing::TempDir& dir) {
+// Imports and extracts leaves into dir/db; returns the database path.
+std::string build_mesh(const std::vector<Octant>& leaves, const testing::TempDir& dir) {
   const std::string db = dir.file("db"), text = dir.file("o.txt");
-  ASSERT_OK(write_octant_text(text, leaves, ""));
+  EXPECT_OK(write_octant_text(text, leaves, ""));
   ImportResult ir;
-  ASSERT_OK(import_octants(db, text, ImportOptions{}, &ir));
+  EXPECT_OK(import_octants(db, text, ImportOptions{}, &ir));
   ExtractResult er;
-  ASSERT_OK(extract_mesh(db, ExtractOptions{}, &er));
+  EXPECT_OK(extract_mesh(db, ExtractOptions{}, &er));
+  return db;
+}
+
+void check_export(const std::vector<Octant>& leaves, const testing::TempDir& dir) {
+  const std::string db = build_mesh(leaves, dir);
   ExportOptions eo;
   eo.nodes_path = dir.file("nodes.csv");
   eo.elements_path = dir.file("elements.csv");
@@ -132,12 +138,7 @@ TEST(MeshQuery, ElementsAndNodesByIdAndCoordinateMatchReference) {
   g.radius = 0.27;
   std::vector<Octant> leaves;
   ASSERT_OK(generate_octree(g, &leaves));
-  const std::string db = dir.file("db"), text = dir.file("o.txt");
-  ASSERT_OK(write_octant_text(text, leaves, ""));
-  ImportResult ir;
-  ASSERT_OK(import_octants(db, text, ImportOptions{}, &ir));
-  ExtractResult er;
-  ASSERT_OK(extract_mesh(db, ExtractOptions{}, &er));
+  const std::string db = build_mesh(leaves, dir);
   std::unique_ptr<Database> d;
   std::unique_ptr<BTree> octants, nodes;
   ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &d));
