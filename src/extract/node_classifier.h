@@ -1,0 +1,66 @@
+// Deciding a node's kind, shared by both extraction algorithms.
+//
+// The input is the node's direction mask: bit d is set when the cell next to
+// the node in direction d (bit a of d: the + side on axis a) holds an element
+// that has the node as a corner.  A full mask means anchored.  Each empty
+// cell is settled by an aggregate hit on its pixel: no leaf there means
+// outside the domain; a leaf that does not have the node as a corner has it
+// on an edge (one axis strictly inside the leaf) or a face (two axes), and
+// the node dangles.  Direction counts and levels alone cannot tell a dangling
+// node from one on a re-entrant corner of a non-cube domain; the hit can.  A
+// node on a leaf's edge or face but off its midpoint or centre proves the
+// octree is not 2:1 balanced.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "extract/extract.h"
+#include "schema/node.h"
+#include "schema/octant.h"
+#include "schema/status.h"
+#include "storage/btree.h"
+
+namespace weaver {
+
+// The direction bit an element contributes to its corner k: the element lies
+// on the far side of that corner.
+inline uint8_t corner_direction_bit(int k) { return static_cast<uint8_t>(1u << (~k & 7)); }
+
+// "(x y z level)", for messages.
+std::string describe_octant(const Octant& o);
+
+class NodeClassifier {
+ public:
+  explicit NodeClassifier(BTree& octants) : octants_(octants) {}
+
+  // Leaves of the active bucket (sorted keys), searched before the octant
+  // table for pixels whose node key >> shift equals bucket.
+  void set_local(const std::vector<uint64_t>* leaf_keys, uint64_t bucket, int shift) {
+    leaf_keys_ = leaf_keys;
+    bucket_ = bucket;
+    bucket_shift_ = shift;
+  }
+
+  Status classify(uint64_t key, uint8_t mask, NodeKind* kind);
+
+ private:
+  Status leaf_at(Coord p, Octant* leaf, bool* found);
+  Status kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind);
+  Status unbalanced(Coord n, const Octant& coarse, uint8_t mask);
+
+  BTree& octants_;
+  const std::vector<uint64_t>* leaf_keys_ = nullptr;
+  uint64_t bucket_ = 0;
+  int bucket_shift_ = 0;
+};
+
+inline void count_kind(NodeKind k, ExtractResult* r) {
+  ++r->nodes;
+  if (k == NodeKind::kAnchored) ++r->anchored;
+  if (k == NodeKind::kEdge) ++r->edge;
+  if (k == NodeKind::kFace) ++r->face;
+}
+
+}  // namespace weaver
