@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <random>
 
 #include "db/database.h"
@@ -185,6 +186,36 @@ TEST_F(ExtractTest, GradedAroundASphereWithManyBucketsAndSpillFiles) {
   EXPECT_GT(r.edge + r.face, 0u);
 }
 
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST_F(ExtractTest, SearchAlgorithmMatchesReferenceAndSortByteForByte) {
+  std::mt19937_64 rng(7);
+  const int cases = static_cast<int>(testing::scaled(30, 8));
+  for (int t = 0; t < cases; ++t) {
+    const int block_level = static_cast<int>(rng() % 3);
+    const uint32_t per_axis = 1u << block_level;
+    const auto leaves = random_balanced(rng(), 1 + rng() % per_axis, 1 + rng() % per_axis,
+                                        1 + rng() % per_axis, block_level, 20 + rng() % 300,
+                                        block_level + 2 + static_cast<int>(rng() % 6));
+    SCOPED_TRACE("case " + std::to_string(t));
+    ExtractOptions search;
+    search.algorithm = ExtractOptions::Algorithm::kSearch;
+    search.memory_bytes = 1 << 16;  // a small pool: the node B-tree lives on disk
+    ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, search));
+    std::unique_ptr<Database> db;
+    ASSERT_OK(Database::open(db_, Database::Mode::kRead, false, &db));
+    const std::string search_table = file_bytes(db->table_path(kNodeTable));
+    db.reset();
+    ExtractResult r;
+    ASSERT_OK(extract_mesh(db_, ExtractOptions{}, &r));  // sort, same database
+    ASSERT_OK(Database::open(db_, Database::Mode::kRead, false, &db));
+    ASSERT_EQ(file_bytes(db->table_path(kNodeTable)), search_table);
+  }
+}
+
 TEST_F(ExtractTest, RefusesUnbalancedOctreesNamingTwoOctants) {
   // The root split once, then one child refined two more levels: 4x jump.
   std::vector<Octant> leaves;
@@ -198,11 +229,15 @@ TEST_F(ExtractTest, RefusesUnbalancedOctreesNamingTwoOctants) {
       leaves.push_back(c);
     }
   }
-  ExtractResult r;
-  const Status st = extract(leaves, ExtractOptions{}, &r);
-  ASSERT_TRUE(st.is_invalid_argument()) << st.to_string();
-  EXPECT_NE(st.message().find("not 2:1 balanced"), std::string::npos) << st.message();
-  EXPECT_NE(st.message().find("(524288"), std::string::npos) << st.message();
+  for (auto algorithm : {ExtractOptions::Algorithm::kSort, ExtractOptions::Algorithm::kSearch}) {
+    ExtractOptions o;
+    o.algorithm = algorithm;
+    ExtractResult r;
+    const Status st = extract(leaves, o, &r);
+    ASSERT_TRUE(st.is_invalid_argument()) << st.to_string();
+    EXPECT_NE(st.message().find("not 2:1 balanced"), std::string::npos) << st.message();
+    EXPECT_NE(st.message().find("(524288"), std::string::npos) << st.message();
+  }
   // The database keeps no node table.
   std::unique_ptr<Database> db;
   ASSERT_OK(Database::open(db_, Database::Mode::kRead, false, &db));

@@ -12,6 +12,11 @@
 namespace weaver {
 
 struct ExtractOptions {
+  // kSort: the two-level bucket sort.  kSearch: the conventional baseline
+  // (a node B-tree searched for every element vertex; paper, section 3).
+  // Both produce the same node table.
+  enum class Algorithm { kSort, kSearch };
+  Algorithm algorithm = Algorithm::kSort;
   uint64_t memory_bytes = 256ull << 20;
   // The level of the high-level buckets; -1 derives it from the budget.
   int bucket_level = -1;
@@ -26,6 +31,7 @@ struct ExtractResult {
   uint64_t spilled = 0;          // nodal pixels handed to a later bucket
   uint64_t spilled_to_disk = 0;  // of those, the ones that went through a file
   uint64_t node_table_bytes = 0;
+  uint64_t search_tree_bytes = 0;  // search: the node B-tree with element codes
 };
 
 // Reads the octant table of db_dir, writes its node table.  Refuses an octree

@@ -19,6 +19,7 @@
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "extract/extract.h"
+#include "extract/extract_search.h"
 #include "extract/node_classifier.h"
 #include "extract/node_hash.h"
 #include "extract/spill_store.h"
@@ -187,7 +188,14 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
   WEAVER_RETURN_IF_ERROR(db->create_table(kNodeTable, topt, std::min<uint64_t>(pool, 8ull << 20),
                                           &nodes, &file));
   const std::string scratch = db_dir + "/tmp-extract-" + std::to_string(::getpid());
-  Status st = run_buckets(*octants, *nodes, options, scratch, result);
+  Status st;
+  if (options.algorithm == ExtractOptions::Algorithm::kSearch) {
+    result->bucket_level = 0;
+    st = extract_by_search(*octants, *nodes, scratch + ".bt",
+                           std::max<uint64_t>(options.memory_bytes / 2, 1 << 20), result);
+  } else {
+    st = run_buckets(*octants, *nodes, options, scratch, result);
+  }
   if (st.ok()) st = nodes->commit();
   if (st.ok()) st = db->commit({{kNodeTable, file}});
   if (!st.ok()) {

@@ -4,20 +4,15 @@
 #include <filesystem>
 #include <memory>
 
-#include "storage/file.h"
-
 namespace weaver {
 
 SpillStore::SpillStore(std::string scratch_dir, uint64_t memory_cap_bytes)
     : dir_(std::move(scratch_dir)), cap_(memory_cap_bytes) {}
 
 SpillStore::~SpillStore() {
+  log_.reset();
   std::error_code ec;
   if (records_written_ > 0) std::filesystem::remove_all(dir_, ec);
-}
-
-std::string SpillStore::file_of(uint64_t bucket) const {
-  return dir_ + "/spill-" + std::to_string(bucket);
 }
 
 Status SpillStore::add(uint64_t bucket, const SpillRecord& r) {
@@ -35,25 +30,24 @@ uint64_t SpillStore::first_bucket() const {
   return b;
 }
 
-// Appends the largest buffers to their files until memory is at half the cap.
+// Appends the largest buffers to the log until memory is at half the cap.
 Status SpillStore::flush_largest() {
-  std::error_code ec;
-  std::filesystem::create_directories(dir_, ec);
-  if (ec) return Status::IOError("cannot create " + dir_ + ": " + ec.message());
+  if (!log_) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir_, ec);
+    if (ec) return Status::IOError("cannot create " + dir_ + ": " + ec.message());
+    WEAVER_RETURN_IF_ERROR(open_posix_file(dir_ + "/spill.log", OpenMode::kCreateTruncate, &log_));
+  }
   std::vector<std::pair<size_t, uint64_t>> by_size;
   for (const auto& [bucket, recs] : memory_) by_size.push_back({recs.size(), bucket});
   std::sort(by_size.rbegin(), by_size.rend());
   for (const auto& [size, bucket] : by_size) {
     if (memory_bytes_ <= cap_ / 2) break;
     std::vector<SpillRecord>& recs = memory_[bucket];
-    std::unique_ptr<File> f;
-    const std::string path = file_of(bucket);
-    const bool exists = on_disk_.count(bucket) != 0;
-    WEAVER_RETURN_IF_ERROR(
-        open_posix_file(path, exists ? OpenMode::kReadWrite : OpenMode::kCreateTruncate, &f));
-    const uint64_t offset = on_disk_[bucket] * sizeof(SpillRecord);
-    WEAVER_RETURN_IF_ERROR(write_fully(*f, offset, recs.data(), recs.size() * sizeof(SpillRecord)));
-    on_disk_[bucket] += recs.size();
+    const uint64_t bytes = recs.size() * sizeof(SpillRecord);
+    WEAVER_RETURN_IF_ERROR(write_fully(*log_, log_bytes_, recs.data(), bytes));
+    on_disk_[bucket].push_back({log_bytes_, recs.size()});
+    log_bytes_ += bytes;
     records_written_ += recs.size();
     memory_bytes_ -= recs.size() * sizeof(SpillRecord);
     memory_.erase(bucket);
@@ -65,13 +59,12 @@ Status SpillStore::take(uint64_t bucket, std::vector<SpillRecord>* out) {
   out->clear();
   auto disk = on_disk_.find(bucket);
   if (disk != on_disk_.end()) {
-    std::unique_ptr<File> f;
-    WEAVER_RETURN_IF_ERROR(open_posix_file(file_of(bucket), OpenMode::kReadOnly, &f));
-    out->resize(disk->second);
-    WEAVER_RETURN_IF_ERROR(read_fully(*f, 0, out->data(), out->size() * sizeof(SpillRecord)));
-    f.reset();
-    std::error_code ec;
-    std::filesystem::remove(file_of(bucket), ec);
+    for (const Chunk& c : disk->second) {
+      const size_t at = out->size();
+      out->resize(at + c.count);
+      WEAVER_RETURN_IF_ERROR(
+          read_fully(*log_, c.offset, out->data() + at, c.count * sizeof(SpillRecord)));
+    }
     on_disk_.erase(disk);
   }
   auto mem = memory_.find(bucket);

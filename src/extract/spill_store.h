@@ -1,15 +1,19 @@
 // Nodal pixels that fall into a later (inactive) high-level bucket wait here
 // until that bucket becomes active: in memory up to a byte cap, beyond which
-// the largest per-bucket buffers are appended to per-bucket files in a
-// scratch directory.
+// the largest per-bucket buffers are appended, as chunks, to one spill log in
+// a scratch directory.  An in-memory index lists each bucket's chunks.  (One
+// log rather than a file per bucket: thousands of small files cost far more
+// in inode churn than the I/O itself.)
 #pragma once
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "schema/status.h"
+#include "storage/file.h"
 
 namespace weaver {
 
@@ -34,14 +38,19 @@ class SpillStore {
   uint64_t records_written() const { return records_written_; }
 
  private:
+  struct Chunk {
+    uint64_t offset;  // bytes into the log
+    uint64_t count;   // records
+  };
   Status flush_largest();
-  std::string file_of(uint64_t bucket) const;
 
   std::string dir_;
   uint64_t cap_;
   uint64_t memory_bytes_ = 0;
   std::map<uint64_t, std::vector<SpillRecord>> memory_;
-  std::map<uint64_t, uint64_t> on_disk_;  // bucket -> records in its file
+  std::unique_ptr<File> log_;  // opened on the first flush
+  uint64_t log_bytes_ = 0;
+  std::map<uint64_t, std::vector<Chunk>> on_disk_;  // bucket -> its chunks in the log
   uint64_t records_added_ = 0, records_written_ = 0;
 };
 
