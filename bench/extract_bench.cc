@@ -2,7 +2,9 @@
 // construction) are generated, imported, then extracted in a child process
 // per run, so peak RSS is the extraction's own.  Prints one JSON object per
 // run, then a table of medians laid out like the paper's Figure 12.
-// Only the sort-based algorithm exists so far.
+// Both algorithms run on every mesh; the table adds the speedup of sort over
+// search and the storage of each (Figure 13: the node B-tree with element
+// codes vs the node table).
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -38,14 +40,16 @@ int main(int argc, char** argv) {
   std::string dir = "/tmp/weaver-extract-bench";
   uint64_t memory = 256ull << 20;
   int repeat = 3;
+  int search_repeat = 1;  // the baseline is slow: one run unless asked
   std::vector<Mesh> meshes = {{"graded-1M", 8, 0.3}, {"graded-8M", 10, 0.22}};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--small") meshes = {{"graded-1M", 8, 0.3}};
     else if (a == "--repeat" && i + 1 < argc) repeat = std::stoi(argv[++i]);
+    else if (a == "--search-repeat" && i + 1 < argc) search_repeat = std::stoi(argv[++i]);
     else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
     else {
-      std::printf("usage: extract_bench [--small] [--repeat N] [--dir DIR]\n");
+      std::printf("usage: extract_bench [--small] [--repeat N] [--search-repeat N] [--dir DIR]\n");
       return 2;
     }
   }
@@ -68,40 +72,63 @@ int main(int argc, char** argv) {
     }
     leaves.clear();
     leaves.shrink_to_fit();
-    std::vector<double> rates, secs, rss;
-    std::map<std::string, std::string> last;
-    for (int r = 0; r < repeat; ++r) {
-      const std::string line = run_in_child([&](Json* j) {
-        ExtractOptions o;
-        o.memory_bytes = memory;
-        ExtractResult res;
-        const double t0 = now_seconds();
-        if (!extract_mesh(db, o, &res).ok()) return false;
-        const double t = now_seconds() - t0;
-        j->add("bench", "extract").add("algorithm", "sort").add("mesh", m.name);
-        j->add("elements", res.elements).add("nodes", res.nodes);
-        j->add("dangling", res.edge + res.face).add("seconds", t);
-        j->add("nodes_per_s", res.nodes / t);
-        j->add("bytes_per_node", double(res.node_table_bytes) / res.nodes);
-        j->add("threads", 1).add("memory_budget", memory).add("buckets", res.buckets);
-        return true;
-      });
-      if (line.empty()) return 1;
-      std::printf("%s\n", line.c_str());
-      last = parse_flat_json(line);
-      rates.push_back(std::stod(last["nodes_per_s"]));
-      secs.push_back(std::stod(last["seconds"]));
-      rss.push_back(std::stod(last["peak_rss_bytes"]));
+    double sort_seconds = 0, sort_bytes = 0;
+    for (const char* algorithm : {"sort", "search"}) {
+      const bool search = std::string(algorithm) == "search";
+      const int runs = search ? search_repeat : repeat;
+      std::vector<double> rates, secs, rss;
+      std::map<std::string, std::string> last;
+      for (int r = 0; r < runs; ++r) {
+        const std::string line = run_in_child([&](Json* j) {
+          ExtractOptions o;
+          o.memory_bytes = memory;
+          o.algorithm = search ? ExtractOptions::Algorithm::kSearch
+                               : ExtractOptions::Algorithm::kSort;
+          ExtractResult res;
+          const double t0 = now_seconds();
+          if (!extract_mesh(db, o, &res).ok()) return false;
+          const double t = now_seconds() - t0;
+          j->add("bench", "extract").add("algorithm", algorithm).add("mesh", m.name);
+          j->add("elements", res.elements).add("nodes", res.nodes);
+          j->add("dangling", res.edge + res.face).add("seconds", t);
+          j->add("nodes_per_s", res.nodes / t);
+          j->add("bytes_per_node", double(res.node_table_bytes) / res.nodes);
+          // The storage the algorithm builds: the node B-tree with element
+          // codes for search, the node table for sort (Figure 13).
+          const double built = double(search ? res.search_tree_bytes : res.node_table_bytes);
+          j->add("built_bytes", built).add("built_bytes_per_node", built / res.nodes);
+          j->add("threads", 1).add("memory_budget", memory).add("buckets", res.buckets);
+          return true;
+        });
+        if (line.empty()) return 1;
+        std::printf("%s\n", line.c_str());
+        last = parse_flat_json(line);
+        rates.push_back(std::stod(last["nodes_per_s"]));
+        secs.push_back(std::stod(last["seconds"]));
+        rss.push_back(std::stod(last["peak_rss_bytes"]));
+      }
+      last["nodes_per_s"] = median(rates);
+      last["seconds"] = median(secs);
+      last["peak_rss_bytes"] = median(rss);
+      last["runs"] = std::to_string(runs);
+      if (!search) {
+        sort_seconds = std::stod(last["seconds"]);
+        sort_bytes = std::stod(last["built_bytes"]);
+      } else {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%.1f", std::stod(last["seconds"]) / sort_seconds);
+        last["speedup_of_sort"] = buf;
+        std::snprintf(buf, sizeof buf, "%.1f%%", 100.0 * (1 - sort_bytes / std::stod(last["built_bytes"])));
+        last["storage_saved_by_sort"] = buf;
+      }
+      table.push_back(last);
     }
-    last["nodes_per_s"] = median(rates);
-    last["seconds"] = median(secs);
-    last["peak_rss_bytes"] = median(rss);
-    table.push_back(last);
     std::filesystem::remove_all(db);
     std::filesystem::remove(text);
   }
-  std::printf("\nmedians of %d runs (Figure 12 layout: T and rho per mesh):\n", repeat);
+  std::printf("\nmedians (Figure 12: T and rho per mesh and algorithm; Figure 13: storage built):\n");
   print_table(table, {"mesh", "algorithm", "elements", "nodes", "dangling", "seconds",
-                      "nodes_per_s", "bytes_per_node", "peak_rss_bytes", "memory_budget"});
+                      "nodes_per_s", "speedup_of_sort", "built_bytes_per_node",
+                      "storage_saved_by_sort", "peak_rss_bytes", "runs"});
   return 0;
 }

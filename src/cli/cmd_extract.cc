@@ -10,7 +10,7 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver extract DB [--memory BYTES]\n"
+    "usage: weaver extract DB [--algorithm sort|search] [--memory BYTES]\n"
     "\n"
     "Extracts the mesh nodes of the balanced octree in DB's octant table into\n"
     "its node table (node key + kind: anchored, edge- or face-dangling; ids are\n"
@@ -18,6 +18,10 @@ constexpr char kUsage[] =
     "sort, out of core.  Refuses overlapping octants and octrees that are not\n"
     "face+edge 2:1 balanced, naming two offending octants; on any error the\n"
     "database is left as it was.\n"
+    "  --algorithm sort    the two-level bucket sort (default)\n"
+    "  --algorithm search  the conventional baseline: a node B-tree searched for\n"
+    "                      every element vertex, holding up to 8 element codes\n"
+    "                      per node; slower, same result\n"
     "  --memory BYTES  memory budget, e.g. 256M (default 256M); it sets the size\n"
     "                  of the high-level buckets\n";
 
@@ -25,12 +29,20 @@ constexpr char kUsage[] =
 
 int cmd_extract(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory"}, {}, &args);
+  Status st = parse_args(argc, argv, 2, {"memory", "algorithm"}, {}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("extract", "expected one DB", kUsage);
   ExtractOptions o;
   st = memory_option(args, &o.memory_bytes);
+  if (st.ok() && args.values.count("algorithm")) {
+    const std::string& a = args.values["algorithm"];
+    if (a == "search") {
+      o.algorithm = ExtractOptions::Algorithm::kSearch;
+    } else if (a != "sort") {
+      st = Status::InvalidArgument("--algorithm must be sort or search");
+    }
+  }
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   auto elapsed = [t0] {
@@ -52,10 +64,15 @@ int cmd_extract(int argc, char** argv) {
               (unsigned long long)r.nodes, (unsigned long long)r.anchored,
               (unsigned long long)r.edge, (unsigned long long)r.face,
               (unsigned long long)r.elements, secs, r.nodes / secs);
-  std::printf("%llu buckets at level %d, %llu nodal pixels spilled (%llu through files), "
-              "node table %.2f bytes/node\n",
-              (unsigned long long)r.buckets, r.bucket_level, (unsigned long long)r.spilled,
-              (unsigned long long)r.spilled_to_disk, double(r.node_table_bytes) / r.nodes);
+  if (o.algorithm == ExtractOptions::Algorithm::kSearch) {
+    std::printf("node B-tree with element codes %.2f bytes/node, node table %.2f bytes/node\n",
+                double(r.search_tree_bytes) / r.nodes, double(r.node_table_bytes) / r.nodes);
+  } else {
+    std::printf("%llu buckets at level %d, %llu nodal pixels spilled (%llu through the spill "
+                "log), node table %.2f bytes/node\n",
+                (unsigned long long)r.buckets, r.bucket_level, (unsigned long long)r.spilled,
+                (unsigned long long)r.spilled_to_disk, double(r.node_table_bytes) / r.nodes);
+  }
   return 0;
 }
 
