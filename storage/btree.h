@@ -32,6 +32,11 @@ class BTree final : public Store {
   ~BTree() override;
 
   Status append(uint64_t key, const std::byte* payload) override;
+  // Sorted append of n records at once (keys strictly increasing, all greater
+  // than the tree's last key; payloads packed, n x payload_size bytes).
+  // Copies whole runs into the rightmost leaf.  On an out-of-order key,
+  // nothing is appended.
+  Status append_batch(const uint64_t* keys, const std::byte* payloads, size_t n);
   Status put(uint64_t key, const std::byte* payload, bool* replaced) override;
   Status erase(uint64_t key) override;
   Status get(uint64_t key, std::byte* payload_out, bool* found) override;
@@ -101,7 +106,7 @@ class BTree final : public Store {
   Status descend_edge(uint32_t page_no, int level, bool rightmost, Path* path, PageRef* leaf);
   Status add_to_path_counts(const Path& path, int upto, int64_t delta);
   bool path_is_rightmost(const Path& path);
-  void bump_spine_counts(int levels);
+  void bump_spine_counts(int levels, uint64_t delta = 1);
 
   // insert
   Status insert_new_root_leaf(uint64_t key, const std::byte* payload);

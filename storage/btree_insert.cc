@@ -1,5 +1,6 @@
 // B+tree writes: random insert with in-place splits, and sorted append on
 // the right spine.
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -234,14 +235,50 @@ Status BTree::load_spine() {
   return Status::Ok();
 }
 
-// One more record under the last entry of spine levels [0, levels).
-void BTree::bump_spine_counts(int levels) {
+// `delta` more records under the last entry of spine levels [0, levels).
+void BTree::bump_spine_counts(int levels, uint64_t delta) {
   for (int d = 0; d < levels; ++d) {
     const page::InternalView iv = internal(spine_[d]);
     const uint32_t last = page::count(spine_[d].data()) - 1;
-    iv.set_count(last, iv.subtree_count(last) + 1);
+    iv.set_count(last, iv.subtree_count(last) + delta);
     spine_[d].mark_dirty();
   }
+}
+
+Status BTree::append_batch(const uint64_t* keys, const std::byte* payloads, size_t n) {
+  if (n == 0) return Status::Ok();
+  for (size_t i = 1; i < n; ++i) {
+    if (keys[i] <= keys[i - 1]) {
+      return Status::InvalidArgument(file_->name() + ": append out of order: key " +
+                                     std::to_string(keys[i]) + " after key " +
+                                     std::to_string(keys[i - 1]));
+    }
+  }
+  WEAVER_RETURN_IF_ERROR(append(keys[0], payloads));  // checks keys[0] against the tree
+  if (!spine_valid_) WEAVER_RETURN_IF_ERROR(load_spine());
+  size_t i = 1;
+  while (i < n) {
+    PageRef& lf = spine_[height_ - 1];
+    const uint32_t count = page::count(lf.data());
+    const size_t room = leaf_cap_ - count;
+    if (room == 0) {
+      WEAVER_RETURN_IF_ERROR(append_new_leaf(keys[i], payloads + i * payload_));
+      ++record_count_;
+      ++i;
+      continue;
+    }
+    const size_t k = std::min(room, n - i);
+    const page::LeafView v = leaf(lf);
+    std::memcpy(v.key_at(count), keys + i, 8 * k);
+    if (payload_ > 0) std::memcpy(v.value(count), payloads + i * payload_, payload_ * k);
+    page::set_count(lf.data(), static_cast<uint32_t>(count + k));
+    lf.mark_dirty();
+    bump_spine_counts(static_cast<int>(height_) - 1, k);
+    record_count_ += k;
+    i += k;
+  }
+  max_key_ = keys[n - 1];
+  return Status::Ok();
 }
 
 Status BTree::append(uint64_t key, const std::byte* payload) {

@@ -110,12 +110,34 @@ TEST_P(BTreeModel, RandomMixMatchesStdMap) {
   for (uint64_t op = 0; op < ops; ++op) {
     const uint64_t r = rng() % 100;
     ++version;
-    if (r < 12) {  // append
+    if (r < 8) {  // append
       const uint64_t k = model_.empty() ? rng() % 1000 : model_.rbegin()->first + 1 + rng() % 50;
       const auto v = payload_for(k, version);
       ASSERT_OK(tree_->append(k, v.data()));
       model_[k] = v;
       order_.insert(k);
+    } else if (r < 12) {  // append a batch (sometimes one with a key out of order)
+      const size_t n = 1 + rng() % 200;
+      uint64_t k = model_.empty() ? rng() % 1000 : model_.rbegin()->first + 1 + rng() % 50;
+      std::vector<uint64_t> keys;
+      std::vector<std::byte> payloads;
+      for (size_t i = 0; i < n; ++i, k += 1 + rng() % 5) {
+        keys.push_back(k);
+        const auto v = payload_for(k, version);
+        payloads.insert(payloads.end(), v.begin(), v.end());
+      }
+      const bool spoil = n > 2 && rng() % 8 == 0;
+      if (spoil) keys[n / 2] = keys[n / 2 - 1];
+      const Status st = tree_->append_batch(keys.data(), payloads.data(), n);
+      if (spoil) {
+        ASSERT_TRUE(st.is_invalid_argument()) << st.to_string();
+      } else {
+        ASSERT_OK(st);
+        for (size_t i = 0; i < n; ++i) {
+          model_[keys[i]] = payload_for(keys[i], version);
+          order_.insert(keys[i]);
+        }
+      }
     } else if (r < 14 && !model_.empty()) {  // append out of order: rejected, no change
       const uint64_t k = model_.rbegin()->first - rng() % 3;
       const auto v = payload_for(k, version);

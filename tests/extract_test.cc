@@ -216,6 +216,46 @@ TEST_F(ExtractTest, SearchAlgorithmMatchesReferenceAndSortByteForByte) {
   }
 }
 
+TEST_F(ExtractTest, ThreadCountsOneToFourGiveTheSameNodeTable) {
+  std::mt19937_64 rng(41);
+  const int cases = static_cast<int>(testing::scaled(12, 4));
+  for (int t = 0; t < cases; ++t) {
+    const auto leaves = random_balanced(rng(), 1 + rng() % 4, 1 + rng() % 4, 1 + rng() % 4, 2,
+                                        50 + rng() % 400, 4 + static_cast<int>(rng() % 5));
+    SCOPED_TRACE("case " + std::to_string(t));
+    std::string first;
+    for (int threads = 1; threads <= 4; ++threads) {
+      ExtractOptions o;
+      o.threads = threads;
+      o.bucket_level = 3 + static_cast<int>(rng() % 3);  // many buckets in flight
+      o.memory_bytes = 1 << 16;
+      if (threads == 1) {
+        ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
+      } else {
+        ExtractResult r;
+        ASSERT_OK(extract_mesh(db_, o, &r));
+        EXPECT_EQ(r.elements, leaves.size());
+      }
+      std::unique_ptr<Database> db;
+      ASSERT_OK(Database::open(db_, Database::Mode::kRead, false, &db));
+      const std::string table = file_bytes(db->table_path(kNodeTable));
+      if (threads == 1) first = table;
+      ASSERT_EQ(table, first) << threads << " threads";
+    }
+  }
+  // An unbalanced octree is refused with threads too.
+  std::vector<Octant> bad;
+  for (int k = 1; k < 8; ++k) bad.push_back(octant_child(octant_root(), k));
+  const Octant c0 = octant_child(octant_root(), 0);
+  for (int k = 0; k < 7; ++k) bad.push_back(octant_child(c0, k));
+  for (int j = 0; j < 8; ++j) bad.push_back(octant_child(octant_child(c0, 7), j));
+  ExtractOptions o;
+  o.threads = 3;
+  o.bucket_level = 2;
+  ExtractResult r;
+  EXPECT_TRUE(extract(bad, o, &r).is_invalid_argument());
+}
+
 TEST_F(ExtractTest, RefusesUnbalancedOctreesNamingTwoOctants) {
   // The root split once, then one child refined two more levels: 4x jump.
   std::vector<Octant> leaves;

@@ -10,7 +10,7 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver extract DB [--algorithm sort|search] [--memory BYTES]\n"
+    "usage: weaver extract DB [--algorithm sort|search] [--threads N] [--memory BYTES]\n"
     "\n"
     "Extracts the mesh nodes of the balanced octree in DB's octant table into\n"
     "its node table (node key + kind: anchored, edge- or face-dangling; ids are\n"
@@ -22,6 +22,8 @@ constexpr char kUsage[] =
     "  --algorithm search  the conventional baseline: a node B-tree searched for\n"
     "                      every element vertex, holding up to 8 element codes\n"
     "                      per node; slower, same result\n"
+    "  --threads N         worker threads for sort (default 1); the node table is\n"
+    "                      the same for every N\n"
     "  --memory BYTES  memory budget, e.g. 256M (default 256M); it sets the size\n"
     "                  of the high-level buckets\n";
 
@@ -29,7 +31,7 @@ constexpr char kUsage[] =
 
 int cmd_extract(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory", "algorithm"}, {}, &args);
+  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "threads"}, {}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("extract", "expected one DB", kUsage);
@@ -42,6 +44,12 @@ int cmd_extract(int argc, char** argv) {
     } else if (a != "sort") {
       st = Status::InvalidArgument("--algorithm must be sort or search");
     }
+  }
+  if (st.ok() && args.values.count("threads")) {
+    uint64_t n = 0;
+    st = parse_u64(args.values["threads"], "--threads", &n);
+    if (st.ok() && (n < 1 || n > 256)) st = Status::InvalidArgument("--threads must be 1..256");
+    o.threads = static_cast<int>(n);
   }
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();

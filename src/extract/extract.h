@@ -18,6 +18,8 @@ struct ExtractOptions {
   enum class Algorithm { kSort, kSearch };
   Algorithm algorithm = Algorithm::kSort;
   uint64_t memory_bytes = 256ull << 20;
+  // Worker threads for the sort algorithm; the output is the same for any count.
+  int threads = 1;
   // The level of the high-level buckets; -1 derives it from the budget.
   int bucket_level = -1;
   std::function<void(const char* phase, uint64_t done)> progress;

@@ -19,10 +19,10 @@
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "extract/extract.h"
+#include "extract/bucket_worker.h"
+#include "extract/extract_parallel.h"
 #include "extract/extract_search.h"
 #include "extract/node_classifier.h"
-#include "extract/node_hash.h"
-#include "extract/spill_store.h"
 #include "schema/node.h"
 #include "schema/octant.h"
 
@@ -36,66 +36,6 @@ constexpr uint64_t kBytesPerLeaf = 8 + 24 + 16;
 // budget: its hash table then stays in the CPU caches.  Larger buckets only
 // save spills, which cost far less than cache misses on every corner.
 constexpr int kMaxBucketDepth = 6;
-
-struct Bucketing {
-  int level;  // bucket level: edge 2^(20-level)
-  int shift;  // bits of a node key below the bucket id
-  uint64_t of_key(uint64_t node_key) const { return node_key >> shift; }
-};
-
-class BucketExtractor {
- public:
-  BucketExtractor(BTree& octants, BTree& nodes, SpillStore& spills, Bucketing b,
-                  ExtractResult* result)
-      : classifier_(octants), nodes_(nodes), spills_(spills), b_(b), result_(result) {}
-
-  // Extracts the nodes of bucket `bucket`, whose leaves are `leaves` (key order).
-  Status run(uint64_t bucket, const std::vector<uint64_t>& leaf_keys) {
-    bucket_ = bucket;
-    classifier_.set_local(&leaf_keys, bucket, b_.shift);
-    hash_.reset(leaf_keys.size() + 64);
-    for (uint64_t key : leaf_keys) WEAVER_RETURN_IF_ERROR(add_corners(octant_from_key(key)));
-    WEAVER_RETURN_IF_ERROR(spills_.take(bucket, &incoming_));
-    for (const SpillRecord& r : incoming_) hash_.add(r.key, r.mask);
-    order_.resize(hash_.size());
-    for (size_t i = 0; i < hash_.size(); ++i) order_[i] = {hash_.key_at(i), hash_.mask_at(i)};
-    std::sort(order_.begin(), order_.end(),
-              [](const SpillRecord& a, const SpillRecord& b) { return a.key < b.key; });
-    for (const auto& [key, mask] : order_) {
-      NodeKind kind = NodeKind::kAnchored;
-      WEAVER_RETURN_IF_ERROR(classifier_.classify(key, mask, &kind));
-      const std::byte payload{static_cast<uint8_t>(kind)};
-      WEAVER_RETURN_IF_ERROR(nodes_.append(key, &payload));
-      count_kind(kind, result_);
-    }
-    return Status::Ok();
-  }
-
- private:
-  Status add_corners(const Octant& e) {
-    for (int c = 0; c < 8; ++c) {
-      const uint64_t key = node_key(octant_corner(e, c));
-      const uint8_t bit = corner_direction_bit(c);
-      const uint64_t owner = b_.of_key(key);
-      if (owner == bucket_) {
-        hash_.add(key, bit);
-      } else {
-        WEAVER_RETURN_IF_ERROR(spills_.add(owner, {key, bit}));
-      }
-    }
-    return Status::Ok();
-  }
-
-  NodeClassifier classifier_;
-  BTree& nodes_;
-  SpillStore& spills_;
-  Bucketing b_;
-  ExtractResult* result_;
-  uint64_t bucket_ = 0;
-  NodeHash hash_;
-  std::vector<SpillRecord> incoming_;
-  std::vector<SpillRecord> order_;  // (key, mask) of the bucket's nodes
-};
 
 // One pass over the octant table: the finest level, and no two octants overlap.
 Status scan_octants(BTree& octants, int* max_level) {
@@ -133,32 +73,21 @@ int bucket_level_for(uint64_t budget, int max_level) {
   return level;
 }
 
-Status run_buckets(BTree& octants, BTree& nodes, const ExtractOptions& options,
-                   const std::string& scratch, ExtractResult* result) {
-  Bucketing b{result->bucket_level, 3 * (kMaxLevel - result->bucket_level)};
-  SpillStore spills(scratch, std::max<uint64_t>(options.memory_bytes / 8, 1 << 12));
-  BucketExtractor extractor(octants, nodes, spills, b, result);
+// One thread: read, extract and write each bucket in turn.
+Status run_serial(BTree& octants, BTree& nodes, const Bucketing& b, SpillStore& spills,
+                  const ExtractOptions& options, ExtractResult* result) {
+  BucketWorker worker(octants, b);
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(octants.seek_cursor(0, &c));
-  std::vector<uint64_t> leaf_keys;
-  while (c.valid() || !spills.empty()) {
-    const uint64_t leaf_bucket = c.valid() ? b.of_key(octant_morton(octant_from_key(c.key())))
-                                           : UINT64_MAX;
-    const uint64_t bucket = spills.empty() ? leaf_bucket
-                                           : std::min(leaf_bucket, spills.first_bucket());
-    leaf_keys.clear();
-    while (c.valid() && b.of_key(octant_morton(octant_from_key(c.key()))) == bucket) {
-      leaf_keys.push_back(c.key());
-      WEAVER_RETURN_IF_ERROR(c.next());
-    }
-    result->elements += leaf_keys.size();
-    WEAVER_RETURN_IF_ERROR(extractor.run(bucket, leaf_keys));
-    ++result->buckets;
+  BucketTask task;
+  bool more = true;
+  while (true) {
+    WEAVER_RETURN_IF_ERROR(read_bucket(c, b, spills, &task, &more));
+    if (!more) return Status::Ok();
+    WEAVER_RETURN_IF_ERROR(worker.run(task));
+    WEAVER_RETURN_IF_ERROR(write_bucket(task, nodes, result));
     if (options.progress && result->buckets % 64 == 0) options.progress("nodes", result->nodes);
   }
-  result->spilled = spills.records_added();
-  result->spilled_to_disk = spills.records_written();
-  return Status::Ok();
 }
 
 }  // namespace
@@ -194,7 +123,15 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
     st = extract_by_search(*octants, *nodes, scratch + ".bt",
                            std::max<uint64_t>(options.memory_bytes / 2, 1 << 20), result);
   } else {
-    st = run_buckets(*octants, *nodes, options, scratch, result);
+    const Bucketing b{result->bucket_level, 3 * (kMaxLevel - result->bucket_level)};
+    SpillStore spills(scratch, std::max<uint64_t>(options.memory_bytes / 8, 1 << 12));
+    if (options.threads > 1) {
+      st = run_parallel(*db, *octants, *nodes, b, spills, options, result);
+    } else {
+      st = run_serial(*octants, *nodes, b, spills, options, result);
+    }
+    result->spilled = spills.records_added();
+    result->spilled_to_disk = spills.records_written();
   }
   if (st.ok()) st = nodes->commit();
   if (st.ok()) st = db->commit({{kNodeTable, file}});

@@ -1,0 +1,134 @@
+#include "extract/extract_parallel.h"
+
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "db/octant_table.h"
+
+namespace weaver {
+
+Status write_bucket(const BucketTask& t, BTree& nodes, ExtractResult* result) {
+  WEAVER_RETURN_IF_ERROR(nodes.append_batch(t.node_keys.data(), t.node_kinds.data(),
+                                            t.node_keys.size()));
+  result->elements += t.counts.elements;
+  result->nodes += t.counts.nodes;
+  result->anchored += t.counts.anchored;
+  result->edge += t.counts.edge;
+  result->face += t.counts.face;
+  ++result->buckets;
+  return Status::Ok();
+}
+
+namespace {
+
+// The queue between the reader and the workers.
+class WorkQueue {
+ public:
+  void push(BucketTask* t) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      queue_.push_back(t);
+    }
+    work_.notify_one();
+  }
+  // Null once stopped.
+  BucketTask* pop() {
+    std::unique_lock<std::mutex> lock(mu_);
+    work_.wait(lock, [&] { return stopped_ || !queue_.empty(); });
+    if (stopped_) return nullptr;
+    BucketTask* t = queue_.front();
+    queue_.pop_front();
+    return t;
+  }
+  void finish(BucketTask* t, Status st) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      t->status = std::move(st);
+      t->done = true;
+    }
+    done_.notify_all();
+  }
+  void wait_done(BucketTask* t) {
+    std::unique_lock<std::mutex> lock(mu_);
+    done_.wait(lock, [&] { return t->done; });
+  }
+  void stop() {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      stopped_ = true;
+    }
+    work_.notify_all();
+  }
+
+ private:
+  std::mutex mu_;
+  std::condition_variable work_, done_;
+  std::deque<BucketTask*> queue_;
+  bool stopped_ = false;
+};
+
+constexpr int kTasksPerThread = 8;
+
+// Memory a task holds while in flight: its leaves, its incoming pixels and
+// (once done) its nodes, about 1.2 per leaf.  Estimated from the inputs so
+// that it is the same when the task is added and when it is removed.
+uint64_t task_bytes(const BucketTask& t) {
+  return t.leaf_keys.size() * (8 + 20) + t.incoming.size() * 2 * sizeof(SpillRecord);
+}
+
+}  // namespace
+
+Status run_parallel(Database& db, BTree& octants, BTree& nodes, const Bucketing& b,
+                    SpillStore& spills, const ExtractOptions& options, ExtractResult* result) {
+  const int n = options.threads;
+  // Each worker reads the octant table through its own handle: a buffer pool
+  // serves one thread.
+  std::vector<std::unique_ptr<BTree>> handles(n);
+  const uint64_t pool = std::max<uint64_t>(options.memory_bytes / 16 / n, 1 << 20);
+  for (auto& h : handles) WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, pool, &h));
+  WorkQueue queue;
+  std::deque<std::unique_ptr<BucketTask>> in_flight;  // Z-order
+  std::vector<std::thread> workers;
+  for (int i = 0; i < n; ++i) {
+    workers.emplace_back([&, i] {
+      BucketWorker worker(*handles[i], b);
+      while (BucketTask* t = queue.pop()) queue.finish(t, worker.run(*t));
+    });
+  }
+  BTreeCursor c;
+  Status st = octants.seek_cursor(0, &c);
+  bool more = true;
+  // Read ahead far enough that workers never wait for the writer (8 tasks a
+  // thread measured 1.63x on 2 cores, 2 tasks only 1.41x), but within half
+  // the budget.
+  const size_t max_tasks = static_cast<size_t>(kTasksPerThread * n);
+  uint64_t in_flight_bytes = 0;
+  while (st.ok()) {
+    while (more && in_flight.size() < max_tasks && in_flight_bytes < options.memory_bytes / 2) {
+      auto t = std::make_unique<BucketTask>();
+      st = read_bucket(c, b, spills, t.get(), &more);
+      if (!st.ok() || !more) break;
+      in_flight_bytes += task_bytes(*t);
+      queue.push(t.get());
+      in_flight.push_back(std::move(t));
+    }
+    if (!st.ok() || in_flight.empty()) break;
+    BucketTask* head = in_flight.front().get();
+    queue.wait_done(head);
+    st = head->status;
+    if (st.ok()) st = write_bucket(*head, nodes, result);
+    in_flight_bytes -= task_bytes(*head);
+    in_flight.pop_front();
+    if (options.progress && result->buckets % 64 == 0) options.progress("nodes", result->nodes);
+  }
+  // Let running tasks finish before their memory goes away.
+  for (auto& t : in_flight) queue.wait_done(t.get());
+  queue.stop();
+  for (auto& w : workers) w.join();
+  return st;
+}
+
+}  // namespace weaver

@@ -1,0 +1,18 @@
+// The bucket sort with worker threads: this thread reads buckets in Z-order
+// (and routes spills), workers extract them, this thread writes them back in
+// Z-order.  At most 2 x threads buckets are in flight.
+#pragma once
+
+#include "db/database.h"
+#include "extract/bucket_worker.h"
+#include "extract/extract.h"
+
+namespace weaver {
+
+Status run_parallel(Database& db, BTree& octants, BTree& nodes, const Bucketing& b,
+                    SpillStore& spills, const ExtractOptions& options, ExtractResult* result);
+
+// Appends a finished bucket's nodes and adds up its counts.
+Status write_bucket(const BucketTask& t, BTree& nodes, ExtractResult* result);
+
+}  // namespace weaver
