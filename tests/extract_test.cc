@@ -256,6 +256,48 @@ TEST_F(ExtractTest, ThreadCountsOneToFourGiveTheSameNodeTable) {
   EXPECT_TRUE(extract(bad, o, &r).is_invalid_argument());
 }
 
+// An octant table written directly (import would refuse the overlap, and
+// writes level counts that this table lacks: extract must scan instead).
+void write_raw_octant_table(const std::string& dir, const std::vector<Octant>& octants) {
+  std::unique_ptr<Database> db;
+  ASSERT_OK(Database::open(dir, Database::Mode::kWrite, true, &db));
+  std::unique_ptr<BTree> t;
+  std::string file;
+  ASSERT_OK(db->create_table(kOctantTable, TableOptions{}, 1 << 20, &t, &file));
+  std::vector<uint64_t> keys;
+  for (const Octant& o : octants) keys.push_back(octant_key(o));
+  std::sort(keys.begin(), keys.end());
+  for (uint64_t k : keys) ASSERT_OK(t->append(k, nullptr));
+  ASSERT_OK(t->commit());
+  ASSERT_OK(db->commit({{kOctantTable, file}}));
+}
+
+TEST_F(ExtractTest, RefusesOverlappingOctantsAndScansTablesWithoutLevelCounts) {
+  std::vector<Octant> leaves;
+  for (int k = 0; k < 8; ++k) leaves.push_back(octant_child(octant_root(), k));
+  const std::string good = dir_.file("raw-good");
+  ASSERT_NO_FATAL_FAILURE(write_raw_octant_table(good, leaves));
+  ExtractResult r;
+  ASSERT_OK(extract_mesh(good, ExtractOptions{}, &r));
+  EXPECT_EQ(r.nodes, 27u);
+  leaves.push_back(octant_child(leaves[3], 5));  // inside leaf 3
+  const std::string bad = dir_.file("raw-bad");
+  ASSERT_NO_FATAL_FAILURE(write_raw_octant_table(bad, leaves));
+  for (int threads : {1, 2}) {
+    for (auto algorithm : {ExtractOptions::Algorithm::kSort, ExtractOptions::Algorithm::kSearch}) {
+      ExtractOptions o;
+      o.threads = threads;
+      o.algorithm = algorithm;
+      o.bucket_level = 2;
+      const Status st = extract_mesh(bad, o, &r);
+      ASSERT_TRUE(st.is_invalid_argument()) << st.to_string();
+      EXPECT_NE(st.message().find("(524288 524288 0 1) and (786432 524288 262144 2) overlap"),
+                std::string::npos)
+          << st.message();
+    }
+  }
+}
+
 TEST_F(ExtractTest, RefusesUnbalancedOctreesNamingTwoOctants) {
   // The root split once, then one child refined two more levels: 4x jump.
   std::vector<Octant> leaves;

@@ -27,4 +27,36 @@ void units_from_metadata(const std::string& metadata, Units* u) {
   }
 }
 
+std::string levels_to_metadata(const LevelCounts& levels) {
+  std::string out = ";levels=";
+  for (size_t l = 0; l < levels.size(); ++l) {
+    if (l > 0) out += ',';
+    out += std::to_string(levels[l]);
+  }
+  return out;
+}
+
+bool levels_from_metadata(const std::string& metadata, LevelCounts* levels) {
+  const size_t at = metadata.find("levels=");
+  if (at == std::string::npos) return false;
+  std::istringstream in(metadata.substr(at + 7));
+  for (size_t l = 0; l < levels->size(); ++l) {
+    std::string item;
+    if (!std::getline(in, item, l + 1 < levels->size() ? ',' : ';')) return false;
+    try {
+      (*levels)[l] = std::stoull(item);
+    } catch (...) {
+      return false;
+    }
+  }
+  return true;
+}
+
+int finest_level(const LevelCounts& levels) {
+  for (int l = static_cast<int>(levels.size()) - 1; l > 0; --l) {
+    if (levels[l] > 0) return l;
+  }
+  return 0;
+}
+
 }  // namespace weaver

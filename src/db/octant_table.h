@@ -21,4 +21,13 @@ std::string units_to_metadata(const Units& u);
 // Fills *u from metadata; unknown or missing fields keep their defaults.
 void units_from_metadata(const std::string& metadata, Units* u);
 
+// Leaves per level, kept in the metadata by the writer of the table
+// (";levels=n0,n1,...,n20") so that readers need not scan for them.
+using LevelCounts = std::array<uint64_t, 21>;
+std::string levels_to_metadata(const LevelCounts& levels);
+// False if the metadata has no (well-formed) level counts.
+bool levels_from_metadata(const std::string& metadata, LevelCounts* levels);
+// The finest level with leaves (0 if none).
+int finest_level(const LevelCounts& levels);
+
 }  // namespace weaver

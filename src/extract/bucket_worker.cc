@@ -6,7 +6,7 @@
 
 namespace weaver {
 
-Status read_bucket(BTreeCursor& cursor, const Bucketing& b, SpillStore& spills, BucketTask* task,
+Status read_bucket(LeafReader& cursor, const Bucketing& b, SpillStore& spills, BucketTask* task,
                    bool* more) {
   auto leaf_bucket = [&] { return b.of_key(octant_morton(octant_from_key(cursor.key()))); };
   *more = cursor.valid() || !spills.empty();

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "extract/extract.h"
+#include "extract/leaf_reader.h"
 #include "extract/node_classifier.h"
 #include "extract/node_hash.h"
 #include "extract/spill_store.h"
@@ -37,7 +38,7 @@ struct BucketTask {
 
 // Reads the next bucket from the cursor and the spill store into *task;
 // returns false in *more when both are exhausted.
-Status read_bucket(BTreeCursor& cursor, const Bucketing& b, SpillStore& spills, BucketTask* task,
+Status read_bucket(LeafReader& cursor, const Bucketing& b, SpillStore& spills, BucketTask* task,
                    bool* more);
 
 class BucketWorker {

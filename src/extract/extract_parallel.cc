@@ -98,8 +98,8 @@ Status run_parallel(Database& db, BTree& octants, BTree& nodes, const Bucketing&
       while (BucketTask* t = queue.pop()) queue.finish(t, worker.run(*t));
     });
   }
-  BTreeCursor c;
-  Status st = octants.seek_cursor(0, &c);
+  LeafReader c;
+  Status st = c.open(octants);
   bool more = true;
   // Read ahead far enough that workers never wait for the writer (8 tasks a
   // thread measured 1.63x on 2 cores, 2 tasks only 1.41x), but within half

@@ -10,6 +10,7 @@
 
 #include <cstring>
 
+#include "extract/leaf_reader.h"
 #include "extract/node_classifier.h"
 #include "schema/node.h"
 #include "schema/octant.h"
@@ -28,8 +29,8 @@ int corner_index(const Octant& e, Coord n) {
 }
 
 Status record_vertices(BTree& octants, BTree& scratch, ExtractResult* result) {
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(octants.seek_cursor(0, &c));
+  LeafReader c;
+  WEAVER_RETURN_IF_ERROR(c.open(octants));
   std::byte rec[kPayload];
   while (c.valid()) {
     const uint64_t code = c.key();

@@ -37,27 +37,19 @@ constexpr uint64_t kBytesPerLeaf = 8 + 24 + 16;
 // save spills, which cost far less than cache misses on every corner.
 constexpr int kMaxBucketDepth = 6;
 
-// One pass over the octant table: the finest level, and no two octants overlap.
-Status scan_octants(BTree& octants, int* max_level) {
+// The finest level: from the counts the table's writer kept, else one pass.
+Status finest_level_of(BTree& octants, int* max_level) {
+  LevelCounts levels{};
+  if (levels_from_metadata(octants.options().metadata, &levels)) {
+    *max_level = finest_level(levels);
+    return Status::Ok();
+  }
   *max_level = 0;
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(octants.seek_cursor(0, &c));
-  bool first = true;
-  Octant prev{};
-  while (c.valid()) {
-    if (!octant_key_is_valid(c.key())) {
-      return Status::Corruption(octants.file_name() + ": invalid octant key " +
-                                std::to_string(c.key()));
-    }
-    const Octant o = octant_from_key(c.key());
-    if (!first && octant_is_ancestor(prev, o)) {
-      return Status::InvalidArgument("octants " + describe_octant(prev) + " and " + describe_octant(o) +
-                                     " overlap");
-    }
-    *max_level = std::max<int>(*max_level, o.level);
-    prev = o;
-    first = false;
-    WEAVER_RETURN_IF_ERROR(c.next());
+  LeafReader r;
+  WEAVER_RETURN_IF_ERROR(r.open(octants));
+  while (r.valid()) {
+    *max_level = std::max<int>(*max_level, octant_from_key(r.key()).level);
+    WEAVER_RETURN_IF_ERROR(r.next());
   }
   return Status::Ok();
 }
@@ -77,8 +69,8 @@ int bucket_level_for(uint64_t budget, int max_level) {
 Status run_serial(BTree& octants, BTree& nodes, const Bucketing& b, SpillStore& spills,
                   const ExtractOptions& options, ExtractResult* result) {
   BucketWorker worker(octants, b);
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(octants.seek_cursor(0, &c));
+  LeafReader c;
+  WEAVER_RETURN_IF_ERROR(c.open(octants));
   BucketTask task;
   bool more = true;
   while (true) {
@@ -103,7 +95,7 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
   const uint64_t pool = std::min<uint64_t>(options.memory_bytes / 8, 32ull << 20);
   WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, pool, &octants));
   int max_level = 0;
-  WEAVER_RETURN_IF_ERROR(scan_octants(*octants, &max_level));
+  WEAVER_RETURN_IF_ERROR(finest_level_of(*octants, &max_level));
   result->bucket_level = options.bucket_level >= 0
                              ? std::min(options.bucket_level, kMaxLevel)
                              : bucket_level_for(options.memory_bytes, max_level);

@@ -60,18 +60,19 @@ Status build_table(Database& db, const std::string& text_path, const ImportOptio
                    ExternalSorter& sorter, std::string* file_name, ImportResult* result) {
   TableOptions topt;
   topt.key_kind = KeyKind::kOctant;
-  topt.metadata = units_to_metadata(options.units);
   std::unique_ptr<BTree> table;
   WEAVER_RETURN_IF_ERROR(db.create_table(kOctantTable, topt,
                                          append_pool_bytes(options.memory_bytes), &table,
                                          file_name));
   KeyTag prev{}, cur{};
   bool done = false, first = true;
+  LevelCounts levels{};
   while (true) {
     WEAVER_RETURN_IF_ERROR(sorter.next(&cur, &done));
     if (done) break;
     if (!first) WEAVER_RETURN_IF_ERROR(check_neighbours(text_path, prev, cur));
     WEAVER_RETURN_IF_ERROR(table->append(cur.key, nullptr));
+    ++levels[octant_from_key(cur.key).level];
     if (options.progress && table->size() % kProgressEvery == 0) {
       options.progress("write", table->size());
     }
@@ -79,6 +80,7 @@ Status build_table(Database& db, const std::string& text_path, const ImportOptio
     first = false;
   }
   if (table->size() == 0) return Status::InvalidArgument(text_path + ": no octants in the file");
+  table->set_metadata(units_to_metadata(options.units) + levels_to_metadata(levels));
   WEAVER_RETURN_IF_ERROR(table->commit());
   result->octants = table->size();
   result->table_bytes = table->file_bytes();

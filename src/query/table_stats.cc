@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "db/octant_table.h"
 #include "schema/node.h"
 #include "schema/octant.h"
 
@@ -29,7 +30,9 @@ Status table_stats(const std::string& name, BTree& table, TableStats* out) {
       WEAVER_RETURN_IF_ERROR(c.next());
     }
   }
-  if (s.key_kind == KeyKind::kOctant) {
+  const bool counted =  // by the table's writer, into its metadata
+      s.key_kind == KeyKind::kOctant && levels_from_metadata(table.options().metadata, &s.per_level);
+  if (s.key_kind == KeyKind::kOctant && !counted) {
     BTreeCursor c;
     WEAVER_RETURN_IF_ERROR(table.seek_cursor(0, &c));
     while (c.valid()) {

@@ -1,0 +1,28 @@
+// The octant table in key order, refusing invalid keys and overlapping
+// octants as it goes: in key order (preorder) an overlap always shows up
+// between neighbours.
+#pragma once
+
+#include <cstdint>
+
+#include "schema/octant.h"
+#include "schema/status.h"
+#include "storage/btree.h"
+
+namespace weaver {
+
+class LeafReader {
+ public:
+  Status open(BTree& octants);
+  bool valid() const { return cursor_.valid(); }
+  uint64_t key() const { return cursor_.key(); }  // REQUIRES: valid()
+  Status next();                                   // REQUIRES: valid()
+
+ private:
+  Status check_current();
+
+  BTreeCursor cursor_;
+  std::string file_;
+};
+
+}  // namespace weaver
