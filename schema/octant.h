@@ -180,6 +180,17 @@ constexpr Octant octant_from_key(uint64_t key) {
   return {c.x, c.y, c.z, level};
 }
 
+// The Morton code of the octant's corner, straight from its key (no decode).
+// REQUIRES: octant_key_is_valid(key).
+constexpr uint64_t octant_key_morton(uint64_t key) {
+  const uint64_t slot = key & 127;
+  return ((key >> 7) << 3) | (slot >= kKeyLevel20Slot ? slot - kKeyLevel20Slot : 0);
+}
+constexpr int octant_key_level(uint64_t key) {
+  const uint64_t slot = key & 127;
+  return slot >= kKeyLevel20Slot ? kMaxLevel : static_cast<int>(slot);
+}
+
 // The key of the level-20 octant at pixel p; the floor of this key in a leaf
 // table is the leaf that contains p, if any (the "aggregate hit").
 // Accepts: pixel.
@@ -187,12 +198,17 @@ constexpr uint64_t pixel_key(Coord p) { return octant_key({p.x, p.y, p.z, kMaxLe
 
 // The smallest key greater than every key in o's subtree; UINT64_MAX (never a
 // valid key) for the root.  Accepts: octant.
-constexpr uint64_t octant_subtree_key_end(const Octant& o) {
-  if (o.level == kMaxLevel) return octant_key(o) + 1;  // the next slot
-  const uint64_t span = uint64_t{1} << (3 * (kMaxLevel - o.level));
-  const uint64_t m_end = octant_morton(o) + span;  // a multiple of 8 below level 20
+// Accepts: a valid octant key.
+constexpr uint64_t octant_key_subtree_end(uint64_t key) {
+  const int level = octant_key_level(key);
+  if (level == kMaxLevel) return key + 1;  // the next slot
+  const uint64_t span = uint64_t{1} << (3 * (kMaxLevel - level));
+  const uint64_t m_end = octant_key_morton(key) + span;  // a multiple of 8 below level 20
   if (m_end >> (3 * kMaxLevel)) return UINT64_MAX;  // the subtree reaches the root's end
   return (m_end >> 3) << 7;
+}
+constexpr uint64_t octant_subtree_key_end(const Octant& o) {
+  return octant_key_subtree_end(octant_key(o));
 }
 
 // The node key of a node coordinate: its Morton code.  Accepts: node.

@@ -8,7 +8,7 @@ namespace weaver {
 
 Status read_bucket(LeafReader& cursor, const Bucketing& b, SpillStore& spills, BucketTask* task,
                    bool* more) {
-  auto leaf_bucket = [&] { return b.of_key(octant_morton(octant_from_key(cursor.key()))); };
+  auto leaf_bucket = [&] { return b.of_key(octant_key_morton(cursor.key())); };
   *more = cursor.valid() || !spills.empty();
   if (!*more) return Status::Ok();
   const uint64_t next_leaf = cursor.valid() ? leaf_bucket() : UINT64_MAX;

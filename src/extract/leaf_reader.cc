@@ -18,14 +18,14 @@ Status LeafReader::check_current() {
 }
 
 Status LeafReader::next() {
-  const Octant prev = octant_from_key(cursor_.key());
+  const uint64_t prev = cursor_.key();
   WEAVER_RETURN_IF_ERROR(cursor_.next());
   if (!cursor_.valid()) return Status::Ok();
   WEAVER_RETURN_IF_ERROR(check_current());
-  const Octant cur = octant_from_key(cursor_.key());
-  if (octant_is_ancestor(prev, cur)) {
-    return Status::InvalidArgument("octants " + describe_octant(prev) + " and " +
-                                   describe_octant(cur) + " overlap");
+  // A later key inside prev's subtree key range is a descendant of prev.
+  if (cursor_.key() < octant_key_subtree_end(prev)) {
+    return Status::InvalidArgument("octants " + describe_octant(octant_from_key(prev)) + " and " +
+                                   describe_octant(octant_from_key(cursor_.key())) + " overlap");
   }
   return Status::Ok();
 }
