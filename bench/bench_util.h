@@ -98,6 +98,39 @@ inline std::string run_in_child(const std::function<bool(Json*)>& fn) {
   return text;
 }
 
+// Runs argv[0] (a path) with its arguments in a fresh process, returning its
+// stdout ("" on failure) and its peak RSS.  A fresh process, not a fork of
+// this one: a fork inherits this process's heap, and copy-on-write faults
+// then distort a multi-threaded child's timing.
+inline std::string run_program(const std::vector<std::string>& args, uint64_t* peak_rss) {
+  int fds[2];
+  if (pipe(fds) != 0) return "";
+  std::fflush(stdout);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    dup2(fds[1], STDOUT_FILENO);
+    close(fds[0]);
+    close(fds[1]);
+    std::vector<char*> argv;
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  close(fds[1]);
+  std::string text;
+  char buf[4096];
+  ssize_t r;
+  while ((r = read(fds[0], buf, sizeof buf)) > 0) text.append(buf, static_cast<size_t>(r));
+  close(fds[0]);
+  int status = 0;
+  struct rusage ru;
+  wait4(pid, &status, 0, &ru);
+  *peak_rss = static_cast<uint64_t>(ru.ru_maxrss) * 1024;
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return "";
+  return text;
+}
+
 // Parses the flat objects Json::str() writes: {"k": value, ...}.
 inline std::map<std::string, std::string> parse_flat_json(const std::string& s) {
   std::map<std::string, std::string> out;

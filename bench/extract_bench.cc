@@ -1,6 +1,6 @@
 // Extraction throughput: sphere-graded octrees (2:1 balanced by
-// construction) are generated, imported, then extracted in a child process
-// per run, so peak RSS is the extraction's own.  Prints one JSON object per
+// construction) are generated and imported, then `weaver extract --json` runs
+// in a fresh process per run, so time and peak RSS are what a user sees.  Prints one JSON object per
 // run, then a table of medians laid out like the paper's Figure 12.
 // Both algorithms run on every mesh; the table adds the speedup of sort over
 // search and the storage of each (Figure 13: the node B-tree with element
@@ -90,28 +90,32 @@ int main(int argc, char** argv) {
       std::vector<double> rates, secs, rss;
       std::map<std::string, std::string> last;
       for (int r = 0; r < runs; ++r) {
-        const std::string line = run_in_child([&](Json* j) {
-          ExtractOptions o;
-          o.memory_bytes = memory;
-          o.algorithm = search ? ExtractOptions::Algorithm::kSearch
-                               : ExtractOptions::Algorithm::kSort;
-          o.threads = v.threads;
-          ExtractResult res;
-          const double t0 = now_seconds();
-          if (!extract_mesh(db, o, &res).ok()) return false;
-          const double t = now_seconds() - t0;
-          j->add("bench", "extract").add("algorithm", algorithm).add("mesh", m.name);
-          j->add("elements", res.elements).add("nodes", res.nodes);
-          j->add("dangling", res.edge + res.face).add("seconds", t);
-          j->add("nodes_per_s", res.nodes / t);
-          j->add("bytes_per_node", double(res.node_table_bytes) / res.nodes);
-          // The storage the algorithm builds: the node B-tree with element
-          // codes for search, the node table for sort (Figure 13).
-          const double built = double(search ? res.search_tree_bytes : res.node_table_bytes);
-          j->add("built_bytes", built).add("built_bytes_per_node", built / res.nodes);
-          j->add("threads", v.threads).add("memory_budget", memory).add("buckets", res.buckets);
-          return true;
-        });
+        uint64_t peak = 0;
+        const std::string out = run_program(
+            {WEAVER_BINARY, "extract", db, "--json", "--algorithm", algorithm, "--threads",
+             std::to_string(v.threads), "--memory", std::to_string(memory)},
+            &peak);
+        if (out.empty()) {
+          std::fprintf(stderr, "weaver extract failed on %s\n", m.name.c_str());
+          return 1;
+        }
+        auto res = parse_flat_json(out);
+        Json j;
+        j.add("bench", "extract").add("algorithm", algorithm).add("mesh", m.name);
+        const double nodes = std::stod(res["nodes"]);
+        const double built = std::stod(res[search ? "search_tree_bytes" : "node_table_bytes"]);
+        j.add("elements", static_cast<uint64_t>(std::stod(res["elements"])));
+        j.add("nodes", static_cast<uint64_t>(nodes));
+        j.add("dangling", static_cast<uint64_t>(std::stod(res["edge"]) + std::stod(res["face"])));
+        j.add("seconds", std::stod(res["seconds"])).add("nodes_per_s", std::stod(res["nodes_per_s"]));
+        j.add("bytes_per_node", std::stod(res["node_table_bytes"]) / nodes);
+        // The storage the algorithm builds: the node B-tree with element codes
+        // for search, the node table for sort (Figure 13).
+        j.add("built_bytes", built).add("built_bytes_per_node", built / nodes);
+        j.add("threads", v.threads).add("memory_budget", memory);
+        j.add("buckets", static_cast<uint64_t>(std::stod(res["buckets"])));
+        j.add("peak_rss_bytes", peak);
+        const std::string line = j.str();
         if (line.empty()) return 1;
         std::printf("%s\n", line.c_str());
         last = parse_flat_json(line);

@@ -11,6 +11,7 @@ namespace {
 
 constexpr char kUsage[] =
     "usage: weaver extract DB [--algorithm sort|search] [--threads N] [--memory BYTES]\n"
+    "                         [--json]\n"
     "\n"
     "Extracts the mesh nodes of the balanced octree in DB's octant table into\n"
     "its node table (node key + kind: anchored, edge- or face-dangling; ids are\n"
@@ -24,6 +25,7 @@ constexpr char kUsage[] =
     "                      per node; slower, same result\n"
     "  --threads N         worker threads for sort (default 1); the node table is\n"
     "                      the same for every N\n"
+    "  --json              print the result as one JSON object\n"
     "  --memory BYTES  memory budget, e.g. 256M (default 256M); it sets the size\n"
     "                  of the high-level buckets\n";
 
@@ -31,7 +33,7 @@ constexpr char kUsage[] =
 
 int cmd_extract(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "threads"}, {}, &args);
+  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "threads"}, {"json"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("extract", "expected one DB", kUsage);
@@ -67,6 +69,21 @@ int cmd_extract(int argc, char** argv) {
   if (o.progress) std::fprintf(stderr, "\r%60s\r", "");
   if (!st.ok()) return report("extract", st);
   const double secs = elapsed();
+  if (args.flags.count("json")) {
+    const bool search = o.algorithm == ExtractOptions::Algorithm::kSearch;
+    std::printf("{\"algorithm\": \"%s\", \"threads\": %d, \"memory_budget\": %llu, "
+                "\"elements\": %llu, \"nodes\": %llu, \"anchored\": %llu, \"edge\": %llu, "
+                "\"face\": %llu, \"seconds\": %.6f, \"nodes_per_s\": %.1f, \"buckets\": %llu, "
+                "\"bucket_level\": %d, \"spilled\": %llu, \"node_table_bytes\": %llu, "
+                "\"search_tree_bytes\": %llu}\n",
+                search ? "search" : "sort", o.threads, (unsigned long long)o.memory_bytes,
+                (unsigned long long)r.elements, (unsigned long long)r.nodes,
+                (unsigned long long)r.anchored, (unsigned long long)r.edge,
+                (unsigned long long)r.face, secs, r.nodes / secs, (unsigned long long)r.buckets,
+                r.bucket_level, (unsigned long long)r.spilled,
+                (unsigned long long)r.node_table_bytes, (unsigned long long)r.search_tree_bytes);
+    return 0;
+  }
   std::printf("extracted %llu nodes (%llu anchored, %llu edge-dangling, %llu face-dangling) from "
               "%llu elements in %.2fs (%.0f nodes/s)\n",
               (unsigned long long)r.nodes, (unsigned long long)r.anchored,
