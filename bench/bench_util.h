@@ -67,6 +67,25 @@ class Json {
   std::vector<std::pair<std::string, std::string>> fields_;
 };
 
+// Reads the child's end of the pipe to EOF, then reaps the child; returns
+// its output, or "" if it failed.  Sets *peak_rss (may be null).
+inline std::string collect_child(pid_t pid, int read_fd, uint64_t* peak_rss) {
+  std::string text;
+  char buf[4096];
+  ssize_t r;
+  while ((r = read(read_fd, buf, sizeof buf)) > 0) text.append(buf, static_cast<size_t>(r));
+  close(read_fd);
+  int status = 0;
+  struct rusage ru;
+  wait4(pid, &status, 0, &ru);
+  if (peak_rss != nullptr) *peak_rss = static_cast<uint64_t>(ru.ru_maxrss) * 1024;
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    std::fprintf(stderr, "child failed: %s\n", text.c_str());
+    return "";
+  }
+  return text;
+}
+
 // Runs fn in a child process and returns its JSON line (with peak_rss_bytes
 // added), or "" if the child failed.
 inline std::string run_in_child(const std::function<bool(Json*)>& fn) {
@@ -84,18 +103,7 @@ inline std::string run_in_child(const std::function<bool(Json*)>& fn) {
     _exit(ok ? 0 : 1);
   }
   close(fds[1]);
-  std::string text;
-  char buf[4096];
-  ssize_t r;
-  while ((r = read(fds[0], buf, sizeof buf)) > 0) text.append(buf, static_cast<size_t>(r));
-  close(fds[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::fprintf(stderr, "workload failed: %s\n", text.c_str());
-    return "";
-  }
-  return text;
+  return collect_child(pid, fds[0], nullptr);
 }
 
 // Runs argv[0] (a path) with its arguments in a fresh process, returning its
@@ -118,17 +126,7 @@ inline std::string run_program(const std::vector<std::string>& args, uint64_t* p
     _exit(127);
   }
   close(fds[1]);
-  std::string text;
-  char buf[4096];
-  ssize_t r;
-  while ((r = read(fds[0], buf, sizeof buf)) > 0) text.append(buf, static_cast<size_t>(r));
-  close(fds[0]);
-  int status = 0;
-  struct rusage ru;
-  wait4(pid, &status, 0, &ru);
-  *peak_rss = static_cast<uint64_t>(ru.ru_maxrss) * 1024;
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return "";
-  return text;
+  return collect_child(pid, fds[0], peak_rss);
 }
 
 // Parses the flat objects Json::str() writes: {"k": value, ...}.
