@@ -22,8 +22,10 @@ namespace {
 
 struct Mesh {
   std::string name;
+  GenOptions::Kind kind;
   int max_level;
-  double radius;
+  double radius;    // sphere
+  uint64_t points;  // points
 };
 
 std::string median(std::vector<double> v) {
@@ -43,10 +45,15 @@ int main(int argc, char** argv) {
   uint64_t memory = 256ull << 20;
   int repeat = 3;
   int search_repeat = 1;  // the baseline is slow: one run unless asked
-  std::vector<Mesh> meshes = {{"graded-1M", 8, 0.3}, {"graded-8M", 10, 0.22}};
+  // Sphere-graded and scattered-random octrees, both 2:1 balanced by
+  // construction, of about 1M and 10M elements.
+  std::vector<Mesh> meshes = {{"graded-1M", GenOptions::Kind::kSphere, 8, 0.3, 0},
+                              {"random-1M", GenOptions::Kind::kPoints, 9, 0, 500},
+                              {"graded-10M", GenOptions::Kind::kSphere, 10, 0.243, 0},
+                              {"random-10M", GenOptions::Kind::kPoints, 9, 0, 7200}};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--small") meshes = {{"graded-1M", 8, 0.3}};
+    if (a == "--small") meshes.resize(2);
     else if (a == "--repeat" && i + 1 < argc) repeat = std::stoi(argv[++i]);
     else if (a == "--search-repeat" && i + 1 < argc) search_repeat = std::stoi(argv[++i]);
     else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
@@ -59,10 +66,11 @@ int main(int argc, char** argv) {
   std::vector<std::map<std::string, std::string>> table;
   for (const Mesh& m : meshes) {
     GenOptions g;
-    g.kind = GenOptions::Kind::kSphere;
+    g.kind = m.kind;
     g.level = 3;
     g.max_level = m.max_level;
     g.radius = m.radius;
+    g.points = m.points;
     std::vector<Octant> leaves;
     const std::string text = dir + "/" + m.name + ".txt", db = dir + "/" + m.name + ".db";
     std::filesystem::remove_all(db);

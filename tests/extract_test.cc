@@ -122,6 +122,22 @@ class ExtractTest : public ::testing::Test {
   int count_ = 0;
 };
 
+TEST_F(ExtractTest, SphereAndPointGeneratorsAreBalancedByConstruction) {
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    GenOptions g;
+    g.seed = seed;
+    g.level = 1;
+    g.max_level = 5;
+    g.kind = seed % 2 ? GenOptions::Kind::kSphere : GenOptions::Kind::kPoints;
+    g.radius = 0.1 + 0.05 * seed;
+    g.points = 3 * seed;
+    std::vector<Octant> leaves;
+    ASSERT_OK(generate_octree(g, &leaves));
+    ASSERT_EQ(reference::balance(leaves), leaves) << "seed " << seed;  // nothing to split
+    ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, ExtractOptions{}));
+  }
+}
+
 TEST_F(ExtractTest, SingleElementAndUniformGrids) {
   for (int level : {0, 1, 2, 3}) {
     GenOptions g;
@@ -148,7 +164,7 @@ TEST_F(ExtractTest, LeavesAtLevel20) {
 
 TEST_F(ExtractTest, RandomBalancedOctreesAcrossDomainsAndBudgets) {
   std::mt19937_64 rng(99);
-  const int cases = static_cast<int>(testing::scaled(120, 25));
+  const int cases = static_cast<int>(testing::scaled(200, 25));
   for (int t = 0; t < cases; ++t) {
     const int block_level = static_cast<int>(rng() % 3);
     const uint32_t per_axis = 1u << block_level;

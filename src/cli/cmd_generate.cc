@@ -8,9 +8,9 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver generate FILE [--kind random|uniform|sphere] [--leaves N] [--level L]\n"
+    "usage: weaver generate FILE [--kind random|uniform|sphere|points] [--leaves N] [--level L]\n"
     "                            [--max-level L] [--blocks BX,BY,BZ] [--block-level L]\n"
-    "                            [--radius R] [--seed S] [--shuffle]\n"
+    "                            [--radius R] [--points N] [--seed S] [--shuffle]\n"
     "\n"
     "Writes a sample octree as octant text ('x y z level' per line, ticks).\n"
     "The domain is BX x BY x BZ blocks of level --block-level (default 1,1,1 at 0:\n"
@@ -23,6 +23,8 @@ constexpr char kUsage[] =
     "                  root are refined from --level down to --max-level; 2:1\n"
     "                  balanced by construction; --radius R (default 0.3) sets\n"
     "                  the sphere's radius as a fraction of the root edge\n"
+    "  --kind points   the same rule around --points N random points (default\n"
+    "                  1000): scattered refinement, also 2:1 balanced\n"
     "  --shuffle       write the leaves in random order instead of key order\n";
 
 }  // namespace
@@ -30,7 +32,7 @@ constexpr char kUsage[] =
 int cmd_generate(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(argc, argv, 2,
-                         {"kind", "leaves", "level", "max-level", "blocks", "block-level", "seed", "radius"},
+                         {"kind", "leaves", "level", "max-level", "blocks", "block-level", "seed", "radius", "points"},
                          {"shuffle"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("generate", st.message(), kUsage);
@@ -43,8 +45,10 @@ int cmd_generate(int argc, char** argv) {
       o.kind = GenOptions::Kind::kUniform;
     } else if (k == "sphere") {
       o.kind = GenOptions::Kind::kSphere;
+    } else if (k == "points") {
+      o.kind = GenOptions::Kind::kPoints;
     } else if (k != "random") {
-      return usage_error("generate", "--kind must be random, uniform or sphere", kUsage);
+      return usage_error("generate", "--kind must be random, uniform, sphere or points", kUsage);
     }
   }
   auto number = [&](const char* name, uint64_t max, auto* field) -> Status {
@@ -59,6 +63,7 @@ int cmd_generate(int argc, char** argv) {
   if (st.ok()) st = number("max-level", kMaxLevel, &o.max_level);
   if (st.ok()) st = number("block-level", kMaxLevel, &o.block_level);
   if (st.ok()) st = number("seed", UINT64_MAX, &o.seed);
+  if (st.ok()) st = number("points", uint64_t{1} << 24, &o.points);
   if (st.ok() && args.values.count("blocks")) {
     std::vector<uint64_t> b;
     st = parse_u64_list(args.values["blocks"], "--blocks", 3, &b);

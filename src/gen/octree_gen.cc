@@ -64,6 +64,34 @@ void refine_sphere(const Octant& o, const GenOptions& g, std::vector<Octant>* ou
   for (int k = 0; k < 8; ++k) refine_sphere(octant_child(o, k), g, out);
 }
 
+struct Point3 {
+  double x, y, z;
+};
+
+double distance_to_point(const Octant& o, const Point3& p) {
+  const double e = octant_edge(o);
+  const double dx = std::max({double(o.x) - p.x, p.x - (double(o.x) + e), 0.0});
+  const double dy = std::max({double(o.y) - p.y, p.y - (double(o.y) + e), 0.0});
+  const double dz = std::max({double(o.z) - p.z, p.z - (double(o.z) + e), 0.0});
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+// Refines o if some point lies within 2 edges of it.  Only those points can
+// matter to its children (closer boxes, smaller thresholds), so only they go down.
+void refine_points(const Octant& o, const GenOptions& g, const std::vector<Point3>& near,
+                   std::vector<Octant>* out) {
+  std::vector<Point3> closer;
+  for (const Point3& p : near) {
+    if (distance_to_point(o, p) < 2.0 * octant_edge(o)) closer.push_back(p);
+  }
+  const bool refine = o.level < g.level || (o.level < g.max_level && !closer.empty());
+  if (!refine) {
+    out->push_back(o);
+    return;
+  }
+  for (int k = 0; k < 8; ++k) refine_points(octant_child(o, k), g, closer, out);
+}
+
 }  // namespace
 
 Status generate_octree(const GenOptions& o, std::vector<Octant>* leaves) {
@@ -83,6 +111,14 @@ Status generate_octree(const GenOptions& o, std::vector<Octant>* leaves) {
       return Status::InvalidArgument("sphere needs level <= max level <= 20 and a radius > 0");
     }
     for (const Octant& b : blocks) refine_sphere(b, o, leaves);
+  } else if (o.kind == GenOptions::Kind::kPoints) {
+    if (o.max_level < o.level || o.max_level > kMaxLevel) {
+      return Status::InvalidArgument("points needs level <= max level <= 20");
+    }
+    std::uniform_real_distribution<double> coord(0.0, double(kRootEdge));
+    std::vector<Point3> points(o.points);
+    for (Point3& p : points) p = {coord(rng), coord(rng), coord(rng)};
+    for (const Octant& b : blocks) refine_points(b, o, points, leaves);
   } else {
     if (o.max_level <= o.block_level) {
       return Status::InvalidArgument("max level must exceed the block level");

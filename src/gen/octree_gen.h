@@ -18,7 +18,10 @@ struct GenOptions {
   // refined, from `level` down to `max_level`.  The factor 2 makes the result
   // face+edge 2:1 balanced by construction (a leaf next to one two levels
   // finer would be within 2 of its own edges of the sphere).
-  enum class Kind { kUniform, kRandom, kSphere };
+  // kPoints: the same rule around `points` random points: scattered random
+  // refinement, also 2:1 balanced by construction (the argument only needs
+  // one distance function and one finest level).
+  enum class Kind { kUniform, kRandom, kSphere, kPoints };
   Kind kind = Kind::kRandom;
   uint32_t blocks[3] = {1, 1, 1};
   int block_level = 0;
@@ -26,6 +29,7 @@ struct GenOptions {
   uint64_t leaves = 100000;  // random: refine until at least this many leaves
   int max_level = kMaxLevel;  // random: no leaf finer than this
   double radius = 0.3;        // sphere: radius as a fraction of the root edge
+  uint64_t points = 1000;     // points: how many
   uint64_t seed = 1;
   bool shuffle = false;  // output in random order instead of key order
 };
