@@ -1,6 +1,7 @@
 // The sort-based extractor against the brute-force reference, node for node
 // (id, coordinate, kind, anchors), on many generated balanced octrees.
 #include "extract/extract.h"
+#include "export/export_csv.h"
 
 #include <gtest/gtest.h>
 
@@ -207,6 +208,16 @@ std::string file_bytes(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// nodes.csv and elements.csv of the database, concatenated.
+std::string exported(const std::string& db) {
+  ExportOptions o;
+  o.nodes_path = db + "-nodes.csv";
+  o.elements_path = db + "-elements.csv";
+  ExportResult r;
+  EXPECT_OK(export_csv(db, o, &r));
+  return file_bytes(o.nodes_path) + file_bytes(o.elements_path);
+}
+
 TEST_F(ExtractTest, SearchAlgorithmMatchesReferenceAndSortByteForByte) {
   std::mt19937_64 rng(7);
   const int cases = static_cast<int>(testing::scaled(30, 8));
@@ -225,10 +236,12 @@ TEST_F(ExtractTest, SearchAlgorithmMatchesReferenceAndSortByteForByte) {
     ASSERT_OK(Database::open(db_, Database::Mode::kRead, false, &db));
     const std::string search_table = file_bytes(db->table_path(kNodeTable));
     db.reset();
+    const std::string search_csv = exported(db_);
     ExtractResult r;
     ASSERT_OK(extract_mesh(db_, ExtractOptions{}, &r));  // sort, same database
     ASSERT_OK(Database::open(db_, Database::Mode::kRead, false, &db));
     ASSERT_EQ(file_bytes(db->table_path(kNodeTable)), search_table);
+    ASSERT_EQ(exported(db_), search_csv);
   }
 }
 
