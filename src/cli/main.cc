@@ -12,6 +12,7 @@ constexpr char kUsage[] =
     "\n"
     "commands:\n"
     "  generate FILE     write a sample octree as octant text\n"
+    "  construct DB      build the octant table from a velocity model\n"
     "  import DB         load octant text into the octant table of database DB\n"
     "  extract DB        extract the mesh nodes of a balanced octree\n"
     "  export DB         write the mesh as nodes.csv / elements.csv\n"
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
   const std::string cmd = argv[1];
   if (cmd == "generate") return cmd_generate(argc, argv);
   if (cmd == "import") return cmd_import(argc, argv);
+  if (cmd == "construct") return cmd_construct(argc, argv);
   if (cmd == "extract") return cmd_extract(argc, argv);
   if (cmd == "export") return cmd_export(argc, argv);
   if (cmd == "stat") return cmd_stat(argc, argv);

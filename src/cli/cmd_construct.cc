@@ -1,0 +1,111 @@
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+
+#include "cli/cli.h"
+#include "construct/construct.h"
+
+namespace weaver::cli {
+namespace {
+
+constexpr char kUsage[] =
+    "usage: weaver construct DB --model NAME [--grid FILE] [--freq F] [--ppw N]\n"
+    "                           [--vs-min V] [--domain LX,LY,LZ] [--min-level L]\n"
+    "                           [--max-level L] [--memory BYTES]\n"
+    "\n"
+    "Builds the octant table of DB from a velocity model: every leaf satisfies\n"
+    "edge <= Vs_min / (F * N), Vs_min being the least Vs of the model over 27\n"
+    "sample points of the leaf (corners, edge midpoints, face centres, centre),\n"
+    "and no leaf is finer than needed.  Leaves carry Vp, Vs and density at their\n"
+    "centre.  The domain (metres; x, y horizontal, z depth) is made a union of\n"
+    "blocks: 100000,100000,37500 is 8 x 8 x 3 blocks of level 3.\n"
+    "  --model NAME       halfspace, loh1, basin (a synthetic sedimentary basin)\n"
+    "                     or grid (with --grid FILE; format in src/model/grid_model.h)\n"
+    "  --freq F           highest frequency to resolve, Hz (default 0.5)\n"
+    "  --ppw N            points per wavelength (default 10)\n"
+    "  --vs-min V         Vs floor in the rule, m/s (default none)\n"
+    "  --domain LX,LY,LZ  metres (default 100000,100000,37500)\n"
+    "  --min-level L, --max-level L   bounds on leaf levels (default 0, 20)\n";
+
+}  // namespace
+
+Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
+  auto number = [&](const char* name, double* v) -> Status {
+    if (!args.values.count(name)) return Status::Ok();
+    return parse_double(args.values.at(name), std::string("--") + name, v);
+  };
+  auto level = [&](const char* name, int* v) -> Status {
+    if (!args.values.count(name)) return Status::Ok();
+    uint64_t l = 0;
+    WEAVER_RETURN_IF_ERROR(parse_u64(args.values.at(name), std::string("--") + name, &l));
+    if (l > 20) return Status::InvalidArgument(std::string("--") + name + " must be 0..20");
+    *v = static_cast<int>(l);
+    return Status::Ok();
+  };
+  if (!args.values.count("model")) return Status::InvalidArgument("--model NAME is required");
+  o->model = args.values.at("model");
+  if (args.values.count("grid")) o->grid_file = args.values.at("grid");
+  WEAVER_RETURN_IF_ERROR(number("freq", &o->freq));
+  WEAVER_RETURN_IF_ERROR(number("ppw", &o->ppw));
+  WEAVER_RETURN_IF_ERROR(number("vs-min", &o->vs_min));
+  WEAVER_RETURN_IF_ERROR(level("min-level", &o->min_level));
+  WEAVER_RETURN_IF_ERROR(level("max-level", &o->max_level));
+  if (args.values.count("domain")) {
+    std::vector<double> d;
+    WEAVER_RETURN_IF_ERROR(parse_double_list(args.values.at("domain"), "--domain", 3, &d));
+    o->domain_m = {d[0], d[1], d[2]};
+  }
+  return memory_option(args, &o->memory_bytes);
+}
+
+void print_plan(const ConstructOptions& o, const ConstructPlan& p) {
+  std::printf("model      %s\n", p.model.c_str());
+  std::printf("rule       edge <= Vs_min / (%g Hz x %g ppw)%s\n", o.freq, o.ppw,
+              o.vs_min > 0 ? (", Vs floor " + std::to_string(int(o.vs_min)) + " m/s").c_str() : "");
+  std::printf("domain     %g x %g x %g m = %u x %u x %u blocks of level %d (%g m)%s\n",
+              p.domain_m[0], p.domain_m[1], p.domain_m[2], p.blocks[0], p.blocks[1], p.blocks[2],
+              p.block_level, p.root_edge_m / (1 << p.block_level),
+              p.rounded_up ? ", rounded up to whole blocks" : "");
+  std::printf("root       %g m, tick %.6g m, levels %d..%d\n", p.root_edge_m, p.tick_m,
+              std::max(o.min_level, p.block_level), o.max_level);
+}
+
+int cmd_construct(int argc, char** argv) {
+  ParsedArgs args;
+  Status st = parse_args(argc, argv, 2,
+                         {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level",
+                          "max-level", "memory"},
+                         {}, &args);
+  if (args.help) return std::fputs(kUsage, stdout), 0;
+  if (!st.ok()) return usage_error("construct", st.message(), kUsage);
+  if (args.positional.size() != 1) return usage_error("construct", "expected one DB", kUsage);
+  ConstructOptions o;
+  st = parse_construct_options(args, &o);
+  if (!st.ok()) return usage_error("construct", st.message(), kUsage);
+  ConstructPlan plan;
+  st = plan_construct(o, &plan);
+  if (!st.ok()) return report("construct", st);
+  print_plan(o, plan);
+  std::fflush(stdout);
+  const auto t0 = std::chrono::steady_clock::now();
+  if (isatty(STDERR_FILENO)) {
+    o.progress = [](uint64_t n) {
+      if (n % (1 << 20) < 4096) std::fprintf(stderr, "\rconstruct: %llu leaves   ", (unsigned long long)n);
+    };
+  }
+  ConstructResult r;
+  st = construct_octree(args.positional[0], o, &plan, &r);
+  if (o.progress) std::fprintf(stderr, "\r%40s\r", "");
+  if (!st.ok()) return report("construct", st);
+  const double secs =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("constructed %llu leaves in %.2fs (%.0f leaves/s), edges %g..%g m, deepest level "
+              "%d, worst %.2f points per wavelength, %.2f bytes/leaf\n",
+              (unsigned long long)r.elements, secs, r.elements / secs, r.smallest_edge_m,
+              r.largest_edge_m, finest_level(r.levels), r.worst_ppw,
+              double(r.table_bytes) / r.elements);
+  return 0;
+}
+
+}  // namespace weaver::cli

@@ -1,0 +1,57 @@
+// `weaver construct`: an octree from a velocity model.  Every leaf satisfies
+//   edge <= Vs_min / (freq * ppw)
+// where Vs_min is the least Vs of the model over 27 sample points of the leaf
+// (corners, edge midpoints, face centres and centre), raised to at least
+// --vs-min; and no leaf is finer than needed (its parent breaks the rule).
+// Leaves come from a depth-first descent in Z-order and are written by sorted
+// append, each with the material at its centre; memory does not grow with
+// the mesh.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "db/octant_table.h"
+#include "schema/status.h"
+
+namespace weaver {
+
+struct ConstructOptions {
+  std::string model = "basin";
+  std::string grid_file;  // model "grid"
+  double freq = 0.5;      // Hz
+  double ppw = 10;        // points per wavelength
+  double vs_min = 0;      // floor on Vs in the rule (m/s); 0: none
+  std::array<double, 3> domain_m = {100000, 100000, 37500};
+  int min_level = 0, max_level = kMaxLevelDefault;
+  uint64_t memory_bytes = 256ull << 20;
+  std::function<void(uint64_t leaves)> progress;
+  static constexpr int kMaxLevelDefault = 20;
+};
+
+// The domain as a union of blocks: resolved before anything is written.
+struct ConstructPlan {
+  double root_edge_m = 0;  // the root octant's edge
+  double tick_m = 0;       // root_edge_m / 2^20
+  int block_level = 0;
+  std::array<uint32_t, 3> blocks = {1, 1, 1};
+  std::array<double, 3> domain_m = {0, 0, 0};  // as covered by the blocks
+  bool rounded_up = false;  // the domain was not a union of blocks up to level 10
+  std::string model;        // the model's description
+};
+
+struct ConstructResult {
+  uint64_t elements = 0;
+  LevelCounts levels{};
+  double smallest_edge_m = 0, largest_edge_m = 0;
+  double worst_ppw = 0;  // the fewest points per wavelength at any leaf (by its Vs_min)
+  uint64_t table_bytes = 0;
+};
+
+Status plan_construct(const ConstructOptions& options, ConstructPlan* plan);
+Status construct_octree(const std::string& db_dir, const ConstructOptions& options,
+                        ConstructPlan* plan, ConstructResult* result);
+
+}  // namespace weaver
