@@ -12,6 +12,7 @@ namespace weaver::cli {
 int cmd_generate(int argc, char** argv);
 int cmd_import(int argc, char** argv);
 int cmd_construct(int argc, char** argv);
+int cmd_balance(int argc, char** argv);
 int cmd_extract(int argc, char** argv);
 int cmd_export(int argc, char** argv);
 int cmd_stat(int argc, char** argv);

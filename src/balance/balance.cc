@@ -1,0 +1,359 @@
+#include "balance/balance.h"
+
+#include <unistd.h>
+
+#include <array>
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+#include "db/database.h"
+#include "import/external_sort.h"
+#include "model/velocity_model.h"
+#include "schema/octant.h"
+
+namespace weaver {
+namespace {
+
+constexpr size_t kBatch = 4096;
+
+std::string describe(const Octant& o) {
+  return "(" + std::to_string(o.x) + " " + std::to_string(o.y) + " " + std::to_string(o.z) + " " +
+         std::to_string(o.level) + ")";
+}
+
+// The 18 face and edge neighbour directions.
+std::vector<std::array<int, 3>> face_edge_directions() {
+  std::vector<std::array<int, 3>> dirs;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nonzero = (dx != 0) + (dy != 0) + (dz != 0);
+        if (nonzero == 1 || nonzero == 2) dirs.push_back({dx, dy, dz});
+      }
+  return dirs;
+}
+
+// Walks the octant table alongside a nondecreasing stream of keys and tells
+// whether each octant overlaps the domain (the union of the leaves).
+class DomainProbe {
+ public:
+  Status open(BTree& leaves) { return leaves.seek_cursor(0, &cursor_); }
+  Status overlaps(uint64_t key, bool* yes) {
+    while (cursor_.valid() && cursor_.key() <= key) {
+      last_ = cursor_.key();
+      has_last_ = true;
+      WEAVER_RETURN_IF_ERROR(cursor_.next());
+    }
+    // A leaf equal to or containing the octant, or a leaf inside it.
+    *yes = (has_last_ && key < octant_key_subtree_end(last_)) ||
+           (cursor_.valid() && cursor_.key() < octant_key_subtree_end(key));
+    return Status::Ok();
+  }
+
+ private:
+  BTreeCursor cursor_;
+  uint64_t last_ = 0;
+  bool has_last_ = false;
+};
+
+// Reads a finished sorter, skipping repeated keys.
+Status next_unique(ExternalSorter& s, uint64_t* prev, bool* has_prev, KeyTag* out, bool* done) {
+  while (true) {
+    WEAVER_RETURN_IF_ERROR(s.next(out, done));
+    if (*done) return Status::Ok();
+    if (!*has_prev || out->key != *prev) {
+      *prev = out->key;
+      *has_prev = true;
+      return Status::Ok();
+    }
+  }
+}
+
+class Balancer {
+ public:
+  Balancer(BTree& leaves, const BalanceOptions& o, const std::string& scratch, BalanceResult* r)
+      : leaves_(leaves), o_(o), scratch_(scratch), r_(r), dirs_(face_edge_directions()) {}
+
+  // Builds the required octants (into required_), level by level.
+  // Without propagation (check_only) only the leaves' own requirements are
+  // made: enough to tell whether the octree is balanced.
+  Status closure(int max_level, bool propagate) {
+    const uint64_t share = std::max<uint64_t>(o_.memory_bytes / 4 / (max_level + 1), 1 << 16);
+    for (int l = 0; l <= max_level; ++l) {
+      parents_.push_back(std::make_unique<ExternalSorter>(scratch_ + "/p" + std::to_string(l), share));
+    }
+    required_ = std::make_unique<ExternalSorter>(scratch_ + "/required", o_.memory_bytes / 4);
+    BTreeCursor c;
+    WEAVER_RETURN_IF_ERROR(leaves_.seek_cursor(0, &c));
+    while (c.valid()) {
+      const Octant q = octant_from_key(c.key());
+      ++r_->input_leaves;
+      // Tag: the leaf that asks, for naming violations.
+      if (q.level > 0) WEAVER_RETURN_IF_ERROR(parents_[q.level - 1]->add({octant_key(octant_parent(q)), c.key()}));
+      WEAVER_RETURN_IF_ERROR(c.next());
+    }
+    for (int l = max_level - 1; l >= 0; --l) {
+      WEAVER_RETURN_IF_ERROR(expand_level(l, propagate));
+      parents_[l].reset();
+    }
+    return required_->finish();
+  }
+
+  // The required octants, deduplicated, in key order; tag = a leaf that asks.
+  ExternalSorter& required() { return *required_; }
+
+ private:
+  // Neighbours of the level-l parents, kept where they meet the domain.
+  Status expand_level(int l, bool propagate) {
+    ExternalSorter& parents = *parents_[l];
+    WEAVER_RETURN_IF_ERROR(parents.finish());
+    ExternalSorter candidates(scratch_ + "/c" + std::to_string(l), o_.memory_bytes / 4);
+    KeyTag p;
+    bool done = false, has_prev = false;
+    uint64_t prev = 0;
+    while (true) {
+      WEAVER_RETURN_IF_ERROR(next_unique(parents, &prev, &has_prev, &p, &done));
+      if (done) break;
+      const Octant po = octant_from_key(p.key);
+      for (const auto& d : dirs_) {
+        Octant n;
+        if (octant_neighbour(po, d[0], d[1], d[2], &n)) {
+          WEAVER_RETURN_IF_ERROR(candidates.add({octant_key(n), p.tag}));
+        }
+      }
+    }
+    WEAVER_RETURN_IF_ERROR(candidates.finish());
+    DomainProbe probe;
+    WEAVER_RETURN_IF_ERROR(probe.open(leaves_));
+    has_prev = false;
+    KeyTag n;
+    while (true) {
+      WEAVER_RETURN_IF_ERROR(next_unique(candidates, &prev, &has_prev, &n, &done));
+      if (done) return Status::Ok();
+      bool inside = false;
+      WEAVER_RETURN_IF_ERROR(probe.overlaps(n.key, &inside));
+      if (!inside) continue;
+      WEAVER_RETURN_IF_ERROR(required_->add(n));
+      ++r_->required;
+      if (l > 0 && propagate) {
+        WEAVER_RETURN_IF_ERROR(
+            parents_[l - 1]->add({octant_key(octant_parent(octant_from_key(n.key))), n.tag}));
+      }
+    }
+  }
+
+  BTree& leaves_;
+  const BalanceOptions& o_;
+  std::string scratch_;
+  BalanceResult* r_;
+  std::vector<std::array<int, 3>> dirs_;
+  std::vector<std::unique_ptr<ExternalSorter>> parents_;
+  std::unique_ptr<ExternalSorter> required_;
+};
+
+// Writes leaf t, split just enough that every required octant strictly
+// inside it is resolved.  `inside` holds those, in key order.
+class Completion {
+ public:
+  Completion(BTree& out, const VelocityModel* model, double tick_m, uint32_t payload)
+      : out_(out), model_(model), tick_m_(tick_m), payload_(payload) {}
+
+  Status write(const Octant& t, const std::byte* parent_payload, const std::vector<uint64_t>& inside,
+               BalanceResult* r) {
+    size_t pos = 0;
+    return split(t, parent_payload, inside, &pos, r);
+  }
+  Status flush() {
+    WEAVER_RETURN_IF_ERROR(out_.append_batch(keys_.data(), payloads_.data(), keys_.size()));
+    keys_.clear();
+    payloads_.clear();
+    return Status::Ok();
+  }
+
+ private:
+  Status split(const Octant& o, const std::byte* parent_payload, const std::vector<uint64_t>& inside,
+               size_t* pos, BalanceResult* r) {
+    const uint64_t key = octant_key(o), end = octant_subtree_key_end(o);
+    while (*pos < inside.size() && inside[*pos] <= key) ++*pos;  // o itself is resolved
+    if (*pos < inside.size() && inside[*pos] < end) {
+      for (int c = 0; c < 8; ++c) {
+        WEAVER_RETURN_IF_ERROR(split(octant_child(o, c), parent_payload, inside, pos, r));
+      }
+      return Status::Ok();
+    }
+    return emit(o, parent_payload, r);
+  }
+
+  Status emit(const Octant& o, const std::byte* parent_payload, BalanceResult* r) {
+    keys_.push_back(octant_key(o));
+    const size_t at = payloads_.size();
+    payloads_.resize(at + payload_);
+    if (payload_ > 0) std::memcpy(payloads_.data() + at, parent_payload, payload_);
+    if (model_ != nullptr && payload_ == 12) {  // vp, vs, rho at the new leaf's centre
+      const double h = octant_edge(o) * tick_m_ / 2;
+      const Material m = model_->at(o.x * tick_m_ + h, o.y * tick_m_ + h, o.z * tick_m_ + h);
+      const float f[3] = {m.vp, m.vs, m.rho};
+      std::memcpy(payloads_.data() + at, f, sizeof f);
+    }
+    ++r->levels[o.level];
+    ++r->output_leaves;
+    if (keys_.size() == kBatch) return flush();
+    return Status::Ok();
+  }
+
+  BTree& out_;
+  const VelocityModel* model_;
+  double tick_m_;
+  uint32_t payload_;
+  std::vector<uint64_t> keys_;
+  std::vector<std::byte> payloads_;
+};
+
+// The model named in the table's metadata, if it is a built-in one.
+std::unique_ptr<VelocityModel> model_of(const std::string& metadata) {
+  const size_t at = metadata.find("model=");
+  if (at == std::string::npos) return nullptr;
+  const std::string name = metadata.substr(at + 6, metadata.find(';', at) - at - 6);
+  std::unique_ptr<VelocityModel> m;
+  if (name == "grid" || !make_model(name, "", &m).ok()) return nullptr;
+  return m;
+}
+
+std::string replace_levels(const std::string& metadata, const LevelCounts& levels) {
+  std::string out;
+  size_t start = 0;
+  while (start <= metadata.size()) {  // drop the old ";levels=..." item
+    size_t end = metadata.find(';', start);
+    if (end == std::string::npos) end = metadata.size();
+    const std::string item = metadata.substr(start, end - start);
+    if (!item.empty() && item.rfind("levels=", 0) != 0) out += (out.empty() ? "" : ";") + item;
+    start = end + 1;
+  }
+  return out + levels_to_metadata(levels);
+}
+
+// Merges the leaves with the required octants and writes the refinement.
+Status write_refinement(BTree& leaves, ExternalSorter& required, BTree& out, BalanceResult* r) {
+  Units u;
+  units_from_metadata(leaves.options().metadata, &u);
+  const std::unique_ptr<VelocityModel> model = model_of(leaves.options().metadata);
+  Completion completion(out, model.get(), u.tick_m, leaves.payload_size());
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(leaves.seek_cursor(0, &c));
+  KeyTag req;
+  bool done = false, has_prev = false;
+  uint64_t prev = 0;
+  WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
+  std::vector<uint64_t> inside;
+  std::vector<std::byte> payload(leaves.payload_size());
+  while (c.valid()) {
+    const uint64_t key = c.key(), end = octant_key_subtree_end(key);
+    inside.clear();
+    while (!done && req.key < end) {  // required octants up to the end of this leaf
+      if (req.key > key) inside.push_back(req.key);
+      WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
+    }
+    if (!inside.empty()) ++r->split;
+    if (!payload.empty()) std::memcpy(payload.data(), c.payload(), payload.size());
+    WEAVER_RETURN_IF_ERROR(completion.write(octant_from_key(key), payload.data(), inside, r));
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  return completion.flush();
+}
+
+// The leaf of parent(asker) that touches `coarse`: the leaf holding the
+// pixel of parent(asker) nearest to it.  (The asker itself may sit on the far
+// side of its parent; the parent is covered by leaves at least as fine.)
+Status touching_leaf(BTree& leaves, const Octant& coarse, const Octant& asker, Octant* out) {
+  const Octant p = octant_parent(asker);
+  const uint32_t s = octant_edge(p), e = octant_edge(coarse);
+  const uint32_t lo[3] = {p.x, p.y, p.z}, clo[3] = {coarse.x, coarse.y, coarse.z};
+  uint32_t px[3];
+  for (int a = 0; a < 3; ++a) {
+    if (clo[a] >= lo[a] + s) {
+      px[a] = lo[a] + s - 1;  // coarse lies beyond on this axis
+    } else if (clo[a] + e <= lo[a]) {
+      px[a] = lo[a];          // coarse lies before
+    } else {
+      px[a] = std::max(lo[a], clo[a]);  // overlapping range: a shared coordinate
+    }
+  }
+  uint64_t key = 0;
+  bool found = false;
+  WEAVER_RETURN_IF_ERROR(leaves.floor(pixel_key({px[0], px[1], px[2]}), &key, nullptr, &found));
+  *out = found ? octant_from_key(key) : asker;
+  return Status::Ok();
+}
+
+// check_only: the first required octant strictly inside a leaf is a violation.
+Status find_violation(BTree& leaves, ExternalSorter& required, BalanceResult* r) {
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(leaves.seek_cursor(0, &c));
+  KeyTag req;
+  bool done = false, has_prev = false;
+  uint64_t prev = 0;
+  WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
+  while (c.valid() && !done) {
+    const uint64_t key = c.key(), end = octant_key_subtree_end(key);
+    while (!done && req.key < end) {
+      if (req.key > key) {
+        const Octant coarse = octant_from_key(key);
+        Octant fine;
+        WEAVER_RETURN_IF_ERROR(touching_leaf(leaves, coarse, octant_from_key(req.tag), &fine));
+        r->balanced = false;
+        r->violation = "octants " + describe(coarse) + " and " + describe(fine) +
+                       " are face or edge neighbours more than one level apart";
+        return Status::Ok();
+      }
+      WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
+    }
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status balance_octree(const std::string& db_dir, const BalanceOptions& o, BalanceResult* r) {
+  *r = BalanceResult{};
+  std::unique_ptr<Database> db;
+  WEAVER_RETURN_IF_ERROR(Database::open(db_dir, o.check_only ? Database::Mode::kRead
+                                                             : Database::Mode::kWrite,
+                                        false, &db));
+  std::unique_ptr<BTree> leaves;
+  WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, std::min<uint64_t>(o.memory_bytes / 8, 32ull << 20), &leaves));
+  LevelCounts levels{};
+  int max_level = kMaxLevel;
+  if (levels_from_metadata(leaves->options().metadata, &levels)) max_level = finest_level(levels);
+  const std::string scratch = db_dir + "/tmp-balance-" + std::to_string(::getpid());
+  struct ScratchGuard {
+    std::string dir;
+    ~ScratchGuard() {
+      std::error_code ec;
+      std::filesystem::remove_all(dir, ec);
+    }
+  } guard{scratch};
+  Balancer balancer(*leaves, o, scratch, r);
+  WEAVER_RETURN_IF_ERROR(balancer.closure(max_level, !o.check_only));
+  if (o.check_only) return find_violation(*leaves, balancer.required(), r);
+  TableOptions topt = leaves->options();
+  std::unique_ptr<BTree> out;
+  std::string file;
+  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, 8ull << 20, &out, &file));
+  Status st = write_refinement(*leaves, balancer.required(), *out, r);
+  if (st.ok()) {
+    out->set_metadata(replace_levels(leaves->options().metadata, r->levels));
+    st = out->commit();
+  }
+  if (st.ok()) st = db->commit({{kOctantTable, file}});
+  if (!st.ok()) {
+    out.reset();
+    db->abandon(file);
+  }
+  return st;
+}
+
+}  // namespace weaver

@@ -1,0 +1,56 @@
+#include <chrono>
+#include <cstdio>
+
+#include "balance/balance.h"
+#include "cli/cli.h"
+
+namespace weaver::cli {
+namespace {
+
+constexpr char kUsage[] =
+    "usage: weaver balance DB [--memory BYTES] [--check]\n"
+    "\n"
+    "Replaces the octant table of DB by its minimal face+edge 2:1 balanced\n"
+    "refinement: every leaf is kept or split, and nothing is split unless the\n"
+    "2:1 condition forces it.  Out of core; split children take their material\n"
+    "from the model that built the table, or from their parent.\n"
+    "  --check          only verify; name the first violation (exit status 1 if\n"
+    "                   the octree is not balanced)\n"
+    "  --memory BYTES   memory budget (default 256M)\n";
+
+}  // namespace
+
+int cmd_balance(int argc, char** argv) {
+  ParsedArgs args;
+  Status st = parse_args(argc, argv, 2, {"memory"}, {"check"}, &args);
+  if (args.help) return std::fputs(kUsage, stdout), 0;
+  if (!st.ok()) return usage_error("balance", st.message(), kUsage);
+  if (args.positional.size() != 1) return usage_error("balance", "expected one DB", kUsage);
+  BalanceOptions o;
+  o.check_only = args.flags.count("check") != 0;
+  st = memory_option(args, &o.memory_bytes);
+  if (!st.ok()) return usage_error("balance", st.message(), kUsage);
+  const auto t0 = std::chrono::steady_clock::now();
+  BalanceResult r;
+  st = balance_octree(args.positional[0], o, &r);
+  if (!st.ok()) return report("balance", st);
+  const double secs =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (o.check_only) {
+    if (!r.balanced) {
+      std::fprintf(stderr, "weaver balance: not 2:1 balanced: %s\n", r.violation.c_str());
+      return 1;
+    }
+    std::printf("%llu leaves, 2:1 balanced (checked in %.2fs)\n",
+                (unsigned long long)r.input_leaves, secs);
+    return 0;
+  }
+  std::printf("balanced %llu leaves into %llu (%llu split, %llu required octants) in %.2fs "
+              "(%.0f leaves/s)\n",
+              (unsigned long long)r.input_leaves, (unsigned long long)r.output_leaves,
+              (unsigned long long)r.split, (unsigned long long)r.required, secs,
+              r.input_leaves / secs);
+  return 0;
+}
+
+}  // namespace weaver::cli

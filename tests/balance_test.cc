@@ -1,0 +1,118 @@
+// weaver balance against the brute-force reference balancer: the same leaf
+// set, on hundreds of random unbalanced octrees, including non-cube domains
+// and tiny budgets that push every sort out of core.
+#include "balance/balance.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "db/database.h"
+#include "gen/octree_gen.h"
+#include "import/import.h"
+#include "import/octant_text.h"
+#include "reference/reference_mesh.h"
+#include "test_util.h"
+
+namespace weaver {
+namespace {
+
+class BalanceTest : public ::testing::Test {
+ protected:
+  std::string import(const std::vector<Octant>& leaves) {
+    const std::string db = dir_.file("db" + std::to_string(count_++));
+    EXPECT_OK(write_octant_text(db + ".txt", leaves, ""));
+    ImportResult r;
+    EXPECT_OK(import_octants(db, db + ".txt", ImportOptions{}, &r));
+    return db;
+  }
+  std::vector<Octant> table(const std::string& db) {
+    std::unique_ptr<Database> d;
+    std::unique_ptr<BTree> t;
+    EXPECT_OK(Database::open(db, Database::Mode::kRead, false, &d));
+    EXPECT_OK(d->open_table(kOctantTable, 1 << 20, &t));
+    std::vector<Octant> out;
+    BTreeCursor c;
+    EXPECT_OK(t->seek_cursor(0, &c));
+    while (c.valid()) {
+      out.push_back(octant_from_key(c.key()));
+      EXPECT_OK(c.next());
+    }
+    return out;
+  }
+  testing::TempDir dir_;
+  int count_ = 0;
+};
+
+TEST_F(BalanceTest, MatchesReferenceOnRandomUnbalancedOctrees) {
+  std::mt19937_64 rng(5);
+  const int cases = static_cast<int>(testing::scaled(250, 40));
+  int unbalanced = 0;
+  for (int t = 0; t < cases; ++t) {
+    GenOptions g;
+    g.seed = rng();
+    g.block_level = static_cast<int>(rng() % 3);
+    const uint32_t per_axis = 1u << g.block_level;
+    for (int a = 0; a < 3; ++a) g.blocks[a] = 1 + rng() % per_axis;
+    g.leaves = 10 + rng() % 300;
+    g.max_level = g.block_level + 1 + static_cast<int>(rng() % 9);
+    std::vector<Octant> leaves;
+    ASSERT_OK(generate_octree(g, &leaves));
+    const std::vector<Octant> want = reference::balance(leaves);
+    unbalanced += want != leaves;
+    const std::string db = import(leaves);
+    SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) + " leaves");
+    BalanceOptions check;
+    check.check_only = true;
+    BalanceResult cr;
+    ASSERT_OK(balance_octree(db, check, &cr));
+    ASSERT_EQ(cr.balanced, want == leaves) << cr.violation;
+    BalanceOptions o;
+    o.memory_bytes = (t % 3 == 0) ? (64 << 10) : (64 << 20);  // tiny: sorts spill
+    BalanceResult r;
+    ASSERT_OK(balance_octree(db, o, &r));
+    ASSERT_EQ(table(db), want);
+    EXPECT_EQ(r.output_leaves, want.size());
+    EXPECT_EQ(r.input_leaves, leaves.size());
+    BalanceResult after;
+    ASSERT_OK(balance_octree(db, check, &after));
+    EXPECT_TRUE(after.balanced) << after.violation;
+  }
+  EXPECT_GT(unbalanced, cases / 2);  // the cases exercise real refinement
+}
+
+TEST_F(BalanceTest, CheckNamesTwoOctantsThatReallyViolate) {
+  std::mt19937_64 rng(8);
+  for (int t = 0; t < 60; ++t) {
+    GenOptions g;
+    g.seed = rng();
+    g.leaves = 50 + rng() % 200;
+    g.max_level = 3 + static_cast<int>(rng() % 6);
+    std::vector<Octant> leaves;
+    ASSERT_OK(generate_octree(g, &leaves));
+    if (reference::balance(leaves) == leaves) continue;
+    const std::string db = import(leaves);
+    BalanceOptions check;
+    check.check_only = true;
+    BalanceResult r;
+    ASSERT_OK(balance_octree(db, check, &r));
+    ASSERT_FALSE(r.balanced);
+    // Parse "(x y z l)" twice out of the message and check the pair.
+    std::vector<Octant> named;
+    size_t pos = 0;
+    while ((pos = r.violation.find('(', pos)) != std::string::npos) {
+      unsigned x, y, z, l;
+      ASSERT_EQ(std::sscanf(r.violation.c_str() + pos, "(%u %u %u %u)", &x, &y, &z, &l), 4);
+      named.push_back({x, y, z, uint8_t(l)});
+      ++pos;
+    }
+    ASSERT_EQ(named.size(), 2u) << r.violation;
+    EXPECT_TRUE(reference::face_or_edge_adjacent(named[0], named[1])) << r.violation;
+    EXPECT_GE(std::abs(int(named[0].level) - int(named[1].level)), 2) << r.violation;
+    EXPECT_NE(std::find(leaves.begin(), leaves.end(), named[0]), leaves.end());
+    EXPECT_NE(std::find(leaves.begin(), leaves.end(), named[1]), leaves.end());
+  }
+}
+
+}  // namespace
+}  // namespace weaver
