@@ -7,6 +7,11 @@
 #include "schema/status.h"
 #include "util/args.h"
 
+namespace weaver {
+struct ConstructOptions;
+struct ConstructPlan;
+}
+
 namespace weaver::cli {
 
 int cmd_generate(int argc, char** argv);
@@ -22,6 +27,12 @@ int cmd_query(int argc, char** argv);
 // errors, which are InvalidArgument statuses raised while parsing).
 int report(const std::string& command, const Status& st);
 int usage_error(const std::string& command, const std::string& message, const char* usage);
+
+int cmd_mesh(int argc, char** argv);
+
+// The construct options and plan printout shared by `construct` and `mesh`.
+Status parse_construct_options(const ParsedArgs& args, weaver::ConstructOptions* o);
+void print_construct_plan(const weaver::ConstructOptions& o, const weaver::ConstructPlan& p);
 
 // The default memory budget when --memory is absent.
 inline constexpr uint64_t kDefaultMemory = 256ull << 20;

@@ -59,7 +59,7 @@ Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
   return memory_option(args, &o->memory_bytes);
 }
 
-void print_plan(const ConstructOptions& o, const ConstructPlan& p) {
+void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
   std::printf("model      %s\n", p.model.c_str());
   std::printf("rule       edge <= Vs_min / (%g Hz x %g ppw)%s\n", o.freq, o.ppw,
               o.vs_min > 0 ? (", Vs floor " + std::to_string(int(o.vs_min)) + " m/s").c_str() : "");
@@ -86,7 +86,7 @@ int cmd_construct(int argc, char** argv) {
   ConstructPlan plan;
   st = plan_construct(o, &plan);
   if (!st.ok()) return report("construct", st);
-  print_plan(o, plan);
+  print_construct_plan(o, plan);
   std::fflush(stdout);
   const auto t0 = std::chrono::steady_clock::now();
   if (isatty(STDERR_FILENO)) {

@@ -12,6 +12,7 @@ constexpr char kUsage[] =
     "\n"
     "commands:\n"
     "  generate FILE     write a sample octree as octant text\n"
+    "  mesh DB           construct, balance and extract in one go\n"
     "  construct DB      build the octant table from a velocity model\n"
     "  balance DB        2:1 balance the octant table (minimal refinement)\n"
     "  import DB         load octant text into the octant table of database DB\n"
@@ -35,6 +36,7 @@ int main(int argc, char** argv) {
   if (cmd == "generate") return cmd_generate(argc, argv);
   if (cmd == "import") return cmd_import(argc, argv);
   if (cmd == "construct") return cmd_construct(argc, argv);
+  if (cmd == "mesh") return cmd_mesh(argc, argv);
   if (cmd == "balance") return cmd_balance(argc, argv);
   if (cmd == "extract") return cmd_extract(argc, argv);
   if (cmd == "export") return cmd_export(argc, argv);
