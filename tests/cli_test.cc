@@ -37,7 +37,8 @@ int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), 
 TEST(Cli, EveryCommandHasHelp) {
   const CommandRun top = run("--help");
   EXPECT_EQ(top.code, 0);
-  for (const char* cmd : {"generate", "import", "extract", "export", "stat", "query"}) {
+  for (const char* cmd : {"generate", "import", "construct", "balance", "mesh", "extract",
+                          "export", "stat", "query"}) {
     EXPECT_NE(top.out.find(cmd), std::string::npos);
     const CommandRun r = run(std::string(cmd) + " --help");
     EXPECT_EQ(r.code, 0) << cmd;
@@ -88,6 +89,29 @@ TEST(Cli, DataErrorsAreOneLineWithStatus1) {
   const CommandRun q = run("query " + d.file("nothing") + " locate 1 2 3");
   EXPECT_EQ(q.code, 1);
   EXPECT_EQ(lines(q.err), 1) << q.err;
+}
+
+}  // namespace
+}  // namespace weaver
+
+namespace weaver {
+namespace {
+
+TEST(Cli, MeshRunsThePipelineAndBalanceCheckAgrees) {
+  testing::TempDir d;
+  const CommandRun mesh = run("mesh " + d.file("db") +
+                              " --model loh1 --freq 0.5 --domain 20000,20000,10000 --threads 2");
+  ASSERT_EQ(mesh.code, 0) << mesh.err;
+  for (const char* word : {"construct", "balance", "extract", "elements", "danglings",
+                           "points per wavelength"}) {
+    EXPECT_NE(mesh.out.find(word), std::string::npos) << word << "\n" << mesh.out;
+  }
+  const CommandRun check = run("balance " + d.file("db") + " --check");
+  EXPECT_EQ(check.code, 0) << check.err;
+  EXPECT_NE(check.out.find("2:1 balanced"), std::string::npos);
+  const CommandRun bad = run("construct " + d.file("db2") + " --model lava");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_EQ(lines(bad.err), 1) << bad.err;
 }
 
 }  // namespace

@@ -1,0 +1,175 @@
+// Velocity models at known points, grid files good and bad, and construct's
+// refinement rule checked leaf by leaf.
+#include "construct/construct.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+
+#include "db/database.h"
+#include "model/grid_model.h"
+#include "model/velocity_model.h"
+#include "schema/octant.h"
+#include "test_util.h"
+
+namespace weaver {
+namespace {
+
+Material at(const std::string& name, double x, double y, double z) {
+  std::unique_ptr<VelocityModel> m;
+  EXPECT_OK(make_model(name, "", &m));
+  return m->at(x, y, z);
+}
+
+TEST(Models, ValuesAtKnownPoints) {
+  const Material h = at("halfspace", 1, 2, 3);
+  EXPECT_EQ(h.vp, 6000);
+  EXPECT_EQ(h.vs, 3464);
+  EXPECT_EQ(h.rho, 2700);
+  EXPECT_EQ(at("loh1", 0, 0, 500).vs, 2000);
+  EXPECT_EQ(at("loh1", 0, 0, 500).vp, 4000);
+  EXPECT_EQ(at("loh1", 0, 0, 1500).vs, 3464);
+  EXPECT_FLOAT_EQ(at("basin", 42000, 55000, 0).vs, 450);      // a bowl's centre, at the surface
+  EXPECT_FLOAT_EQ(at("basin", 95000, 95000, 0).vs, 2500);     // rock outside the bowls
+  EXPECT_FLOAT_EQ(at("basin", 95000, 95000, 30000).vs, 3464);  // deep rock, capped
+  EXPECT_GT(at("basin", 42000, 55000, 1000).vs, 450);          // Vs rises with depth
+  std::unique_ptr<VelocityModel> m;
+  EXPECT_TRUE(make_model("marble", "", &m).is_invalid_argument());
+  EXPECT_TRUE(make_model("grid", "", &m).is_invalid_argument());
+}
+
+TEST(GridModel, InterpolatesAndClamps) {
+  testing::TempDir dir;
+  GridSpec s;
+  s.nx = 2, s.ny = 2, s.nz = 3;
+  s.dz = 100;
+  std::vector<Material> v;
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) v.push_back({float(3000 + 100 * k + 10 * i), float(1000 + 100 * k), 2000});
+  ASSERT_OK(write_grid_model(dir.file("g"), s, v));
+  std::unique_ptr<VelocityModel> m;
+  ASSERT_OK(make_model("grid", dir.file("g"), &m));
+  EXPECT_FLOAT_EQ(m->at(0.5, 0.5, 50).vs, 1050);   // halfway between k=0 and k=1
+  EXPECT_FLOAT_EQ(m->at(0.5, 0, 0).vp, 3005);      // halfway in x
+  EXPECT_FLOAT_EQ(m->at(-9, -9, 1e6).vs, 1200);    // clamped to the last layer
+}
+
+TEST(GridModel, BadFilesGetOneLineErrorsNamingTheFile) {
+  testing::TempDir dir;
+  auto expect_bad = [&](const std::string& body, const std::string& words) {
+    const std::string path = dir.file("bad");
+    std::ofstream(path, std::ios::binary) << body;
+    std::unique_ptr<VelocityModel> m;
+    const Status st = make_model("grid", path, &m);
+    ASSERT_FALSE(st.ok());
+    EXPECT_NE(st.message().find(path), std::string::npos) << st.message();
+    EXPECT_NE(st.message().find(words), std::string::npos) << st.message();
+    EXPECT_EQ(st.message().find('\n'), std::string::npos);
+  };
+  expect_bad("hello\n", "not a weaver grid model");
+  expect_bad("weaver-grid 1\n2 2\n0 0 0\n1 1 1\n", "line 2");
+  expect_bad("weaver-grid 1\n1 2 2\n0 0 0\n1 1 1\n", "dimensions");
+  expect_bad("weaver-grid 1\n2 2 2\n0 0 0\n1 0 1\n", "spacing");
+  expect_bad("weaver-grid 1\n2 2 2\n0 0 0\n1 1 1\nshort", "expected 96 bytes");
+  std::string body = "weaver-grid 1\n2 2 2\n0 0 0\n1 1 1\n";
+  const float bad[3] = {3000, -1, 2000};
+  for (int i = 0; i < 8; ++i) body.append(reinterpret_cast<const char*>(bad), 12);
+  expect_bad(body, "non-positive");
+  std::unique_ptr<VelocityModel> m;
+  EXPECT_TRUE(make_model("grid", dir.file("missing"), &m).is_not_found());
+}
+
+// Vs_min over the 27 sample points, written out independently of construct.
+double vs_min(const VelocityModel& m, const Octant& o, double tick, double floor) {
+  double v = 1e300;
+  const double e = octant_edge(o) * tick;
+  for (double fz : {0.0, 0.5, 1.0})
+    for (double fy : {0.0, 0.5, 1.0})
+      for (double fx : {0.0, 0.5, 1.0}) {
+        v = std::min<double>(v, m.at(o.x * tick + fx * e, o.y * tick + fy * e, o.z * tick + fz * e).vs);
+      }
+  return std::max(v, floor);
+}
+
+TEST(Construct, EveryLeafMeetsTheRuleAndNoneIsFinerThanNeeded) {
+  struct Case {
+    const char* model;
+    double freq;
+    std::array<double, 3> domain;
+    double vs_min;
+  };
+  for (const Case& c : {Case{"loh1", 0.8, {20000, 20000, 10000}, 0},
+                        Case{"basin", 0.15, {100000, 100000, 37500}, 0},
+                        Case{"basin", 0.3, {100000, 50000, 37500}, 600}}) {
+    testing::TempDir dir;
+    ConstructOptions o;
+    o.model = c.model;
+    o.freq = c.freq;
+    o.domain_m = c.domain;
+    o.vs_min = c.vs_min;
+    ConstructPlan plan;
+    ConstructResult r;
+    ASSERT_OK(construct_octree(dir.file("db"), o, &plan, &r));
+    std::unique_ptr<VelocityModel> model;
+    ASSERT_OK(make_model(c.model, "", &model));
+    std::unique_ptr<Database> db;
+    std::unique_ptr<BTree> t;
+    ASSERT_OK(Database::open(dir.file("db"), Database::Mode::kRead, false, &db));
+    ASSERT_OK(db->open_table(kOctantTable, 1 << 20, &t));
+    BTreeCursor cur;
+    ASSERT_OK(t->seek_cursor(0, &cur));
+    double volume = 0;
+    uint64_t n = 0;
+    while (cur.valid()) {
+      const Octant leaf = octant_from_key(cur.key());
+      const double edge = octant_edge(leaf) * plan.tick_m;
+      volume += edge * edge * edge;
+      const double limit = vs_min(*model, leaf, plan.tick_m, c.vs_min) / (c.freq * o.ppw);
+      ASSERT_TRUE(edge <= limit || leaf.level == o.max_level) << c.model << " leaf too big";
+      if (leaf.level > plan.block_level) {
+        const Octant p = octant_parent(leaf);
+        const double pedge = octant_edge(p) * plan.tick_m;
+        ASSERT_GT(pedge, vs_min(*model, p, plan.tick_m, c.vs_min) / (c.freq * o.ppw))
+            << c.model << ": the parent of a leaf already meets the rule";
+      }
+      float mat[3];
+      std::memcpy(mat, cur.payload(), sizeof mat);
+      const double h = edge / 2;
+      EXPECT_FLOAT_EQ(mat[1], model->at(leaf.x * plan.tick_m + h, leaf.y * plan.tick_m + h,
+                                        leaf.z * plan.tick_m + h).vs);
+      ++n;
+      ASSERT_OK(cur.next());
+    }
+    EXPECT_EQ(n, r.elements);
+    const double domain = c.domain[0] * c.domain[1] * c.domain[2];
+    EXPECT_NEAR(volume / domain, 1.0, 1e-9) << c.model << ": leaves must tile the domain";
+  }
+}
+
+TEST(Construct, ResolvesDomainsIntoBlocksAndRejectsBadOptions) {
+  ConstructOptions o;
+  ConstructPlan p;
+  ASSERT_OK(plan_construct(o, &p));
+  EXPECT_EQ(p.block_level, 3);
+  EXPECT_EQ(p.blocks, (std::array<uint32_t, 3>{8, 8, 3}));
+  EXPECT_FALSE(p.rounded_up);
+  o.domain_m = {1000, 333, 10};
+  ASSERT_OK(plan_construct(o, &p));
+  EXPECT_TRUE(p.rounded_up);
+  EXPECT_GE(p.domain_m[1], 333);
+  o = ConstructOptions{};
+  o.freq = 0;
+  EXPECT_TRUE(plan_construct(o, &p).is_invalid_argument());
+  o = ConstructOptions{};
+  o.min_level = 9;
+  o.max_level = 4;
+  EXPECT_TRUE(plan_construct(o, &p).is_invalid_argument());
+  o = ConstructOptions{};
+  o.model = "lava";
+  EXPECT_TRUE(plan_construct(o, &p).is_invalid_argument());
+}
+
+}  // namespace
+}  // namespace weaver
