@@ -106,7 +106,10 @@ class Balancer {
   ExternalSorter& required() { return *required_; }
 
  private:
-  // Neighbours of the level-l parents, kept where they meet the domain.
+  // Neighbours of the level-l parents, kept where they meet the domain.  A
+  // neighbour that is itself a parent (it has finer children) is resolved
+  // already, and its own parent enters the next level through its siblings,
+  // so it is skipped: inside refined regions almost every candidate goes.
   Status expand_level(int l, bool propagate) {
     ExternalSorter& parents = *parents_[l];
     WEAVER_RETURN_IF_ERROR(parents.finish());
@@ -114,17 +117,42 @@ class Balancer {
     KeyTag p;
     bool done = false, has_prev = false;
     uint64_t prev = 0;
+    // The level's parents, in memory when they fit in a quarter of the budget.
+    std::vector<KeyTag> level;
+    const size_t fits = o_.memory_bytes / 4 / sizeof(KeyTag);
+    bool all_in_memory = true;
+    auto emit_neighbours = [&](const KeyTag& par) -> Status {
+      const Octant po = octant_from_key(par.key);
+      for (const auto& d : dirs_) {
+        Octant n;
+        if (!octant_neighbour(po, d[0], d[1], d[2], &n)) continue;
+        const uint64_t nk = octant_key(n);
+        if (all_in_memory && std::binary_search(level.begin(), level.end(), KeyTag{nk, 0},
+                                                [](const KeyTag& a, const KeyTag& b) {
+                                                  return a.key < b.key;
+                                                })) {
+          continue;
+        }
+        WEAVER_RETURN_IF_ERROR(candidates.add({nk, par.tag}));
+      }
+      return Status::Ok();
+    };
     while (true) {
       WEAVER_RETURN_IF_ERROR(next_unique(parents, &prev, &has_prev, &p, &done));
       if (done) break;
-      const Octant po = octant_from_key(p.key);
-      for (const auto& d : dirs_) {
-        Octant n;
-        if (octant_neighbour(po, d[0], d[1], d[2], &n)) {
-          WEAVER_RETURN_IF_ERROR(candidates.add({octant_key(n), p.tag}));
-        }
+      if (all_in_memory && level.size() < fits) {
+        level.push_back(p);
+        continue;
       }
+      if (all_in_memory) {  // too many: no skipping for this level
+        all_in_memory = false;
+        for (const KeyTag& q : level) WEAVER_RETURN_IF_ERROR(emit_neighbours(q));
+        level.clear();
+      }
+      WEAVER_RETURN_IF_ERROR(emit_neighbours(p));
     }
+    for (const KeyTag& q : level) WEAVER_RETURN_IF_ERROR(emit_neighbours(q));
+    level.clear();
     WEAVER_RETURN_IF_ERROR(candidates.finish());
     DomainProbe probe;
     WEAVER_RETURN_IF_ERROR(probe.open(leaves_));
