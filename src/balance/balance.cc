@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -189,7 +190,7 @@ class Completion {
   Completion(BTree& out, const VelocityModel* model, double tick_m, uint32_t payload)
       : out_(out), model_(model), tick_m_(tick_m), payload_(payload) {}
 
-  Status write(const Octant& t, const std::byte* parent_payload, const std::vector<uint64_t>& inside,
+  Status write(const Octant& t, const std::byte* parent_payload, const std::vector<KeyTag>& inside,
                BalanceResult* r) {
     size_t pos = 0;
     return split(t, parent_payload, inside, &pos, r);
@@ -202,11 +203,11 @@ class Completion {
   }
 
  private:
-  Status split(const Octant& o, const std::byte* parent_payload, const std::vector<uint64_t>& inside,
+  Status split(const Octant& o, const std::byte* parent_payload, const std::vector<KeyTag>& inside,
                size_t* pos, BalanceResult* r) {
     const uint64_t key = octant_key(o), end = octant_subtree_key_end(o);
-    while (*pos < inside.size() && inside[*pos] <= key) ++*pos;  // o itself is resolved
-    if (*pos < inside.size() && inside[*pos] < end) {
+    while (*pos < inside.size() && inside[*pos].key <= key) ++*pos;  // o itself is resolved
+    if (*pos < inside.size() && inside[*pos].key < end) {
       for (int c = 0; c < 8; ++c) {
         WEAVER_RETURN_IF_ERROR(split(octant_child(o, c), parent_payload, inside, pos, r));
       }
@@ -263,32 +264,44 @@ std::string replace_levels(const std::string& metadata, const LevelCounts& level
   return out + levels_to_metadata(levels);
 }
 
+// Calls visit(leaf cursor, required octants strictly inside the leaf) for
+// every leaf in key order, until visit sets *stop.
+Status for_each_leaf(BTree& leaves, ExternalSorter& required,
+                     const std::function<Status(const BTreeCursor&, const std::vector<KeyTag>&,
+                                                bool*)>& visit) {
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(leaves.seek_cursor(0, &c));
+  KeyTag req;
+  bool done = false, has_prev = false, stop = false;
+  uint64_t prev = 0;
+  WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
+  std::vector<KeyTag> inside;
+  while (c.valid() && !stop) {
+    const uint64_t key = c.key(), end = octant_key_subtree_end(key);
+    inside.clear();
+    while (!done && req.key < end) {  // required octants up to the end of this leaf
+      if (req.key > key) inside.push_back(req);
+      WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
+    }
+    WEAVER_RETURN_IF_ERROR(visit(c, inside, &stop));
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  return Status::Ok();
+}
+
 // Merges the leaves with the required octants and writes the refinement.
 Status write_refinement(BTree& leaves, ExternalSorter& required, BTree& out, BalanceResult* r) {
   Units u;
   units_from_metadata(leaves.options().metadata, &u);
   const std::unique_ptr<VelocityModel> model = model_of(leaves.options().metadata);
   Completion completion(out, model.get(), u.tick_m, leaves.payload_size());
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(leaves.seek_cursor(0, &c));
-  KeyTag req;
-  bool done = false, has_prev = false;
-  uint64_t prev = 0;
-  WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
-  std::vector<uint64_t> inside;
   std::vector<std::byte> payload(leaves.payload_size());
-  while (c.valid()) {
-    const uint64_t key = c.key(), end = octant_key_subtree_end(key);
-    inside.clear();
-    while (!done && req.key < end) {  // required octants up to the end of this leaf
-      if (req.key > key) inside.push_back(req.key);
-      WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
-    }
-    if (!inside.empty()) ++r->split;
-    if (!payload.empty()) std::memcpy(payload.data(), c.payload(), payload.size());
-    WEAVER_RETURN_IF_ERROR(completion.write(octant_from_key(key), payload.data(), inside, r));
-    WEAVER_RETURN_IF_ERROR(c.next());
-  }
+  WEAVER_RETURN_IF_ERROR(for_each_leaf(
+      leaves, required, [&](const BTreeCursor& c, const std::vector<KeyTag>& inside, bool*) {
+        if (!inside.empty()) ++r->split;
+        if (!payload.empty()) std::memcpy(payload.data(), c.payload(), payload.size());
+        return completion.write(octant_from_key(c.key()), payload.data(), inside, r);
+      }));
   return completion.flush();
 }
 
@@ -318,29 +331,18 @@ Status touching_leaf(BTree& leaves, const Octant& coarse, const Octant& asker, O
 
 // check_only: the first required octant strictly inside a leaf is a violation.
 Status find_violation(BTree& leaves, ExternalSorter& required, BalanceResult* r) {
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(leaves.seek_cursor(0, &c));
-  KeyTag req;
-  bool done = false, has_prev = false;
-  uint64_t prev = 0;
-  WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
-  while (c.valid() && !done) {
-    const uint64_t key = c.key(), end = octant_key_subtree_end(key);
-    while (!done && req.key < end) {
-      if (req.key > key) {
-        const Octant coarse = octant_from_key(key);
+  return for_each_leaf(
+      leaves, required, [&](const BTreeCursor& c, const std::vector<KeyTag>& inside, bool* stop) {
+        if (inside.empty()) return Status::Ok();
+        const Octant coarse = octant_from_key(c.key());
         Octant fine;
-        WEAVER_RETURN_IF_ERROR(touching_leaf(leaves, coarse, octant_from_key(req.tag), &fine));
+        WEAVER_RETURN_IF_ERROR(touching_leaf(leaves, coarse, octant_from_key(inside[0].tag), &fine));
         r->balanced = false;
         r->violation = "octants " + describe(coarse) + " and " + describe(fine) +
                        " are face or edge neighbours more than one level apart";
+        *stop = true;
         return Status::Ok();
-      }
-      WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
-    }
-    WEAVER_RETURN_IF_ERROR(c.next());
-  }
-  return Status::Ok();
+      });
 }
 
 }  // namespace
@@ -371,17 +373,9 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   std::unique_ptr<BTree> out;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, 8ull << 20, &out, &file));
-  Status st = write_refinement(*leaves, balancer.required(), *out, r);
-  if (st.ok()) {
-    out->set_metadata(replace_levels(leaves->options().metadata, r->levels));
-    st = out->commit();
-  }
-  if (st.ok()) st = db->commit({{kOctantTable, file}});
-  if (!st.ok()) {
-    out.reset();
-    db->abandon(file);
-  }
-  return st;
+  const Status st = write_refinement(*leaves, balancer.required(), *out, r);
+  if (st.ok()) out->set_metadata(replace_levels(leaves->options().metadata, r->levels));
+  return db->publish(kOctantTable, file, out, st);
 }
 
 }  // namespace weaver

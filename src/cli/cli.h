@@ -37,5 +37,6 @@ void print_construct_plan(const weaver::ConstructOptions& o, const weaver::Const
 // The default memory budget when --memory is absent.
 inline constexpr uint64_t kDefaultMemory = 256ull << 20;
 Status memory_option(const ParsedArgs& args, uint64_t* bytes);
+Status threads_option(const ParsedArgs& args, int default_threads, int* threads);
 
 }  // namespace weaver::cli

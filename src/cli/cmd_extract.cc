@@ -47,12 +47,7 @@ int cmd_extract(int argc, char** argv) {
       st = Status::InvalidArgument("--algorithm must be sort or search");
     }
   }
-  if (st.ok() && args.values.count("threads")) {
-    uint64_t n = 0;
-    st = parse_u64(args.values["threads"], "--threads", &n);
-    if (st.ok() && (n < 1 || n > 256)) st = Status::InvalidArgument("--threads must be 1..256");
-    o.threads = static_cast<int>(n);
-  }
+  if (st.ok()) st = threads_option(args, 1, &o.threads);
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   auto elapsed = [t0] {

@@ -64,13 +64,7 @@ int cmd_mesh(int argc, char** argv) {
   ConstructOptions co;
   st = parse_construct_options(args, &co);
   ExtractOptions eo;
-  eo.threads = 2;
-  if (st.ok() && args.values.count("threads")) {
-    uint64_t n = 0;
-    st = parse_u64(args.values["threads"], "--threads", &n);
-    if (st.ok() && (n < 1 || n > 256)) st = Status::InvalidArgument("--threads must be 1..256");
-    eo.threads = static_cast<int>(n);
-  }
+  if (st.ok()) st = threads_option(args, 2, &eo.threads);
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   eo.memory_bytes = co.memory_bytes;
   const std::string& db = args.positional[0];

@@ -26,4 +26,14 @@ Status memory_option(const ParsedArgs& args, uint64_t* bytes) {
   return Status::Ok();
 }
 
+Status threads_option(const ParsedArgs& args, int default_threads, int* threads) {
+  *threads = default_threads;
+  if (!args.values.count("threads")) return Status::Ok();
+  uint64_t n = 0;
+  WEAVER_RETURN_IF_ERROR(parse_u64(args.values.at("threads"), "--threads", &n));
+  if (n < 1 || n > 256) return Status::InvalidArgument("--threads must be 1..256");
+  *threads = static_cast<int>(n);
+  return Status::Ok();
+}
+
 }  // namespace weaver::cli

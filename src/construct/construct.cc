@@ -164,14 +164,8 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
     std::snprintf(model_meta, sizeof model_meta, ";model=%s;freq=%.17g;ppw=%.17g;vs_min=%.17g",
                   o.model.c_str(), o.freq, o.ppw, o.vs_min);
     table->set_metadata(units_to_metadata(u) + levels_to_metadata(r->levels) + model_meta);
-    st = table->commit();
   }
-  if (st.ok()) st = db->commit({{kOctantTable, file}});
-  if (!st.ok()) {
-    table.reset();
-    db->abandon(file);
-    return st;
-  }
+  WEAVER_RETURN_IF_ERROR(db->publish(kOctantTable, file, table, st));
   r->table_bytes = table->file_bytes();
   return Status::Ok();
 }

@@ -198,6 +198,17 @@ Status Database::commit(const std::map<std::string, std::string>& table_files) {
   return Status::Ok();
 }
 
+Status Database::publish(const std::string& name, const std::string& file,
+                         std::unique_ptr<BTree>& table, Status built) {
+  if (built.ok()) built = table->commit();
+  if (built.ok()) built = commit({{name, file}});
+  if (!built.ok()) {
+    table.reset();
+    abandon(file);
+  }
+  return built;
+}
+
 void Database::abandon(const std::string& file_name) {
   std::error_code ec;
   fs::remove(dir_ + "/" + file_name, ec);

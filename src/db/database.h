@@ -47,6 +47,11 @@ class Database {
   Status commit(const std::map<std::string, std::string>& table_files);
   // Writer only: deletes an uncommitted file after a failed build.
   void abandon(const std::string& file_name);
+  // Writer only: ends the build of table `name` in `file`.  If `built` is OK,
+  // commits the table and makes it live; otherwise (or if that fails) closes
+  // and deletes the file.  Returns the first error.
+  Status publish(const std::string& name, const std::string& file,
+                 std::unique_ptr<BTree>& table, Status built);
 
   // Files in the directory that no manifest names (left by a crashed writer);
   // a writer removes them when it opens.

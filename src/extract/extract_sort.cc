@@ -125,13 +125,7 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
     result->spilled = spills.records_added();
     result->spilled_to_disk = spills.records_written();
   }
-  if (st.ok()) st = nodes->commit();
-  if (st.ok()) st = db->commit({{kNodeTable, file}});
-  if (!st.ok()) {
-    nodes.reset();
-    db->abandon(file);
-    return st;
-  }
+  WEAVER_RETURN_IF_ERROR(db->publish(kNodeTable, file, nodes, st));
   result->node_table_bytes = nodes->file_bytes();
   return Status::Ok();
 }
