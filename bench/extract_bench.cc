@@ -28,12 +28,6 @@ struct Mesh {
   uint64_t points;  // points
 };
 
-std::string median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", v[v.size() / 2]);
-  return buf;
-}
 
 }  // namespace
 }  // namespace weaver::bench
@@ -131,9 +125,9 @@ int main(int argc, char** argv) {
         secs.push_back(std::stod(last["seconds"]));
         rss.push_back(std::stod(last["peak_rss_bytes"]));
       }
-      last["nodes_per_s"] = median(rates);
-      last["seconds"] = median(secs);
-      last["peak_rss_bytes"] = median(rss);
+      last["nodes_per_s"] = fmt(median(rates));
+      last["seconds"] = fmt(median(secs));
+      last["peak_rss_bytes"] = fmt(median(rss));
       last["runs"] = std::to_string(runs);
       if (!search && v.threads == 1) {
         sort_seconds = std::stod(last["seconds"]);

@@ -12,23 +12,6 @@
 #include "bench_util.h"
 #include "construct/construct.h"
 
-namespace weaver::bench {
-namespace {
-
-std::string fmt(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", v);
-  return buf;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-}  // namespace
-}  // namespace weaver::bench
-
 int main(int argc, char** argv) {
   using namespace weaver;
   using namespace weaver::bench;

@@ -204,11 +204,7 @@ std::string median_of(std::vector<std::map<std::string, std::string>>& runs, con
   for (auto& r : runs) {
     if (r.count(key)) v.push_back(std::stod(r[key]));
   }
-  if (v.empty()) return "";
-  std::sort(v.begin(), v.end());
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.4g", v[v.size() / 2]);
-  return buf;
+  return v.empty() ? "" : fmt(median(v));
 }
 
 uint64_t parse_size(const std::string& s) {

@@ -103,11 +103,6 @@ constexpr bool octant_is_ancestor(const Octant& a, const Octant& b) {
          (a.z >> shift) == (b.z >> shift);
 }
 
-// Whether the two octants share any volume (equal, or one contains the other).
-constexpr bool octant_overlaps(const Octant& a, const Octant& b) {
-  return a == b || octant_is_ancestor(a, b) || octant_is_ancestor(b, a);
-}
-
 // The smallest octant containing both.  Accepts: octants.
 constexpr Octant octant_nearest_common_ancestor(const Octant& a, const Octant& b) {
   const uint32_t diff = (a.x ^ b.x) | (a.y ^ b.y) | (a.z ^ b.z);

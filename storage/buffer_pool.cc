@@ -221,14 +221,4 @@ Status BufferPool::flush() {
   return Status::Ok();
 }
 
-void BufferPool::discard_all() {
-  recycle_.clear();
-  for (Frame& f : frames_) {
-    if (f.pins > 0 || f.page_no == 0) continue;
-    table_erase(f.page_no);
-    f.page_no = 0;
-    f.dirty = false;
-  }
-}
-
 }  // namespace weaver

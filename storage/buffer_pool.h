@@ -65,9 +65,6 @@ class BufferPool {
 
   // Writes every dirty page back (does not sync the file).
   Status flush();
-  // Forgets every unpinned page without writing (after the file was replaced
-  // or rolled back).
-  void discard_all();
 
   uint32_t page_size() const { return page_size_; }
   uint64_t frame_count() const { return frames_.size(); }

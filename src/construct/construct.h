@@ -14,6 +14,7 @@
 #include <string>
 
 #include "db/octant_table.h"
+#include "schema/octant.h"
 #include "schema/status.h"
 
 namespace weaver {
@@ -25,10 +26,9 @@ struct ConstructOptions {
   double ppw = 10;        // points per wavelength
   double vs_min = 0;      // floor on Vs in the rule (m/s); 0: none
   std::array<double, 3> domain_m = {100000, 100000, 37500};
-  int min_level = 0, max_level = kMaxLevelDefault;
+  int min_level = 0, max_level = kMaxLevel;
   uint64_t memory_bytes = 256ull << 20;
   std::function<void(uint64_t leaves)> progress;
-  static constexpr int kMaxLevelDefault = 20;
 };
 
 // The domain as a union of blocks: resolved before anything is written.

@@ -36,10 +36,6 @@ class NodeHash {
   // The keys, in insertion order, and their masks.
   uint64_t key_at(size_t i) const { return slots_[used_[i]]; }
   uint8_t mask_at(size_t i) const { return masks_[used_[i]]; }
-  uint8_t mask_of(uint64_t key) const {
-    const size_t s = find_slot(key);
-    return slots_[s] == kEmpty ? 0 : masks_[s];
-  }
 
  private:
   // Node keys use 63 bits, so an all-ones slot can mark "empty".
