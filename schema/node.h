@@ -19,6 +19,16 @@ namespace weaver {
 
 enum class NodeKind : uint8_t { kAnchored = 0, kEdge = 1, kFace = 2 };  // on disk
 
+// "anchored", "edge" or "face": the names the CSV export and messages use.
+constexpr const char* node_kind_name(NodeKind k) {
+  switch (k) {
+    case NodeKind::kAnchored: return "anchored";
+    case NodeKind::kEdge: return "edge";
+    case NodeKind::kFace: return "face";
+  }
+  return "?";
+}
+
 // Trailing zero bits of a node coordinate; 0 counts as 31 (a multiple of everything).
 constexpr int coord_zeros(uint32_t v) { return v == 0 ? 31 : std::countr_zero(v); }
 

@@ -14,6 +14,7 @@
 #include "import/import.h"
 #include "import/octant_text.h"
 #include "reference/reference_mesh.h"
+#include "test_octrees.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -24,19 +25,7 @@ struct Case {
   std::vector<Octant> leaves;  // balanced
 };
 
-// Random refinement of a block domain, made balanced by the reference.
-std::vector<Octant> random_balanced(uint64_t seed, uint32_t bx, uint32_t by, uint32_t bz,
-                                    int block_level, uint64_t leaves, int max_level) {
-  GenOptions g;
-  g.seed = seed;
-  g.blocks[0] = bx, g.blocks[1] = by, g.blocks[2] = bz;
-  g.block_level = block_level;
-  g.leaves = leaves;
-  g.max_level = max_level;
-  std::vector<Octant> out;
-  EXPECT_OK(generate_octree(g, &out));
-  return reference::balance(out);
-}
+using testing::random_balanced;
 
 // Refines every leaf that touches a sphere, to `depth` levels (grading).
 std::vector<Octant> graded_sphere(int base, int depth, double radius_frac) {

@@ -22,6 +22,7 @@ int cmd_extract(int argc, char** argv);
 int cmd_export(int argc, char** argv);
 int cmd_stat(int argc, char** argv);
 int cmd_query(int argc, char** argv);
+int cmd_verify(int argc, char** argv);
 
 // Prints "weaver <command>: <message>" to stderr; returns 1 (2 for usage
 // errors, which are InvalidArgument statuses raised while parsing).

@@ -69,10 +69,6 @@ std::string ids_text(const uint64_t* ids, int n) {
   return s;
 }
 
-const char* kind_name(NodeKind k) {
-  return k == NodeKind::kAnchored ? "anchored" : k == NodeKind::kEdge ? "edge" : "face";
-}
-
 int run_locate(BTree& t, BTree* nodes, const Units& u, const std::vector<uint32_t>& c, bool json) {
   LocateResult r;
   Status st = locate(t, {c[0], c[1], c[2]}, &r);
@@ -120,13 +116,13 @@ int print_node(const NodeInfo& n, const Units& u, bool json) {
   if (json) {
     std::printf("{\"id\": %llu, \"x\": %u, \"y\": %u, \"z\": %u, \"kind\": \"%s\", "
                 "\"anchors\": %s}\n",
-                (unsigned long long)n.id, n.c.x, n.c.y, n.c.z, kind_name(n.kind),
+                (unsigned long long)n.id, n.c.x, n.c.y, n.c.z, node_kind_name(n.kind),
                 ids_json(n.anchors.data(), n.anchor_count).c_str());
     return 0;
   }
   std::printf("node %llu: (%u %u %u) ticks = (%.10g %.10g %.10g) m, %s", (unsigned long long)n.id, n.c.x,
               n.c.y, n.c.z, u.origin_m[0] + n.c.x * u.tick_m, u.origin_m[1] + n.c.y * u.tick_m,
-              u.origin_m[2] + n.c.z * u.tick_m, kind_name(n.kind));
+              u.origin_m[2] + n.c.z * u.tick_m, node_kind_name(n.kind));
   if (n.anchor_count > 0) {
     std::printf(", depends on nodes %s", ids_text(n.anchors.data(), n.anchor_count).c_str());
   }

@@ -20,6 +20,7 @@ constexpr char kUsage[] =
     "  export DB         write the mesh as nodes.csv / elements.csv\n"
     "  stat DB           table sizes, per-level counts and storage overhead\n"
     "  query DB ...      locate a point, or list the leaves in a box\n"
+    "  verify DB         check pages, keys and the mesh invariants\n"
     "\n"
     "Run 'weaver <command> --help' for the arguments of one command.\n";
 
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
   if (cmd == "export") return cmd_export(argc, argv);
   if (cmd == "stat") return cmd_stat(argc, argv);
   if (cmd == "query") return cmd_query(argc, argv);
+  if (cmd == "verify") return cmd_verify(argc, argv);
   std::fprintf(stderr, "weaver: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
   return 2;
 }

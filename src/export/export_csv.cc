@@ -73,15 +73,6 @@ Status node_id(BTree& nodes, Coord c, uint64_t* id) {
   return Status::Ok();
 }
 
-const char* kind_name(NodeKind k) {
-  switch (k) {
-    case NodeKind::kAnchored: return "anchored";
-    case NodeKind::kEdge: return "edge";
-    case NodeKind::kFace: return "face";
-  }
-  return "?";
-}
-
 Status write_nodes(BTree& nodes, const std::string& path, uint64_t* count) {
   CsvWriter out(path);
   WEAVER_RETURN_IF_ERROR(out.open("id,x,y,z,kind,a0,a1,a2,a3\n"));
@@ -93,7 +84,7 @@ Status write_nodes(BTree& nodes, const std::string& path, uint64_t* count) {
     if (raw > 2) return Status::Corruption(nodes.file_name() + ": bad node kind " + std::to_string(raw));
     const NodeKind kind = static_cast<NodeKind>(raw);
     out.field(id), out.comma(), out.field(p.x), out.comma(), out.field(p.y), out.comma();
-    out.field(p.z), out.comma(), out.text(kind_name(kind));
+    out.field(p.z), out.comma(), out.text(node_kind_name(kind));
     Coord anchors[4];
     const int n = node_anchors(p, kind, anchors);
     for (int i = 0; i < 4; ++i) {

@@ -1,0 +1,131 @@
+#include "verify/verify.h"
+
+#include <memory>
+
+#include "balance/balance.h"
+#include "db/database.h"
+#include "db/node_table.h"
+#include "db/octant_table.h"
+#include "extract/leaf_reader.h"
+#include "verify/mesh_check.h"
+
+namespace weaver {
+namespace {
+
+std::string count_text(uint64_t n, const char* what) { return std::to_string(n) + " " + what; }
+
+// Octant keys: valid, non-overlapping (LeafReader), and counted per level as
+// the metadata says.
+Status scan_octants(BTree& t, const std::string& name, Problems& problems) {
+  LeafReader reader;
+  LevelCounts counted{};
+  Status st = reader.open(t);
+  while (st.ok() && reader.valid()) {
+    ++counted[octant_key_level(reader.key())];
+    st = reader.next();
+  }
+  if (!st.ok()) {
+    if (st.code() == Status::Code::kIOError) return st;
+    problems.add("table " + name + ": " + st.message());
+    return Status::Ok();
+  }
+  LevelCounts stored{};
+  if (levels_from_metadata(t.options().metadata, &stored) && stored != counted) {
+    for (int l = 0; l <= kMaxLevel; ++l) {
+      if (stored[l] == counted[l]) continue;
+      problems.add("table " + name + ": metadata counts " + std::to_string(stored[l]) +
+                   " leaves at level " + std::to_string(l) + ", the table holds " +
+                   std::to_string(counted[l]));
+      break;
+    }
+  }
+  return Status::Ok();
+}
+
+Status scan_nodes(BTree& t, const std::string& name, Problems& problems) {
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(t.seek_cursor(0, &c));
+  for (uint64_t id = 0; c.valid(); ++id) {
+    const Coord p = morton_decode(c.key());
+    if (!node_is_valid(p) || static_cast<uint8_t>(c.payload()[0]) > 2) {
+      problems.add("table " + name + ": node " + std::to_string(id) + " (key " +
+                   std::to_string(c.key()) + ") has an invalid coordinate or kind");
+      return Status::Ok();
+    }
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  return Status::Ok();
+}
+
+// Pages and keys of one table.  *usable is false when the table is too
+// damaged for the mesh checks.
+Status check_table(const Database& db, const std::string& name, const VerifyOptions& o,
+                   Problems& problems, VerifyReport* r, bool* usable) {
+  *usable = false;
+  std::unique_ptr<BTree> t;
+  Status st = db.open_table(name, o.memory_bytes / 4, &t);
+  if (st.ok()) st = t->check_invariants();
+  if (!st.ok()) {
+    problems.add("table " + name + ": " + st.message());
+    return Status::Ok();
+  }
+  ++r->tables;
+  r->records += t->size();
+  r->pages += t->page_count();
+  const size_t before = r->problems.size();
+  if (t->options().key_kind == KeyKind::kOctant) {
+    WEAVER_RETURN_IF_ERROR(scan_octants(*t, name, problems));
+  } else if (name == kNodeTable) {
+    WEAVER_RETURN_IF_ERROR(scan_nodes(*t, name, problems));
+  }
+  *usable = r->problems.size() == before;
+  problems.progress("table " + name + ": " + count_text(t->size(), "records") + ", " +
+                    count_text(t->page_count(), "pages") + (*usable ? ": ok" : ": PROBLEMS"));
+  return Status::Ok();
+}
+
+Status check_mesh(const std::string& dir, const Database& db, const VerifyOptions& o,
+                  Problems& problems, VerifyReport* r) {
+  BalanceOptions bo;
+  bo.memory_bytes = o.memory_bytes;
+  bo.check_only = true;
+  BalanceResult br;
+  WEAVER_RETURN_IF_ERROR(balance_octree(dir, bo, &br));
+  if (!br.balanced) problems.add("mesh: not 2:1 balanced: " + br.violation);
+  problems.progress(std::string("mesh: 2:1 balance: ") + (br.balanced ? "ok" : "VIOLATED"));
+  if (problems.full()) return Status::Ok();
+  std::unique_ptr<BTree> octants, nodes;
+  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, o.memory_bytes / 2, &octants));
+  WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, o.memory_bytes / 4, &nodes));
+  r->mesh_checked = true;
+  const size_t before = r->problems.size();
+  WEAVER_RETURN_IF_ERROR(check_mesh_nodes(*octants, *nodes, problems, r));
+  problems.progress("mesh: " + count_text(r->nodes, "nodes") + " (" +
+                    count_text(r->dangling, "dangling") + "), " +
+                    count_text(r->corners, "element corners") +
+                    (r->problems.size() == before ? ": ok" : ": PROBLEMS"));
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyReport* r) {
+  *r = VerifyReport{};
+  Problems problems(o, r);
+  std::unique_ptr<Database> db;
+  Status st = Database::open(dir, Database::Mode::kRead, false, &db);
+  if (!st.ok()) {
+    if (st.code() == Status::Code::kCorruption) return problems.add(st.message()), Status::Ok();
+    return st;
+  }
+  bool mesh_usable = o.mesh && db->has_table(kOctantTable) && db->has_table(kNodeTable);
+  for (const std::string& name : db->table_names()) {
+    bool usable = false;
+    WEAVER_RETURN_IF_ERROR(check_table(*db, name, o, problems, r, &usable));
+    if (!usable && (name == kOctantTable || name == kNodeTable)) mesh_usable = false;
+  }
+  if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(dir, *db, o, problems, r));
+  return Status::Ok();
+}
+
+}  // namespace weaver

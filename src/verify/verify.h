@@ -1,0 +1,45 @@
+// `weaver verify`: checks a database from the pages up.
+//
+// Storage: every page of every table (checksums, key order, separators,
+// subtree counts, the header's record count), octant keys decode to valid,
+// non-overlapping octants whose per-level counts match the metadata, node
+// keys are node coordinates with a known kind.
+//
+// Mesh (when the octants and nodes tables are both present): the octree is
+// 2:1 balanced; every node, classified again from the leaves around it, has
+// the kind stored for it; every element corner is a node and every node a
+// corner of some element; the anchors of every dangling node exist and are
+// anchored.  The classification is independent of the extractor: it looks
+// at the up to 8 leaves touching the node (one aggregate hit each).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "schema/status.h"
+
+namespace weaver {
+
+struct VerifyOptions {
+  uint64_t memory_bytes = 256ull << 20;
+  bool mesh = true;      // also check the mesh invariants
+  size_t max_problems = 20;  // stop collecting after this many
+  std::function<void(const std::string& line)> progress;  // one line per finished check
+};
+
+struct VerifyReport {
+  std::vector<std::string> problems;  // each names table, page or key
+  uint64_t tables = 0, records = 0, pages = 0;
+  bool mesh_checked = false;
+  uint64_t elements = 0, nodes = 0, dangling = 0, corners = 0;
+  bool ok() const { return problems.empty(); }
+};
+
+// Problems found go into the report; the returned status is an error only
+// when the check itself could not run (say, the directory is missing).
+Status verify_database(const std::string& db_dir, const VerifyOptions& options,
+                       VerifyReport* report);
+
+}  // namespace weaver

@@ -1,0 +1,232 @@
+// weaver verify: passes reference meshes, and names each kind of damage.
+#include "verify/verify.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <random>
+
+#include "bench_util.h"
+#include "db/database.h"
+#include "db/node_table.h"
+#include "db/octant_table.h"
+#include "gen/octree_gen.h"
+#include "import/import.h"
+#include "import/octant_text.h"
+#include "reference/reference_mesh.h"
+#include "test_octrees.h"
+#include "test_util.h"
+
+namespace weaver {
+namespace {
+
+using Nodes = std::vector<std::pair<uint64_t, NodeKind>>;
+
+using testing::random_balanced;
+
+class VerifyTest : public ::testing::Test {
+ protected:
+  // A database holding the leaves and the node table of the reference mesh
+  // (written directly, so verify is checked against the reference, not
+  // against our extractor).
+  void build(const std::vector<Octant>& leaves) {
+    db_ = dir_.file("db" + std::to_string(count_++));
+    const std::string text = db_ + ".txt";
+    ASSERT_OK(write_octant_text(text, leaves, ""));
+    ImportResult ir;
+    ASSERT_OK(import_octants(db_, text, ImportOptions{}, &ir));
+    const reference::Mesh ref = reference::extract(leaves);
+    nodes_.clear();
+    for (const reference::MeshNode& n : ref.nodes) nodes_.emplace_back(node_key(n.c), n.kind);
+    write_nodes(nodes_);
+    elements_ = ref.elements.size();
+  }
+
+  void write_nodes(const Nodes& nodes) {
+    std::unique_ptr<Database> db;
+    ASSERT_OK(Database::open(db_, Database::Mode::kWrite, false, &db));
+    TableOptions o;
+    o.key_kind = KeyKind::kNode;
+    std::string error;
+    o.schema = *RecordSchema::parse(kNodeSchema, &error);
+    std::unique_ptr<BTree> t;
+    std::string file;
+    ASSERT_OK(db->create_table(kNodeTable, o, 1 << 20, &t, &file));
+    Status built;
+    for (const auto& [key, kind] : nodes) {
+      const auto b = static_cast<std::byte>(kind);
+      if (built.ok()) built = t->append(key, &b);
+    }
+    if (built.ok()) built = t->commit();
+    ASSERT_OK(db->publish(kNodeTable, file, t, built));
+  }
+
+  VerifyReport verify() {
+    VerifyReport r;
+    VerifyOptions o;
+    o.memory_bytes = 8 << 20;
+    EXPECT_OK(verify_database(db_, o, &r));
+    return r;
+  }
+
+  void expect_problem(const std::string& needle) {
+    const VerifyReport r = verify();
+    ASSERT_FALSE(r.ok()) << "expected a problem mentioning '" << needle << "'";
+    bool seen = false;
+    for (const std::string& p : r.problems) seen = seen || p.find(needle) != std::string::npos;
+    EXPECT_TRUE(seen) << "first problem: " << r.problems[0] << "\nexpected: " << needle;
+  }
+
+  size_t find_kind(NodeKind k, uint64_t seed) const {
+    std::vector<size_t> of_kind;
+    for (size_t i = 0; i < nodes_.size(); ++i)
+      if (nodes_[i].second == k) of_kind.push_back(i);
+    EXPECT_FALSE(of_kind.empty());
+    return of_kind.empty() ? 0 : of_kind[seed % of_kind.size()];
+  }
+
+  std::string table_file(const std::string& name) {
+    std::unique_ptr<Database> db;
+    EXPECT_OK(Database::open(db_, Database::Mode::kRead, false, &db));
+    return db->table_path(name);
+  }
+
+  testing::TempDir dir_;
+  std::string db_;
+  Nodes nodes_;
+  uint64_t elements_ = 0;
+  int count_ = 0;
+};
+
+TEST_F(VerifyTest, ReferenceMeshesPassWithTheirCounts) {
+  const int cases = static_cast<int>(testing::scaled(40, 8));
+  for (int i = 0; i < cases; ++i) {
+    std::mt19937_64 rng(i);
+    const uint32_t bx = 1 + rng() % 3, by = 1 + rng() % 3, bz = 1 + rng() % 2;
+    const int block_level = 2;
+    ASSERT_NO_FATAL_FAILURE(build(random_balanced(i, bx, by, bz, block_level, 300 + rng() % 3000,
+                                                  block_level + 2 + rng() % 4)));
+    const VerifyReport r = verify();
+    ASSERT_TRUE(r.ok()) << "case " << i << ": " << r.problems[0];
+    ASSERT_TRUE(r.mesh_checked);
+    EXPECT_EQ(r.nodes, nodes_.size());
+    EXPECT_EQ(r.elements, elements_);
+    EXPECT_EQ(r.corners, 8 * elements_);
+    uint64_t dangling = 0;
+    for (const auto& n : nodes_) dangling += n.second != NodeKind::kAnchored;
+    EXPECT_EQ(r.dangling, dangling);
+    EXPECT_EQ(r.tables, 2u);
+  }
+}
+
+TEST_F(VerifyTest, NamesAWrongKind) {
+  ASSERT_NO_FATAL_FAILURE(build(random_balanced(3, 2, 1, 1, 1, 2000, 6)));
+  for (uint64_t seed = 0; seed < 6; ++seed) {
+    Nodes bad = nodes_;
+    const size_t i = find_kind(seed % 2 ? NodeKind::kEdge : NodeKind::kFace, seed);
+    bad[i].second = seed % 3 ? NodeKind::kAnchored : NodeKind::kFace;
+    if (bad[i].second == nodes_[i].second) bad[i].second = NodeKind::kEdge;
+    write_nodes(bad);
+    expect_problem("node " + std::to_string(i) + " at ");
+  }
+}
+
+TEST_F(VerifyTest, NamesAMissingNodeAndAnExtraOne) {
+  ASSERT_NO_FATAL_FAILURE(build(random_balanced(5, 1, 2, 1, 1, 2000, 6)));
+  // An anchored corner removed: some element corner is not a node (or some
+  // dangling node lost an anchor).
+  Nodes missing = nodes_;
+  missing.erase(missing.begin() + find_kind(NodeKind::kAnchored, 17));
+  write_nodes(missing);
+  expect_problem("is not a node");
+  // A node at the centre of an element.
+  Nodes extra = nodes_;
+  const reference::Mesh ref = reference::extract(random_balanced(5, 1, 2, 1, 1, 2000, 6));
+  const Octant e = ref.elements[ref.elements.size() / 2];
+  const uint32_t h = octant_edge(e) / 2;
+  extra.emplace_back(node_key({e.x + h, e.y + h, e.z + h}), NodeKind::kAnchored);
+  std::sort(extra.begin(), extra.end());
+  write_nodes(extra);
+  expect_problem("away from its corners and midpoints");
+  // A dangling node whose anchor is itself dangling.
+  Nodes wrong_anchor = nodes_;
+  const size_t d = find_kind(NodeKind::kEdge, 3);
+  Coord anchors[4];
+  node_anchors(morton_decode(nodes_[d].first), NodeKind::kEdge, anchors);
+  for (auto& n : wrong_anchor)
+    if (n.first == node_key(anchors[0])) n.second = NodeKind::kFace;
+  write_nodes(wrong_anchor);
+  expect_problem("is not anchored");
+}
+
+TEST_F(VerifyTest, NamesAnUnbalancedOctree) {
+  // Splitting one leaf into its 512 descendants three levels down puts them
+  // beside neighbours at most one level finer than the leaf: a 2-level jump.
+  // The node table of the balanced mesh is then stale too.
+  std::vector<Octant> leaves = random_balanced(9, 1, 1, 1, 1, 200, 4);
+  ASSERT_NO_FATAL_FAILURE(build(leaves));
+  std::vector<Octant> split = {leaves[leaves.size() / 2]};
+  leaves.erase(leaves.begin() + leaves.size() / 2);
+  for (int level = 0; level < 3; ++level) {
+    std::vector<Octant> finer;
+    for (const Octant& o : split)
+      for (int k = 0; k < 8; ++k) finer.push_back(octant_child(o, k));
+    split.swap(finer);
+  }
+  leaves.insert(leaves.end(), split.begin(), split.end());
+  const std::string text = db_ + ".unbalanced.txt";
+  ASSERT_OK(write_octant_text(text, leaves, ""));
+  ImportResult ir;
+  ASSERT_OK(import_octants(db_, text, ImportOptions{}, &ir));
+  expect_problem("not 2:1 balanced");
+}
+
+TEST_F(VerifyTest, NamesADamagedPageAndWrongLevelCounts) {
+  ASSERT_NO_FATAL_FAILURE(build(random_balanced(11, 2, 2, 1, 2, 3000, 6)));
+  const std::string nodes_file = table_file(kNodeTable);
+  {
+    std::fstream f(nodes_file, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(4096 + 4096 + 100);  // inside the second page after the header
+    f.put('\x5a');
+  }
+  expect_problem("page");
+  // Restore the nodes, then claim a wrong level histogram in the octants.
+  write_nodes(nodes_);
+  ASSERT_TRUE(verify().ok());
+  std::unique_ptr<Database> db;
+  ASSERT_OK(Database::open(db_, Database::Mode::kWrite, false, &db));
+  std::unique_ptr<BTree> old_t, t;
+  ASSERT_OK(db->open_table(kOctantTable, 1 << 20, &old_t));
+  TableOptions o = old_t->options();
+  LevelCounts levels{};
+  levels[3] = old_t->size();  // all at level 3: false
+  o.metadata = levels_to_metadata(levels);
+  std::string file;
+  ASSERT_OK(db->create_table(kOctantTable, o, 1 << 20, &t, &file));
+  BTreeCursor c;
+  ASSERT_OK(old_t->seek_cursor(0, &c));
+  Status built;
+  for (; c.valid() && built.ok(); built = c.next()) built = t->append(c.key(), c.payload());
+  if (built.ok()) built = t->commit();
+  ASSERT_OK(db->publish(kOctantTable, file, t, built));
+  db.reset();
+  expect_problem("metadata counts");
+}
+
+TEST_F(VerifyTest, CommandExitStatus) {
+  ASSERT_NO_FATAL_FAILURE(build(random_balanced(13, 1, 1, 1, 1, 500, 5)));
+  uint64_t rss = 0;
+  std::string out = bench::run_program({WEAVER_BINARY, "verify", db_}, &rss);
+  EXPECT_NE(out.find("no problems"), std::string::npos) << out;
+  Nodes bad = nodes_;
+  bad[find_kind(NodeKind::kEdge, 1)].second = NodeKind::kAnchored;
+  write_nodes(bad);
+  const std::string cmd = std::string(WEAVER_BINARY) + " verify " + db_ + " >/dev/null 2>&1";
+  EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 1);
+  EXPECT_EQ(WEXITSTATUS(std::system((std::string(WEAVER_BINARY) + " verify " + db_ +
+                                     " --storage-only >/dev/null 2>&1").c_str())), 0);
+  EXPECT_EQ(WEXITSTATUS(std::system((std::string(WEAVER_BINARY) + " verify >/dev/null 2>&1").c_str())), 2);
+}
+
+}  // namespace
+}  // namespace weaver
