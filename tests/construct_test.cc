@@ -30,13 +30,33 @@ TEST(Models, ValuesAtKnownPoints) {
   EXPECT_EQ(at("loh1", 0, 0, 500).vs, 2000);
   EXPECT_EQ(at("loh1", 0, 0, 500).vp, 4000);
   EXPECT_EQ(at("loh1", 0, 0, 1500).vs, 3464);
-  EXPECT_FLOAT_EQ(at("basin", 42000, 55000, 0).vs, 450);      // a bowl's centre, at the surface
-  EXPECT_FLOAT_EQ(at("basin", 95000, 95000, 0).vs, 2500);     // rock outside the bowls
-  EXPECT_FLOAT_EQ(at("basin", 95000, 95000, 30000).vs, 3464);  // deep rock, capped
-  EXPECT_GT(at("basin", 42000, 55000, 1000).vs, 450);          // Vs rises with depth
+  EXPECT_FLOAT_EQ(at("basin", 42000, 55000, 0).vs, 575);      // a bowl's centre, at the surface
+  EXPECT_FLOAT_EQ(at("basin", 95000, 95000, 0).vs, 2600);     // rock outside the bowls
+  EXPECT_FLOAT_EQ(at("basin", 95000, 95000, 30000).vs, 3900);  // deep rock, capped
+  EXPECT_FLOAT_EQ(at("basin", 42000, 55000, 1000).vs, 1325);   // Vs rises with depth
   std::unique_ptr<VelocityModel> m;
   EXPECT_TRUE(make_model("marble", "", &m).is_invalid_argument());
   EXPECT_TRUE(make_model("grid", "", &m).is_invalid_argument());
+}
+
+// The basin's soft inclusions: about one per four 600 m cells of the rock
+// above 5 km, 40 m in radius, none in the sediments or deeper.
+TEST(Models, BasinInclusionsSitInShallowRockOnly) {
+  std::unique_ptr<VelocityModel> m;
+  ASSERT_OK(make_model("basin", "", &m));
+  auto soft_points = [&](double x0, double y0, double z0) {
+    int n = 0;
+    for (double z = z0; z < z0 + 2400; z += 20)
+      for (double y = y0; y < y0 + 2400; y += 20)
+        for (double x = x0; x < x0 + 2400; x += 20) n += m->at(x, y, z).vs == 100;
+    return n;
+  };
+  // 64 cells, 16 inclusions expected; a 40 m ball holds about 34 points of a 20 m lattice.
+  const int shallow_rock = soft_points(90000, 90000, 600);
+  EXPECT_GT(shallow_rock, 4 * 20);
+  EXPECT_LT(shallow_rock, 40 * 40);
+  EXPECT_EQ(soft_points(90000, 90000, 6000), 0);  // below 5 km
+  EXPECT_EQ(soft_points(41000, 54000, 0), 0);     // a bowl's sediments
 }
 
 TEST(GridModel, InterpolatesAndClamps) {
