@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include <cstring>
 #include <fstream>
 
@@ -57,6 +59,19 @@ TEST(Models, BasinInclusionsSitInShallowRockOnly) {
   EXPECT_LT(shallow_rock, 40 * 40);
   EXPECT_EQ(soft_points(90000, 90000, 6000), 0);  // below 5 km
   EXPECT_EQ(soft_points(41000, 54000, 0), 0);     // a bowl's sediments
+}
+
+// The basin's shared-work lattice minimum agrees with 27 plain samples.
+TEST(Models, BasinLatticeMinimumMatchesSampling) {
+  std::unique_ptr<VelocityModel> m;
+  ASSERT_OK(make_model("basin", "", &m));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> x(0, 100000), z(0, 8000), h(1, 400);
+  for (int i = 0; i < 20000; ++i) {
+    const double px = x(rng), py = x(rng), pz = z(rng), ph = h(rng);
+    ASSERT_EQ(m->min_vs_on_lattice(px, py, pz, ph), m->VelocityModel::min_vs_on_lattice(px, py, pz, ph))
+        << px << " " << py << " " << pz << " " << ph;
+  }
 }
 
 TEST(GridModel, InterpolatesAndClamps) {

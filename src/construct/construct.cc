@@ -41,12 +41,7 @@ class Descent {
   // The least Vs over the 27 sample points, floored by --vs-min.
   double vs_min_of(const Octant& o) const {
     const double t = p_.tick_m, h = octant_edge(o) * t / 2;
-    const double x = o.x * t, y = o.y * t, z = o.z * t;
-    double vs = 1e300;
-    for (int k = 0; k < 3; ++k)
-      for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 3; ++i) vs = std::min<double>(vs, model_.at(x + i * h, y + j * h, z + k * h).vs);
-    return std::max(vs, o_.vs_min);
+    return std::max(model_.min_vs_on_lattice(o.x * t, o.y * t, o.z * t, h), o_.vs_min);
   }
 
   Status visit(const Octant& o) {

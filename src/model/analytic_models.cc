@@ -48,17 +48,30 @@ class Loh1 final : public VelocityModel {
 class Basin final : public VelocityModel {
  public:
   Material at(double x, double y, double z) const override {
-    const double depth = sediment_depth(x, y);
-    const bool sediment = z < depth;
-    double vs = sediment ? kSedimentVs0 + kSedimentGradient * z : kRockVs0 + kRockGradient * z;
-    vs = std::min(vs, kRockVsMax);
-    if (!sediment && in_inclusion(x, y, z)) vs = kInclusionVs;
+    const bool sediment = z < sediment_depth(x, y);
+    const double vs = vs_at(x, y, z, sediment);
     // Poisson-solid-like Vp for rock, a water-saturated floor for sediments
     // and inclusions; Gardner-like density.
     const double vp = std::max(1500.0, vs * (sediment ? 2.0 : std::sqrt(3.0)));
     const double rho = 1700 + 0.29 * vs;
     return {static_cast<float>(vp), static_cast<float>(vs), static_cast<float>(rho)};
   }
+  // The bowl depth once per column of the lattice, and Vs only.
+  double min_vs_on_lattice(double x, double y, double z, double h) const override {
+    double vs = 1e300;
+    for (int j = 0; j < 3; ++j) {
+      for (int i = 0; i < 3; ++i) {
+        const double cx = x + i * h, cy = y + j * h, depth = sediment_depth(cx, cy);
+        for (int k = 0; k < 3; ++k) {
+          const double cz = z + k * h;
+          // Rounded as at() rounds, so both paths build the same octree.
+          vs = std::min<double>(vs, static_cast<float>(vs_at(cx, cy, cz, cz < depth)));
+        }
+      }
+    }
+    return vs;
+  }
+
   std::string describe() const override {
     char buf[300];
     std::snprintf(buf, sizeof buf,
@@ -83,6 +96,12 @@ class Basin final : public VelocityModel {
   static constexpr double kRockVs0 = 2600, kRockGradient = 0.2, kRockVsMax = 3900;
   static constexpr double kInclusionVs = 100, kInclusionRadius = 40;
   static constexpr double kInclusionCell = 600, kInclusionShare = 0.25, kInclusionDepth = 5000;
+
+  static double vs_at(double x, double y, double z, bool sediment) {
+    const double vs = sediment ? kSedimentVs0 + kSedimentGradient * z : kRockVs0 + kRockGradient * z;
+    if (!sediment && in_inclusion(x, y, z)) return kInclusionVs;
+    return std::min(vs, kRockVsMax);
+  }
 
   // Depth of the sediment floor at (x, y): the deepest bowl there; each bowl
   // is a smooth quartic dish, zero at its rim.
