@@ -7,6 +7,8 @@
 #include <cerrno>
 #include <cstring>
 
+#include "storage/crash_point.h"
+
 namespace weaver {
 namespace {
 
@@ -17,7 +19,10 @@ std::string errno_text(const std::string& what, const std::string& path) {
 class PosixFile final : public File {
  public:
   PosixFile(int fd, std::string path) : fd_(fd), path_(std::move(path)) {}
-  ~PosixFile() override { ::close(fd_); }
+  ~PosixFile() override {
+    crash_point::note_close(fd_);
+    ::close(fd_);
+  }
 
   Status read_at(uint64_t offset, void* buf, size_t n, size_t* done) override {
     ssize_t r;
@@ -30,17 +35,21 @@ class PosixFile final : public File {
   }
 
   Status write_at(uint64_t offset, const void* buf, size_t n, size_t* done) override {
+    crash_point::step();
     ssize_t r;
     do {
       r = ::pwrite(fd_, buf, n, static_cast<off_t>(offset));
     } while (r < 0 && errno == EINTR);
     if (r < 0) return Status::IOError(errno_text("write", path_));
+    crash_point::note_write(fd_, offset, static_cast<size_t>(r));
     *done = static_cast<size_t>(r);
     return Status::Ok();
   }
 
   Status sync() override {
+    crash_point::step();
     if (::fdatasync(fd_) != 0) return Status::IOError(errno_text("sync", path_));
+    crash_point::note_sync(fd_);
     return Status::Ok();
   }
 

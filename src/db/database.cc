@@ -5,12 +5,14 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "storage/checksum.h"
+#include "storage/crash_point.h"
 
 namespace fs = std::filesystem;
 
@@ -79,7 +81,16 @@ Status Database::open(const std::string& dir, Mode mode, bool create_if_missing,
   } else if (mode == Mode::kRead) {
     return Status::NotFound(dir + ": not a weaver database (no MANIFEST)");
   }
-  if (mode == Mode::kWrite) WEAVER_RETURN_IF_ERROR(db->remove_leftovers());
+  if (mode == Mode::kWrite) {
+    WEAVER_RETURN_IF_ERROR(db->remove_leftovers());
+    if (!db->cleaned_.empty()) {
+      std::string names;
+      for (const std::string& n : db->cleaned_) names += (names.empty() ? "" : ", ") + n;
+      std::fprintf(stderr, "weaver: %s: removed %zu file%s left by an interrupted writer: %s\n",
+                   dir.c_str(), db->cleaned_.size(), db->cleaned_.size() == 1 ? "" : "s",
+                   names.c_str());
+    }
+  }
   *out = std::move(db);
   return Status::Ok();
 }
@@ -122,16 +133,20 @@ Status Database::write_manifest(const std::map<std::string, std::string>& tables
   for (const auto& [name, file] : tables) body += "table " + name + " " + file + "\n";
   body += "checksum " + hex32(checksum32(body.data(), body.size())) + "\n";
   const std::string tmp = dir_ + "/" + kManifestTmp, final_path = dir_ + "/" + kManifest;
+  crash_point::step();
   {
     std::ofstream out(tmp, std::ios::trunc);
     out << body;
     out.flush();
     if (!out) return Status::IOError("cannot write " + tmp);
   }
+  crash_point::step();
   WEAVER_RETURN_IF_ERROR(sync_path(tmp, false));
+  crash_point::step();
   if (::rename(tmp.c_str(), final_path.c_str()) != 0) {
     return Status::IOError("cannot rename " + tmp + ": " + std::strerror(errno));
   }
+  crash_point::step();
   return sync_path(dir_, true);
 }
 

@@ -1,0 +1,81 @@
+#include "storage/crash_point.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <mutex>
+#include <vector>
+
+namespace weaver::crash_point {
+namespace {
+
+struct Range {
+  uint64_t offset;
+  size_t n;
+};
+
+struct State {
+  bool enabled = false;
+  uint64_t crash_at = 0;  // 0: count only
+  uint64_t steps = 0;
+  std::mutex mu;
+  std::map<int, std::vector<Range>> unsynced;  // by fd
+
+  State() {
+    const char* v = std::getenv("WEAVER_CRASH_AT");
+    if (v == nullptr || *v == '\0') return;
+    enabled = true;
+    crash_at = std::strtoull(v, nullptr, 10);
+    if (crash_at == 0) std::atexit([] { std::fprintf(stderr, "crash steps: %llu\n", (unsigned long long)instance().steps); });
+  }
+  static State& instance();
+
+  // The power cut: unsynced bytes read back as zeros.
+  [[noreturn]] void die() {
+    std::vector<char> zeros(1 << 16, 0);
+    for (const auto& [fd, ranges] : unsynced) {
+      for (const Range& r : ranges) {
+        for (uint64_t done = 0; done < r.n;) {
+          const size_t chunk = std::min<uint64_t>(zeros.size(), r.n - done);
+          if (::pwrite(fd, zeros.data(), chunk, static_cast<off_t>(r.offset + done)) <= 0) break;
+          done += chunk;
+        }
+      }
+    }
+    ::_exit(137);
+  }
+};
+
+State& State::instance() {
+  static State s;
+  return s;
+}
+
+}  // namespace
+
+void step() {
+  State& s = State::instance();
+  if (!s.enabled) return;
+  std::lock_guard<std::mutex> lock(s.mu);
+  if (++s.steps == s.crash_at) s.die();
+}
+
+void note_write(int fd, uint64_t offset, size_t n) {
+  State& s = State::instance();
+  if (!s.enabled) return;
+  std::lock_guard<std::mutex> lock(s.mu);
+  s.unsynced[fd].push_back({offset, n});
+}
+
+void note_sync(int fd) {
+  State& s = State::instance();
+  if (!s.enabled) return;
+  std::lock_guard<std::mutex> lock(s.mu);
+  s.unsynced.erase(fd);
+}
+
+void note_close(int fd) { note_sync(fd); }
+
+}  // namespace weaver::crash_point

@@ -1,0 +1,241 @@
+// Crash safety: every writer killed at many points leaves a database that
+// opens, verifies, and holds exactly the state before or after the writer.
+//
+// Two kinds of kill point:
+//  - a power cut at the N-th durable step of the writer (WEAVER_CRASH_AT=N,
+//    storage/crash_point.h): bytes written since the file's last sync read
+//    back as zeros, then the process dies;
+//  - SIGKILL from the parent after a random delay within the writer's run.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <random>
+#include <thread>
+
+#include "db/database.h"
+#include "import/octant_text.h"
+#include "test_octrees.h"
+#include "test_util.h"
+#include "verify/verify.h"
+
+namespace weaver {
+namespace {
+
+namespace fs = std::filesystem;
+
+// What a database holds: per table, its record count and a hash of every key
+// and payload, in order.
+using Fingerprint = std::map<std::string, std::pair<uint64_t, uint64_t>>;
+
+Fingerprint fingerprint(const std::string& dir) {
+  Fingerprint f;
+  std::unique_ptr<Database> db;
+  if (!Database::open(dir, Database::Mode::kRead, false, &db).ok()) return f;  // no database yet
+  for (const std::string& name : db->table_names()) {
+    std::unique_ptr<BTree> t;
+    EXPECT_OK(db->open_table(name, 1 << 20, &t));
+    if (!t) continue;
+    BTreeCursor c;
+    EXPECT_OK(t->seek_cursor(0, &c));
+    uint64_t h = 1469598103934665603ull;
+    while (c.valid()) {
+      h = (h ^ c.key()) * 1099511628211ull;
+      for (uint32_t i = 0; i < t->payload_size(); ++i) {
+        h = (h ^ static_cast<uint8_t>(c.payload()[i])) * 1099511628211ull;
+      }
+      EXPECT_OK(c.next());
+    }
+    f[name] = {t->size(), h};
+  }
+  return f;
+}
+
+// Runs the weaver binary; crash_at > 0 arms the crash point, kill_after_us
+// >= 0 sends SIGKILL after that delay.  Returns the wait status.
+int run_writer(const std::vector<std::string>& args, uint64_t crash_at, int64_t kill_after_us) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (crash_at > 0) setenv("WEAVER_CRASH_AT", std::to_string(crash_at).c_str(), 1);
+    const int null = ::open("/dev/null", O_WRONLY);
+    dup2(null, 1), dup2(null, 2);
+    std::vector<char*> argv;
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  if (kill_after_us >= 0) {
+    std::this_thread::sleep_for(std::chrono::microseconds(kill_after_us));
+    kill(pid, SIGKILL);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return status;
+}
+
+// How many durable steps the writer takes, from a counting run.
+uint64_t count_steps(const std::vector<std::string>& args) {
+  std::string cmd = "WEAVER_CRASH_AT=0";
+  for (const std::string& a : args) cmd += " " + a;
+  cmd += " 2>&1 >/dev/null | grep 'crash steps'";
+  FILE* p = popen(cmd.c_str(), "r");
+  unsigned long long n = 0;
+  if (p != nullptr) {
+    if (std::fscanf(p, "crash steps: %llu", &n) != 1) n = 0;
+    pclose(p);
+  }
+  return n;
+}
+
+struct Writer {
+  std::string name;
+  std::vector<std::string> args;  // "{db}" stands for the database directory
+};
+
+class CrashTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    // Inputs: an unbalanced random octree, and a second one to import over it.
+    GenOptions g;
+    g.seed = 21;
+    g.blocks[0] = 2, g.blocks[1] = 1, g.blocks[2] = 1;
+    g.block_level = 1;
+    g.leaves = 3000;
+    g.max_level = 7;
+    std::vector<Octant> a, b;
+    ASSERT_OK(generate_octree(g, &a));
+    g.seed = 22;
+    ASSERT_OK(generate_octree(g, &b));
+    text_a_ = dir_.file("a.txt");
+    text_b_ = dir_.file("b.txt");
+    ASSERT_OK(write_octant_text(text_a_, a, ""));
+    std::shuffle(b.begin(), b.end(), std::mt19937_64(3));  // out of order: the sort spills
+    ASSERT_OK(write_octant_text(text_b_, b, ""));
+  }
+
+  std::vector<std::string> with_db(const Writer& w, const std::string& db) const {
+    std::vector<std::string> out = {WEAVER_BINARY};
+    for (const std::string& a : w.args) out.push_back(a == "{db}" ? db : a);
+    return out;
+  }
+
+  // Builds the state before the writer with the given preparation commands.
+  void prepare(const std::string& db, const std::vector<std::vector<std::string>>& steps) {
+    fs::remove_all(db);
+    for (const auto& s : steps) {
+      std::vector<std::string> args = {WEAVER_BINARY};
+      for (const std::string& a : s) args.push_back(a == "{db}" ? db : a);
+      ASSERT_EQ(run_writer(args, 0, -1), 0) << s[0];
+    }
+  }
+
+  // One kill point: from a copy of the old state, run and crash, then check.
+  void check_one(const Writer& w, const std::string& old_db, const Fingerprint& before,
+                 const Fingerprint& after, uint64_t crash_at, int64_t kill_after_us) {
+    const std::string db = dir_.file("crash.db");
+    fs::remove_all(db);
+    if (fs::exists(old_db)) fs::copy(old_db, db, fs::copy_options::recursive);
+    run_writer(with_db(w, db), crash_at, kill_after_us);
+    const std::string where = w.name + (crash_at ? " at step " + std::to_string(crash_at)
+                                                 : " killed after " + std::to_string(kill_after_us) + " us");
+    if (fs::exists(db)) {  // the next writer's open removes leftovers, and says so
+      auto files = [&] {
+        size_t n = 0;
+        for (const auto& e : fs::directory_iterator(db)) n += e.path().filename() != "LOCK";
+        return n;
+      };
+      const size_t files_before = files();
+      std::unique_ptr<Database> d;
+      ASSERT_OK(Database::open(db, Database::Mode::kWrite, false, &d));
+      const size_t files_after = files();
+      ASSERT_EQ(files_before - files_after, d->cleaned_leftovers().size()) << where;
+      for (const auto& e : fs::directory_iterator(db)) {
+        const std::string f = e.path().filename().string();
+        bool live = f == "MANIFEST" || f == "LOCK";
+        for (const std::string& t : d->table_names()) live = live || d->table_path(t) == e.path().string();
+        ASSERT_TRUE(live) << where << ": leftover " << f << " survived the open";
+      }
+    }
+    const Fingerprint now = fingerprint(db);
+    ASSERT_TRUE(now == before || now == after) << where << ": neither the old nor the new state";
+    if (!now.empty()) {
+      VerifyReport r;
+      VerifyOptions o;
+      o.memory_bytes = 4 << 20;
+      ASSERT_OK(verify_database(db, o, &r));
+      ASSERT_TRUE(r.ok()) << where << ": " << r.problems[0];
+    }
+    ++(now == after ? new_states_ : old_states_);
+  }
+
+  // Kills the writer at every durable step (or `steps` of them, spread
+  // evenly) and at `kills` random moments of its run.
+  void torture(const Writer& w, const std::vector<std::vector<std::string>>& setup, uint64_t steps,
+               int kills) {
+    const std::string old_db = dir_.file("old.db"), new_db = dir_.file("new.db");
+    ASSERT_NO_FATAL_FAILURE(prepare(old_db, setup));
+    const Fingerprint before = fingerprint(old_db);
+    fs::remove_all(new_db);
+    if (fs::exists(old_db)) fs::copy(old_db, new_db, fs::copy_options::recursive);
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_EQ(run_writer(with_db(w, new_db), 0, -1), 0) << w.name;
+    const auto run_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                            std::chrono::steady_clock::now() - t0).count();
+    const Fingerprint after = fingerprint(new_db);
+    ASSERT_NE(before, after) << w.name << " changed nothing";
+    const std::string count_db = new_db + ".count";
+    fs::remove_all(count_db);
+    if (fs::exists(old_db)) fs::copy(old_db, count_db, fs::copy_options::recursive);
+    const uint64_t n = count_steps(with_db(w, count_db));
+    ASSERT_GT(n, 0u) << w.name;
+    const uint64_t points = std::min(n, steps);
+    for (uint64_t i = 0; i < points; ++i) {
+      ASSERT_NO_FATAL_FAILURE(check_one(w, old_db, before, after, 1 + i * n / points, -1));
+      ++points_;
+    }
+    std::mt19937_64 rng(w.name.size());
+    for (int k = 0; k < kills; ++k) {
+      ASSERT_NO_FATAL_FAILURE(check_one(w, old_db, before, after, 0, rng() % (run_us * 13 / 10 + 1)));
+      ++points_;
+    }
+  }
+
+  testing::TempDir dir_;
+  std::string text_a_, text_b_;
+  int points_ = 0, old_states_ = 0, new_states_ = 0;
+};
+
+TEST_F(CrashTest, EveryWriterLeavesTheOldOrTheNewState) {
+  const uint64_t steps = testing::scaled(200, 25);
+  const int kills = static_cast<int>(testing::scaled(200, 15));
+  const std::vector<std::string> import_a = {"import", "{db}", "--octants", "", "--memory", "1M"};
+  auto import_of = [&](const std::string& text) {
+    std::vector<std::string> v = import_a;
+    v[3] = text;
+    return v;
+  };
+  const std::vector<std::string> balance = {"balance", "{db}", "--memory", "1M"};
+  torture({"import over a table", import_of(text_b_)}, {import_of(text_a_)}, steps, kills);
+  torture({"import into a new database", import_of(text_b_)}, {}, steps, kills);
+  torture({"construct", {"construct", "{db}", "--model", "basin", "--freq", "0.08", "--memory", "1M"}},
+          {import_of(text_a_)}, steps, kills);
+  torture({"balance", balance}, {import_of(text_a_)}, steps, kills);
+  torture({"extract (sort)", {"extract", "{db}", "--memory", "1M"}}, {import_of(text_a_), balance},
+          steps, kills);
+  torture({"extract (search)", {"extract", "{db}", "--algorithm", "search", "--memory", "1M"}},
+          {import_of(text_a_), balance}, steps, kills);
+  std::printf("kill points: %d (old state after %d, new state after %d)\n", points_, old_states_,
+              new_states_);
+  EXPECT_GE(points_, static_cast<int>(testing::scaled(1000, 150)));
+  EXPECT_GT(old_states_, 0);
+  EXPECT_GT(new_states_, 0);
+}
+
+}  // namespace
+}  // namespace weaver
