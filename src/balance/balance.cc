@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "db/database.h"
+#include "extract/node_hash.h"  // an open-addressing key set
 #include "import/external_sort.h"
 #include "model/velocity_model.h"
 #include "schema/octant.h"
@@ -118,9 +119,11 @@ class Balancer {
     KeyTag p;
     bool done = false, has_prev = false;
     uint64_t prev = 0;
-    // The level's parents, in memory when they fit in a quarter of the budget.
+    // The level's parents, in memory when they fit in a quarter of the budget
+    // (16 bytes each in the list, 16 more in the hash that finds them).
     std::vector<KeyTag> level;
-    const size_t fits = o_.memory_bytes / 4 / sizeof(KeyTag);
+    NodeHash level_keys;
+    const size_t fits = o_.memory_bytes / 4 / (sizeof(KeyTag) + 16);
     bool all_in_memory = true;
     auto emit_neighbours = [&](const KeyTag& par) -> Status {
       const Octant po = octant_from_key(par.key);
@@ -128,12 +131,7 @@ class Balancer {
         Octant n;
         if (!octant_neighbour(po, d[0], d[1], d[2], &n)) continue;
         const uint64_t nk = octant_key(n);
-        if (all_in_memory && std::binary_search(level.begin(), level.end(), KeyTag{nk, 0},
-                                                [](const KeyTag& a, const KeyTag& b) {
-                                                  return a.key < b.key;
-                                                })) {
-          continue;
-        }
+        if (all_in_memory && level_keys.contains(nk)) continue;
         WEAVER_RETURN_IF_ERROR(candidates.add({nk, par.tag}));
       }
       return Status::Ok();
@@ -152,8 +150,13 @@ class Balancer {
       }
       WEAVER_RETURN_IF_ERROR(emit_neighbours(p));
     }
+    if (all_in_memory) {
+      level_keys.reset(level.size());
+      for (const KeyTag& q : level) level_keys.add(q.key, 1);
+    }
     for (const KeyTag& q : level) WEAVER_RETURN_IF_ERROR(emit_neighbours(q));
     level.clear();
+    level_keys.reset(0);
     WEAVER_RETURN_IF_ERROR(candidates.finish());
     DomainProbe probe;
     WEAVER_RETURN_IF_ERROR(probe.open(leaves_));
