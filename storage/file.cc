@@ -89,6 +89,13 @@ Status open_posix_file(const std::string& path, OpenMode mode, std::unique_ptr<F
   return Status::Ok();
 }
 
+Status dup_posix_file(int fd, const std::string& path, std::unique_ptr<File>* out) {
+  const int copy = ::fcntl(fd, F_DUPFD_CLOEXEC, 0);
+  if (copy < 0) return Status::IOError(errno_text("cannot duplicate descriptor of", path));
+  *out = std::make_unique<PosixFile>(copy, path);
+  return Status::Ok();
+}
+
 Status read_fully(File& f, uint64_t offset, void* buf, size_t n) {
   auto* p = static_cast<char*>(buf);
   while (n > 0) {

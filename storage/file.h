@@ -31,6 +31,9 @@ class File {
 enum class OpenMode { kReadOnly, kReadWrite, kCreateTruncate };
 
 Status open_posix_file(const std::string& path, OpenMode mode, std::unique_ptr<File>* out);
+// A read-only File over a duplicate of an open descriptor (the original stays
+// open): a reader's snapshot survives the file being unlinked by a writer.
+Status dup_posix_file(int fd, const std::string& path, std::unique_ptr<File>* out);
 
 // Reads exactly n bytes; a short read (end of file) is Corruption naming the
 // file and offset, since every caller expects the bytes to exist.

@@ -53,7 +53,31 @@ uint64_t file_number(const std::string& file) {
 }  // namespace
 
 Database::~Database() {
+  for (const auto& [name, fd] : snapshot_fds_) ::close(fd);
   if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
+}
+
+// Opens the files of the manifest just read.  A writer may commit and delete
+// one of them in between: then read the new manifest and try again.
+Status Database::open_snapshot() {
+  for (int attempt = 0;; ++attempt) {
+    bool missing = false;
+    for (const auto& [name, file] : tables_) {
+      const int fd = ::open(table_path(name).c_str(), O_RDONLY | O_CLOEXEC);
+      if (fd < 0 && errno == ENOENT) {
+        missing = true;
+        break;
+      }
+      if (fd < 0) return Status::IOError("cannot open " + table_path(name) + ": " + std::strerror(errno));
+      snapshot_fds_[name] = fd;
+    }
+    if (!missing) return Status::Ok();
+    for (const auto& [name, fd] : snapshot_fds_) ::close(fd);
+    snapshot_fds_.clear();
+    if (attempt == 100) return Status::Busy(dir_ + ": tables keep changing under the reader");
+    tables_.clear();
+    WEAVER_RETURN_IF_ERROR(read_manifest());
+  }
 }
 
 Status Database::open(const std::string& dir, Mode mode, bool create_if_missing,
@@ -81,6 +105,7 @@ Status Database::open(const std::string& dir, Mode mode, bool create_if_missing,
   } else if (mode == Mode::kRead) {
     return Status::NotFound(dir + ": not a weaver database (no MANIFEST)");
   }
+  if (mode == Mode::kRead) WEAVER_RETURN_IF_ERROR(db->open_snapshot());
   if (mode == Mode::kWrite) {
     WEAVER_RETURN_IF_ERROR(db->remove_leftovers());
     if (!db->cleaned_.empty()) {
@@ -183,7 +208,12 @@ Status Database::open_table(const std::string& name, uint64_t pool_bytes,
                             std::unique_ptr<BTree>* out) const {
   if (!has_table(name)) return Status::NotFound(dir_ + ": no table '" + name + "'");
   std::unique_ptr<File> f;
-  WEAVER_RETURN_IF_ERROR(open_posix_file(table_path(name), OpenMode::kReadOnly, &f));
+  const auto snap = snapshot_fds_.find(name);
+  if (snap != snapshot_fds_.end()) {
+    WEAVER_RETURN_IF_ERROR(dup_posix_file(snap->second, table_path(name), &f));
+  } else {
+    WEAVER_RETURN_IF_ERROR(open_posix_file(table_path(name), OpenMode::kReadOnly, &f));
+  }
   return BTree::open(std::move(f), pool_bytes, out);
 }
 

@@ -10,6 +10,10 @@
 // writing MANIFEST.tmp, syncing it, renaming it over MANIFEST and syncing the
 // directory.  A crash before the rename leaves the old state; files no
 // manifest names are leftovers, removed by the next writer.
+//
+// A reader opens every live table file when it opens the database, so it
+// reads one committed state (a snapshot) however many commits and file
+// deletions writers make meanwhile.
 #pragma once
 
 #include <map>
@@ -69,6 +73,8 @@ class Database {
   int lock_fd_ = -1;
   uint64_t next_file_number_ = 1;
   std::map<std::string, std::string> tables_;  // name -> file name
+  std::map<std::string, int> snapshot_fds_;    // reader: name -> open descriptor
+  Status open_snapshot();
   std::vector<std::string> cleaned_;
 };
 
