@@ -108,6 +108,42 @@ class Balancer {
   ExternalSorter& required() { return *required_; }
 
  private:
+  // The face and edge neighbours of the level's parents, into candidates.
+  // Parents pass through memory in chunks of what fits in a quarter of the
+  // budget (16 bytes each in the list, about 18 in the hash); a neighbour
+  // that is a parent of the same chunk is skipped (see expand_level).  Any
+  // subset may be skipped, and Z-order keeps most neighbours in one chunk.
+  Status emit_candidates(ExternalSorter& parents, ExternalSorter& candidates) {
+    std::vector<KeyTag> chunk;
+    NodeHash chunk_keys;
+    const size_t fits = std::max<size_t>(1024, o_.memory_bytes / 4 / (sizeof(KeyTag) + 18));
+    auto flush_chunk = [&]() -> Status {
+      chunk_keys.reset(chunk.size());
+      for (const KeyTag& q : chunk) chunk_keys.add(q.key, 1);
+      for (const KeyTag& q : chunk) {
+        const Octant po = octant_from_key(q.key);
+        for (const auto& d : dirs_) {
+          Octant n;
+          if (!octant_neighbour(po, d[0], d[1], d[2], &n)) continue;
+          const uint64_t nk = octant_key(n);
+          if (!chunk_keys.contains(nk)) WEAVER_RETURN_IF_ERROR(candidates.add({nk, q.tag}));
+        }
+      }
+      chunk.clear();
+      return Status::Ok();
+    };
+    KeyTag p;
+    bool done = false, has_prev = false;
+    uint64_t prev = 0;
+    while (true) {
+      WEAVER_RETURN_IF_ERROR(next_unique(parents, &prev, &has_prev, &p, &done));
+      if (done) break;
+      chunk.push_back(p);
+      if (chunk.size() == fits) WEAVER_RETURN_IF_ERROR(flush_chunk());
+    }
+    return flush_chunk();
+  }
+
   // Neighbours of the level-l parents, kept where they meet the domain.  A
   // neighbour that is itself a parent (it has finer children) is resolved
   // already, and its own parent enters the next level through its siblings,
@@ -116,51 +152,12 @@ class Balancer {
     ExternalSorter& parents = *parents_[l];
     WEAVER_RETURN_IF_ERROR(parents.finish());
     ExternalSorter candidates(scratch_ + "/c" + std::to_string(l), o_.memory_bytes / 4);
-    KeyTag p;
-    bool done = false, has_prev = false;
-    uint64_t prev = 0;
-    // The level's parents, in memory when they fit in a quarter of the budget
-    // (16 bytes each in the list, 16 more in the hash that finds them).
-    std::vector<KeyTag> level;
-    NodeHash level_keys;
-    const size_t fits = o_.memory_bytes / 4 / (sizeof(KeyTag) + 16);
-    bool all_in_memory = true;
-    auto emit_neighbours = [&](const KeyTag& par) -> Status {
-      const Octant po = octant_from_key(par.key);
-      for (const auto& d : dirs_) {
-        Octant n;
-        if (!octant_neighbour(po, d[0], d[1], d[2], &n)) continue;
-        const uint64_t nk = octant_key(n);
-        if (all_in_memory && level_keys.contains(nk)) continue;
-        WEAVER_RETURN_IF_ERROR(candidates.add({nk, par.tag}));
-      }
-      return Status::Ok();
-    };
-    while (true) {
-      WEAVER_RETURN_IF_ERROR(next_unique(parents, &prev, &has_prev, &p, &done));
-      if (done) break;
-      if (all_in_memory && level.size() < fits) {
-        level.push_back(p);
-        continue;
-      }
-      if (all_in_memory) {  // too many: no skipping for this level
-        all_in_memory = false;
-        for (const KeyTag& q : level) WEAVER_RETURN_IF_ERROR(emit_neighbours(q));
-        level.clear();
-      }
-      WEAVER_RETURN_IF_ERROR(emit_neighbours(p));
-    }
-    if (all_in_memory) {
-      level_keys.reset(level.size());
-      for (const KeyTag& q : level) level_keys.add(q.key, 1);
-    }
-    for (const KeyTag& q : level) WEAVER_RETURN_IF_ERROR(emit_neighbours(q));
-    level.clear();
-    level_keys.reset(0);
+    WEAVER_RETURN_IF_ERROR(emit_candidates(parents, candidates));
     WEAVER_RETURN_IF_ERROR(candidates.finish());
     DomainProbe probe;
     WEAVER_RETURN_IF_ERROR(probe.open(leaves_));
-    has_prev = false;
+    bool done = false, has_prev = false;
+    uint64_t prev = 0;
     KeyTag n;
     while (true) {
       WEAVER_RETURN_IF_ERROR(next_unique(candidates, &prev, &has_prev, &n, &done));
