@@ -347,6 +347,34 @@ Status find_violation(BTree& leaves, ExternalSorter& required, BalanceResult* r)
 
 }  // namespace
 
+namespace {
+
+// The finest level with leaves, from the metadata when the writer kept it.
+int max_level_of(BTree& leaves) {
+  LevelCounts levels{};
+  return levels_from_metadata(leaves.options().metadata, &levels) ? finest_level(levels) : kMaxLevel;
+}
+
+// Removes the scratch directory of the sorters however the run ends.
+struct ScratchGuard {
+  std::string dir;
+  ~ScratchGuard() {
+    std::error_code ec;
+    std::filesystem::remove_all(dir, ec);
+  }
+};
+
+}  // namespace
+
+Status check_balance(BTree& leaves, const BalanceOptions& o, const std::string& scratch_parent,
+                     BalanceResult* r) {
+  *r = BalanceResult{};
+  ScratchGuard guard{scratch_parent + "/weaver-balance-check-" + std::to_string(::getpid())};
+  Balancer balancer(leaves, o, guard.dir, r);
+  WEAVER_RETURN_IF_ERROR(balancer.closure(max_level_of(leaves), false));
+  return find_violation(leaves, balancer.required(), r);
+}
+
 Status balance_octree(const std::string& db_dir, const BalanceOptions& o, BalanceResult* r) {
   *r = BalanceResult{};
   std::unique_ptr<Database> db;
@@ -355,20 +383,14 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
                                         false, &db));
   std::unique_ptr<BTree> leaves;
   WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, std::min<uint64_t>(o.memory_bytes / 8, 32ull << 20), &leaves));
-  LevelCounts levels{};
-  int max_level = kMaxLevel;
-  if (levels_from_metadata(leaves->options().metadata, &levels)) max_level = finest_level(levels);
-  const std::string scratch = db_dir + "/tmp-balance-" + std::to_string(::getpid());
-  struct ScratchGuard {
-    std::string dir;
-    ~ScratchGuard() {
-      std::error_code ec;
-      std::filesystem::remove_all(dir, ec);
-    }
-  } guard{scratch};
-  Balancer balancer(*leaves, o, scratch, r);
-  WEAVER_RETURN_IF_ERROR(balancer.closure(max_level, !o.check_only));
-  if (o.check_only) return find_violation(*leaves, balancer.required(), r);
+  // A reader keeps its scratch out of the database directory, where a
+  // writer's open would remove it as a leftover.
+  if (o.check_only) {
+    return check_balance(*leaves, o, std::filesystem::temp_directory_path().string(), r);
+  }
+  ScratchGuard guard{db_dir + "/tmp-balance-" + std::to_string(::getpid())};
+  Balancer balancer(*leaves, o, guard.dir, r);
+  WEAVER_RETURN_IF_ERROR(balancer.closure(max_level_of(*leaves), true));
   TableOptions topt = leaves->options();
   std::unique_ptr<BTree> out;
   std::string file;

@@ -36,5 +36,11 @@ struct BalanceResult {
 
 Status balance_octree(const std::string& db_dir, const BalanceOptions& options,
                       BalanceResult* result);
+// The check of --check on an octant table already open (a reader's
+// snapshot): result->balanced and, if false, result->violation.  Sorter
+// scratch goes in a directory under scratch_parent, removed at the end.
+class BTree;
+Status check_balance(BTree& leaves, const BalanceOptions& options,
+                     const std::string& scratch_parent, BalanceResult* result);
 
 }  // namespace weaver

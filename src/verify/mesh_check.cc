@@ -1,5 +1,6 @@
 #include "verify/mesh_check.h"
 
+#include <algorithm>
 #include <array>
 #include <string>
 
@@ -21,28 +22,25 @@ class LeafFinder {
   explicit LeafFinder(BTree& octants) : octants_(octants) {}
 
   Status find(Coord pixel, Octant* leaf, bool* found) {
-    for (const Octant& o : recent_) {
-      if (o.level != kNone && octant_contains_point(o, pixel)) return *leaf = o, *found = true, Status::Ok();
+    for (size_t i = 0; i < filled_; ++i) {
+      if (octant_contains_point(recent_[i], pixel)) return *leaf = recent_[i], *found = true, Status::Ok();
     }
     uint64_t key = 0;
     WEAVER_RETURN_IF_ERROR(octants_.floor(pixel_key(pixel), &key, nullptr, found));
     if (!*found) return Status::Ok();
     *leaf = octant_from_key(key);
     *found = octant_contains_point(*leaf, pixel);
-    if (*found) recent_[next_++ % recent_.size()] = *leaf;
+    if (*found) {
+      recent_[next_++ % recent_.size()] = *leaf;
+      filled_ = std::min(filled_ + 1, recent_.size());
+    }
     return Status::Ok();
   }
 
  private:
-  static constexpr uint8_t kNone = 0xFF;
   BTree& octants_;
-  std::array<Octant, 16> recent_ = make_empty();
-  size_t next_ = 0;
-  static std::array<Octant, 16> make_empty() {
-    std::array<Octant, 16> a{};
-    for (Octant& o : a) o.level = kNone;
-    return a;
-  }
+  std::array<Octant, 16> recent_{};
+  size_t next_ = 0, filled_ = 0;
 };
 
 // Where node p sits on a leaf whose closure holds it.

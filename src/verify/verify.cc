@@ -1,11 +1,13 @@
 #include "verify/verify.h"
 
+#include <filesystem>
 #include <memory>
 
 #include "balance/balance.h"
 #include "db/database.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
+#include "storage/btree.h"
 #include "extract/leaf_reader.h"
 #include "verify/mesh_check.h"
 
@@ -84,19 +86,20 @@ Status check_table(const Database& db, const std::string& name, const VerifyOpti
   return Status::Ok();
 }
 
-Status check_mesh(const std::string& dir, const Database& db, const VerifyOptions& o,
-                  Problems& problems, VerifyReport* r) {
+Status check_mesh(const Database& db, const VerifyOptions& o, Problems& problems,
+                  VerifyReport* r) {
+  std::unique_ptr<BTree> octants, nodes;
+  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, o.memory_bytes / 2, &octants));
+  WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, o.memory_bytes / 4, &nodes));
   BalanceOptions bo;
   bo.memory_bytes = o.memory_bytes;
   bo.check_only = true;
   BalanceResult br;
-  WEAVER_RETURN_IF_ERROR(balance_octree(dir, bo, &br));
+  WEAVER_RETURN_IF_ERROR(
+      check_balance(*octants, bo, std::filesystem::temp_directory_path().string(), &br));
   if (!br.balanced) problems.add("mesh: not 2:1 balanced: " + br.violation);
   problems.progress(std::string("mesh: 2:1 balance: ") + (br.balanced ? "ok" : "VIOLATED"));
   if (problems.full()) return Status::Ok();
-  std::unique_ptr<BTree> octants, nodes;
-  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, o.memory_bytes / 2, &octants));
-  WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, o.memory_bytes / 4, &nodes));
   r->mesh_checked = true;
   const size_t before = r->problems.size();
   WEAVER_RETURN_IF_ERROR(check_mesh_nodes(*octants, *nodes, problems, r));
@@ -124,7 +127,7 @@ Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyRep
     WEAVER_RETURN_IF_ERROR(check_table(*db, name, o, problems, r, &usable));
     if (!usable && (name == kOctantTable || name == kNodeTable)) mesh_usable = false;
   }
-  if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(dir, *db, o, problems, r));
+  if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, o, problems, r));
   return Status::Ok();
 }
 
