@@ -3,6 +3,7 @@
 // table at the end.
 #pragma once
 
+#include <malloc.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -128,6 +129,10 @@ inline std::string run_program(const std::vector<std::string>& args, uint64_t* p
   int fds[2];
   if (pipe(fds) != 0) return "";
   std::fflush(stdout);
+  // A forked child starts with the RSS this process has at the fork, and a
+  // child's peak counts it; return freed heap first, so that the peak of a
+  // program run from a test that used much memory before is its own.
+  malloc_trim(0);
   const pid_t pid = fork();
   if (pid == 0) {
     dup2(fds[1], STDOUT_FILENO);

@@ -9,7 +9,7 @@ namespace weaver {
 
 class Status {
  public:
-  enum class Code { kOk, kNotFound, kCorruption, kIOError, kInvalidArgument, kBusy };
+  enum class Code { kOk, kNotFound, kCorruption, kIOError, kInvalidArgument, kBusy, kInternal };
 
   Status() = default;
   static Status Ok() { return Status(); }
@@ -20,6 +20,8 @@ class Status {
     return Status(Code::kInvalidArgument, std::move(msg));
   }
   static Status Busy(std::string msg) { return Status(Code::kBusy, std::move(msg)); }
+  // A broken promise between parts of weaver: a bug, not bad input.
+  static Status Internal(std::string msg) { return Status(Code::kInternal, std::move(msg)); }
 
   bool ok() const { return code_ == Code::kOk; }
   bool is_not_found() const { return code_ == Code::kNotFound; }
@@ -47,6 +49,7 @@ inline std::string Status::to_string() const {
     case Code::kIOError: return "I/O error: " + msg_;
     case Code::kInvalidArgument: return "invalid argument: " + msg_;
     case Code::kBusy: return "busy: " + msg_;
+    case Code::kInternal: return "internal error: " + msg_;
   }
   return msg_;
 }

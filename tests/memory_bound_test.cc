@@ -14,18 +14,23 @@ namespace {
 // measured at 4-8 MiB across budgets; 12 MiB leaves room for noise.
 constexpr uint64_t kAllowedOverBudget = 12ull << 20;
 
+// Generates an octree (weaver generate with `args`) and imports it into db.
+void make_db(const testing::TempDir& dir, std::vector<std::string> args, const std::string& db) {
+  uint64_t rss = 0;
+  const std::string text = dir.file("o.txt");
+  args.insert(args.begin(), {WEAVER_BINARY, "generate", text});
+  ASSERT_FALSE(bench::run_program(args, &rss).empty());
+  ASSERT_FALSE(bench::run_program({WEAVER_BINARY, "import", db, "--octants", text}, &rss).empty());
+}
+
 TEST(MemoryBound, ExtractStaysWithinBudgetOnAMeshFarLargerThanIt) {
 #ifdef WEAVER_SANITIZED
   GTEST_SKIP() << "sanitizers inflate RSS";
 #endif
   testing::TempDir dir;
   uint64_t rss = 0;
-  const std::string text = dir.file("o.txt"), db = dir.file("db");
-  ASSERT_FALSE(bench::run_program({WEAVER_BINARY, "generate", text, "--kind", "sphere", "--level",
-                                   "3", "--max-level", "8"},
-                                  &rss)
-                   .empty());
-  ASSERT_FALSE(bench::run_program({WEAVER_BINARY, "import", db, "--octants", text}, &rss).empty());
+  const std::string db = dir.file("db");
+  make_db(dir, {"--kind", "sphere", "--level", "3", "--max-level", "8"}, db);
   const uint64_t budget = 2ull << 20;
   for (const char* threads : {"1", "2"}) {
     const std::string out =
@@ -38,6 +43,26 @@ TEST(MemoryBound, ExtractStaysWithinBudgetOnAMeshFarLargerThanIt) {
     EXPECT_GT(std::stod(r["buckets"]), 1000);
     EXPECT_LE(rss, budget + kAllowedOverBudget) << threads << " threads: peak RSS " << rss;
   }
+}
+
+// Balance of half a million random leaves down to level 14 (millions of
+// parents and required octants through sorters and spools) with a 1 MiB
+// budget.  Before the parents went through spools, the per-level sorters'
+// merge buffers alone took 18 MB here.
+TEST(MemoryBound, BalanceStaysWithinBudgetOnAnOctreeFarLargerThanIt) {
+#ifdef WEAVER_SANITIZED
+  GTEST_SKIP() << "sanitizers inflate RSS";
+#endif
+  testing::TempDir dir;
+  uint64_t rss = 0;
+  const std::string db = dir.file("db");
+  make_db(dir, {"--kind", "random", "--leaves", "500000", "--max-level", "14"}, db);
+  const std::string out =
+      bench::run_program({WEAVER_BINARY, "balance", db, "--memory", "1M"}, &rss);
+  ASSERT_NE(out.find("balanced 500"), std::string::npos) << out;
+  EXPECT_LE(rss, (1ull << 20) + kAllowedOverBudget) << "peak RSS " << rss;
+  const std::string check = bench::run_program({WEAVER_BINARY, "balance", db, "--check"}, &rss);
+  EXPECT_NE(check.find("2:1 balanced"), std::string::npos) << check;
 }
 
 }  // namespace

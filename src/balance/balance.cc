@@ -11,8 +11,9 @@
 #include <vector>
 
 #include "db/database.h"
-#include "extract/node_hash.h"  // an open-addressing key set
-#include "import/external_sort.h"
+#include "sort/external_sort.h"
+#include "sort/sorted_spool.h"
+#include "util/key_set.h"
 #include "model/velocity_model.h"
 #include "schema/octant.h"
 
@@ -61,8 +62,8 @@ class DomainProbe {
   bool has_last_ = false;
 };
 
-// Reads a finished sorter, skipping repeated keys.
-Status next_unique(ExternalSorter& s, uint64_t* prev, bool* has_prev, KeyTag* out, bool* done) {
+// Reads a sorted source, skipping repeated keys.
+Status next_unique(KeyTagSource& s, uint64_t* prev, bool* has_prev, KeyTag* out, bool* done) {
   while (true) {
     WEAVER_RETURN_IF_ERROR(s.next(out, done));
     if (*done) return Status::Ok();
@@ -74,6 +75,12 @@ Status next_unique(ExternalSorter& s, uint64_t* prev, bool* has_prev, KeyTag* ou
   }
 }
 
+// Where the budget goes (M = memory_bytes): the leaf table's pool takes up to
+// M/8, the chunk of parents with its key set M/4, the candidate sorter M/4,
+// and the spools (three per level) their buffers of M/512 each.  Everything
+// else is sorted already: a level's parents arrive as two sorted streams (of
+// the leaves, of the octants required one level finer), and each level's
+// required octants come out of the candidate sorter in order.
 class Balancer {
  public:
   Balancer(BTree& leaves, const BalanceOptions& o, const std::string& scratch, BalanceResult* r)
@@ -83,43 +90,65 @@ class Balancer {
   // Without propagation (check_only) only the leaves' own requirements are
   // made: enough to tell whether the octree is balanced.
   Status closure(int max_level, bool propagate) {
-    const uint64_t share = std::max<uint64_t>(o_.memory_bytes / 4 / (max_level + 1), 1 << 16);
     for (int l = 0; l <= max_level; ++l) {
-      parents_.push_back(std::make_unique<ExternalSorter>(scratch_ + "/p" + std::to_string(l), share));
+      leaf_parents_.push_back(spool("lp", l));
+      required_parents_.push_back(spool("rp", l));
+      required_.push_back(spool("r", l));
     }
-    required_ = std::make_unique<ExternalSorter>(scratch_ + "/required", o_.memory_bytes / 4);
     BTreeCursor c;
     WEAVER_RETURN_IF_ERROR(leaves_.seek_cursor(0, &c));
     while (c.valid()) {
       const Octant q = octant_from_key(c.key());
       ++r_->input_leaves;
       // Tag: the leaf that asks, for naming violations.
-      if (q.level > 0) WEAVER_RETURN_IF_ERROR(parents_[q.level - 1]->add({octant_key(octant_parent(q)), c.key()}));
+      if (q.level > 0) {
+        WEAVER_RETURN_IF_ERROR(
+            leaf_parents_[q.level - 1]->add({octant_key(octant_parent(q)), c.key()}));
+      }
       WEAVER_RETURN_IF_ERROR(c.next());
     }
     for (int l = max_level - 1; l >= 0; --l) {
-      WEAVER_RETURN_IF_ERROR(expand_level(l, propagate));
-      parents_[l].reset();
+      WEAVER_RETURN_IF_ERROR(leaf_parents_[l]->finish());
+      WEAVER_RETURN_IF_ERROR(required_parents_[l]->finish());
+      KeyTagMerge parents({leaf_parents_[l].get(), required_parents_[l].get()});
+      WEAVER_RETURN_IF_ERROR(expand_level(l, parents, propagate));
+      leaf_parents_[l].reset();
+      required_parents_[l].reset();
     }
-    return required_->finish();
+    std::vector<KeyTagSource*> levels;
+    for (auto& level : required_) {
+      WEAVER_RETURN_IF_ERROR(level->finish());
+      if (level->size() > 0) levels.push_back(level.get());
+    }
+    required_merge_ = std::make_unique<KeyTagMerge>(std::move(levels));
+    return Status::Ok();
   }
 
   // The required octants, deduplicated, in key order; tag = a leaf that asks.
-  ExternalSorter& required() { return *required_; }
+  KeyTagSource& required() { return *required_merge_; }
 
  private:
+  std::unique_ptr<SortedSpool> spool(const char* name, int level) const {
+    const size_t bytes = std::clamp<uint64_t>(o_.memory_bytes / 512, 4 << 10, 1 << 20);
+    return std::make_unique<SortedSpool>(scratch_ + "/" + name + std::to_string(level), bytes);
+  }
+
   // The face and edge neighbours of the level's parents, into candidates.
   // Parents pass through memory in chunks of what fits in a quarter of the
-  // budget (16 bytes each in the list, about 18 in the hash); a neighbour
-  // that is a parent of the same chunk is skipped (see expand_level).  Any
-  // subset may be skipped, and Z-order keeps most neighbours in one chunk.
-  Status emit_candidates(ExternalSorter& parents, ExternalSorter& candidates) {
+  // budget (16 bytes each in the list, and a key set of twice as many slots);
+  // a neighbour that is a parent of the same chunk is skipped (see
+  // expand_level).  Any subset may be skipped, and Z-order keeps most
+  // neighbours in one chunk.
+  Status emit_candidates(KeyTagSource& parents, ExternalSorter& candidates) {
+    const size_t quarter = o_.memory_bytes / 4;
+    size_t fits = 1024;
+    while (2 * fits * sizeof(KeyTag) + KeySet::slots_for(2 * fits) * 8 <= quarter) fits *= 2;
     std::vector<KeyTag> chunk;
-    NodeHash chunk_keys;
-    const size_t fits = std::max<size_t>(1024, o_.memory_bytes / 4 / (sizeof(KeyTag) + 18));
+    chunk.reserve(fits);
+    KeySet chunk_keys;
     auto flush_chunk = [&]() -> Status {
       chunk_keys.reset(chunk.size());
-      for (const KeyTag& q : chunk) chunk_keys.add(q.key, 1);
+      for (const KeyTag& q : chunk) chunk_keys.add(q.key);
       for (const KeyTag& q : chunk) {
         const Octant po = octant_from_key(q.key);
         for (const auto& d : dirs_) {
@@ -148,9 +177,7 @@ class Balancer {
   // neighbour that is itself a parent (it has finer children) is resolved
   // already, and its own parent enters the next level through its siblings,
   // so it is skipped: inside refined regions almost every candidate goes.
-  Status expand_level(int l, bool propagate) {
-    ExternalSorter& parents = *parents_[l];
-    WEAVER_RETURN_IF_ERROR(parents.finish());
+  Status expand_level(int l, KeyTagSource& parents, bool propagate) {
     ExternalSorter candidates(scratch_ + "/c" + std::to_string(l), o_.memory_bytes / 4);
     WEAVER_RETURN_IF_ERROR(emit_candidates(parents, candidates));
     WEAVER_RETURN_IF_ERROR(candidates.finish());
@@ -165,11 +192,11 @@ class Balancer {
       bool inside = false;
       WEAVER_RETURN_IF_ERROR(probe.overlaps(n.key, &inside));
       if (!inside) continue;
-      WEAVER_RETURN_IF_ERROR(required_->add(n));
+      WEAVER_RETURN_IF_ERROR(required_[l]->add(n));
       ++r_->required;
       if (l > 0 && propagate) {
-        WEAVER_RETURN_IF_ERROR(
-            parents_[l - 1]->add({octant_key(octant_parent(octant_from_key(n.key))), n.tag}));
+        WEAVER_RETURN_IF_ERROR(required_parents_[l - 1]->add(
+            {octant_key(octant_parent(octant_from_key(n.key))), n.tag}));
       }
     }
   }
@@ -179,8 +206,9 @@ class Balancer {
   std::string scratch_;
   BalanceResult* r_;
   std::vector<std::array<int, 3>> dirs_;
-  std::vector<std::unique_ptr<ExternalSorter>> parents_;
-  std::unique_ptr<ExternalSorter> required_;
+  // By level: parents of leaves, parents of required octants, the required.
+  std::vector<std::unique_ptr<SortedSpool>> leaf_parents_, required_parents_, required_;
+  std::unique_ptr<KeyTagMerge> required_merge_;
 };
 
 // Writes leaf t, split just enough that every required octant strictly
@@ -266,7 +294,7 @@ std::string replace_levels(const std::string& metadata, const LevelCounts& level
 
 // Calls visit(leaf cursor, required octants strictly inside the leaf) for
 // every leaf in key order, until visit sets *stop.
-Status for_each_leaf(BTree& leaves, ExternalSorter& required,
+Status for_each_leaf(BTree& leaves, KeyTagSource& required,
                      const std::function<Status(const BTreeCursor&, const std::vector<KeyTag>&,
                                                 bool*)>& visit) {
   BTreeCursor c;
@@ -290,7 +318,7 @@ Status for_each_leaf(BTree& leaves, ExternalSorter& required,
 }
 
 // Merges the leaves with the required octants and writes the refinement.
-Status write_refinement(BTree& leaves, ExternalSorter& required, BTree& out, BalanceResult* r) {
+Status write_refinement(BTree& leaves, KeyTagSource& required, BTree& out, BalanceResult* r) {
   Units u;
   units_from_metadata(leaves.options().metadata, &u);
   const std::unique_ptr<VelocityModel> model = model_of(leaves.options().metadata);
@@ -330,7 +358,7 @@ Status touching_leaf(BTree& leaves, const Octant& coarse, const Octant& asker, O
 }
 
 // check_only: the first required octant strictly inside a leaf is a violation.
-Status find_violation(BTree& leaves, ExternalSorter& required, BalanceResult* r) {
+Status find_violation(BTree& leaves, KeyTagSource& required, BalanceResult* r) {
   return for_each_leaf(
       leaves, required, [&](const BTreeCursor& c, const std::vector<KeyTag>& inside, bool* stop) {
         if (inside.empty()) return Status::Ok();
@@ -394,7 +422,7 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   TableOptions topt = leaves->options();
   std::unique_ptr<BTree> out;
   std::string file;
-  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, 8ull << 20, &out, &file));
+  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, std::min<uint64_t>(o.memory_bytes / 8, 8ull << 20), &out, &file));
   const Status st = write_refinement(*leaves, balancer.required(), *out, r);
   if (st.ok()) out->set_metadata(replace_levels(leaves->options().metadata, r->levels));
   return db->publish(kOctantTable, file, out, st);

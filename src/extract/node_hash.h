@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "util/key_set.h"
+
 namespace weaver {
 
 class NodeHash {
@@ -42,11 +44,7 @@ class NodeHash {
   // Node keys use 63 bits, so an all-ones slot can mark "empty".
   static constexpr uint64_t kEmpty = ~uint64_t{0};
 
-  size_t find_slot(uint64_t key) const {
-    size_t s = (key * 0x9E3779B97F4A7C15ULL) >> shift_;
-    while (slots_[s] != kEmpty && slots_[s] != key) s = (s + 1) & (slots_.size() - 1);
-    return s;
-  }
+  size_t find_slot(uint64_t key) const { return probe_slot(slots_, shift_, key, kEmpty); }
 
   void grow() {
     std::vector<uint64_t> keys;

@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "db/database.h"
-#include "import/external_sort.h"
+#include "sort/external_sort.h"
 #include "import/octant_text.h"
 
 namespace weaver {

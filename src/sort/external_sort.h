@@ -1,6 +1,9 @@
 // Out-of-core sort of (key, tag) pairs within a memory budget: buffer, sort,
 // spill sorted runs to files in a scratch directory, then merge them.  When
-// everything fits in the buffer nothing touches the disk.
+// everything fits in the buffer nothing touches the disk.  The merge reads
+// each run through a buffer of at least kMinReadItems, so when there are more
+// runs than the budget can feed at once, groups of runs are first merged into
+// longer ones (each pass costs one more write and read of the data).
 #pragma once
 
 #include <cstdint>
@@ -9,19 +12,12 @@
 #include <vector>
 
 #include "schema/status.h"
+#include "sort/key_tag.h"
 #include "storage/file.h"
 
 namespace weaver {
 
-struct KeyTag {
-  uint64_t key;
-  uint64_t tag;
-  friend bool operator<(const KeyTag& a, const KeyTag& b) {
-    return a.key != b.key ? a.key < b.key : a.tag < b.tag;
-  }
-};
-
-class ExternalSorter {
+class ExternalSorter : public KeyTagSource {
  public:
   // Scratch files go to scratch_dir (created on the first spill, removed by
   // the destructor).  memory_bytes bounds the buffer and the merge buffers.
@@ -32,9 +28,11 @@ class ExternalSorter {
   // Ends input; then next() yields everything in (key, tag) order.
   Status finish();
   // Sets *done when no items remain.
-  Status next(KeyTag* out, bool* done);
+  Status next(KeyTag* out, bool* done) override;
 
-  uint64_t runs_spilled() const { return runs_.size(); }
+  uint64_t runs_spilled() const { return runs_spilled_; }
+  // The most runs merged at once within the budget.
+  size_t max_fan_in() const { return max_fan_in_; }
 
  private:
   struct Run {
@@ -44,8 +42,12 @@ class ExternalSorter {
     size_t pos = 0;
   };
   Status spill();
+  Status open_run(Run* run);
   Status refill(Run& run);
   void heap_push(size_t source);
+  Status pop(KeyTag* out);
+  // Merges the first `count` runs into one run file at the end of runs_.
+  Status merge_prefix(size_t count);
 
   std::string scratch_dir_;
   uint64_t memory_bytes_;
@@ -53,6 +55,8 @@ class ExternalSorter {
   std::vector<KeyTag> buffer_;
   size_t buffer_pos_ = 0;  // next unread item of buffer_ during the merge
   std::vector<Run> runs_;
+  uint64_t runs_spilled_ = 0, run_files_ = 0;
+  size_t max_fan_in_;
   // Merge heap of (key, tag, source); source == runs_.size() is buffer_.
   struct HeapItem {
     KeyTag item;
