@@ -11,8 +11,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "storage/checksum.h"
-#include "storage/crash_point.h"
+#include "storage/manifest_file.h"
 
 namespace fs = std::filesystem;
 
@@ -20,24 +19,9 @@ namespace weaver {
 namespace {
 
 constexpr char kManifest[] = "MANIFEST";
-constexpr char kManifestTmp[] = "MANIFEST.tmp";
+constexpr char kManifestTmp[] = "MANIFEST.tmp";  // write_manifest_file's temporary
 constexpr char kLock[] = "LOCK";
 constexpr char kManifestHeader[] = "weaver-db 1";  // do not change: on disk
-
-std::string hex32(uint32_t v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "%08x", v);
-  return buf;
-}
-
-Status sync_path(const std::string& path, bool directory) {
-  const int fd = ::open(path.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
-  if (fd < 0) return Status::IOError("cannot open " + path + ": " + std::strerror(errno));
-  const int r = ::fsync(fd);
-  ::close(fd);
-  if (r != 0) return Status::IOError("cannot sync " + path + ": " + std::strerror(errno));
-  return Status::Ok();
-}
 
 // "octants-12.bt" -> 12; 0 if the name has no number.
 uint64_t file_number(const std::string& file) {
@@ -122,57 +106,25 @@ Status Database::open(const std::string& dir, Mode mode, bool create_if_missing,
 
 Status Database::read_manifest() {
   const std::string path = dir_ + "/" + kManifest;
-  std::ifstream in(path);
-  if (!in) return Status::IOError("cannot read " + path);
-  std::string line, body;
-  std::getline(in, line);
-  if (line != kManifestHeader) {
-    return Status::Corruption(path + ": unknown manifest format '" + line + "'");
-  }
-  body = line + "\n";
-  bool have_checksum = false;
-  while (std::getline(in, line)) {
+  std::vector<std::string> lines;
+  WEAVER_RETURN_IF_ERROR(read_manifest_file(path, kManifestHeader, &lines));
+  for (const std::string& line : lines) {
     std::istringstream fields(line);
     std::string kind, a, b;
     fields >> kind >> a >> b;
-    if (kind == "table" && !a.empty() && !b.empty()) {
-      tables_[a] = b;
-      next_file_number_ = std::max(next_file_number_, file_number(b) + 1);
-      body += line + "\n";
-    } else if (kind == "checksum") {
-      if (a != hex32(checksum32(body.data(), body.size()))) {
-        return Status::Corruption(path + ": checksum mismatch");
-      }
-      have_checksum = true;
-      break;
-    } else {
+    if (kind != "table" || a.empty() || b.empty()) {
       return Status::Corruption(path + ": bad line '" + line + "'");
     }
+    tables_[a] = b;
+    next_file_number_ = std::max(next_file_number_, file_number(b) + 1);
   }
-  if (!have_checksum) return Status::Corruption(path + ": truncated (no checksum line)");
   return Status::Ok();
 }
 
 Status Database::write_manifest(const std::map<std::string, std::string>& tables) {
-  std::string body = std::string(kManifestHeader) + "\n";
-  for (const auto& [name, file] : tables) body += "table " + name + " " + file + "\n";
-  body += "checksum " + hex32(checksum32(body.data(), body.size())) + "\n";
-  const std::string tmp = dir_ + "/" + kManifestTmp, final_path = dir_ + "/" + kManifest;
-  crash_point::step();
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << body;
-    out.flush();
-    if (!out) return Status::IOError("cannot write " + tmp);
-  }
-  crash_point::step();
-  WEAVER_RETURN_IF_ERROR(sync_path(tmp, false));
-  crash_point::step();
-  if (::rename(tmp.c_str(), final_path.c_str()) != 0) {
-    return Status::IOError("cannot rename " + tmp + ": " + std::strerror(errno));
-  }
-  crash_point::step();
-  return sync_path(dir_, true);
+  std::vector<std::string> lines;
+  for (const auto& [name, file] : tables) lines.push_back("table " + name + " " + file);
+  return write_manifest_file(dir_, kManifest, kManifestHeader, lines);
 }
 
 Status Database::remove_leftovers() {
