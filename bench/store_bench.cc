@@ -1,9 +1,13 @@
-// Named workloads over the B+tree store, in the LevelDB tradition:
+// Named workloads over both stores (--backends btree,lsm), in the LevelDB
+// tradition, all through the Store interface:
 //   fillseq      sorted append of n records, then commit (flush + fsync)
 //   readseq      cursor scan of every record
 //   getrandom    exact lookups of random present keys
 //   floorrandom  aggregate hits: the leaf containing a random pixel
-//   fillrandom   random-order inserts of n records, then commit
+//   fillrandom   random-order inserts of n records, then commit; the LSM
+//                compacts first, so both end as one B+tree file
+// The LSM's memtable gets the small pool as its budget; its reads run on the
+// store fillseq left (compacted: one run).
 // Records are octant keys (the first n level-8 octants in Z-order, so the
 // domain is their union) with a 16-byte payload.  Every workload runs in its
 // own child process, so its peak RSS is its own.  Prints one JSON object per
@@ -18,6 +22,7 @@
 #include "bench_util.h"
 #include "schema/octant.h"
 #include "storage/btree.h"
+#include "storage/lsm.h"
 
 namespace weaver::bench {
 namespace {
@@ -34,6 +39,7 @@ struct Config {
   std::string dir = "/tmp/weaver-bench";
   std::vector<std::string> workloads = {"fillseq", "readseq", "getrandom", "floorrandom",
                                         "fillrandom"};
+  std::vector<std::string> backends = {"btree", "lsm"};
 };
 
 uint64_t key_of(uint64_t i) {
@@ -94,35 +100,82 @@ TableOptions table_options() {
   return o;
 }
 
-bool create_tree(const std::string& path, uint64_t pool, std::unique_ptr<BTree>* t) {
-  std::unique_ptr<File> f;
-  if (!open_posix_file(path, OpenMode::kCreateTruncate, &f).ok()) return false;
-  return BTree::create(std::move(f), table_options(), pool, t).ok();
+// A store of either backend; `path` names a file (B+tree) or a directory (LSM).
+struct Backend {
+  std::string name;
+  uint64_t memtable_bytes = 0;  // LSM only
+  std::string path(const std::string& dir, const std::string& what) const {
+    return dir + "/" + what + (name == "lsm" ? ".lsm" : ".bt");
+  }
+};
+
+LsmOptions lsm_options(const Backend& b, uint64_t pool) {
+  LsmOptions o;
+  o.table = table_options();
+  o.memtable_bytes = b.memtable_bytes;
+  o.run_pool_bytes = pool;
+  return o;
 }
 
-bool open_tree(const std::string& path, uint64_t pool, std::unique_ptr<BTree>* t) {
-  std::unique_ptr<File> f;
-  Status st = open_posix_file(path, OpenMode::kReadOnly, &f);
-  if (st.ok()) st = BTree::open(std::move(f), pool, t);
+bool report(const Status& st) {
   if (!st.ok()) std::fprintf(stderr, "%s\n", st.to_string().c_str());
   return st.ok();
 }
 
-void describe(Json* j, const std::string& w, uint64_t n, uint64_t pool, double secs,
-              uint64_t ops, const char* rate_name) {
-  j->add("bench", "store").add("backend", "btree").add("workload", w).add("n", n);
+bool create_store(const Backend& b, const std::string& path, uint64_t pool,
+                  std::unique_ptr<Store>* out) {
+  if (b.name == "lsm") {
+    std::filesystem::remove_all(path);
+    std::unique_ptr<LsmTree> t;
+    // Runs are only merged while filling, by cursors: a small pool each.
+    if (!report(LsmTree::create(path, lsm_options(b, 1 << 20), &t))) return false;
+    *out = std::move(t);
+    return true;
+  }
+  std::unique_ptr<File> f;
+  std::unique_ptr<BTree> t;
+  Status st = open_posix_file(path, OpenMode::kCreateTruncate, &f);
+  if (st.ok()) st = BTree::create(std::move(f), table_options(), pool, &t);
+  *out = std::move(t);
+  return report(st);
+}
+
+bool open_store(const Backend& b, const std::string& path, uint64_t pool,
+                std::unique_ptr<Store>* out) {
+  if (b.name == "lsm") {
+    std::unique_ptr<LsmTree> t;
+    if (!report(LsmTree::open(path, lsm_options(b, pool), &t))) return false;
+    *out = std::move(t);
+    return true;
+  }
+  std::unique_ptr<File> f;
+  std::unique_ptr<BTree> t;
+  Status st = open_posix_file(path, OpenMode::kReadOnly, &f);
+  if (st.ok()) st = BTree::open(std::move(f), pool, &t);
+  *out = std::move(t);
+  return report(st);
+}
+
+void describe(Json* j, const Backend& b, const std::string& w, uint64_t n, uint64_t pool,
+              double secs, uint64_t ops, const char* rate_name) {
+  j->add("bench", "store").add("backend", b.name).add("workload", w).add("n", n);
   j->add(rate_name, ops / secs).add("seconds", secs).add("pool_bytes", pool);
 }
 
-void describe_size(Json* j, const BTree& t, uint64_t n) {
-  const double bpr = double(t.file_bytes()) / double(n);
+// File size per record, and the B+tree's height (of the LSM's one run).
+void describe_size(Json* j, Store& s, uint64_t n) {
+  auto* lsm = dynamic_cast<LsmTree*>(&s);
+  const BTree* t = lsm != nullptr ? lsm->compacted_run() : dynamic_cast<BTree*>(&s);
+  const uint64_t bytes = lsm != nullptr ? lsm->file_bytes() : t->file_bytes();
+  const double bpr = double(bytes) / double(n);
   j->add("bytes_per_record", bpr).add("overhead_pct", 100.0 * (bpr / (8 + kPayload) - 1));
-  j->add("height", uint64_t{t.height()});
+  if (t != nullptr) j->add("height", uint64_t{t->height()});
 }
 
-bool fill(const std::string& path, uint64_t n, uint64_t pool, bool random, Json* j) {
-  std::unique_ptr<BTree> t;
-  if (!create_tree(path, pool, &t)) return false;
+bool fill(const Backend& b, const std::string& path, uint64_t n, uint64_t pool, bool random,
+          Json* j) {
+  std::unique_ptr<Store> t;
+  if (!create_store(b, path, pool, &t)) return false;
   const Permutation order(n);
   std::byte payload[kPayload];
   const double t0 = now_seconds();
@@ -130,36 +183,46 @@ bool fill(const std::string& path, uint64_t n, uint64_t pool, bool random, Json*
     const uint64_t r = random ? order(i) : i;
     payload_of(r, payload);
     const Status st = random ? t->put(key_of(r), payload, nullptr) : t->append(key_of(r), payload);
-    if (!st.ok()) return false;
+    if (!report(st)) return false;
   }
-  if (!t->commit().ok()) return false;
+  auto* lsm = dynamic_cast<LsmTree*>(t.get());
+  uint64_t runs_before = 0;
+  if (lsm != nullptr) {
+    runs_before = lsm->run_count();
+    if (!report(lsm->compact())) return false;
+  }
+  if (!report(t->commit())) return false;
   const double secs = now_seconds() - t0;
-  describe(j, random ? "fillrandom" : "fillseq", n, pool, secs, n, "records_per_s");
+  describe(j, b, random ? "fillrandom" : "fillseq", n, pool, secs, n, "records_per_s");
   describe_size(j, *t, n);
+  if (lsm != nullptr) {
+    j->add("memtable_bytes", b.memtable_bytes).add("runs_before_compaction", runs_before);
+    j->add("write_amplification", double(lsm->records_written()) / double(n));
+  }
   return t->size() == n;
 }
 
-bool readseq(const std::string& path, uint64_t n, uint64_t pool, Json* j) {
-  std::unique_ptr<BTree> t;
-  if (!open_tree(path, pool, &t)) return false;
+bool readseq(const Backend& b, const std::string& path, uint64_t n, uint64_t pool, Json* j) {
+  std::unique_ptr<Store> t;
+  if (!open_store(b, path, pool, &t)) return false;
   const double t0 = now_seconds();
-  BTreeCursor c;
-  if (!t->seek_cursor(0, &c).ok()) return false;
+  std::unique_ptr<Cursor> c;
+  if (!report(t->seek(0, &c))) return false;
   uint64_t count = 0, sum = 0;
-  while (c.valid()) {
-    sum += c.key() + page::load64(c.payload());
+  while (c->valid()) {
+    sum += c->key() + page::load64(c->payload());
     ++count;
-    if (!c.next().ok()) return false;
+    if (!report(c->next())) return false;
   }
   const double secs = now_seconds() - t0;
-  describe(j, "readseq", n, pool, secs, count, "records_per_s");
+  describe(j, b, "readseq", n, pool, secs, count, "records_per_s");
   describe_size(j, *t, n);
   j->add("checksum", sum & 0xffff);
   return count == n;
 }
 
 // One pass of random lookups; returns false on an error or a wrong answer.
-bool lookup_pass(BTree& t, uint64_t n, uint64_t queries, bool floor, uint64_t seed) {
+bool lookup_pass(Store& t, uint64_t n, uint64_t queries, bool floor, uint64_t seed) {
   uint64_t wrong = 0;
   std::byte payload[kPayload];
   for (uint64_t q = 0; q < queries; ++q) {
@@ -170,10 +233,10 @@ bool lookup_pass(BTree& t, uint64_t n, uint64_t queries, bool floor, uint64_t se
       const uint64_t span_bits = 3 * (kMaxLevel - kGridLevel);
       const uint64_t m = (i << span_bits) | (splitmix(&seed) & ((1ull << span_bits) - 1));
       uint64_t k = 0;
-      if (!t.floor(pixel_key(morton_decode(m)), &k, payload, &found).ok()) return false;
+      if (!report(t.floor(pixel_key(morton_decode(m)), &k, payload, &found))) return false;
       wrong += !found || k != key_of(i);
     } else {
-      if (!t.get(key_of(i), payload, &found).ok()) return false;
+      if (!report(t.get(key_of(i), payload, &found))) return false;
       wrong += !found || page::load64(payload) != i;
     }
   }
@@ -182,20 +245,18 @@ bool lookup_pass(BTree& t, uint64_t n, uint64_t queries, bool floor, uint64_t se
 
 // A cold pass (fresh pool: reads and first-touch faults) and then a warm,
 // steady-state pass with other random keys; both rates are reported.
-bool lookups(const std::string& path, uint64_t n, uint64_t pool, uint64_t queries, bool floor,
-             Json* j) {
-  std::unique_ptr<BTree> t;
-  if (!open_tree(path, pool, &t)) return false;
+bool lookups(const Backend& b, const std::string& path, uint64_t n, uint64_t pool,
+             uint64_t queries, bool floor, Json* j) {
+  std::unique_ptr<Store> t;
+  if (!open_store(b, path, pool, &t)) return false;
   const double t0 = now_seconds();
   if (!lookup_pass(*t, n, queries, floor, 42)) return false;
   const double t1 = now_seconds();
   if (!lookup_pass(*t, n, queries, floor, 4242)) return false;
   const double t2 = now_seconds();
-  describe(j, floor ? "floorrandom" : "getrandom", n, pool, t2 - t1, queries, "queries_per_s");
+  describe(j, b, floor ? "floorrandom" : "getrandom", n, pool, t2 - t1, queries, "queries_per_s");
   j->add("cold_queries_per_s", queries / (t1 - t0));
   describe_size(j, *t, n);
-  j->add("pool_hit_pct", 100.0 * t->pool().stats().hits /
-                             double(t->pool().stats().hits + t->pool().stats().misses));
   return true;
 }
 
@@ -242,7 +303,7 @@ int usage() {
       "usage: store_bench [--sizes 1M,10M] [--workloads fillseq,readseq,getrandom,floorrandom,"
       "fillrandom]\n"
       "                   [--pool 20M] [--large-pool 512M] [--queries 2M] [--repeat 3]\n"
-      "                   [--dir /tmp/weaver-bench]\n"
+      "                   [--backends btree,lsm] [--dir /tmp/weaver-bench]\n"
       "Lookups run twice: with the small pool and with the large one (which holds the tree).\n");
   return 2;
 }
@@ -260,6 +321,8 @@ int main(int argc, char** argv) {
     if (a == "--sizes") {
       c.sizes.clear();
       for (const auto& s : split_commas(v)) c.sizes.push_back(parse_size(s));
+    } else if (a == "--backends") {
+      c.backends = split_commas(v);
     } else if (a == "--workloads") {
       c.workloads = split_commas(v);
     } else if (a == "--pool") {
@@ -280,44 +343,48 @@ int main(int argc, char** argv) {
   std::vector<std::map<std::string, std::string>> table;
   bool all_ok = true;
   for (uint64_t n : c.sizes) {
-    const std::string seq_path = c.dir + "/seq.bt", rnd_path = c.dir + "/rnd.bt";
-    for (const std::string& w : c.workloads) {
-      std::vector<uint64_t> pools = {c.small_pool};
-      if (w == "getrandom" || w == "floorrandom" || w == "readseq") pools.push_back(c.large_pool);
-      if (w == "fillrandom") pools = {c.large_pool};
-      for (uint64_t pool : pools) {
-        std::vector<std::map<std::string, std::string>> runs;
-        for (int r = 0; r < c.repeat; ++r) {
-          const std::string line = run_in_child([&](Json* j) {
-            if (w == "fillseq") return fill(seq_path, n, pool, false, j);
-            if (w == "fillrandom") return fill(rnd_path, n, pool, true, j);
-            if (w == "readseq") return readseq(seq_path, n, pool, j);
-            if (w == "getrandom") return lookups(seq_path, n, pool, c.queries, false, j);
-            if (w == "floorrandom") return lookups(seq_path, n, pool, c.queries, true, j);
-            return false;
-          });
-          if (line.empty()) {
-            all_ok = false;
-            continue;
+    for (const std::string& backend : c.backends) {
+      const Backend b{backend, c.small_pool};
+      const std::string seq_path = b.path(c.dir, "seq"), rnd_path = b.path(c.dir, "rnd");
+      for (const std::string& w : c.workloads) {
+        std::vector<uint64_t> pools = {c.small_pool};
+        if (w == "getrandom" || w == "floorrandom" || w == "readseq") pools.push_back(c.large_pool);
+        if (w == "fillrandom") pools = {c.large_pool};
+        for (uint64_t pool : pools) {
+          std::vector<std::map<std::string, std::string>> runs;
+          for (int r = 0; r < c.repeat; ++r) {
+            const std::string line = run_in_child([&](Json* j) {
+              if (w == "fillseq") return fill(b, seq_path, n, pool, false, j);
+              if (w == "fillrandom") return fill(b, rnd_path, n, pool, true, j);
+              if (w == "readseq") return readseq(b, seq_path, n, pool, j);
+              if (w == "getrandom") return lookups(b, seq_path, n, pool, c.queries, false, j);
+              if (w == "floorrandom") return lookups(b, seq_path, n, pool, c.queries, true, j);
+              return false;
+            });
+            if (line.empty()) {
+              all_ok = false;
+              continue;
+            }
+            std::printf("%s\n", line.c_str());
+            runs.push_back(parse_flat_json(line));
           }
-          std::printf("%s\n", line.c_str());
-          runs.push_back(parse_flat_json(line));
+          if (runs.empty()) continue;
+          auto row = runs[0];
+          for (const char* k : {"records_per_s", "queries_per_s", "cold_queries_per_s", "seconds",
+                                "peak_rss_bytes"}) {
+            row[k] = median_of(runs, k);
+          }
+          row["runs"] = std::to_string(runs.size());
+          table.push_back(row);
         }
-        if (runs.empty()) continue;
-        auto row = runs[0];
-        for (const char* k : {"records_per_s", "queries_per_s", "cold_queries_per_s", "seconds",
-                              "peak_rss_bytes"}) {
-          row[k] = median_of(runs, k);
-        }
-        row["runs"] = std::to_string(runs.size());
-        table.push_back(row);
       }
+      if (!std::getenv("WEAVER_BENCH_KEEP")) std::filesystem::remove_all(seq_path);
+      std::filesystem::remove_all(rnd_path);
     }
-    if (!std::getenv("WEAVER_BENCH_KEEP")) std::filesystem::remove(seq_path);
-    std::filesystem::remove(rnd_path);
   }
-  std::printf("\nmedians (B+tree, octant key + %u-byte payload):\n", kPayload);
-  print_table(table, {"workload", "n", "pool_bytes", "records_per_s", "queries_per_s",
-                      "cold_queries_per_s", "bytes_per_record", "overhead_pct", "height", "peak_rss_bytes", "runs"});
+  std::printf("\nmedians (octant key + %u-byte payload):\n", kPayload);
+  print_table(table, {"backend", "workload", "n", "pool_bytes", "records_per_s", "queries_per_s",
+                      "cold_queries_per_s", "bytes_per_record", "overhead_pct", "height", "write_amplification",
+                      "peak_rss_bytes", "runs"});
   return all_ok ? 0 : 1;
 }

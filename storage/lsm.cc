@@ -50,7 +50,8 @@ uint64_t run_number(const std::string& file) {  // "run-12.bt" -> 12
 }  // namespace
 
 LsmTree::LsmTree(std::string dir, const LsmOptions& o)
-    : dir_(std::move(dir)), o_(o), payload_(o.table.schema.record_size()), mem_(payload_) {
+    : dir_(std::move(dir)), o_(o), payload_(o.table.schema.record_size()),
+      mem_(payload_, o.memtable_bytes) {
   scratch_.resize(payload_ + 1);
 }
 
@@ -99,7 +100,7 @@ Status LsmTree::open(const std::string& dir, const LsmOptions& options,
     t->o_.table = t->runs_.back().tree->options();
     t->o_.table.schema = without_tombstone(t->o_.table.schema);
     t->payload_ = t->o_.table.schema.record_size();
-    t->mem_ = Memtable(t->payload_);
+    t->mem_ = Memtable(t->payload_, options.memtable_bytes);
     t->scratch_.resize(t->payload_ + 1);
   }
   std::error_code ec;
@@ -113,9 +114,9 @@ Status LsmTree::open(const std::string& dir, const LsmOptions& options,
   }
   uint64_t max_key = 0;
   bool found = false;
-  int source = 0;
+  size_t skip = 0;
   WEAVER_RETURN_IF_ERROR(t->live_floor(std::numeric_limits<uint64_t>::max(), &max_key, &found,
-                                       &source));
+                                       &skip));
   t->has_max_ = found;
   t->max_key_ = max_key;
   *out = std::move(t);
@@ -242,8 +243,8 @@ Status LsmTree::append(uint64_t key, const std::byte* payload) {
   if (has_max_ && key <= max_key_) {
     uint64_t last = 0;
     bool found = false;
-    int source = 0;
-    WEAVER_RETURN_IF_ERROR(live_floor(std::numeric_limits<uint64_t>::max(), &last, &found, &source));
+    size_t skip = 0;
+    WEAVER_RETURN_IF_ERROR(live_floor(std::numeric_limits<uint64_t>::max(), &last, &found, &skip));
     if (found && key <= last) {
       return Status::InvalidArgument(dir_ + ": append out of order: key " + std::to_string(key) +
                                      " after key " + std::to_string(last));
@@ -268,6 +269,7 @@ Status LsmTree::erase(uint64_t key) {
 }
 
 Status LsmTree::get(uint64_t key, std::byte* payload_out, bool* found) {
+  if (BTree* t = compacted_run()) return t->get(key, payload_out, found);
   const std::byte* p = nullptr;
   bool dead = false;
   *found = false;
@@ -288,34 +290,39 @@ Status LsmTree::get(uint64_t key, std::byte* payload_out, bool* found) {
   return Status::Ok();
 }
 
-// The largest key <= key over all sources whose newest entry is live.
-// (source: -1 for the memtable, else the run.)
-Status LsmTree::live_floor(uint64_t key, uint64_t* key_out, bool* found, int* source) {
+// The largest key <= key over all sources whose newest entry is live, and
+// its payload (into scratch_, after `*skip` flag bytes).  Sources are asked
+// newest first and a key found again in an older source does not displace
+// it, so the winner holds the newest entry of its key.
+Status LsmTree::live_floor(uint64_t key, uint64_t* key_out, bool* found, size_t* skip) {
   mem_.sort();
+  std::vector<std::byte> candidate(scratch_.size());
   while (true) {
     *found = false;
+    bool live = false;
     uint64_t best = 0;
     const size_t pos = key == std::numeric_limits<uint64_t>::max() ? mem_.size()
                                                                     : mem_.lower_bound(key + 1);
     if (pos > 0) {
       best = mem_.key_at(pos - 1);
       *found = true;
-      *source = -1;
+      live = !mem_.tombstone_at(pos - 1);
+      *skip = 0;
+      std::memcpy(scratch_.data(), mem_.payload_at(pos - 1), payload_);
     }
     for (size_t r = runs_.size(); r-- > 0;) {
       uint64_t k = 0;
       bool in_run = false;
-      WEAVER_RETURN_IF_ERROR(runs_[r].tree->floor(key, &k, nullptr, &in_run));
+      WEAVER_RETURN_IF_ERROR(runs_[r].tree->floor(key, &k, candidate.data(), &in_run));
       if (in_run && (!*found || k > best)) {
         best = k;
         *found = true;
-        *source = static_cast<int>(r);
+        *skip = runs_[r].flags ? 1 : 0;
+        live = *skip == 0 || candidate[0] == std::byte{0};
+        scratch_.swap(candidate);
       }
     }
-    if (!*found) return Status::Ok();
-    bool live = false;
-    WEAVER_RETURN_IF_ERROR(get(best, nullptr, &live));  // the newest entry decides
-    if (live) {
+    if (!*found || live) {
       *key_out = best;
       return Status::Ok();
     }
@@ -328,17 +335,18 @@ Status LsmTree::live_floor(uint64_t key, uint64_t* key_out, bool* found, int* so
 }
 
 Status LsmTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, bool* found) {
-  int source = 0;
+  if (BTree* t = compacted_run()) return t->floor(key, key_out, payload_out, found);
+  size_t skip = 0;
   uint64_t k = 0;
-  WEAVER_RETURN_IF_ERROR(live_floor(key, &k, found, &source));
+  WEAVER_RETURN_IF_ERROR(live_floor(key, &k, found, &skip));
   if (!*found) return Status::Ok();
   if (key_out != nullptr) *key_out = k;
-  if (payload_out == nullptr) return Status::Ok();
-  bool live = false;
-  return get(k, payload_out, &live);
+  if (payload_out != nullptr) std::memcpy(payload_out, scratch_.data() + skip, payload_);
+  return Status::Ok();
 }
 
 Status LsmTree::seek(uint64_t key, std::unique_ptr<Cursor>* out) {
+  if (BTree* t = compacted_run()) return t->seek(key, out);
   std::unique_ptr<LsmMergeIterator> it;
   WEAVER_RETURN_IF_ERROR(make_iterator(key, false, &it));
   *out = std::make_unique<LsmCursor>(std::move(it));

@@ -21,8 +21,9 @@
 // would keep point reads cheaper during the build at several times the
 // writes.
 //
-// Ids: rank() and select() are O(log n) on a compacted store (one run, empty
-// memtable) and a merging scan otherwise.  size() is exact while every write
+// A compacted store (one plain run, empty memtable) answers every read from
+// that run's B+tree directly.  Ids: rank() and select() are O(log n) then,
+// and a merging scan otherwise.  size() is exact while every write
 // is known to be new or known to replace (appends, puts and erases on a
 // compacted or empty store, puts that ask for *replaced); after a blind put
 // it is an upper bound until count() or compact().
@@ -111,7 +112,7 @@ class LsmTree final : public Store {
   Status write_merged(LsmMergeIterator& it, BTree& out, bool flags, uint64_t* written);
   Status write_run_list();
   void retire(const std::string& file);
-  Status live_floor(uint64_t key, uint64_t* key_out, bool* found, int* source);
+  Status live_floor(uint64_t key, uint64_t* key_out, bool* found, size_t* skip);
   Status make_iterator(uint64_t from, bool keep_tombstones, std::unique_ptr<LsmMergeIterator>* it);
 
   std::string dir_;

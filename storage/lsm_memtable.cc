@@ -7,6 +7,10 @@
 
 namespace weaver {
 
+Memtable::Memtable(uint32_t payload_size, uint64_t budget_bytes)
+    : payload_(payload_size),
+      reserve_entries_(static_cast<size_t>(budget_bytes / (8 + 1 + payload_size + 4 + 8 + 16))) {}
+
 size_t Memtable::probe(uint64_t key) const {
   const size_t mask = slots_.size() - 1;
   size_t s = (key * 0x9E3779B97F4A7C15ULL) >> (64 - std::countr_zero(slots_.size()));
@@ -15,6 +19,13 @@ size_t Memtable::probe(uint64_t key) const {
 }
 
 void Memtable::grow_hash() {
+  if (keys_.capacity() == 0) {
+    keys_.reserve(reserve_entries_);
+    dead_.reserve(reserve_entries_);
+    payloads_.reserve(reserve_entries_ * payload_);
+    order_.reserve(reserve_entries_);
+    sort_pairs_.reserve(reserve_entries_);
+  }
   slots_.assign(std::max<size_t>(1024, 2 * slots_.size()), 0);
   for (size_t i = 0; i < keys_.size(); ++i) slots_[probe(keys_[i])] = static_cast<uint32_t>(i + 1);
 }
@@ -58,8 +69,8 @@ void Memtable::sort() {
   if (sorted_ == keys_.size()) return;
   // The new entries, sorted by (key, index) pairs (no indirection while
   // comparing), then merged with the sorted ones.
-  std::vector<std::pair<uint64_t, uint32_t>> fresh;
-  fresh.reserve(keys_.size() - sorted_);
+  std::vector<std::pair<uint64_t, uint32_t>>& fresh = sort_pairs_;  // kept: no heap churn
+  fresh.clear();
   for (size_t i = sorted_; i < keys_.size(); ++i) fresh.emplace_back(keys_[i], uint32_t(i));
   if (!in_order_) std::sort(fresh.begin(), fresh.end());
   const size_t old = order_.size();
@@ -79,8 +90,8 @@ size_t Memtable::lower_bound(uint64_t key) const {
 }
 
 uint64_t Memtable::memory_bytes() const {
-  // keys, flags, payloads, order, the hash at its worst (4x), sort pairs.
-  return keys_.size() * (8 + 1 + payload_ + 4 + 16 + 16);
+  // keys, flags, payloads, order, the sort pairs, and the hash.
+  return keys_.size() * (8 + 1 + payload_ + 4 + 16) + slots_.size() * 4;
 }
 
 void Memtable::clear() {

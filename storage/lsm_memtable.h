@@ -9,13 +9,17 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace weaver {
 
 class Memtable {
  public:
-  explicit Memtable(uint32_t payload_size) : payload_(payload_size) {}
+  // budget_bytes: what memory_bytes() may reach before the owner flushes;
+  // the arrays are reserved for that many entries up front, so they never
+  // grow by doubling past it.
+  Memtable(uint32_t payload_size, uint64_t budget_bytes);
 
   // Inserts or overwrites; payload may be null (zeros).
   void put(uint64_t key, const std::byte* payload) { upsert(key, payload, false); }
@@ -49,11 +53,13 @@ class Memtable {
   void grow_hash();
 
   uint32_t payload_;
+  size_t reserve_entries_;
   std::vector<uint64_t> keys_;
   std::vector<uint8_t> dead_;
   std::vector<std::byte> payloads_;
   std::vector<uint32_t> slots_;  // entry index + 1; 0 is empty
   std::vector<uint32_t> order_;  // entry indexes, sorted by key up to sorted_
+  std::vector<std::pair<uint64_t, uint32_t>> sort_pairs_;
   size_t sorted_ = 0;            // entries covered by order_
   size_t tombstones_ = 0;
   bool in_order_ = true;
