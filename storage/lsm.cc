@@ -228,6 +228,7 @@ Status LsmTree::put(uint64_t key, const std::byte* payload, bool* replaced) {
     if (!found) ++size_;
   } else if (mem_.find(key, &old, &dead)) {
     if (dead) ++size_;  // a tombstone hid every older entry
+    if (o_.on_shadow) WEAVER_RETURN_IF_ERROR(o_.on_shadow(key, payload, dead ? nullptr : old));
   } else {
     ++size_;  // an upper bound unless nothing older can hold the key
     if (!runs_.empty()) size_exact_ = false;

@@ -33,6 +33,7 @@
 // Not thread-safe.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,8 +44,17 @@
 
 namespace weaver {
 
+// Called when an entry hides an older entry of the same key (newer and older
+// payloads; null for a tombstone or a put of a null payload), wherever that
+// is found: a put over a memtable entry, a merge, a read.  An error it
+// returns fails that operation.  The default (none) lets the newer entry win silently; a
+// caller for whom a repeated key is bad input reports it here.
+using LsmShadowHook =
+    std::function<Status(uint64_t key, const std::byte* newer, const std::byte* older)>;
+
 struct LsmOptions {
   TableOptions table;                    // key kind, payload schema, page size, metadata
+  LsmShadowHook on_shadow;
   uint64_t memtable_bytes = 64ull << 20;  // flush when the memtable holds this much
   uint64_t run_pool_bytes = 1ull << 20;   // buffer pool of each run
 };

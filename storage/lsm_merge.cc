@@ -5,6 +5,7 @@ namespace weaver {
 Status LsmMergeIterator::init(LsmTree& tree, size_t first_run, bool with_memtable,
                               uint64_t from, bool keep_tombstones) {
   mem_ = &tree.mem_;
+  on_shadow_ = &tree.o_.on_shadow;
   keep_tombstones_ = keep_tombstones;
   sources_.clear();
   sources_.reserve(tree.runs_.size() - first_run + 1);
@@ -65,12 +66,23 @@ Status LsmMergeIterator::settle() {
     if (winner_ < 0) return Status::Ok();
     for (size_t i = winner_ + 1; i < sources_.size(); ++i) {  // older entries of the key
       if (sources_[i].valid && source_key(sources_[i]) == key_) {
+        if (on_shadow_ != nullptr && *on_shadow_) WEAVER_RETURN_IF_ERROR(report_shadow(i));
         WEAVER_RETURN_IF_ERROR(advance(sources_[i]));
       }
     }
     if (keep_tombstones_ || !tombstone()) return Status::Ok();
     WEAVER_RETURN_IF_ERROR(advance(sources_[winner_]));
   }
+}
+
+// The hook gets the winner's entry over source i's.
+Status LsmMergeIterator::report_shadow(size_t i) {
+  const int winner = winner_;
+  const std::byte* newer = tombstone() ? nullptr : payload();
+  winner_ = static_cast<int>(i);
+  const std::byte* older = tombstone() ? nullptr : payload();
+  winner_ = winner;
+  return (*on_shadow_)(key_, newer, older);
 }
 
 Status LsmMergeIterator::next() {

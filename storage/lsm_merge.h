@@ -38,8 +38,10 @@ class LsmMergeIterator {
   // Picks the least key; skips the older entries for it, and tombstones
   // unless they are kept.
   Status settle();
+  Status report_shadow(size_t older_source);
 
   const Memtable* mem_ = nullptr;
+  const LsmShadowHook* on_shadow_ = nullptr;
   std::vector<Source> sources_;  // newest first
   bool keep_tombstones_ = false;
   int winner_ = -1;

@@ -156,5 +156,42 @@ TEST_F(ImportTest, OutOfCoreSortStillFindsOverlaps) {
   EXPECT_FALSE(std::filesystem::exists(db_path()));
 }
 
+// Sorted input goes straight into the table: no LSM, nothing spilled, even
+// with a budget far below the input.
+TEST_F(ImportTest, SortedInputTakesTheAppendPath) {
+  GenOptions g;
+  g.leaves = testing::scaled(300'000, 60'000);
+  std::vector<Octant> leaves;
+  ASSERT_OK(generate_octree(g, &leaves));
+  std::sort(leaves.begin(), leaves.end(),
+            [](const Octant& a, const Octant& b) { return octant_key(a) < octant_key(b); });
+  const std::string path = dir_.file("sorted.txt");
+  ASSERT_OK(write_octant_text(path, leaves, ""));
+  ASSERT_OK(run(path, 1 << 20));
+  EXPECT_EQ(result_.runs_spilled, 0u);
+  EXPECT_EQ(table_keys().size(), leaves.size());
+}
+
+// A repeated octant far apart in shuffled input: the two copies sit in
+// different LSM runs, and the merge that meets them names both lines.
+TEST_F(ImportTest, OutOfCoreImportNamesBothLinesOfADuplicate) {
+  GenOptions g;
+  g.leaves = testing::scaled(200'000, 50'000);
+  g.shuffle = true;
+  g.seed = 5;
+  std::vector<Octant> leaves;
+  ASSERT_OK(generate_octree(g, &leaves));
+  leaves.push_back(leaves[100]);
+  const std::string path = dir_.file("dup.txt");
+  ASSERT_OK(write_octant_text(path, leaves, ""));
+  const Status st = run(path, 1 << 20);
+  ASSERT_TRUE(st.is_invalid_argument()) << st.to_string();
+  const std::string last = std::to_string(leaves.size());
+  EXPECT_NE(st.message().find(path + ":" + last + ": duplicate of the octant at line 101"),
+            std::string::npos)
+      << st.message();
+  EXPECT_FALSE(std::filesystem::exists(db_path()));
+}
+
 }  // namespace
 }  // namespace weaver

@@ -18,8 +18,11 @@ constexpr char kUsage[] =
     "directory DB, created if absent.  Rejects malformed lines, coordinates or\n"
     "levels out of range, misaligned corners, duplicate and overlapping octants,\n"
     "naming the line; on any error the database is left as it was.\n"
-    "  --memory BYTES  memory budget, e.g. 256M or 2G (default 256M); larger\n"
-    "                  inputs are sorted out of core in the database directory\n"
+    "  --memory BYTES  memory budget, e.g. 256M or 2G (default 256M).  Octants\n"
+    "                  in key order are appended as they come; from the first\n"
+    "                  one out of order on, the rest go through an LSM store\n"
+    "                  (runs spilled in the database directory) and are merged\n"
+    "                  in at the end\n"
     "  --tick METRES   size of one tick in metres (default 1)\n"
     "  --origin X,Y,Z  position of tick (0,0,0) in metres (default 0,0,0)\n";
 
@@ -60,7 +63,7 @@ int cmd_import(int argc, char** argv) {
   if (o.progress) std::fprintf(stderr, "\r%60s\r", "");
   if (!st.ok()) return report("import", st);
   const double secs = seconds_since(t0);
-  std::printf("imported %llu octants into %s in %.2fs (%.0f octants/s, %llu sorted runs spilled, "
+  std::printf("imported %llu octants into %s in %.2fs (%.0f octants/s, %llu LSM runs written, "
               "%.2f bytes/octant)\n",
               (unsigned long long)r.octants, args.positional[0].c_str(), secs, r.octants / secs,
               (unsigned long long)r.runs_spilled, double(r.table_bytes) / r.octants);

@@ -1,7 +1,10 @@
 // `weaver import`: octant text in any order into the octant table, within a
-// memory budget.  Validates every line (format, range, alignment), then
-// sorts out of core and rejects duplicate and overlapping octants while
-// appending in key order.  The table is committed only if all of it is good.
+// memory budget.  Validates every line (format, range, alignment).  Octants
+// in key order are appended straight to the table; from the first one out
+// of order on, the rest go into an LSM store (storage/lsm.h) with their line
+// numbers, and the table so far and the LSM are merged into the final table.
+// Duplicate and overlapping octants are rejected naming both lines.  The
+// table is committed only if all of it is good.
 #pragma once
 
 #include <cstdint>
@@ -22,7 +25,7 @@ struct ImportOptions {
 
 struct ImportResult {
   uint64_t octants = 0;
-  uint64_t runs_spilled = 0;
+  uint64_t runs_spilled = 0;  // LSM runs written (flushes and merges)
   uint64_t table_bytes = 0;
 };
 
