@@ -10,8 +10,8 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver extract DB [--algorithm sort|search] [--threads N] [--memory BYTES]\n"
-    "                         [--json]\n"
+    "usage: weaver extract DB [--algorithm sort|search] [--store btree|lsm] [--threads N]\n"
+    "                         [--memory BYTES] [--json]\n"
     "\n"
     "Extracts the mesh nodes of the balanced octree in DB's octant table into\n"
     "its node table (node key + kind: anchored, edge- or face-dangling; ids are\n"
@@ -23,6 +23,9 @@ constexpr char kUsage[] =
     "  --algorithm search  the conventional baseline: a node B-tree searched for\n"
     "                      every element vertex, holding up to 8 element codes\n"
     "                      per node; slower, same result\n"
+    "  --store btree|lsm   the node store of search: a B+tree (default, as in the\n"
+    "                      paper) or the LSM store (writes batched in a memtable\n"
+    "                      and sorted runs; every lookup may visit each run)\n"
     "  --threads N         worker threads for sort (default 1); the node table is\n"
     "                      the same for every N\n"
     "  --json              print the result as one JSON object\n"
@@ -33,7 +36,7 @@ constexpr char kUsage[] =
 
 int cmd_extract(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "threads"}, {"json"}, &args);
+  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "store", "threads"}, {"json"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("extract", "expected one DB", kUsage);
@@ -45,6 +48,17 @@ int cmd_extract(int argc, char** argv) {
       o.algorithm = ExtractOptions::Algorithm::kSearch;
     } else if (a != "sort") {
       st = Status::InvalidArgument("--algorithm must be sort or search");
+    }
+  }
+  if (st.ok() && args.values.count("store")) {
+    const std::string& s = args.values["store"];
+    if (s == "lsm") {
+      o.store = ExtractOptions::Store::kLsm;
+    } else if (s != "btree") {
+      st = Status::InvalidArgument("--store must be btree or lsm");
+    }
+    if (st.ok() && o.algorithm != ExtractOptions::Algorithm::kSearch) {
+      st = Status::InvalidArgument("--store applies to --algorithm search only");
     }
   }
   if (st.ok()) st = threads_option(args, 1, &o.threads);
@@ -66,12 +80,13 @@ int cmd_extract(int argc, char** argv) {
   const double secs = elapsed();
   if (args.flags.count("json")) {
     const bool search = o.algorithm == ExtractOptions::Algorithm::kSearch;
-    std::printf("{\"algorithm\": \"%s\", \"threads\": %d, \"memory_budget\": %llu, "
+    std::printf("{\"algorithm\": \"%s\", \"store\": \"%s\", \"threads\": %d, \"memory_budget\": %llu, "
                 "\"elements\": %llu, \"nodes\": %llu, \"anchored\": %llu, \"edge\": %llu, "
                 "\"face\": %llu, \"seconds\": %.6f, \"nodes_per_s\": %.1f, \"buckets\": %llu, "
                 "\"bucket_level\": %d, \"spilled\": %llu, \"node_table_bytes\": %llu, "
                 "\"search_tree_bytes\": %llu}\n",
-                search ? "search" : "sort", o.threads, (unsigned long long)o.memory_bytes,
+                search ? "search" : "sort",
+                o.store == ExtractOptions::Store::kLsm ? "lsm" : "btree", o.threads, (unsigned long long)o.memory_bytes,
                 (unsigned long long)r.elements, (unsigned long long)r.nodes,
                 (unsigned long long)r.anchored, (unsigned long long)r.edge,
                 (unsigned long long)r.face, secs, r.nodes / secs, (unsigned long long)r.buckets,
@@ -85,7 +100,8 @@ int cmd_extract(int argc, char** argv) {
               (unsigned long long)r.edge, (unsigned long long)r.face,
               (unsigned long long)r.elements, secs, r.nodes / secs);
   if (o.algorithm == ExtractOptions::Algorithm::kSearch) {
-    std::printf("node B-tree with element codes %.2f bytes/node, node table %.2f bytes/node\n",
+    std::printf("node %s with element codes %.2f bytes/node, node table %.2f bytes/node\n",
+                o.store == ExtractOptions::Store::kLsm ? "LSM store" : "B-tree",
                 double(r.search_tree_bytes) / r.nodes, double(r.node_table_bytes) / r.nodes);
   } else {
     std::printf("%llu buckets at level %d, %llu nodal pixels spilled (%llu through the spill "

@@ -17,6 +17,9 @@ struct ExtractOptions {
   // Both produce the same node table.
   enum class Algorithm { kSort, kSearch };
   Algorithm algorithm = Algorithm::kSort;
+  // The node store of kSearch: the B+tree, as in the paper, or the LSM.
+  enum class Store { kBTree, kLsm };
+  Store store = Store::kBTree;
   uint64_t memory_bytes = 256ull << 20;
   // Worker threads for the sort algorithm; the output is the same for any count.
   int threads = 1;

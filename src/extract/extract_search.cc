@@ -2,18 +2,21 @@
 // baseline users compare the bucket sort against:
 //   1. a node B-tree keyed by node key; for every element vertex, a lookup and
 //      an insert (or update) that records the element's code in the node's
-//      payload (up to 8 codes: storage about e + 9n);
+//      payload (up to 8 codes: storage about e + 9n).  Or, to see what a
+//      write-optimised store does to this baseline, an LSM store in its place;
 //   2. a pass over the node B-tree in key order that numbers the nodes and
 //      classifies each from the codes of the elements touching it (their
 //      directions, then NodeClassifier's aggregate hits for empty cells).
 #include "extract/extract_search.h"
 
 #include <cstring>
+#include <filesystem>
 
 #include "extract/leaf_reader.h"
 #include "extract/node_classifier.h"
 #include "schema/node.h"
 #include "schema/octant.h"
+#include "storage/lsm.h"
 
 namespace weaver {
 namespace {
@@ -28,7 +31,7 @@ int corner_index(const Octant& e, Coord n) {
   return (n.x > e.x ? 1 : 0) | (n.y > e.y ? 2 : 0) | (n.z > e.z ? 4 : 0);
 }
 
-Status record_vertices(BTree& octants, BTree& scratch, ExtractResult* result) {
+Status record_vertices(BTree& octants, Store& scratch, ExtractResult* result) {
   LeafReader c;
   WEAVER_RETURN_IF_ERROR(c.open(octants));
   std::byte rec[kPayload];
@@ -54,10 +57,11 @@ Status record_vertices(BTree& octants, BTree& scratch, ExtractResult* result) {
   return Status::Ok();
 }
 
-Status number_and_classify(BTree& octants, BTree& scratch, BTree& nodes, ExtractResult* result) {
+Status number_and_classify(BTree& octants, Store& scratch, BTree& nodes, ExtractResult* result) {
   NodeClassifier classifier(octants);
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(scratch.seek_cursor(0, &c));
+  std::unique_ptr<Cursor> cursor;
+  WEAVER_RETURN_IF_ERROR(scratch.seek(0, &cursor));
+  Cursor& c = *cursor;
   while (c.valid()) {
     const Coord n = morton_decode(c.key());
     const std::byte* rec = c.payload();
@@ -77,24 +81,55 @@ Status number_and_classify(BTree& octants, BTree& scratch, BTree& nodes, Extract
   return Status::Ok();
 }
 
-}  // namespace
-
-Status extract_by_search(BTree& octants, BTree& nodes, const std::string& scratch_path,
-                         uint64_t pool_bytes, ExtractResult* result) {
+TableOptions scratch_options() {
   TableOptions o;
   o.key_kind = KeyKind::kNode;
   std::string error;
   o.schema = *RecordSchema::parse(kScratchSchema, &error);
+  return o;
+}
+
+// Both stores end on disk before the numbering pass, as the paper's node
+// B-tree does: the B+tree committed, the LSM compacted (one run) and committed.
+Status build_and_number(BTree& octants, Store& scratch, BTree& nodes, ExtractResult* result) {
+  WEAVER_RETURN_IF_ERROR(record_vertices(octants, scratch, result));
+  if (auto* lsm = dynamic_cast<LsmTree*>(&scratch)) {
+    WEAVER_RETURN_IF_ERROR(lsm->compact());
+    WEAVER_RETURN_IF_ERROR(lsm->commit());
+    result->search_tree_bytes = lsm->file_bytes();
+  } else {
+    auto& tree = dynamic_cast<BTree&>(scratch);
+    WEAVER_RETURN_IF_ERROR(tree.commit());
+    result->search_tree_bytes = tree.file_bytes();
+  }
+  return number_and_classify(octants, scratch, nodes, result);
+}
+
+}  // namespace
+
+Status extract_by_search(BTree& octants, BTree& nodes, const std::string& scratch_path,
+                         uint64_t memory_bytes, bool lsm, ExtractResult* result) {
+  Status st;
+  if (lsm) {
+    LsmOptions o;
+    o.table = scratch_options();
+    o.memtable_bytes = memory_bytes / 2;
+    o.run_pool_bytes = std::max<uint64_t>(memory_bytes / 2 / 16, 1 << 16);
+    std::unique_ptr<LsmTree> scratch;
+    st = LsmTree::create(scratch_path + ".lsm", o, &scratch);
+    if (st.ok()) st = build_and_number(octants, *scratch, nodes, result);
+    scratch.reset();
+    std::error_code ec;
+    std::filesystem::remove_all(scratch_path + ".lsm", ec);
+    return st;
+  }
   std::unique_ptr<File> f;
-  WEAVER_RETURN_IF_ERROR(open_posix_file(scratch_path, OpenMode::kCreateTruncate, &f));
+  WEAVER_RETURN_IF_ERROR(open_posix_file(scratch_path + ".bt", OpenMode::kCreateTruncate, &f));
   std::unique_ptr<BTree> scratch;
-  WEAVER_RETURN_IF_ERROR(BTree::create(std::move(f), o, pool_bytes, &scratch));
-  Status st = record_vertices(octants, *scratch, result);
-  if (st.ok()) st = scratch->commit();  // the node B-tree on disk, as in the paper
-  if (st.ok()) result->search_tree_bytes = scratch->file_bytes();
-  if (st.ok()) st = number_and_classify(octants, *scratch, nodes, result);
+  st = BTree::create(std::move(f), scratch_options(), memory_bytes, &scratch);
+  if (st.ok()) st = build_and_number(octants, *scratch, nodes, result);
   scratch.reset();
-  std::remove(scratch_path.c_str());
+  std::remove((scratch_path + ".bt").c_str());
   return st;
 }
 

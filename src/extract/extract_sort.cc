@@ -112,8 +112,9 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
   Status st;
   if (options.algorithm == ExtractOptions::Algorithm::kSearch) {
     result->bucket_level = 0;
-    st = extract_by_search(*octants, *nodes, scratch + ".bt",
-                           std::max<uint64_t>(options.memory_bytes / 2, 1 << 20), result);
+    st = extract_by_search(*octants, *nodes, scratch,
+                           std::max<uint64_t>(options.memory_bytes / 2, 1 << 20),
+                           options.store == ExtractOptions::Store::kLsm, result);
   } else {
     const Bucketing b{result->bucket_level, 3 * (kMaxLevel - result->bucket_level)};
     SpillStore spills(scratch, std::max<uint64_t>(options.memory_bytes / 8, 1 << 12));
