@@ -231,6 +231,10 @@ TEST_F(CrashTest, EveryWriterLeavesTheOldOrTheNewState) {
           steps, kills);
   torture({"extract (search)", {"extract", "{db}", "--algorithm", "search", "--memory", "1M"}},
           {import_of(text_a_), balance}, steps, kills);
+  // The LSM flushes, merges, compacts and commits its run list inside.
+  torture({"extract (search, lsm)",
+           {"extract", "{db}", "--algorithm", "search", "--store", "lsm", "--memory", "1M"}},
+          {import_of(text_a_), balance}, steps, kills);
   std::printf("kill points: %d (old state after %d, new state after %d)\n", points_, old_states_,
               new_states_);
   EXPECT_GE(points_, static_cast<int>(testing::scaled(1000, 150)));
