@@ -84,8 +84,10 @@ int main(int argc, char** argv) {
     struct Variant {
       const char* algorithm;
       int threads;
+      const char* store;  // of search
     };
-    for (const Variant v : {Variant{"sort", 1}, Variant{"sort", 2}, Variant{"search", 1}}) {
+    for (const Variant v : {Variant{"sort", 1, "btree"}, Variant{"sort", 2, "btree"},
+                            Variant{"search", 1, "btree"}, Variant{"search", 1, "lsm"}}) {
       const char* algorithm = v.algorithm;
       const bool search = std::string(algorithm) == "search";
       const int runs = search ? search_repeat : repeat;
@@ -93,10 +95,11 @@ int main(int argc, char** argv) {
       std::map<std::string, std::string> last;
       for (int r = 0; r < runs; ++r) {
         uint64_t peak = 0;
-        const std::string out = run_program(
-            {WEAVER_BINARY, "extract", db, "--json", "--algorithm", algorithm, "--threads",
-             std::to_string(v.threads), "--memory", std::to_string(memory)},
-            &peak);
+        std::vector<std::string> args = {WEAVER_BINARY, "extract", db, "--json", "--algorithm",
+                                         algorithm, "--threads", std::to_string(v.threads),
+                                         "--memory", std::to_string(memory)};
+        if (search) args.insert(args.end(), {"--store", v.store});
+        const std::string out = run_program(args, &peak);
         if (out.empty()) {
           std::fprintf(stderr, "weaver extract failed on %s\n", m.name.c_str());
           return 1;
@@ -104,6 +107,7 @@ int main(int argc, char** argv) {
         auto res = parse_flat_json(out);
         Json j;
         j.add("bench", "extract").add("algorithm", algorithm).add("mesh", m.name);
+        j.add("store", search ? v.store : "-");
         const double nodes = std::stod(res["nodes"]);
         const double built = std::stod(res[search ? "search_tree_bytes" : "node_table_bytes"]);
         j.add("elements", static_cast<uint64_t>(std::stod(res["elements"])));
@@ -148,7 +152,7 @@ int main(int argc, char** argv) {
     std::filesystem::remove_all(db);
   }
   std::printf("\nmedians (Figure 12: T and rho per mesh and algorithm; Figure 13: storage built):\n");
-  print_table(table, {"mesh", "algorithm", "threads", "elements", "nodes", "dangling", "seconds",
+  print_table(table, {"mesh", "algorithm", "store", "threads", "elements", "nodes", "dangling", "seconds",
                       "nodes_per_s", "speedup_over_1_thread", "speedup_of_sort",
                       "built_bytes_per_node",
                       "storage_saved_by_sort", "peak_rss_bytes", "runs"});
