@@ -221,14 +221,17 @@ Status LsmTree::flush() {
 Status LsmTree::put(uint64_t key, const std::byte* payload, bool* replaced) {
   const std::byte* old = nullptr;
   bool dead = false;
+  const bool in_memtable = mem_.find(key, &old, &dead);
+  if (in_memtable && o_.on_shadow) {
+    WEAVER_RETURN_IF_ERROR(o_.on_shadow(key, payload, dead ? nullptr : old));
+  }
   if (replaced != nullptr) {
-    bool found = false;
-    WEAVER_RETURN_IF_ERROR(get(key, nullptr, &found));
+    bool found = !dead;
+    if (!in_memtable) WEAVER_RETURN_IF_ERROR(get(key, nullptr, &found));
     *replaced = found;
     if (!found) ++size_;
-  } else if (mem_.find(key, &old, &dead)) {
+  } else if (in_memtable) {
     if (dead) ++size_;  // a tombstone hid every older entry
-    if (o_.on_shadow) WEAVER_RETURN_IF_ERROR(o_.on_shadow(key, payload, dead ? nullptr : old));
   } else {
     ++size_;  // an upper bound unless nothing older can hold the key
     if (!runs_.empty()) size_exact_ = false;

@@ -247,5 +247,34 @@ TEST(LsmPersistence, AppendKeepsKeyOrderAcrossRuns) {
   EXPECT_TRUE(t->size_exact());
 }
 
+// The shadow hook sees every entry that hides an older one of its key: over
+// the memtable at once, over a run when a merge or a read meets the two.
+TEST(LsmShadowHook, ReportsEachHiddenEntryAndCanFailTheOperation) {
+  testing::TempDir dir;
+  LsmOptions o = small_options(1 << 20);
+  std::vector<std::pair<uint64_t, uint64_t>> seen;  // key, older version
+  o.on_shadow = [&](uint64_t key, const std::byte* newer, const std::byte* older) {
+    uint64_t v = 0;
+    if (older != nullptr) std::memcpy(&v, older + 8, 4);
+    seen.emplace_back(key, v);
+    if (newer != nullptr) std::memcpy(&v, newer + 8, 4);
+    return v == 99 ? Status::InvalidArgument("no version 99") : Status::Ok();
+  };
+  std::unique_ptr<LsmTree> t;
+  ASSERT_OK(LsmTree::create(dir.file("lsm"), o, &t));
+  ASSERT_OK(t->put(5, payload_for(5, 1).data(), nullptr));
+  ASSERT_OK(t->put(5, payload_for(5, 2).data(), nullptr));  // over the memtable
+  ASSERT_EQ(seen.size(), 1u);
+  EXPECT_EQ(seen[0], std::make_pair(uint64_t{5}, uint64_t{1}));
+  ASSERT_OK(t->commit());                                    // 5 moves to a run
+  ASSERT_OK(t->put(5, payload_for(5, 3).data(), nullptr));  // no memtable entry to hide
+  ASSERT_EQ(seen.size(), 1u);
+  ASSERT_OK(t->compact());  // the merge meets version 3 over version 2
+  ASSERT_EQ(seen.size(), 2u);
+  EXPECT_EQ(seen[1], std::make_pair(uint64_t{5}, uint64_t{2}));
+  ASSERT_OK(t->put(5, payload_for(5, 4).data(), nullptr));
+  EXPECT_TRUE(t->put(5, payload_for(5, 99).data(), nullptr).is_invalid_argument());
+}
+
 }  // namespace
 }  // namespace weaver
