@@ -16,6 +16,7 @@
 #include <bit>
 #include <cassert>
 #include <cstdint>
+#include <string>
 
 #include "schema/morton.h"
 
@@ -208,5 +209,11 @@ constexpr uint64_t octant_subtree_key_end(const Octant& o) {
 
 // The node key of a node coordinate: its Morton code.  Accepts: node.
 constexpr uint64_t node_key(Coord p) { return morton_encode(p); }
+
+// "(x y z level)" in ticks, for messages.
+inline std::string describe_octant(const Octant& o) {
+  return "(" + std::to_string(o.x) + " " + std::to_string(o.y) + " " + std::to_string(o.z) + " " +
+         std::to_string(o.level) + ")";
+}
 
 }  // namespace weaver

@@ -53,6 +53,7 @@ LsmTree::LsmTree(std::string dir, const LsmOptions& o)
     : dir_(std::move(dir)), o_(o), payload_(o.table.schema.record_size()),
       mem_(payload_, o.memtable_bytes) {
   scratch_.resize(payload_ + 1);
+  floor_candidate_.resize(payload_ + 1);
 }
 
 LsmTree::~LsmTree() = default;
@@ -102,6 +103,7 @@ Status LsmTree::open(const std::string& dir, const LsmOptions& options,
     t->payload_ = t->o_.table.schema.record_size();
     t->mem_ = Memtable(t->payload_, options.memtable_bytes);
     t->scratch_.resize(t->payload_ + 1);
+    t->floor_candidate_.resize(t->payload_ + 1);
   }
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {  // runs of no commit
@@ -300,7 +302,7 @@ Status LsmTree::get(uint64_t key, std::byte* payload_out, bool* found) {
 // it, so the winner holds the newest entry of its key.
 Status LsmTree::live_floor(uint64_t key, uint64_t* key_out, bool* found, size_t* skip) {
   mem_.sort();
-  std::vector<std::byte> candidate(scratch_.size());
+  std::vector<std::byte>& candidate = floor_candidate_;  // kept: floor is a hot path
   while (true) {
     *found = false;
     bool live = false;

@@ -139,6 +139,7 @@ class LsmTree final : public Store {
   uint64_t max_key_ = 0;  // the largest key ever written (for append)
   uint64_t runs_written_ = 0, records_written_ = 0;
   std::vector<std::byte> scratch_;  // a run record: flag byte + payload
+  std::vector<std::byte> floor_candidate_;  // live_floor's other record buffer
 };
 
 }  // namespace weaver

@@ -43,8 +43,6 @@ class Memtable {
   size_t tombstones() const { return tombstones_; }
   // Bytes held, counting the hash and the room sorting needs.
   uint64_t memory_bytes() const;
-  // A write after the last key ever added in order keeps "appended in order".
-  bool in_key_order() const { return in_order_; }
   void clear();
 
  private:

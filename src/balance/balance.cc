@@ -22,11 +22,6 @@ namespace {
 
 constexpr size_t kBatch = 4096;
 
-std::string describe(const Octant& o) {
-  return "(" + std::to_string(o.x) + " " + std::to_string(o.y) + " " + std::to_string(o.z) + " " +
-         std::to_string(o.level) + ")";
-}
-
 // The 18 face and edge neighbour directions.
 std::vector<std::array<int, 3>> face_edge_directions() {
   std::vector<std::array<int, 3>> dirs;
@@ -366,7 +361,7 @@ Status find_violation(BTree& leaves, KeyTagSource& required, BalanceResult* r) {
         Octant fine;
         WEAVER_RETURN_IF_ERROR(touching_leaf(leaves, coarse, octant_from_key(inside[0].tag), &fine));
         r->balanced = false;
-        r->violation = "octants " + describe(coarse) + " and " + describe(fine) +
+        r->violation = "octants " + describe_octant(coarse) + " and " + describe_octant(fine) +
                        " are face or edge neighbours more than one level apart";
         *stop = true;
         return Status::Ok();

@@ -1,6 +1,6 @@
 #include "extract/leaf_reader.h"
 
-#include "extract/node_classifier.h"
+#include "schema/octant.h"
 
 namespace weaver {
 

@@ -25,11 +25,6 @@ bool direction_pixel(Coord n, int d, Coord* p) {
 
 }  // namespace
 
-std::string describe_octant(const Octant& o) {
-  return "(" + std::to_string(o.x) + " " + std::to_string(o.y) + " " + std::to_string(o.z) + " " +
-         std::to_string(o.level) + ")";
-}
-
 // The leaf holding pixel p, if any: the active bucket's leaves first, then
 // the octant table (pixels in earlier buckets, and leaves larger than a bucket).
 Status NodeClassifier::leaf_at(Coord p, Octant* leaf, bool* found) {

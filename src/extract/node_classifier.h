@@ -29,7 +29,6 @@ namespace weaver {
 inline uint8_t corner_direction_bit(int k) { return static_cast<uint8_t>(1u << (~k & 7)); }
 
 // "(x y z level)", for messages.
-std::string describe_octant(const Octant& o);
 
 class NodeClassifier {
  public:

@@ -33,11 +33,6 @@ uint64_t lsm_bytes(uint64_t budget) {
   return budget > 2 * reserved ? budget - reserved : budget / 2;
 }
 
-std::string describe(const Octant& o) {
-  return "(" + std::to_string(o.x) + " " + std::to_string(o.y) + " " + std::to_string(o.z) + " " +
-         std::to_string(o.level) + ")";
-}
-
 // In key order (preorder) two octants overlap iff they are equal or one is
 // the other's ancestor, and every key between an ancestor and its descendant
 // lies in the ancestor's subtree: if any pair overlaps, an adjacent pair does.
@@ -48,8 +43,8 @@ Status check_neighbours(const std::string& path, const KeyTag& prev, const KeyTa
   if (prev.key == cur.key) return Status::InvalidArgument(at + "duplicate of the octant" + other);
   if (octant_is_ancestor(a, b)) {
     const bool later_is_b = cur.tag > prev.tag;
-    return Status::InvalidArgument(at + "octant " + describe(later_is_b ? b : a) +
-                                   " overlaps octant " + describe(later_is_b ? a : b) + other);
+    return Status::InvalidArgument(at + "octant " + describe_octant(later_is_b ? b : a) +
+                                   " overlaps octant " + describe_octant(later_is_b ? a : b) + other);
   }
   return Status::Ok();
 }

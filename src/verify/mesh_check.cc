@@ -4,7 +4,7 @@
 #include <array>
 #include <string>
 
-#include "extract/node_classifier.h"
+#include "schema/octant.h"
 #include "schema/node.h"
 #include "schema/octant.h"
 
