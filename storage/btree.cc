@@ -20,6 +20,17 @@ Status validate_options(const TableOptions& o, const std::string& name) {
                                    std::to_string(o.schema.record_size()) +
                                    " bytes do not fit two to a page of " + std::to_string(p));
   }
+  if (o.packed) {
+    page::PackedLeafBuilder one(page::PackedShape::of(p, o.key_kind, o.schema));
+    const std::vector<std::byte> widest(o.schema.record_size(), std::byte{0xff});
+    const std::vector<std::byte> zero(o.schema.record_size());
+    if (!one.add(0, zero.data()) || !one.add(UINT64_MAX, widest.data())) {
+      return Status::InvalidArgument(name + ": records of " +
+                                     std::to_string(o.schema.record_size()) +
+                                     " bytes do not fit two to a packed page of " +
+                                     std::to_string(p));
+    }
+  }
   const size_t var = o.schema.to_text().size() + o.metadata.size();
   if (page::kHdrVarStart + var > page::kFileHeaderBytes) {
     return Status::InvalidArgument(name + ": schema and metadata (" + std::to_string(var) +
@@ -36,7 +47,13 @@ BTree::BTree(std::unique_ptr<File> file, const TableOptions& options, uint64_t p
       payload_(options.schema.record_size()),
       leaf_cap_(page::leaf_capacity(options.page_size, payload_)),
       internal_cap_(page::internal_capacity(options.page_size)),
-      pool_(std::make_unique<BufferPool>(file_.get(), options.page_size, pool_bytes)) {}
+      pool_(std::make_unique<BufferPool>(file_.get(), options.page_size, pool_bytes)),
+      shape_(page::PackedShape::of(options.page_size, options.key_kind, options.schema)) {
+  if (options.packed) {
+    tail_ = std::make_unique<page::PackedLeafBuilder>(shape_);
+    edit_ = std::make_unique<page::PackedLeafBuilder>(shape_);
+  }
+}
 
 BTree::~BTree() { drop_spine(); }
 
@@ -78,6 +95,11 @@ Status BTree::open(std::unique_ptr<File> file, uint64_t pool_bytes, std::unique_
   TableOptions o;
   o.page_size = page::load32(hdr + page::kHdrPageSize);
   o.key_kind = static_cast<KeyKind>(hdr[page::kHdrKeyKind]);
+  const auto leaf_format = static_cast<uint8_t>(hdr[page::kHdrLeafFormat]);
+  if (leaf_format > 1) {
+    return Status::Corruption(name + ": unknown leaf format " + std::to_string(leaf_format));
+  }
+  o.packed = leaf_format == 1;
   const uint32_t schema_len = page::load32(hdr + page::kHdrSchemaLen);
   const uint32_t meta_len = page::load32(hdr + page::kHdrMetaLen);
   if (uint64_t{schema_len} + meta_len + page::kHdrVarStart > page::kFileHeaderBytes) {
@@ -122,6 +144,7 @@ Status BTree::write_header() {
   page::store32(hdr + page::kHdrPageSize, options_.page_size);
   page::store32(hdr + page::kHdrPayloadSize, payload_);
   hdr[page::kHdrKeyKind] = static_cast<std::byte>(options_.key_kind);
+  hdr[page::kHdrLeafFormat] = static_cast<std::byte>(options_.packed ? 1 : 0);
   page::store32(hdr + page::kHdrHeight, height_);
   page::store32(hdr + page::kHdrRoot, root_);
   page::store32(hdr + page::kHdrPageCount, page_count_);
@@ -138,6 +161,7 @@ Status BTree::write_header() {
 }
 
 Status BTree::commit() {
+  seal_tail();
   WEAVER_RETURN_IF_ERROR(pool_->flush());
   WEAVER_RETURN_IF_ERROR(write_header());
   return file_->sync();

@@ -13,10 +13,13 @@
 
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "storage/btree_cursor.h"
 #include "storage/buffer_pool.h"
 #include "storage/file.h"
+#include "storage/packed_leaf.h"
 #include "storage/page_format.h"
 #include "storage/store.h"
 
@@ -88,6 +91,17 @@ class BTree final : public Store {
   Status new_page(page::PageType type, bool at_end, PageRef* ref);
   Status free_page(uint32_t page_no);
   page::LeafView leaf(const PageRef& r) const { return {r.data(), leaf_cap_, payload_}; }
+  page::PageType leaf_type() const {
+    return options_.packed ? page::PageType::kPackedLeaf : page::PageType::kLeaf;
+  }
+
+  // Leaf access for both formats (packed leaves are decoded on the fly).
+  Status open_packed(const PageRef& lf, page::PackedLeaf* reader);
+  Status leaf_bound(const PageRef& lf, uint64_t key, bool upper, uint32_t* pos);
+  Status leaf_key(const PageRef& lf, uint32_t i, uint64_t* key);
+  Status leaf_payload(const PageRef& lf, uint32_t i, std::byte* out);
+  // All entries of a leaf, keys and payloads (packed row-wise).
+  Status leaf_entries(const PageRef& lf, std::vector<uint64_t>* keys, std::vector<std::byte>* vals);
   page::InternalView internal(const PageRef& r) const { return {r.data(), internal_cap_}; }
 
   // Where a key is, or would be inserted: the pinned leaf, the path to it,
@@ -112,7 +126,8 @@ class BTree final : public Store {
   Status insert_new_root_leaf(uint64_t key, const std::byte* payload);
   Status split_leaf(PageRef& leaf, uint32_t pos, uint64_t key, const std::byte* payload,
                     bool rightmost, Split* split);
-  Status insert_into_parents(Path& path, Split split, bool rightmost);
+  // `above` is added to the counts of the path's entries above the split level.
+  Status insert_into_parents(Path& path, Split split, bool rightmost, int64_t above = 1);
   Status split_internal(PageRef& node, uint32_t pos, const Split& entry, bool rightmost,
                         Split* split);
   Status grow_root(const Split& split, bool at_end, PageRef* root);
@@ -121,6 +136,20 @@ class BTree final : public Store {
   Status load_spine();
   void drop_spine();
   Status append_new_leaf(uint64_t key, const std::byte* payload);
+
+  // packed leaves: the spine's leaf is kept decoded in tail_ while appends
+  // run, and packed into its page before anything reads or writes it back.
+  void seal_tail();
+  Status load_tail();
+  Status init_leaf(PageRef& lf, uint64_t key, const std::byte* payload);
+  Status packed_rewrite(LeafSlot& s, std::vector<uint64_t>& keys, std::vector<std::byte>& vals,
+                        int64_t delta);
+  std::vector<std::pair<uint32_t, uint32_t>> pack_pieces(const std::vector<uint64_t>& keys,
+                                                         const std::vector<std::byte>& vals,
+                                                         bool halve);
+  Status packed_write(std::byte* pg, const std::vector<uint64_t>& keys,
+                      const std::vector<std::byte>& vals, uint32_t from, uint32_t to);
+  Status packed_edit(uint64_t key, const std::byte* payload, bool erase, bool* replaced);
 
   // erase
   Status remove_empty_child(Path& path, int level);
@@ -146,6 +175,12 @@ class BTree final : public Store {
   PageRef spine_[kMaxHeight];  // spine_[0] root ... spine_[height_-1] rightmost leaf
   bool max_known_ = false;
   uint64_t max_key_ = 0;
+
+  page::PackedShape shape_;
+  std::unique_ptr<page::PackedLeafBuilder> tail_;  // packed only
+  std::unique_ptr<page::PackedLeafBuilder> edit_;  // packed only: re-packs edited leaves
+  bool tail_dirty_ = false;  // tail_ holds entries its page does not
+  page::PackedLeaf reader_;  // for point lookups
 };
 
 }  // namespace weaver

@@ -1,5 +1,7 @@
 // BTree::check_invariants: a full walk that verifies the invariants listed in
 // page_format.h and names the first page that breaks one.
+#include <vector>
+
 #include "storage/btree.h"
 
 namespace weaver {
@@ -7,6 +9,7 @@ namespace weaver {
 using page::PageType;
 
 Status BTree::check_invariants() {
+  seal_tail();
   if (height_ == 0) {
     if (record_count_ != 0) return Status::Corruption(file_->name() + ": empty tree has records");
     return Status::Ok();
@@ -26,25 +29,28 @@ Status BTree::check_subtree(uint32_t page_no, int level, uint64_t lo, uint64_t h
   const bool is_leaf = static_cast<uint32_t>(level) + 1 == height_;
   PageRef p;
   WEAVER_RETURN_IF_ERROR(
-      fetch_typed(page_no, is_leaf ? PageType::kLeaf : PageType::kInternal, &p));
+      fetch_typed(page_no, is_leaf ? leaf_type() : PageType::kInternal, &p));
   const uint32_t n = page::count(p.data());
-  const uint32_t cap = is_leaf ? leaf_cap_ : internal_cap_;
+  const uint32_t leaf_cap = options_.packed ? page::kPackedMaxEntries : leaf_cap_;
+  const uint32_t cap = is_leaf ? leaf_cap : internal_cap_;
   if (n == 0 || n > cap) {
     return Status::Corruption(where(page_no) + ": entry count " + std::to_string(n) +
                               " outside [1, " + std::to_string(cap) + "]");
   }
   if (is_leaf) {
-    const page::LeafView v = leaf(p);
+    std::vector<uint64_t> keys;
+    std::vector<std::byte> vals;
+    WEAVER_RETURN_IF_ERROR(leaf_entries(p, &keys, &vals));
     for (uint32_t i = 0; i < n; ++i) {
-      const uint64_t k = v.key(i);
-      if (k < lo || k > hi || (i > 0 && k <= v.key(i - 1))) {
+      const uint64_t k = keys[i];
+      if (k < lo || k > hi || (i > 0 && k <= keys[i - 1])) {
         return Status::Corruption(where(page_no) + ": key " + std::to_string(k) + " at slot " +
                                   std::to_string(i) + " is out of order");
       }
     }
     *count = n;
-    *first_key = v.key(0);
-    *last_key = v.key(n - 1);
+    *first_key = keys[0];
+    *last_key = keys[n - 1];
     return Status::Ok();
   }
   const page::InternalView v = internal(p);

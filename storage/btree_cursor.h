@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "storage/buffer_pool.h"
 #include "storage/page_format.h"
@@ -31,12 +32,8 @@ class BTreeCursor final : public Cursor {
   BTreeCursor& operator=(BTreeCursor&&) = default;
 
   bool valid() const override { return valid_; }
-  uint64_t key() const override {
-    return page::load64(leaf_.data() + page::kPageHeaderBytes + 8 * size_t{i_});
-  }
-  const std::byte* payload() const override {
-    return leaf_.data() + values_offset_ + size_t{payload_} * i_;
-  }
+  uint64_t key() const override { return keys_[i_]; }
+  const std::byte* payload() const override { return vals_ + size_t{payload_} * i_; }
   Status next() override {
     if (++i_ < n_) return Status::Ok();
     return next_leaf();
@@ -47,6 +44,7 @@ class BTreeCursor final : public Cursor {
   Status next_leaf();
   // Positions on `leaf` at index i, moving on to later leaves if i is past its end.
   Status settle();
+  Status load_leaf();
 
   BTree* tree_ = nullptr;
   PageRef leaf_;
@@ -54,7 +52,10 @@ class BTreeCursor final : public Cursor {
   uint32_t i_ = 0;
   uint32_t n_ = 0;
   uint32_t payload_ = 0;
-  uint32_t values_offset_ = 0;
+  const uint64_t* keys_ = nullptr;  // the leaf's keys and payloads (see load_leaf)
+  const std::byte* vals_ = nullptr;
+  std::vector<uint64_t> key_buf_;  // a packed leaf, decoded
+  std::vector<std::byte> val_buf_;
   bool valid_ = false;
 };
 

@@ -32,14 +32,26 @@ bool BTree::path_is_rightmost(const Path& path) {
   return true;
 }
 
-Status BTree::insert_new_root_leaf(uint64_t key, const std::byte* payload) {
-  PageRef r;
-  WEAVER_RETURN_IF_ERROR(new_page(PageType::kLeaf, true, &r));
-  const page::LeafView v = leaf(r);
+// Fills a fresh leaf with one entry.
+Status BTree::init_leaf(PageRef& lf, uint64_t key, const std::byte* payload) {
+  lf.mark_dirty();
+  if (options_.packed) {
+    tail_->clear();
+    if (!tail_->add(key, payload)) return Status::Internal("packed leaf refused its first entry");
+    tail_->encode(lf.data());
+    return Status::Ok();
+  }
+  const page::LeafView v = leaf(lf);
   v.set_key(0, key);
   if (payload_ > 0) std::memcpy(v.value(0), payload, payload_);
-  page::set_count(r.data(), 1);
-  r.mark_dirty();
+  page::set_count(lf.data(), 1);
+  return Status::Ok();
+}
+
+Status BTree::insert_new_root_leaf(uint64_t key, const std::byte* payload) {
+  PageRef r;
+  WEAVER_RETURN_IF_ERROR(new_page(leaf_type(), true, &r));
+  WEAVER_RETURN_IF_ERROR(init_leaf(r, key, payload));
   root_ = r.page_no();
   height_ = 1;
   record_count_ = 1;
@@ -49,6 +61,7 @@ Status BTree::insert_new_root_leaf(uint64_t key, const std::byte* payload) {
 }
 
 Status BTree::put(uint64_t key, const std::byte* payload, bool* replaced) {
+  if (options_.packed) return packed_edit(key, payload, false, replaced);
   if (replaced != nullptr) *replaced = false;
   drop_spine();
   if (height_ == 0) return insert_new_root_leaf(key, payload);
@@ -123,7 +136,7 @@ Status BTree::split_leaf(PageRef& lf, uint32_t pos, uint64_t key, const std::byt
   return Status::Ok();
 }
 
-Status BTree::insert_into_parents(Path& path, Split split, bool rightmost) {
+Status BTree::insert_into_parents(Path& path, Split split, bool rightmost, int64_t above) {
   for (int d = path.depth - 1; d >= 0; --d) {
     PageRef p;
     WEAVER_RETURN_IF_ERROR(fetch_typed(path.e[d].page_no, PageType::kInternal, &p));
@@ -140,7 +153,7 @@ Status BTree::insert_into_parents(Path& path, Split split, bool rightmost) {
       page::set_count(p.data(), n + 1);
       p.mark_dirty();
       p.reset();
-      return add_to_path_counts(path, d, 1);
+      return add_to_path_counts(path, d, above);
     }
     Split up;
     WEAVER_RETURN_IF_ERROR(split_internal(p, pos, split, rightmost, &up));
@@ -195,7 +208,11 @@ Status BTree::grow_root(const Split& split, bool at_end, PageRef* root) {
   {
     PageRef old;
     WEAVER_RETURN_IF_ERROR(fetch(root_, &old));
-    old_first_key = page::load64(old.data() + page::kPageHeaderBytes);
+    if (height_ == 1) {
+      WEAVER_RETURN_IF_ERROR(leaf_key(old, 0, &old_first_key));
+    } else {
+      old_first_key = page::load64(old.data() + page::kPageHeaderBytes);
+    }
   }
   WEAVER_RETURN_IF_ERROR(new_page(PageType::kInternal, at_end, root));
   const page::InternalView v = internal(*root);
@@ -213,7 +230,16 @@ Status BTree::grow_root(const Split& split, bool at_end, PageRef* root) {
 // appends run, so an append touches no page table and does no search.
 // ---------------------------------------------------------------------------
 
+void BTree::seal_tail() {
+  if (!tail_dirty_) return;
+  PageRef& lf = spine_[height_ - 1];
+  tail_->encode(lf.data());
+  lf.mark_dirty();
+  tail_dirty_ = false;
+}
+
 void BTree::drop_spine() {
+  seal_tail();
   for (PageRef& r : spine_) r.reset();
   spine_valid_ = false;
 }
@@ -224,12 +250,13 @@ Status BTree::load_spine() {
   for (uint32_t level = 0; level < height_; ++level) {
     const bool is_leaf = level + 1 == height_;
     WEAVER_RETURN_IF_ERROR(
-        fetch_typed(pg, is_leaf ? PageType::kLeaf : PageType::kInternal, &spine_[level]));
+        fetch_typed(pg, is_leaf ? leaf_type() : PageType::kInternal, &spine_[level]));
     const uint32_t n = page::count(spine_[level].data());
     if (n == 0) return Status::Corruption(where(pg) + ": empty page on the right spine");
     if (!is_leaf) pg = internal(spine_[level]).child(n - 1);
-    if (is_leaf) max_key_ = leaf(spine_[level]).key(n - 1);
+    if (is_leaf) WEAVER_RETURN_IF_ERROR(leaf_key(spine_[level], n - 1, &max_key_));
   }
+  if (options_.packed) WEAVER_RETURN_IF_ERROR(load_tail());
   max_known_ = true;
   spine_valid_ = true;
   return Status::Ok();
@@ -255,6 +282,10 @@ Status BTree::append_batch(const uint64_t* keys, const std::byte* payloads, size
     }
   }
   WEAVER_RETURN_IF_ERROR(append(keys[0], payloads));  // checks keys[0] against the tree
+  if (options_.packed) {
+    for (size_t i = 1; i < n; ++i) WEAVER_RETURN_IF_ERROR(append(keys[i], payloads + i * payload_));
+    return Status::Ok();
+  }
   if (!spine_valid_) WEAVER_RETURN_IF_ERROR(load_spine());
   size_t i = 1;
   while (i < n) {
@@ -290,7 +321,15 @@ Status BTree::append(uint64_t key, const std::byte* payload) {
   }
   PageRef& lf = spine_[height_ - 1];
   const uint32_t n = page::count(lf.data());
-  if (n < leaf_cap_) {
+  if (options_.packed) {
+    if (tail_->add(key, payload)) {
+      tail_dirty_ = true;
+      bump_spine_counts(static_cast<int>(height_) - 1);
+    } else {
+      seal_tail();
+      WEAVER_RETURN_IF_ERROR(append_new_leaf(key, payload));
+    }
+  } else if (n < leaf_cap_) {
     const page::LeafView v = leaf(lf);
     v.set_key(n, key);
     if (payload_ > 0) std::memcpy(v.value(n), payload, payload_);
@@ -310,12 +349,8 @@ Status BTree::append(uint64_t key, const std::byte* payload) {
 // the spine is full.  Nothing is split.
 Status BTree::append_new_leaf(uint64_t key, const std::byte* payload) {
   PageRef fresh;
-  WEAVER_RETURN_IF_ERROR(new_page(PageType::kLeaf, true, &fresh));
-  const page::LeafView v = leaf(fresh);
-  v.set_key(0, key);
-  if (payload_ > 0) std::memcpy(v.value(0), payload, payload_);
-  page::set_count(fresh.data(), 1);
-  fresh.mark_dirty();
+  WEAVER_RETURN_IF_ERROR(new_page(leaf_type(), true, &fresh));
+  WEAVER_RETURN_IF_ERROR(init_leaf(fresh, key, payload));
   uint32_t entry_page = fresh.page_no();
   spine_[height_ - 1] = std::move(fresh);
   for (int d = static_cast<int>(height_) - 2; d >= 0; --d) {

@@ -1,5 +1,6 @@
 // B+tree lookups: descent, get, floor, rank, select, cursors.
 #include <cstring>
+#include <vector>
 
 #include "storage/btree.h"
 #include "storage/page_search.h"
@@ -25,17 +26,86 @@ Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref, uint64_t* ran
     path->e[path->depth++] = {pg, idx};
     pg = v.child(idx);
   }
-  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kLeaf, leaf_ref));
-  page::prefetch_keys(leaf_ref->data() + page::kPageHeaderBytes, page::count(leaf_ref->data()));
+  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, leaf_type(), leaf_ref));
+  if (!options_.packed) {
+    page::prefetch_keys(leaf_ref->data() + page::kPageHeaderBytes, page::count(leaf_ref->data()));
+  }
   return Status::Ok();
 }
 
 Status BTree::find(uint64_t key, LeafSlot* s, uint64_t* rank_before) {
   WEAVER_RETURN_IF_ERROR(descend(key, &s->path, &s->leaf, rank_before));
-  const page::LeafView v = leaf(s->leaf);
   s->n = page::count(s->leaf.data());
-  s->pos = page::lower_bound(v.key_at(0), s->n, key);
-  s->exact = s->pos < s->n && v.key(s->pos) == key;
+  WEAVER_RETURN_IF_ERROR(leaf_bound(s->leaf, key, false, &s->pos));
+  uint64_t at = 0;
+  if (s->pos < s->n) WEAVER_RETURN_IF_ERROR(leaf_key(s->leaf, s->pos, &at));
+  s->exact = s->pos < s->n && at == key;
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------
+// Leaf access for both formats.
+// ---------------------------------------------------------------------------
+
+Status BTree::open_packed(const PageRef& lf, page::PackedLeaf* reader) {
+  if (!reader->open(lf.data(), shape_)) {
+    return Status::Corruption(where(lf.page_no()) + ": packed leaf layout does not fit the page");
+  }
+  return Status::Ok();
+}
+
+Status BTree::leaf_bound(const PageRef& lf, uint64_t key, bool upper, uint32_t* pos) {
+  if (!options_.packed) {
+    const std::byte* keys = lf.data() + page::kPageHeaderBytes;
+    const uint32_t n = page::count(lf.data());
+    *pos = upper ? page::upper_bound(keys, n, key) : page::lower_bound(keys, n, key);
+    return Status::Ok();
+  }
+  WEAVER_RETURN_IF_ERROR(open_packed(lf, &reader_));
+  if (!reader_.bound(key, upper, pos)) {
+    return Status::Corruption(where(lf.page_no()) + ": packed key block out of bounds");
+  }
+  return Status::Ok();
+}
+
+Status BTree::leaf_key(const PageRef& lf, uint32_t i, uint64_t* key) {
+  if (!options_.packed) {
+    *key = leaf(lf).key(i);
+    return Status::Ok();
+  }
+  WEAVER_RETURN_IF_ERROR(open_packed(lf, &reader_));
+  if (!reader_.key(i, key)) {
+    return Status::Corruption(where(lf.page_no()) + ": packed key block out of bounds");
+  }
+  return Status::Ok();
+}
+
+Status BTree::leaf_payload(const PageRef& lf, uint32_t i, std::byte* out) {
+  if (payload_ == 0) return Status::Ok();
+  if (!options_.packed) {
+    std::memcpy(out, leaf(lf).value(i), payload_);
+    return Status::Ok();
+  }
+  WEAVER_RETURN_IF_ERROR(open_packed(lf, &reader_));
+  reader_.payload(i, out);
+  return Status::Ok();
+}
+
+Status BTree::leaf_entries(const PageRef& lf, std::vector<uint64_t>* keys,
+                           std::vector<std::byte>* vals) {
+  const uint32_t n = page::count(lf.data());
+  keys->resize(n);
+  vals->resize(size_t{n} * payload_);
+  if (!options_.packed) {
+    const page::LeafView v = leaf(lf);
+    if (n > 0) std::memcpy(keys->data(), v.key_at(0), 8 * size_t{n});
+    if (n > 0 && payload_ > 0) std::memcpy(vals->data(), v.value(0), vals->size());
+    return Status::Ok();
+  }
+  WEAVER_RETURN_IF_ERROR(open_packed(lf, &reader_));
+  if (!reader_.decode(keys->data(), vals->data())) {
+    return Status::Corruption(where(lf.page_no()) + ": packed key block out of bounds");
+  }
   return Status::Ok();
 }
 
@@ -54,7 +124,7 @@ Status BTree::descend_edge(uint32_t page_no, int level, bool rightmost, Path* pa
     path->e[path->depth++] = {pg, idx};
     pg = internal(r).child(idx);
   }
-  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kLeaf, leaf_ref));
+  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, leaf_type(), leaf_ref));
   if (page::count(leaf_ref->data()) == 0 && height_ > 1) {
     return Status::Corruption(where(pg) + ": empty leaf page");
   }
@@ -63,22 +133,25 @@ Status BTree::descend_edge(uint32_t page_no, int level, bool rightmost, Path* pa
 
 Status BTree::get(uint64_t key, std::byte* payload_out, bool* found) {
   *found = false;
+  seal_tail();
   if (height_ == 0) return Status::Ok();
   LeafSlot s;
   WEAVER_RETURN_IF_ERROR(find(key, &s));
   *found = s.exact;
-  if (s.exact && payload_out != nullptr) std::memcpy(payload_out, leaf(s.leaf).value(s.pos), payload_);
+  if (s.exact && payload_out != nullptr) return leaf_payload(s.leaf, s.pos, payload_out);
   return Status::Ok();
 }
 
 Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, bool* found) {
   *found = false;
+  seal_tail();
   if (height_ == 0) return Status::Ok();
   Path path;
   PageRef lf;
   WEAVER_RETURN_IF_ERROR(descend(key, &path, &lf));
   uint32_t n = page::count(lf.data());
-  uint32_t ub = page::upper_bound(leaf(lf).key_at(0), n, key);
+  uint32_t ub = 0;
+  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, true, &ub));
   if (ub == 0) {
     // Every key here is > key (a separator went stale when its key was
     // erased): the floor is the last record of the preceding leaf.
@@ -96,10 +169,9 @@ Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, boo
     n = page::count(lf.data());
     ub = n;
   }
-  const page::LeafView v = leaf(lf);
   *found = true;
-  *key_out = v.key(ub - 1);
-  if (payload_out != nullptr) std::memcpy(payload_out, v.value(ub - 1), payload_);
+  WEAVER_RETURN_IF_ERROR(leaf_key(lf, ub - 1, key_out));
+  if (payload_out != nullptr) return leaf_payload(lf, ub - 1, payload_out);
   return Status::Ok();
 }
 
@@ -111,6 +183,7 @@ Status BTree::rank(uint64_t key, uint64_t* out) {
 Status BTree::rank_exact(uint64_t key, uint64_t* rank, bool* present) {
   *rank = 0;
   *present = false;
+  seal_tail();
   if (height_ == 0) return Status::Ok();
   uint64_t before = 0;
   LeafSlot s;
@@ -121,6 +194,7 @@ Status BTree::rank_exact(uint64_t key, uint64_t* rank, bool* present) {
 }
 
 Status BTree::select(uint64_t index, uint64_t* key_out, std::byte* payload_out) {
+  seal_tail();
   if (index >= record_count_) {
     return Status::InvalidArgument(file_->name() + ": position " + std::to_string(index) +
                                    " is past the last record (" + std::to_string(record_count_) +
@@ -137,29 +211,49 @@ Status BTree::select(uint64_t index, uint64_t* key_out, std::byte* payload_out) 
     pg = v.child(i);
   }
   PageRef lf;
-  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, PageType::kLeaf, &lf));
+  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, leaf_type(), &lf));
   if (index >= page::count(lf.data())) {
     return Status::Corruption(where(pg) + ": subtree counts disagree with leaf contents");
   }
-  const page::LeafView v = leaf(lf);
-  *key_out = v.key(static_cast<uint32_t>(index));
-  if (payload_out != nullptr) {
-    std::memcpy(payload_out, v.value(static_cast<uint32_t>(index)), payload_);
-  }
+  const auto i = static_cast<uint32_t>(index);
+  WEAVER_RETURN_IF_ERROR(leaf_key(lf, i, key_out));
+  if (payload_out != nullptr) return leaf_payload(lf, i, payload_out);
   return Status::Ok();
 }
 
 Status BTree::seek_cursor(uint64_t key, BTreeCursor* c) {
+  seal_tail();
   c->tree_ = this;
   c->valid_ = false;
   c->leaf_.reset();
   c->payload_ = payload_;
-  c->values_offset_ = static_cast<uint32_t>(page::kPageHeaderBytes + 8 * size_t{leaf_cap_});
   if (height_ == 0) return Status::Ok();
   WEAVER_RETURN_IF_ERROR(descend(key, &c->path_, &c->leaf_));
-  c->n_ = page::count(c->leaf_.data());
-  c->i_ = page::lower_bound(leaf(c->leaf_).key_at(0), c->n_, key);
+  WEAVER_RETURN_IF_ERROR(c->load_leaf());
+  c->i_ = page::lower_bound(reinterpret_cast<const std::byte*>(c->keys_), c->n_, key);
   return c->settle();
+}
+
+// Points keys_ and vals_ at the pinned leaf's entries: into the page for a
+// plain leaf, into the cursor's buffers for a packed one, decoded whole.
+Status BTreeCursor::load_leaf() {
+  BTree& t = *tree_;
+  n_ = page::count(leaf_.data());
+  if (!t.options_.packed) {
+    keys_ = reinterpret_cast<const uint64_t*>(leaf_.data() + page::kPageHeaderBytes);
+    vals_ = leaf_.data() + page::kPageHeaderBytes + 8 * size_t{t.leaf_cap_};
+    return Status::Ok();
+  }
+  key_buf_.resize(n_);
+  val_buf_.resize(size_t{n_} * payload_);
+  page::PackedLeaf reader;
+  WEAVER_RETURN_IF_ERROR(t.open_packed(leaf_, &reader));
+  if (!reader.decode(key_buf_.data(), val_buf_.data())) {
+    return Status::Corruption(t.where(leaf_.page_no()) + ": packed key block out of bounds");
+  }
+  keys_ = key_buf_.data();
+  vals_ = val_buf_.data();
+  return Status::Ok();
 }
 
 Status BTree::seek(uint64_t key, std::unique_ptr<Cursor>* out) {
@@ -189,8 +283,8 @@ Status BTreeCursor::next_leaf() {
     const uint32_t child = t.internal(p).child(++path_.e[d].index);
     p.reset();
     WEAVER_RETURN_IF_ERROR(t.descend_edge(child, d + 1, false, &path_, &leaf_));
+    WEAVER_RETURN_IF_ERROR(load_leaf());
     i_ = 0;
-    n_ = page::count(leaf_.data());
     valid_ = true;
     return Status::Ok();
   }

@@ -16,7 +16,8 @@
 //   16  4    page size P
 //   20  4    payload size (bytes per record after the key)
 //   24  1    key kind (0 = node key / plain u64, 1 = packed octant key)
-//   25  3    reserved, zero
+//   25  1    leaf format (0 = plain, below; 1 = packed: storage/packed_leaf.h)
+//   26  2    reserved, zero
 //   28  4    tree height (0 = empty, 1 = the root is a leaf)
 //   32  4    root page
 //   36  4    page count (pages in use or free, excluding the header)
@@ -31,7 +32,7 @@
 // Every page starts with a 16-byte header:
 //   0   4    checksum32 of bytes [4, P)
 //   4   4    page number (catches misdirected reads and writes)
-//   8   1    page type: 1 leaf, 2 internal, 3 free
+//   8   1    page type: 1 leaf, 2 internal, 3 free, 4 packed leaf
 //   9   1    format version
 //   10  2    entry count n
 //   12  4    free page: next free page; otherwise zero
@@ -70,11 +71,11 @@ inline constexpr size_t kPageHeaderBytes = 16;    // do not change: on disk
 inline constexpr uint32_t kMinPageSize = 128;     // keeps >= 5 entries per internal page
 inline constexpr uint32_t kMaxPageSize = 65536;   // entry counts are u16
 
-enum class PageType : uint8_t { kLeaf = 1, kInternal = 2, kFree = 3 };  // on disk
+enum class PageType : uint8_t { kLeaf = 1, kInternal = 2, kFree = 3, kPackedLeaf = 4 };  // on disk
 
 // File header field offsets.
 inline constexpr size_t kHdrChecksum = 0, kHdrVersion = 4, kHdrMagic = 8, kHdrPageSize = 16,
-                        kHdrPayloadSize = 20, kHdrKeyKind = 24, kHdrHeight = 28, kHdrRoot = 32,
+                        kHdrPayloadSize = 20, kHdrKeyKind = 24, kHdrLeafFormat = 25, kHdrHeight = 28, kHdrRoot = 32,
                         kHdrPageCount = 36, kHdrFreeHead = 40, kHdrRecordCount = 48,
                         kHdrSchemaLen = 56, kHdrMetaLen = 60, kHdrVarStart = 64;
 

@@ -21,6 +21,10 @@ struct TableOptions {
   KeyKind key_kind = KeyKind::kOctant;
   RecordSchema schema;   // the payload layout; record_size() is the payload size
   std::string metadata;  // opaque bytes kept with the table (units, origin, ...)
+  // Packed leaves (storage/packed_leaf.h): keys delta-coded, payload fields
+  // column-wise.  Built by sorted append at about the plain speed; a random
+  // put or erase re-packs the leaf it touches.
+  bool packed = false;
 };
 
 // A forward iterator over (key, payload) in key order.  Not valid across a

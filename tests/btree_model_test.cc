@@ -20,6 +20,8 @@ struct Params {
   uint32_t payload;
   uint64_t seed;
   uint64_t pool_bytes;
+  bool packed = false;
+  KeyKind kind = KeyKind::kOctant;  // the keys are arbitrary: valid octant keys or not
 };
 
 class BTreeModel : public ::testing::TestWithParam<Params> {
@@ -35,6 +37,8 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
     path_ = dir_.file("t.bt");
     TableOptions o;
     o.page_size = p.page_size;
+    o.packed = p.packed;
+    o.key_kind = p.kind;
     std::string err;
     std::string text;
     if (p.payload > 0) text = "v:u8";
@@ -213,9 +217,14 @@ INSTANTIATE_TEST_SUITE_P(
     PagesPayloadsSeeds, BTreeModel,
     ::testing::Values(Params{128, 0, 1, 1 << 20}, Params{128, 16, 2, 16 << 10},
                       Params{256, 8, 3, 1 << 20}, Params{512, 3, 4, 64 << 10},
-                      Params{4096, 16, 5, 8 << 20}, Params{128, 24, 6, 1 << 20}),
+                      Params{4096, 16, 5, 8 << 20}, Params{128, 24, 6, 1 << 20},
+                      // Packed leaves: tiny pages split and re-pack all the time.
+                      Params{128, 0, 7, 1 << 20, true}, Params{256, 3, 8, 16 << 10, true},
+                      Params{512, 8, 9, 1 << 20, true, KeyKind::kNode},
+                      Params{1024, 16, 10, 16 << 10, true}),
     [](const ::testing::TestParamInfo<Params>& info) {
-      return "page" + std::to_string(info.param.page_size) + "_payload" +
+      return std::string(info.param.packed ? "packed_" : "") + "page" +
+             std::to_string(info.param.page_size) + "_payload" +
              std::to_string(info.param.payload) + "_seed" + std::to_string(info.param.seed);
     });
 

@@ -1,0 +1,297 @@
+// Packed leaves: the encoder and the reader (format: storage/packed_leaf.h).
+#include "storage/packed_leaf.h"
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+
+#include "schema/octant.h"
+#include "storage/page_format.h"
+#include "storage/page_search.h"
+
+namespace weaver::page {
+namespace {
+
+constexpr size_t kPgBlocks = 16, kPgFields = 18, kFieldsStart = 20, kFieldBytes = 9;
+constexpr uint8_t kModeSuccessor = 0x80, kShiftMask = 0x3f;
+
+uint64_t blocks_for(uint64_t n) { return (n + kPackedBlock - 1) / kPackedBlock; }
+uint64_t bits_to_bytes(uint64_t bits) { return (bits + 7) / 8; }
+uint64_t block_bytes(uint32_t count, uint32_t width) {
+  return count <= 1 ? 0 : bits_to_bytes(uint64_t{count - 1} * width);
+}
+
+// The predicted next key of mode 1.  Defined for every u64 (damaged pages
+// decode to garbage, never to undefined behaviour).
+uint64_t successor(uint64_t key) { return octant_key_subtree_end(key); }
+
+uint64_t load_field(const std::byte* p, uint32_t size) {
+  uint64_t v = 0;
+  std::memcpy(&v, p, size);
+  return v;
+}
+
+// Bits [pos, pos + w) of the stream at `base`, w <= 64.  Reads up to 9 bytes
+// from byte pos/8: the page's slack keeps that inside the page.
+inline uint64_t read_bits(const std::byte* base, uint64_t pos, uint32_t w) {
+  const std::byte* p = base + (pos >> 3);
+  const uint32_t s = pos & 7;
+  uint64_t v = load64(p) >> s;
+  if (s + w > 64) v |= static_cast<uint64_t>(p[8]) << (64 - s);
+  return w >= 64 ? v : v & ((uint64_t{1} << w) - 1);
+}
+
+// ORs the low w bits of v in at bit pos (the stream is zeroed beforehand).
+inline void write_bits(std::byte* base, uint64_t pos, uint32_t w, uint64_t v) {
+  if (w == 0) return;
+  if (w < 64) v &= (uint64_t{1} << w) - 1;
+  std::byte* p = base + (pos >> 3);
+  const uint32_t s = pos & 7;
+  store64(p, load64(p) | (v << s));
+  if (s + w > 64) p[8] |= static_cast<std::byte>(v >> (64 - s));
+}
+
+}  // namespace
+
+PackedShape PackedShape::of(uint32_t page_size, KeyKind kind, const RecordSchema& schema) {
+  PackedShape s;
+  s.page_size = page_size;
+  s.key_kind = kind;
+  for (const Field& f : schema.fields()) s.field_sizes.push_back(field_type_size(f.type));
+  s.payload = schema.record_size();
+  return s;
+}
+
+// ---------------------------------------------------------------------------
+// Builder.
+// ---------------------------------------------------------------------------
+
+PackedLeafBuilder::PackedLeafBuilder(const PackedShape& shape)
+    : shape_(shape), cols_(shape.field_sizes.size()), scratch_cols_(shape.field_sizes.size()) {}
+
+void PackedLeafBuilder::clear() {
+  keys_.clear();
+  vals_.clear();
+  closed_.clear();
+  key_bytes_closed_ = 0;
+  open_ = OpenBlock{};
+  std::fill(cols_.begin(), cols_.end(), Column{});
+}
+
+PackedLeafBuilder::OpenBlock PackedLeafBuilder::extend(OpenBlock b, uint64_t key, KeyKind kind) {
+  if (b.count == 0) {
+    b.base = b.prev = key;
+    b.count = 1;
+    return b;
+  }
+  const uint64_t d = key - b.prev;
+  b.shift = std::min(b.shift, std::countr_zero(d));
+  b.max_delta = std::max(b.max_delta, d);
+  if (kind == KeyKind::kOctant && b.successor_ok) {
+    const uint64_t e = successor(b.prev);
+    if (e == UINT64_MAX || key < e) {
+      b.successor_ok = false;
+    } else {
+      b.max_residual = std::max(b.max_residual, key - e);
+    }
+  }
+  b.prev = key;
+  ++b.count;
+  return b;
+}
+
+PackedLeafBuilder::BlockCode PackedLeafBuilder::choose(const OpenBlock& b, KeyKind kind) {
+  if (b.count <= 1) return {0, 0};
+  const BlockCode delta{static_cast<uint8_t>(std::bit_width((b.max_delta >> b.shift) - 1)),
+                        static_cast<uint8_t>(b.shift)};
+  if (kind != KeyKind::kOctant || !b.successor_ok) return delta;
+  const auto w = static_cast<uint8_t>(std::bit_width(b.max_residual));
+  return w < delta.width ? BlockCode{w, kModeSuccessor} : delta;
+}
+
+uint64_t PackedLeafBuilder::bytes_for(size_t n, uint64_t key_bytes_closed, const OpenBlock& open,
+                                      const std::vector<Column>& cols) const {
+  uint64_t bytes = kFieldsStart + kFieldBytes * cols.size() + 12 * blocks_for(n) +
+                   key_bytes_closed + block_bytes(open.count, choose(open, shape_.key_kind).width) +
+                   kPackedSlack;
+  for (const Column& c : cols) bytes += bits_to_bytes(n * uint64_t(std::bit_width(c.max - c.min)));
+  return bytes;
+}
+
+bool PackedLeafBuilder::add(uint64_t key, const std::byte* payload) {
+  const size_t n = keys_.size() + 1;
+  if (n > kPackedMaxEntries) return false;
+  const bool closes = open_.count == kPackedBlock;
+  const uint64_t closed_bytes =
+      key_bytes_closed_ +
+      (closes ? block_bytes(open_.count, choose(open_, shape_.key_kind).width) : 0);
+  const OpenBlock open = extend(closes ? OpenBlock{} : open_, key, shape_.key_kind);
+  const std::byte* field = payload;
+  for (size_t f = 0; f < cols_.size(); ++f) {
+    const uint64_t v = load_field(field, shape_.field_sizes[f]);
+    scratch_cols_[f] = {std::min(cols_[f].min, v), std::max(cols_[f].max, v)};
+    field += shape_.field_sizes[f];
+  }
+  if (bytes_for(n, closed_bytes, open, scratch_cols_) > shape_.page_size) return false;
+  if (closes) closed_.push_back(choose(open_, shape_.key_kind));
+  key_bytes_closed_ = closed_bytes;
+  open_ = open;
+  cols_.swap(scratch_cols_);
+  keys_.push_back(key);
+  vals_.insert(vals_.end(), payload, payload + shape_.payload);
+  return true;
+}
+
+void PackedLeafBuilder::encode(std::byte* pg) const {
+  const auto n = static_cast<uint32_t>(keys_.size());
+  const auto m = static_cast<uint32_t>(blocks_for(n));
+  const size_t nf = cols_.size();
+  std::memset(pg + kPageHeaderBytes, 0, shape_.page_size - kPageHeaderBytes);
+  pg[kPgType] = static_cast<std::byte>(PageType::kPackedLeaf);
+  set_count(pg, n);
+  store16(pg + kPgBlocks, static_cast<uint16_t>(m));
+  pg[kPgFields] = static_cast<std::byte>(nf);
+  std::byte* bases = pg + kFieldsStart + kFieldBytes * nf;
+  std::byte* blocks = bases + 8 * size_t{m};
+  std::byte* key_bits = blocks + 4 * size_t{m};
+  uint64_t off = 0;  // bytes into the key bits
+  for (uint32_t j = 0; j < m; ++j) {
+    const uint32_t first = j * kPackedBlock, cnt = std::min(kPackedBlock, n - first);
+    const BlockCode code = j < closed_.size() ? closed_[j] : choose(open_, shape_.key_kind);
+    store64(bases + 8 * size_t{j}, keys_[first]);
+    store16(blocks + 4 * size_t{j}, static_cast<uint16_t>(off));
+    blocks[4 * size_t{j} + 2] = static_cast<std::byte>(code.width);
+    blocks[4 * size_t{j} + 3] = static_cast<std::byte>(code.mode);
+    const int shift = code.mode & kShiftMask;
+    for (uint32_t i = 1; i < cnt; ++i) {
+      const uint64_t prev = keys_[first + i - 1], k = keys_[first + i];
+      const uint64_t r =
+          (code.mode & kModeSuccessor) ? k - successor(prev) : ((k - prev) >> shift) - 1;
+      write_bits(key_bits + off, uint64_t{i - 1} * code.width, code.width, r);
+    }
+    off += block_bytes(cnt, code.width);
+  }
+  std::byte* col = key_bits + off;
+  size_t field_off = 0;
+  for (size_t f = 0; f < nf; ++f) {
+    const Column& c = cols_[f];
+    const auto w = static_cast<uint32_t>(std::bit_width(c.max - c.min));
+    store64(pg + kFieldsStart + kFieldBytes * f, c.min);
+    pg[kFieldsStart + kFieldBytes * f + 8] = static_cast<std::byte>(w);
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint64_t v = load_field(payload(i) + field_off, shape_.field_sizes[f]);
+      write_bits(col, uint64_t{i} * w, w, v - c.min);
+    }
+    col += bits_to_bytes(uint64_t{n} * w);
+    field_off += shape_.field_sizes[f];
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Reader.
+// ---------------------------------------------------------------------------
+
+bool PackedLeaf::open(const std::byte* pg, const PackedShape& shape) {
+  pg_ = pg;
+  shape_ = &shape;
+  n_ = count(pg);
+  m_ = load16(pg + kPgBlocks);
+  const size_t nf = shape.field_sizes.size();
+  if (static_cast<size_t>(pg[kPgFields]) != nf || m_ != blocks_for(n_)) return false;
+  end_ = pg + shape.page_size - kPackedSlack;
+  fields_ = pg + kFieldsStart;
+  bases_ = fields_ + kFieldBytes * nf;
+  blocks_ = bases_ + 8 * size_t{m_};
+  key_bits_ = blocks_ + 4 * size_t{m_};
+  if (key_bits_ > end_) return false;
+  const std::byte* col = key_bits_;
+  if (m_ > 0) {
+    const std::byte* last = blocks_ + 4 * size_t{m_ - 1};
+    const uint32_t cnt = n_ - (m_ - 1) * kPackedBlock;
+    col += load16(last) + block_bytes(cnt, static_cast<uint32_t>(last[2]));
+  }
+  cols_.resize(nf);
+  for (size_t f = 0; f < nf; ++f) {
+    const auto w = static_cast<uint32_t>(fields_[kFieldBytes * f + 8]);
+    if (w > 8 * shape.field_sizes[f]) return false;
+    cols_[f] = col;
+    col += bits_to_bytes(uint64_t{n_} * w);
+  }
+  return col <= end_;
+}
+
+bool PackedLeaf::block_keys(uint32_t j, uint64_t* out, uint32_t* cnt_out) const {
+  const uint32_t cnt = std::min(kPackedBlock, n_ - j * kPackedBlock);
+  const std::byte* b = blocks_ + 4 * size_t{j};
+  const uint32_t w = static_cast<uint32_t>(b[2]);
+  const auto mode = static_cast<uint8_t>(b[3]);
+  const std::byte* bits = key_bits_ + load16(b);
+  if (w > 64 || bits + block_bytes(cnt, w) > end_) return false;
+  uint64_t k = load64(bases_ + 8 * size_t{j});
+  out[0] = k;
+  if (mode & kModeSuccessor) {
+    for (uint32_t i = 1; i < cnt; ++i) out[i] = k = successor(k) + read_bits(bits, (i - 1) * w, w);
+  } else {
+    const int shift = mode & kShiftMask;
+    for (uint32_t i = 1; i < cnt; ++i) {
+      out[i] = k = k + ((read_bits(bits, (i - 1) * w, w) + 1) << shift);
+    }
+  }
+  *cnt_out = cnt;
+  return true;
+}
+
+bool PackedLeaf::bound(uint64_t k, bool upper, uint32_t* pos) const {
+  const uint32_t c = upper ? upper_bound(bases_, m_, k) : lower_bound(bases_, m_, k);
+  if (c == 0) {
+    *pos = 0;
+    return true;
+  }
+  uint64_t keys[kPackedBlock];
+  uint32_t cnt = 0;
+  if (!block_keys(c - 1, keys, &cnt)) return false;
+  uint32_t i = 1;  // keys[0] is the block base: < k (<= k when upper)
+  while (i < cnt && (upper ? keys[i] <= k : keys[i] < k)) ++i;
+  *pos = (c - 1) * kPackedBlock + i;
+  return true;
+}
+
+bool PackedLeaf::key(uint32_t i, uint64_t* out) const {
+  uint64_t keys[kPackedBlock];
+  uint32_t cnt = 0;
+  if (!block_keys(i / kPackedBlock, keys, &cnt)) return false;
+  *out = keys[i % kPackedBlock];
+  return true;
+}
+
+void PackedLeaf::payload(uint32_t i, std::byte* out) const {
+  for (size_t f = 0; f < cols_.size(); ++f) {
+    const uint32_t w = static_cast<uint32_t>(fields_[kFieldBytes * f + 8]);
+    const uint64_t v = load64(fields_ + kFieldBytes * f) + read_bits(cols_[f], uint64_t{i} * w, w);
+    std::memcpy(out, &v, shape_->field_sizes[f]);
+    out += shape_->field_sizes[f];
+  }
+}
+
+bool PackedLeaf::decode(uint64_t* keys, std::byte* vals) const {
+  uint32_t cnt = 0;
+  for (uint32_t j = 0; j < m_; ++j) {
+    if (!block_keys(j, keys + size_t{j} * kPackedBlock, &cnt)) return false;
+  }
+  const uint32_t stride = shape_->payload;
+  size_t field_off = 0;
+  for (size_t f = 0; f < cols_.size(); ++f) {
+    const uint32_t w = static_cast<uint32_t>(fields_[kFieldBytes * f + 8]);
+    const uint64_t min = load64(fields_ + kFieldBytes * f);
+    const uint32_t size = shape_->field_sizes[f];
+    std::byte* out = vals + field_off;
+    for (uint32_t i = 0; i < n_; ++i, out += stride) {
+      const uint64_t v = min + read_bits(cols_[f], uint64_t{i} * w, w);
+      std::memcpy(out, &v, size);
+    }
+    field_off += size;
+  }
+  return true;
+}
+
+}  // namespace weaver::page

@@ -1,0 +1,140 @@
+// Packed (compressed) B+tree leaves: keys delta-coded in blocks with a base
+// key per block kept for binary search, payload fields stored column-wise,
+// each with a frame of reference.  A table is packed or plain as a whole
+// (file header byte 25); internal pages are the same in both.
+//
+// Packed leaf page (page type 4), all integers little-endian:
+//
+//   0        16    20         20+9F          20+9F+8m       20+9F+12m
+//   +--------+-----+----------+--------------+--------------+-----------+--------------+---------+
+//   | header | m F | field[F] | base[m] u64  | block[m] u32 | key bits  | column bits  | >= 16   |
+//   +--------+-----+----------+--------------+--------------+-----------+--------------+ slack --+
+//
+//   header    the common 16-byte page header; its count is n, the entries.
+//   m (u16)   blocks: entries [64j, 64j+64) form block j, so m = ceil(n/64).
+//   F (u8), reserved (u8)   the schema's field count.
+//   field[f]  frame of reference of field f: min u64, width u8 (bits).
+//             Entry i's field f is min + bits[i*width, (i+1)*width) of the
+//             field's column, read as the field's raw little-endian bytes.
+//   base[j]   the full key of block j's first entry (what lookups search).
+//   block[j]  byte offset (u16, from the start of the key bits) | width u8 |
+//             mode u8 (bit 7: octant successor model; bits 0-5: shift).
+//             Entries 1..63 of the block are (cnt-1) residuals of `width`
+//             bits each, from that byte offset:
+//               mode 0 (delta):     key[i] = key[i-1] + ((r + 1) << shift)
+//               mode 1 (successor): key[i] = subtree_end(key[i-1]) + r
+//             In a linear octree the next leaf starts where the previous
+//             one's subtree ends, so mode 1 leaves only the level slot (< 28,
+//             5 bits); node keys of a mesh are near-dense after dropping the
+//             block's common trailing zeros, so mode 0 leaves a few bits.
+//   columns   one bit column per field, each starting on a byte boundary,
+//             right after the last block's key bits.
+//   slack     the encoder leaves >= 16 bytes unused at the end, so readers
+//             may load 64 bits at any bit offset inside the data.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "schema/record_schema.h"
+#include "storage/store.h"
+
+namespace weaver::page {
+
+inline constexpr uint32_t kPackedBlock = 64;      // entries per block; do not change: on disk
+inline constexpr uint32_t kPackedSlack = 16;      // unused tail bytes; do not change: on disk
+inline constexpr uint32_t kPackedMaxEntries = 65535;  // the page header's count is a u16
+
+// What a packed page needs to know of its table.
+struct PackedShape {
+  uint32_t page_size = 0;
+  KeyKind key_kind = KeyKind::kNode;
+  std::vector<uint32_t> field_sizes;  // bytes of each payload field, in record order
+  uint32_t payload = 0;               // sum of field_sizes
+
+  static PackedShape of(uint32_t page_size, KeyKind kind, const RecordSchema& schema);
+};
+
+// Builds one packed leaf entry by entry, knowing at every step whether the
+// next entry still fits the page.
+class PackedLeafBuilder {
+ public:
+  explicit PackedLeafBuilder(const PackedShape& shape);
+
+  // Adds (key, payload) if it fits; false (and no change) if it does not.
+  // REQUIRES: key greater than every key added since clear().
+  bool add(uint64_t key, const std::byte* payload);
+  // Writes the page body and the header's type and count (checksum and page
+  // number are the buffer pool's).  REQUIRES: size() >= 1.
+  void encode(std::byte* page) const;
+  void clear();
+
+  uint32_t size() const { return static_cast<uint32_t>(keys_.size()); }
+  uint64_t key(uint32_t i) const { return keys_[i]; }
+  const std::byte* payload(uint32_t i) const { return vals_.data() + size_t{i} * shape_.payload; }
+  uint64_t encoded_bytes() const { return bytes_for(keys_.size(), key_bytes_closed_, open_, cols_); }
+
+ private:
+  struct OpenBlock {  // the residual widths each mode needs for the last block
+    uint32_t count = 0;
+    uint64_t base = 0, prev = 0;
+    int shift = 63;            // mode 0: common trailing zeros of the deltas
+    uint64_t max_delta = 0;    // mode 0
+    bool successor_ok = true;  // mode 1: every key at or past its predecessor's subtree end
+    uint64_t max_residual = 0;  // mode 1
+  };
+  struct Column {
+    uint64_t min = UINT64_MAX, max = 0;
+  };
+  struct BlockCode {
+    uint8_t width, mode;
+  };
+
+  static OpenBlock extend(OpenBlock b, uint64_t key, KeyKind kind);
+  static BlockCode choose(const OpenBlock& b, KeyKind kind);
+  uint64_t bytes_for(size_t n, uint64_t key_bytes_closed, const OpenBlock& open,
+                     const std::vector<Column>& cols) const;
+
+  PackedShape shape_;
+  std::vector<uint64_t> keys_;
+  std::vector<std::byte> vals_;
+  std::vector<BlockCode> closed_;  // codes of the full blocks
+  uint64_t key_bytes_closed_ = 0;  // key bits of the full blocks, each rounded up to a byte
+  OpenBlock open_;
+  std::vector<Column> cols_;
+  std::vector<Column> scratch_cols_;
+};
+
+// Read access to a packed leaf in a page.  Every accessor checks the offsets
+// it follows against the page, so a damaged page reads as corrupt, never out
+// of bounds.
+class PackedLeaf {
+ public:
+  // False if the page's layout fields do not fit the page.
+  bool open(const std::byte* page, const PackedShape& shape);
+
+  uint32_t size() const { return n_; }
+  // Decodes the keys of entries [64j, 64j+cnt) into out (up to 64); false if damaged.
+  bool block_keys(uint32_t j, uint64_t* out, uint32_t* cnt) const;
+  // The first i with key(i) >= k (or > k when `upper`), or size().
+  bool bound(uint64_t k, bool upper, uint32_t* pos) const;
+  bool key(uint32_t i, uint64_t* out) const;
+  // Writes entry i's payload (shape.payload bytes).
+  void payload(uint32_t i, std::byte* out) const;
+  // Decodes everything: keys into keys[0..n), payloads packed row-wise.
+  bool decode(uint64_t* keys, std::byte* vals) const;
+
+ private:
+  const std::byte* pg_ = nullptr;
+  const PackedShape* shape_ = nullptr;
+  uint32_t n_ = 0, m_ = 0;
+  const std::byte* fields_ = nullptr;
+  const std::byte* bases_ = nullptr;
+  const std::byte* blocks_ = nullptr;
+  const std::byte* key_bits_ = nullptr;
+  const std::byte* end_ = nullptr;  // the first byte the data may not reach
+  std::vector<const std::byte*> cols_;
+};
+
+}  // namespace weaver::page
