@@ -13,7 +13,8 @@ constexpr char kUsage[] =
     "Replaces the octant table of DB by its minimal face+edge 2:1 balanced\n"
     "refinement: every leaf is kept or split, and nothing is split unless the\n"
     "2:1 condition forces it.  Out of core; split children take their material\n"
-    "from the model that built the table, or from their parent.\n"
+    "from the model that built the table, or from their parent.  The new table\n"
+    "keeps the old one's leaf page format (packed or plain).\n"
     "  --check          only verify; name the first violation (exit status 1 if\n"
     "                   the octree is not balanced)\n"
     "  --memory BYTES   memory budget (default 256M)\n";

@@ -12,7 +12,7 @@ namespace {
 constexpr char kUsage[] =
     "usage: weaver construct DB --model NAME [--grid FILE] [--freq F] [--ppw N]\n"
     "                           [--vs-min V] [--domain LX,LY,LZ] [--min-level L]\n"
-    "                           [--max-level L] [--memory BYTES]\n"
+    "                           [--max-level L] [--memory BYTES] [--plain]\n"
     "\n"
     "Builds the octant table of DB from a velocity model: every leaf satisfies\n"
     "edge <= Vs_min / (F * N), Vs_min being the least Vs of the model over 27\n"
@@ -26,7 +26,9 @@ constexpr char kUsage[] =
     "  --ppw N            points per wavelength (default 10)\n"
     "  --vs-min V         Vs floor in the rule, m/s (default none)\n"
     "  --domain LX,LY,LZ  metres (default 100000,100000,37500)\n"
-    "  --min-level L, --max-level L   bounds on leaf levels (default 0, 20)\n";
+    "  --min-level L, --max-level L   bounds on leaf levels (default 0, 20)\n"
+    "  --plain            write plain leaf pages (default: packed, where keys are\n"
+    "                     delta-coded and payload fields stored column-wise)\n";
 
 }  // namespace
 
@@ -44,6 +46,7 @@ Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
     return Status::Ok();
   };
   if (!args.values.count("model")) return Status::InvalidArgument("--model NAME is required");
+  o->packed = !args.flags.count("plain");
   o->model = args.values.at("model");
   if (args.values.count("grid")) o->grid_file = args.values.at("grid");
   WEAVER_RETURN_IF_ERROR(number("freq", &o->freq));
@@ -76,7 +79,7 @@ int cmd_construct(int argc, char** argv) {
   Status st = parse_args(argc, argv, 2,
                          {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level",
                           "max-level", "memory"},
-                         {}, &args);
+                         {"plain"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("construct", "expected one DB", kUsage);

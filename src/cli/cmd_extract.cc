@@ -11,7 +11,7 @@ namespace {
 
 constexpr char kUsage[] =
     "usage: weaver extract DB [--algorithm sort|search] [--store btree|lsm] [--threads N]\n"
-    "                         [--memory BYTES] [--json]\n"
+    "                         [--memory BYTES] [--plain] [--json]\n"
     "\n"
     "Extracts the mesh nodes of the balanced octree in DB's octant table into\n"
     "its node table (node key + kind: anchored, edge- or face-dangling; ids are\n"
@@ -28,6 +28,8 @@ constexpr char kUsage[] =
     "                      and sorted runs; every lookup may visit each run)\n"
     "  --threads N         worker threads for sort (default 1); the node table is\n"
     "                      the same for every N\n"
+    "  --plain             write the node table with plain leaf pages (default:\n"
+    "                      packed, about 0.7 bytes per node)\n"
     "  --json              print the result as one JSON object\n"
     "  --memory BYTES  memory budget, e.g. 256M (default 256M); it sets the size\n"
     "                  of the high-level buckets\n";
@@ -36,11 +38,13 @@ constexpr char kUsage[] =
 
 int cmd_extract(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "store", "threads"}, {"json"}, &args);
+  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "store", "threads"}, {"json", "plain"},
+                         &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("extract", "expected one DB", kUsage);
   ExtractOptions o;
+  o.packed = !args.flags.count("plain");
   st = memory_option(args, &o.memory_bytes);
   if (st.ok() && args.values.count("algorithm")) {
     const std::string& a = args.values["algorithm"];

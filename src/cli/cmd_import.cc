@@ -11,7 +11,7 @@ namespace {
 
 constexpr char kUsage[] =
     "usage: weaver import DB --octants FILE [--memory BYTES] [--tick METRES]\n"
-    "                        [--origin X,Y,Z]\n"
+    "                        [--origin X,Y,Z] [--plain]\n"
     "\n"
     "Loads octant text (one leaf per line: 'x y z level' in ticks, any order;\n"
     "blank lines and '#' comments ignored) into the octant table of database\n"
@@ -24,7 +24,9 @@ constexpr char kUsage[] =
     "                  (runs spilled in the database directory) and are merged\n"
     "                  in at the end\n"
     "  --tick METRES   size of one tick in metres (default 1)\n"
-    "  --origin X,Y,Z  position of tick (0,0,0) in metres (default 0,0,0)\n";
+    "  --origin X,Y,Z  position of tick (0,0,0) in metres (default 0,0,0)\n"
+    "  --plain         write plain leaf pages (default: packed, where keys are\n"
+    "                  delta-coded and payload fields stored column-wise)\n";
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -34,12 +36,13 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 int cmd_import(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"octants", "memory", "tick", "origin"}, {}, &args);
+  Status st = parse_args(argc, argv, 2, {"octants", "memory", "tick", "origin"}, {"plain"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("import", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("import", "expected one DB", kUsage);
   if (!args.values.count("octants")) return usage_error("import", "--octants FILE is required", kUsage);
   ImportOptions o;
+  o.packed = !args.flags.count("plain");
   st = memory_option(args, &o.memory_bytes);
   if (st.ok() && args.values.count("tick")) {
     st = parse_double(args.values["tick"], "--tick", &o.units.tick_m);

@@ -15,14 +15,15 @@ namespace {
 constexpr char kUsage[] =
     "usage: weaver mesh DB --model NAME --freq F [--ppw N] [--vs-min V] [--domain LX,LY,LZ]\n"
     "                      [--min-level L] [--max-level L] [--grid FILE] [--threads N]\n"
-    "                      [--memory BYTES]\n"
+    "                      [--memory BYTES] [--plain]\n"
     "\n"
     "The whole pipeline: construct the octree from the model, 2:1 balance it, extract\n"
     "the mesh.  Prints a line per stage (count, rate, time, peak memory), then the\n"
     "mesh summary (elements, nodes, dangling nodes, as in the paper's Figure 11) and\n"
     "its quality: elements per level, smallest and largest edge, and the fewest\n"
     "points per wavelength at any element.  Options as for 'weaver construct';\n"
-    "--threads is for the extract stage (default 2).\n";
+    "--threads is for the extract stage (default 2); --plain writes plain leaf\n"
+    "pages in every table (default: packed).\n";
 
 // Peak resident memory since the last reset_peak(), from the kernel's high
 // water mark (Linux); 0 where unavailable.
@@ -56,7 +57,7 @@ int cmd_mesh(int argc, char** argv) {
   Status st = parse_args(argc, argv, 2,
                          {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level",
                           "max-level", "memory", "threads"},
-                         {}, &args);
+                         {"plain"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("mesh", "expected one DB", kUsage);
@@ -67,6 +68,7 @@ int cmd_mesh(int argc, char** argv) {
   if (st.ok()) st = threads_option(args, 2, &eo.threads);
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   eo.memory_bytes = co.memory_bytes;
+  eo.packed = co.packed;
   const std::string& db = args.positional[0];
   ConstructPlan plan;
   st = plan_construct(co, &plan);

@@ -11,8 +11,9 @@ constexpr char kUsage[] =
     "usage: weaver stat DB [--json]\n"
     "\n"
     "For every table of database DB: record count, leaves per level (octant\n"
-    "tables), bytes on disk, bytes per record, overhead over the raw 8-byte key\n"
-    "plus payload, and tree depth.\n";
+    "tables), bytes on disk, bytes per record, size against the raw 8-byte key\n"
+    "plus payload (below 100% for packed leaf pages), leaf page format and tree\n"
+    "depth.\n";
 
 }  // namespace
 

@@ -145,6 +145,7 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   topt.key_kind = KeyKind::kOctant;
   std::string error;
   topt.schema = *RecordSchema::parse(kMaterialSchema, &error);
+  topt.packed = o.packed;
   std::unique_ptr<BTree> table;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt,

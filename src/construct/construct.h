@@ -28,6 +28,8 @@ struct ConstructOptions {
   std::array<double, 3> domain_m = {100000, 100000, 37500};
   int min_level = 0, max_level = kMaxLevel;
   uint64_t memory_bytes = 256ull << 20;
+  // Packed leaf pages (storage/packed_leaf.h); false writes plain ones.
+  bool packed = true;
   std::function<void(uint64_t leaves)> progress;
 };
 

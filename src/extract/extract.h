@@ -25,6 +25,8 @@ struct ExtractOptions {
   int threads = 1;
   // The level of the high-level buckets; -1 derives it from the budget.
   int bucket_level = -1;
+  // Packed leaf pages for the node table (storage/packed_leaf.h); false writes plain ones.
+  bool packed = true;
   std::function<void(const char* phase, uint64_t done)> progress;
 };
 

@@ -104,6 +104,7 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
   std::string error;
   topt.schema = *RecordSchema::parse(kNodeSchema, &error);
   topt.metadata = octants->options().metadata;
+  topt.packed = options.packed;
   std::unique_ptr<BTree> nodes;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kNodeTable, topt, std::min<uint64_t>(pool, 8ull << 20),

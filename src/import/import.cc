@@ -164,6 +164,7 @@ Status build_table(Database& db, const std::string& text_path, const ImportOptio
                    const std::string& scratch, std::string* file_name, ImportResult* result) {
   TableOptions topt;
   topt.key_kind = KeyKind::kOctant;
+  topt.packed = options.packed;
   const uint64_t pool = append_pool_bytes(options.memory_bytes);
   std::unique_ptr<BTree> table;
   WEAVER_RETURN_IF_ERROR(db.create_table(kOctantTable, topt, pool, &table, file_name));

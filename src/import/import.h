@@ -19,6 +19,8 @@ namespace weaver {
 struct ImportOptions {
   uint64_t memory_bytes = 256ull << 20;
   Units units;
+  // Packed leaf pages (storage/packed_leaf.h); false writes plain ones.
+  bool packed = true;
   // Called now and then with (phase, items done); may be empty.
   std::function<void(const char*, uint64_t)> progress;
 };

@@ -19,6 +19,7 @@ Status table_stats(const std::string& name, BTree& table, TableStats* out) {
   s.page_size = table.options().page_size;
   s.payload_bytes = table.payload_size();
   s.depth = table.height();
+  s.packed = table.options().packed;
   const Field* kind = table.options().schema.find("kind");
   if (s.key_kind == KeyKind::kNode && kind != nullptr) {
     BTreeCursor c;
@@ -53,12 +54,12 @@ std::string stats_to_text(const TableStats& s) {
   std::snprintf(buf, sizeof buf,
                 "table %s (%s)\n  records          %llu\n  bytes on disk    %llu\n"
                 "  bytes per record %.3f (raw %u: 8-byte key + %u-byte payload)\n"
-                "  overhead         %+.2f%% over raw\n  tree depth       %u\n"
+                "  size vs raw      %.2f%%\n  leaf pages       %s\n  tree depth       %u\n"
                 "  page size        %u\n  payload schema   %s\n",
                 s.name.c_str(), s.file.c_str(), (unsigned long long)s.records,
                 (unsigned long long)s.file_bytes, s.bytes_per_record(), 8 + s.payload_bytes,
-                s.payload_bytes, s.overhead_pct(), s.depth, s.page_size,
-                s.schema.empty() ? "(none)" : s.schema.c_str());
+                s.payload_bytes, 100 + s.overhead_pct(), s.packed ? "packed" : "plain", s.depth,
+                s.page_size, s.schema.empty() ? "(none)" : s.schema.c_str());
   out += buf;
   if (s.key_kind == KeyKind::kOctant) {
     out += "  leaves per level\n";
@@ -83,10 +84,12 @@ std::string stats_to_json(const TableStats& s) {
   std::snprintf(buf, sizeof buf,
                 "{\"table\": \"%s\", \"file\": \"%s\", \"records\": %llu, \"bytes\": %llu, "
                 "\"bytes_per_record\": %.4f, \"raw_bytes_per_record\": %u, "
-                "\"overhead_pct\": %.4f, \"depth\": %u, \"page_size\": %u, \"schema\": \"%s\"",
+                "\"overhead_pct\": %.4f, \"packed\": %s, \"depth\": %u, \"page_size\": %u, "
+                "\"schema\": \"%s\"",
                 s.name.c_str(), s.file.c_str(), (unsigned long long)s.records,
                 (unsigned long long)s.file_bytes, s.bytes_per_record(), 8 + s.payload_bytes,
-                s.overhead_pct(), s.depth, s.page_size, s.schema.c_str());
+                s.overhead_pct(), s.packed ? "true" : "false", s.depth, s.page_size,
+                s.schema.c_str());
   std::string out = buf;
   if (s.key_kind == KeyKind::kOctant) {
     out += ", \"per_level\": {";
