@@ -93,7 +93,9 @@ TEST(LsmModel, RandomMixesMatchAMap) {
   for (uint64_t seed = 1; seed <= testing::scaled(6, 2); ++seed) {
     testing::TempDir dir;
     std::unique_ptr<LsmTree> t;
-    ASSERT_OK(LsmTree::create(dir.file("lsm"), small_options(8 << 10), &t));
+    LsmOptions o = small_options(8 << 10);
+    o.table.packed = seed % 4 >= 2;  // runs with packed leaves: seeds 2, 3, 6
+    ASSERT_OK(LsmTree::create(dir.file("lsm"), o, &t));
     Map m;
     std::mt19937_64 rng(seed);
     const uint64_t key_range = seed % 2 ? 5000 : 1'000'000'000;
@@ -154,10 +156,14 @@ std::vector<char> file_bytes(const std::string& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-// The design promise: a compacted LSM is what sorted append builds.
-TEST(LsmCompaction, EndsInTheFileASortedAppendBuilds) {
+// The design promise: a compacted LSM is what sorted append builds, with
+// plain and with packed leaves.
+class LsmCompaction : public ::testing::TestWithParam<bool> {};
+
+TEST_P(LsmCompaction, EndsInTheFileASortedAppendBuilds) {
   testing::TempDir dir;
-  const LsmOptions o = small_options(32 << 10);
+  LsmOptions o = small_options(32 << 10);
+  o.table.packed = GetParam();
   std::unique_ptr<LsmTree> t;
   ASSERT_OK(LsmTree::create(dir.file("lsm"), o, &t));
   Map m;
@@ -198,6 +204,11 @@ TEST(LsmCompaction, EndsInTheFileASortedAppendBuilds) {
   ASSERT_OK(into->commit());
   EXPECT_TRUE(file_bytes(dir.file("into.bt")) == b);
 }
+
+INSTANTIATE_TEST_SUITE_P(PlainAndPacked, LsmCompaction, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "packed" : "plain";
+                         });
 
 TEST(LsmPersistence, ReopensTheCommittedStateAndDropsTheRest) {
   testing::TempDir dir;

@@ -98,10 +98,11 @@ class TableBuilder {
 // Octants that arrive out of order go to an LSM store keyed by octant, with
 // the line as payload; a repeated octant is reported when the LSM finds it.
 Status make_lsm(const std::string& dir, const std::string& path, uint64_t memory_bytes,
-                std::unique_ptr<LsmTree>* out) {
+                bool packed, std::unique_ptr<LsmTree>* out) {
   LsmOptions o;
   std::string error;
   o.table.schema = *RecordSchema::parse("line:u64", &error);
+  o.table.packed = packed;
   o.memtable_bytes = memory_bytes;
   o.run_pool_bytes = kRunPoolBytes;
   o.on_shadow = [path](uint64_t key, const std::byte* newer, const std::byte* older) {
@@ -123,7 +124,8 @@ Status read_input(const std::string& text_path, const ImportOptions& options,
     if (options.progress && ++count % kProgressEvery == 0) options.progress("read", count);
     const uint64_t key = octant_key(o);
     if (*lsm == nullptr && direct.in_order(key)) return direct.add({key, line});
-    if (*lsm == nullptr) WEAVER_RETURN_IF_ERROR(make_lsm(scratch, text_path, lsm_bytes(options.memory_bytes), lsm));
+    if (*lsm == nullptr) WEAVER_RETURN_IF_ERROR(make_lsm(scratch, text_path, lsm_bytes(options.memory_bytes),
+                                                 options.packed, lsm));
     return (*lsm)->put(key, reinterpret_cast<const std::byte*>(&line), nullptr);
   });
 }
