@@ -51,6 +51,32 @@ inline void write_bits(std::byte* base, uint64_t pos, uint32_t w, uint64_t v) {
   if (s + w > 64) p[8] |= static_cast<std::byte>(v >> (64 - s));
 }
 
+// Decodes n values of a column (frame `min`, `w` bits each) into the field
+// of n rows `stride` bytes apart.  T is the field's width; a fixed-size
+// store and a shift-and-mask per value keep this close to a memcpy.
+template <typename T>
+void decode_column(const std::byte* col, uint32_t w, uint64_t min, uint32_t n, std::byte* out,
+                   uint32_t stride) {
+  if (w == 0) {
+    const auto v = static_cast<T>(min);
+    for (uint32_t i = 0; i < n; ++i, out += stride) std::memcpy(out, &v, sizeof v);
+    return;
+  }
+  uint64_t pos = 0;
+  if (w <= 56) {  // one unaligned load holds every value
+    const uint64_t mask = (uint64_t{1} << w) - 1;
+    for (uint32_t i = 0; i < n; ++i, out += stride, pos += w) {
+      const auto v = static_cast<T>(min + ((load64(col + (pos >> 3)) >> (pos & 7)) & mask));
+      std::memcpy(out, &v, sizeof v);
+    }
+    return;
+  }
+  for (uint32_t i = 0; i < n; ++i, out += stride, pos += w) {
+    const auto v = static_cast<T>(min + read_bits(col, pos, w));
+    std::memcpy(out, &v, sizeof v);
+  }
+}
+
 }  // namespace
 
 PackedShape PackedShape::of(uint32_t page_size, KeyKind kind, const RecordSchema& schema) {
@@ -285,9 +311,11 @@ bool PackedLeaf::decode(uint64_t* keys, std::byte* vals) const {
     const uint64_t min = load64(fields_ + kFieldBytes * f);
     const uint32_t size = shape_->field_sizes[f];
     std::byte* out = vals + field_off;
-    for (uint32_t i = 0; i < n_; ++i, out += stride) {
-      const uint64_t v = min + read_bits(cols_[f], uint64_t{i} * w, w);
-      std::memcpy(out, &v, size);
+    switch (size) {
+      case 1: decode_column<uint8_t>(cols_[f], w, min, n_, out, stride); break;
+      case 2: decode_column<uint16_t>(cols_[f], w, min, n_, out, stride); break;
+      case 4: decode_column<uint32_t>(cols_[f], w, min, n_, out, stride); break;
+      default: decode_column<uint64_t>(cols_[f], w, min, n_, out, stride); break;
     }
     field_off += size;
   }
