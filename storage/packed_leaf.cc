@@ -104,11 +104,11 @@ void PackedLeafBuilder::clear() {
   std::fill(cols_.begin(), cols_.end(), Column{});
 }
 
-PackedLeafBuilder::OpenBlock PackedLeafBuilder::extend(OpenBlock b, uint64_t key, KeyKind kind) {
+inline void PackedLeafBuilder::extend(OpenBlock& b, uint64_t key, KeyKind kind) {
   if (b.count == 0) {
     b.base = b.prev = key;
     b.count = 1;
-    return b;
+    return;
   }
   const uint64_t d = key - b.prev;
   b.shift = std::min(b.shift, std::countr_zero(d));
@@ -123,7 +123,6 @@ PackedLeafBuilder::OpenBlock PackedLeafBuilder::extend(OpenBlock b, uint64_t key
   }
   b.prev = key;
   ++b.count;
-  return b;
 }
 
 PackedLeafBuilder::BlockCode PackedLeafBuilder::choose(const OpenBlock& b, KeyKind kind) {
@@ -151,7 +150,8 @@ bool PackedLeafBuilder::add(uint64_t key, const std::byte* payload) {
   const uint64_t closed_bytes =
       key_bytes_closed_ +
       (closes ? block_bytes(open_.count, choose(open_, shape_.key_kind).width) : 0);
-  const OpenBlock open = extend(closes ? OpenBlock{} : open_, key, shape_.key_kind);
+  OpenBlock open = closes ? OpenBlock{} : open_;
+  extend(open, key, shape_.key_kind);
   const std::byte* field = payload;
   for (size_t f = 0; f < cols_.size(); ++f) {
     const uint64_t v = load_field(field, shape_.field_sizes[f]);

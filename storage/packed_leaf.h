@@ -91,7 +91,7 @@ class PackedLeafBuilder {
     uint8_t width, mode;
   };
 
-  static OpenBlock extend(OpenBlock b, uint64_t key, KeyKind kind);
+  static void extend(OpenBlock& b, uint64_t key, KeyKind kind);
   static BlockCode choose(const OpenBlock& b, KeyKind kind);
   uint64_t bytes_for(size_t n, uint64_t key_bytes_closed, const OpenBlock& open,
                      const std::vector<Column>& cols) const;

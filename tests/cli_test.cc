@@ -114,5 +114,37 @@ TEST(Cli, MeshRunsThePipelineAndBalanceCheckAgrees) {
   EXPECT_EQ(lines(bad.err), 1) << bad.err;
 }
 
+// The same mesh with packed pages (the default) and with --plain: the stat
+// says which, the packed tables are smaller, and every exported row is the same.
+TEST(Cli, PackedAndPlainTablesHoldTheSameMesh) {
+  testing::TempDir d;
+  std::string csv[2];
+  uint64_t bytes[2] = {0, 0};
+  for (const bool plain : {false, true}) {
+    const std::string db = d.file(plain ? "plain" : "packed");
+    const std::string flag = plain ? " --plain" : "";
+    const CommandRun mesh =
+        run("mesh " + db + " --model basin --freq 0.1 --domain 40000,40000,20000" + flag);
+    ASSERT_EQ(mesh.code, 0) << mesh.err;
+    const CommandRun stat = run("stat " + db + " --json");
+    ASSERT_EQ(stat.code, 0) << stat.err;
+    const std::string want = plain ? "\"packed\": false" : "\"packed\": true";
+    EXPECT_EQ(stat.out.find(plain ? "\"packed\": true" : "\"packed\": false"), std::string::npos)
+        << stat.out;
+    EXPECT_NE(stat.out.find(want), std::string::npos) << stat.out;
+    const size_t at = stat.out.find("\"bytes\": ");
+    ASSERT_NE(at, std::string::npos);
+    bytes[plain] = std::stoull(stat.out.substr(at + 9));
+    const CommandRun exp = run("export " + db + " --nodes " + db + "/n.csv --elements " + db + "/e.csv");
+    ASSERT_EQ(exp.code, 0) << exp.err;
+    std::ifstream n(db + "/n.csv"), e(db + "/e.csv");
+    csv[plain].assign(std::istreambuf_iterator<char>(n), {});
+    csv[plain].append(std::istreambuf_iterator<char>(e), {});
+  }
+  EXPECT_GT(csv[0].size(), 1000u);
+  EXPECT_TRUE(csv[0] == csv[1]) << "packed and plain meshes differ";
+  EXPECT_LT(bytes[0] * 2, bytes[1]) << "the first table is not packed smaller";
+}
+
 }  // namespace
 }  // namespace weaver
