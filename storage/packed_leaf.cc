@@ -25,10 +25,15 @@ uint64_t block_bytes(uint32_t count, uint32_t width) {
 // decode to garbage, never to undefined behaviour).
 uint64_t successor(uint64_t key) { return octant_key_subtree_end(key); }
 
-uint64_t load_field(const std::byte* p, uint32_t size) {
-  uint64_t v = 0;
-  std::memcpy(&v, p, size);
-  return v;
+// A field's raw little-endian bytes as an integer.  Fixed-size loads: a
+// memcpy of a run-time size is a library call, and this is on every append.
+inline uint64_t load_field(const std::byte* p, uint32_t size) {
+  switch (size) {
+    case 1: return static_cast<uint64_t>(p[0]);
+    case 2: return load16(p);
+    case 4: return load32(p);
+    default: return load64(p);
+  }
 }
 
 // Bits [pos, pos + w) of the stream at `base`, w <= 64.  Reads up to 9 bytes
