@@ -229,13 +229,15 @@ bool PackedLeaf::open(const std::byte* pg, const PackedShape& shape) {
   m_ = load16(pg + kPgBlocks);
   const size_t nf = shape.field_sizes.size();
   if (static_cast<size_t>(pg[kPgFields]) != nf || m_ != blocks_for(n_)) return false;
-  end_ = pg + shape.page_size - kPackedSlack;
+  // Offsets are checked as integers before any pointer is formed from them.
+  const size_t limit = shape.page_size - kPackedSlack;
+  if (kFieldsStart + kFieldBytes * nf + 12 * size_t{m_} > limit) return false;
+  end_ = pg + limit;
   fields_ = pg + kFieldsStart;
   bases_ = fields_ + kFieldBytes * nf;
   blocks_ = bases_ + 8 * size_t{m_};
   key_bits_ = blocks_ + 4 * size_t{m_};
-  if (key_bits_ > end_) return false;
-  const std::byte* col = key_bits_;
+  uint64_t col = static_cast<uint64_t>(key_bits_ - pg);
   if (m_ > 0) {
     const std::byte* last = blocks_ + 4 * size_t{m_ - 1};
     const uint32_t cnt = n_ - (m_ - 1) * kPackedBlock;
@@ -244,11 +246,11 @@ bool PackedLeaf::open(const std::byte* pg, const PackedShape& shape) {
   cols_.resize(nf);
   for (size_t f = 0; f < nf; ++f) {
     const auto w = static_cast<uint32_t>(fields_[kFieldBytes * f + 8]);
-    if (w > 8 * shape.field_sizes[f]) return false;
-    cols_[f] = col;
+    if (w > 8 * shape.field_sizes[f] || col > limit) return false;
+    cols_[f] = pg + col;
     col += bits_to_bytes(uint64_t{n_} * w);
   }
-  return col <= end_;
+  return col <= limit;
 }
 
 bool PackedLeaf::block_keys(uint32_t j, uint64_t* out, uint32_t* cnt_out) const {
@@ -256,8 +258,9 @@ bool PackedLeaf::block_keys(uint32_t j, uint64_t* out, uint32_t* cnt_out) const 
   const std::byte* b = blocks_ + 4 * size_t{j};
   const uint32_t w = static_cast<uint32_t>(b[2]);
   const auto mode = static_cast<uint8_t>(b[3]);
-  const std::byte* bits = key_bits_ + load16(b);
-  if (w > 64 || bits + block_bytes(cnt, w) > end_) return false;
+  const size_t off = load16(b);
+  if (w > 64 || off + block_bytes(cnt, w) > static_cast<size_t>(end_ - key_bits_)) return false;
+  const std::byte* bits = key_bits_ + off;
   uint64_t k = load64(bases_ + 8 * size_t{j});
   out[0] = k;
   if (mode & kModeSuccessor) {
