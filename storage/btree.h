@@ -97,10 +97,13 @@ class BTree final : public Store {
 
   // Leaf access for both formats (packed leaves are decoded on the fly).
   Status open_packed(const PageRef& lf, page::PackedLeaf* reader);
-  Status leaf_bound(const PageRef& lf, uint64_t key, bool upper, uint32_t* pos);
+  // The first slot with a key >= key (> key when upper), and the keys either
+  // side of it (as PackedLeaf::bound), from one search.
+  Status leaf_bound(const PageRef& lf, uint64_t key, bool upper, uint32_t* pos,
+                    uint64_t* below = nullptr, uint64_t* at = nullptr);
   Status leaf_key(const PageRef& lf, uint32_t i, uint64_t* key);
   Status leaf_payload(const PageRef& lf, uint32_t i, std::byte* out);
-  // All entries of a leaf, keys and payloads (packed row-wise).
+  // All entries of a leaf: keys, and payloads packed row-wise unless vals is null.
   Status leaf_entries(const PageRef& lf, std::vector<uint64_t>* keys, std::vector<std::byte>* vals);
   page::InternalView internal(const PageRef& r) const { return {r.data(), internal_cap_}; }
 

@@ -39,8 +39,7 @@ Status BTree::check_subtree(uint32_t page_no, int level, uint64_t lo, uint64_t h
   }
   if (is_leaf) {
     std::vector<uint64_t> keys;
-    std::vector<std::byte> vals;
-    WEAVER_RETURN_IF_ERROR(leaf_entries(p, &keys, &vals));
+    WEAVER_RETURN_IF_ERROR(leaf_entries(p, &keys, nullptr));
     for (uint32_t i = 0; i < n; ++i) {
       const uint64_t k = keys[i];
       if (k < lo || k > hi || (i > 0 && k <= keys[i - 1])) {

@@ -19,10 +19,9 @@ Status BTree::load_tail() {
   WEAVER_RETURN_IF_ERROR(leaf_entries(lf, &keys, &vals));
   tail_->clear();
   tail_dirty_ = false;
-  for (size_t i = 0; i < keys.size(); ++i) {
-    if (!tail_->add(keys[i], vals.data() + i * payload_)) {
-      return Status::Corruption(where(lf.page_no()) + ": packed leaf does not repack");
-    }
+  const auto n = static_cast<uint32_t>(keys.size());
+  if (tail_->add_range(keys.data(), vals.data(), 0, n) != n) {
+    return Status::Corruption(where(lf.page_no()) + ": packed leaf does not repack");
   }
   return Status::Ok();
 }
@@ -37,10 +36,7 @@ std::vector<std::pair<uint32_t, uint32_t>> BTree::pack_pieces(const std::vector<
   page::PackedLeafBuilder& b = *edit_;
   auto fits = [&](uint32_t from, uint32_t to) {
     b.clear();
-    for (uint32_t i = from; i < to; ++i) {
-      if (!b.add(keys[i], vals.data() + size_t{i} * payload_)) return i;
-    }
-    return to;
+    return b.add_range(keys.data(), vals.data(), from, to);
   };
   if (fits(0, n) == n) return {{0, n}};
   if (halve && fits(0, n / 2) == n / 2 && fits(n / 2, n) == n) return {{0, n / 2}, {n / 2, n}};
@@ -57,10 +53,8 @@ Status BTree::packed_write(std::byte* pg, const std::vector<uint64_t>& keys,
                            const std::vector<std::byte>& vals, uint32_t from, uint32_t to) {
   page::PackedLeafBuilder& b = *edit_;
   b.clear();
-  for (uint32_t i = from; i < to; ++i) {
-    if (!b.add(keys[i], vals.data() + size_t{i} * payload_)) {
-      return Status::Internal(file_->name() + ": a packed piece did not fit its page");
-    }
+  if (b.add_range(keys.data(), vals.data(), from, to) != to) {
+    return Status::Internal(file_->name() + ": a packed piece did not fit its page");
   }
   b.encode(pg);
   return Status::Ok();

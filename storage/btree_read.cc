@@ -36,9 +36,8 @@ Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref, uint64_t* ran
 Status BTree::find(uint64_t key, LeafSlot* s, uint64_t* rank_before) {
   WEAVER_RETURN_IF_ERROR(descend(key, &s->path, &s->leaf, rank_before));
   s->n = page::count(s->leaf.data());
-  WEAVER_RETURN_IF_ERROR(leaf_bound(s->leaf, key, false, &s->pos));
   uint64_t at = 0;
-  if (s->pos < s->n) WEAVER_RETURN_IF_ERROR(leaf_key(s->leaf, s->pos, &at));
+  WEAVER_RETURN_IF_ERROR(leaf_bound(s->leaf, key, false, &s->pos, nullptr, &at));
   s->exact = s->pos < s->n && at == key;
   return Status::Ok();
 }
@@ -54,15 +53,18 @@ Status BTree::open_packed(const PageRef& lf, page::PackedLeaf* reader) {
   return Status::Ok();
 }
 
-Status BTree::leaf_bound(const PageRef& lf, uint64_t key, bool upper, uint32_t* pos) {
+Status BTree::leaf_bound(const PageRef& lf, uint64_t key, bool upper, uint32_t* pos,
+                         uint64_t* below, uint64_t* at) {
   if (!options_.packed) {
-    const std::byte* keys = lf.data() + page::kPageHeaderBytes;
+    const page::LeafView v = leaf(lf);
     const uint32_t n = page::count(lf.data());
-    *pos = upper ? page::upper_bound(keys, n, key) : page::lower_bound(keys, n, key);
+    *pos = upper ? page::upper_bound(v.key_at(0), n, key) : page::lower_bound(v.key_at(0), n, key);
+    if (below != nullptr && *pos > 0) *below = v.key(*pos - 1);
+    if (at != nullptr && *pos < n) *at = v.key(*pos);
     return Status::Ok();
   }
   WEAVER_RETURN_IF_ERROR(open_packed(lf, &reader_));
-  if (!reader_.bound(key, upper, pos)) {
+  if (!reader_.bound(key, upper, pos, below, at)) {
     return Status::Corruption(where(lf.page_no()) + ": packed key block out of bounds");
   }
   return Status::Ok();
@@ -95,15 +97,15 @@ Status BTree::leaf_entries(const PageRef& lf, std::vector<uint64_t>* keys,
                            std::vector<std::byte>* vals) {
   const uint32_t n = page::count(lf.data());
   keys->resize(n);
-  vals->resize(size_t{n} * payload_);
+  if (vals != nullptr) vals->resize(size_t{n} * payload_);
   if (!options_.packed) {
     const page::LeafView v = leaf(lf);
     if (n > 0) std::memcpy(keys->data(), v.key_at(0), 8 * size_t{n});
-    if (n > 0 && payload_ > 0) std::memcpy(vals->data(), v.value(0), vals->size());
+    if (vals != nullptr && n > 0 && payload_ > 0) std::memcpy(vals->data(), v.value(0), vals->size());
     return Status::Ok();
   }
   WEAVER_RETURN_IF_ERROR(open_packed(lf, &reader_));
-  if (!reader_.decode(keys->data(), vals->data())) {
+  if (!reader_.decode(keys->data(), vals != nullptr ? vals->data() : nullptr)) {
     return Status::Corruption(where(lf.page_no()) + ": packed key block out of bounds");
   }
   return Status::Ok();
@@ -149,9 +151,9 @@ Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, boo
   Path path;
   PageRef lf;
   WEAVER_RETURN_IF_ERROR(descend(key, &path, &lf));
-  uint32_t n = page::count(lf.data());
   uint32_t ub = 0;
-  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, true, &ub));
+  uint64_t below = 0;  // the key at ub - 1
+  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, true, &ub, &below));
   if (ub == 0) {
     // Every key here is > key (a separator went stale when its key was
     // erased): the floor is the last record of the preceding leaf.
@@ -166,11 +168,11 @@ Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, boo
     }
     lf.reset();
     WEAVER_RETURN_IF_ERROR(descend_edge(left_child, d + 1, true, &path, &lf));
-    n = page::count(lf.data());
-    ub = n;
+    ub = page::count(lf.data());
+    WEAVER_RETURN_IF_ERROR(leaf_key(lf, ub - 1, &below));
   }
   *found = true;
-  WEAVER_RETURN_IF_ERROR(leaf_key(lf, ub - 1, key_out));
+  *key_out = below;
   if (payload_out != nullptr) return leaf_payload(lf, ub - 1, payload_out);
   return Status::Ok();
 }

@@ -173,6 +173,13 @@ bool PackedLeafBuilder::add(uint64_t key, const std::byte* payload) {
   return true;
 }
 
+uint32_t PackedLeafBuilder::add_range(const uint64_t* keys, const std::byte* vals, uint32_t from,
+                                      uint32_t to) {
+  uint32_t i = from;
+  while (i < to && add(keys[i], vals + size_t{i} * shape_.payload)) ++i;
+  return i;
+}
+
 void PackedLeafBuilder::encode(std::byte* pg) const {
   const auto n = static_cast<uint32_t>(keys_.size());
   const auto m = static_cast<uint32_t>(blocks_for(n));
@@ -275,10 +282,12 @@ bool PackedLeaf::block_keys(uint32_t j, uint64_t* out, uint32_t* cnt_out) const 
   return true;
 }
 
-bool PackedLeaf::bound(uint64_t k, bool upper, uint32_t* pos) const {
+bool PackedLeaf::bound(uint64_t k, bool upper, uint32_t* pos, uint64_t* below,
+                       uint64_t* at) const {
   const uint32_t c = upper ? upper_bound(bases_, m_, k) : lower_bound(bases_, m_, k);
   if (c == 0) {
     *pos = 0;
+    if (at != nullptr && m_ > 0) *at = load64(bases_);
     return true;
   }
   uint64_t keys[kPackedBlock];
@@ -287,6 +296,8 @@ bool PackedLeaf::bound(uint64_t k, bool upper, uint32_t* pos) const {
   uint32_t i = 1;  // keys[0] is the block base: < k (<= k when upper)
   while (i < cnt && (upper ? keys[i] <= k : keys[i] < k)) ++i;
   *pos = (c - 1) * kPackedBlock + i;
+  if (below != nullptr) *below = keys[i - 1];
+  if (at != nullptr && *pos < n_) *at = i < cnt ? keys[i] : load64(bases_ + 8 * size_t{c});
   return true;
 }
 
@@ -312,6 +323,7 @@ bool PackedLeaf::decode(uint64_t* keys, std::byte* vals) const {
   for (uint32_t j = 0; j < m_; ++j) {
     if (!block_keys(j, keys + size_t{j} * kPackedBlock, &cnt)) return false;
   }
+  if (vals == nullptr) return true;
   const uint32_t stride = shape_->payload;
   size_t field_off = 0;
   for (size_t f = 0; f < cols_.size(); ++f) {

@@ -65,6 +65,9 @@ class PackedLeafBuilder {
   // Adds (key, payload) if it fits; false (and no change) if it does not.
   // REQUIRES: key greater than every key added since clear().
   bool add(uint64_t key, const std::byte* payload);
+  // Adds entries [from, to) of keys / vals (payloads packed row-wise) until
+  // one does not fit; returns the index of the first one not added.
+  uint32_t add_range(const uint64_t* keys, const std::byte* vals, uint32_t from, uint32_t to);
   // Writes the page body and the header's type and count (checksum and page
   // number are the buffer pool's).  REQUIRES: size() >= 1.
   void encode(std::byte* page) const;
@@ -117,12 +120,16 @@ class PackedLeaf {
   uint32_t size() const { return n_; }
   // Decodes the keys of entries [64j, 64j+cnt) into out (up to 64); false if damaged.
   bool block_keys(uint32_t j, uint64_t* out, uint32_t* cnt) const;
-  // The first i with key(i) >= k (or > k when `upper`), or size().
-  bool bound(uint64_t k, bool upper, uint32_t* pos) const;
+  // The first i with key(i) >= k (or > k when `upper`), or size(); and, from
+  // the same block decode, the keys either side of it: *below = key(i - 1)
+  // when i > 0, *at = key(i) when i < size() (either may be null).
+  bool bound(uint64_t k, bool upper, uint32_t* pos, uint64_t* below = nullptr,
+             uint64_t* at = nullptr) const;
   bool key(uint32_t i, uint64_t* out) const;
   // Writes entry i's payload (shape.payload bytes).
   void payload(uint32_t i, std::byte* out) const;
-  // Decodes everything: keys into keys[0..n), payloads packed row-wise.
+  // Decodes everything: keys into keys[0..n), payloads packed row-wise
+  // (skipped when vals is null).
   bool decode(uint64_t* keys, std::byte* vals) const;
 
  private:

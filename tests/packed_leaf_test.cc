@@ -88,8 +88,8 @@ size_t pack_and_check(const PackedShape& shape, const Entries& e, std::mt19937_6
   size_t pages = 0;
   for (size_t from = 0; from < e.keys.size();) {
     b.clear();
-    size_t to = from;
-    while (to < e.keys.size() && b.add(e.keys[to], e.vals.data() + to * shape.payload)) ++to;
+    const size_t to = b.add_range(e.keys.data(), e.vals.data(), static_cast<uint32_t>(from),
+                                  static_cast<uint32_t>(e.keys.size()));
     EXPECT_GT(to, from) << "one entry always fits";
     EXPECT_LE(b.encoded_bytes(), shape.page_size);
     std::fill(page.begin(), page.end(), std::byte{0xa5});  // stale bytes must not matter
@@ -202,7 +202,7 @@ TEST(PackedLeaf, DamagedPagesNeverReadOutOfBounds) {
   octree_leaves({0, 0, 0, 0}, rng, {2, 8, 0.3, 0.05}, &e.keys);
   e.vals = payloads(rng, e.keys.size(), shape.payload);
   PackedLeafBuilder b(shape);
-  for (size_t i = 0; i < e.keys.size() && b.add(e.keys[i], e.vals.data() + i * shape.payload);) ++i;
+  b.add_range(e.keys.data(), e.vals.data(), 0, static_cast<uint32_t>(e.keys.size()));
   // An exact-size heap copy, so that the sanitizers see any read past the end.
   std::vector<std::byte> good(shape.page_size);
   b.encode(good.data());
