@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <cstdlib>
 #include <map>
 #include <mutex>
@@ -19,11 +21,19 @@ struct Range {
 struct State {
   bool enabled = false;
   uint64_t crash_at = 0;  // 0: count only
+  uint64_t fail_at = 0;   // WEAVER_FAIL_AT: the step that fails
+  int fail_errno = EIO;
   uint64_t steps = 0;
   std::mutex mu;
   std::map<int, std::vector<Range>> unsynced;  // by fd
 
   State() {
+    if (const char* f = std::getenv("WEAVER_FAIL_AT"); f != nullptr && *f != '\0') {
+      enabled = true;
+      fail_at = std::strtoull(f, nullptr, 10);
+      const char* e = std::getenv("WEAVER_FAIL_ERRNO");
+      if (e != nullptr && std::strcmp(e, "ENOSPC") == 0) fail_errno = ENOSPC;
+    }
     const char* v = std::getenv("WEAVER_CRASH_AT");
     if (v == nullptr || *v == '\0') return;
     enabled = true;
@@ -55,11 +65,12 @@ State& State::instance() {
 
 }  // namespace
 
-void step() {
+int step() {
   State& s = State::instance();
-  if (!s.enabled) return;
+  if (!s.enabled) return 0;
   std::lock_guard<std::mutex> lock(s.mu);
   if (++s.steps == s.crash_at) s.die();
+  return s.steps == s.fail_at ? s.fail_errno : 0;
 }
 
 void note_write(int fd, uint64_t offset, size_t n) {

@@ -8,6 +8,10 @@
 // hold for writes that never reached it.  With WEAVER_CRASH_AT=0 nothing
 // dies and the step count is printed to stderr at exit ("crash steps: N"),
 // so a harness can spread its kill points over a writer's whole run.
+//
+// Faults instead of deaths: with WEAVER_FAIL_AT=N the N-th step fails with
+// the error WEAVER_FAIL_ERRNO names (EIO, the default, or ENOSPC) instead of
+// being taken, as a bad or full disk would fail it, and the process goes on.
 #pragma once
 
 #include <cstddef>
@@ -15,8 +19,9 @@
 
 namespace weaver::crash_point {
 
-// Counts a step; dies if it is the chosen one.  Cheap when idle.
-void step();
+// Counts a step; dies if it is the chosen one, or returns the errno it
+// must fail with (0: go ahead).  Cheap when idle.
+[[nodiscard]] int step();
 // Bookkeeping for the zeroing: a write of n bytes at offset to fd, a sync of
 // fd, and fd closing.
 void note_write(int fd, uint64_t offset, size_t n);

@@ -35,7 +35,7 @@ class PosixFile final : public File {
   }
 
   Status write_at(uint64_t offset, const void* buf, size_t n, size_t* done) override {
-    crash_point::step();
+    if (const int e = crash_point::step()) return injected("write", e);
     ssize_t r;
     do {
       r = ::pwrite(fd_, buf, n, static_cast<off_t>(offset));
@@ -47,7 +47,7 @@ class PosixFile final : public File {
   }
 
   Status sync() override {
-    crash_point::step();
+    if (const int e = crash_point::step()) return injected("sync", e);
     if (::fdatasync(fd_) != 0) return Status::IOError(errno_text("sync", path_));
     crash_point::note_sync(fd_);
     return Status::Ok();
@@ -70,6 +70,10 @@ class PosixFile final : public File {
   const std::string& name() const override { return path_; }
 
  private:
+  Status injected(const char* what, int e) const {
+    return Status::IOError(std::string("cannot ") + what + " " + path_ + ": " + std::strerror(e));
+  }
+
   int fd_;
   std::string path_;
 };

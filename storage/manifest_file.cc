@@ -32,25 +32,29 @@ Status sync_path(const std::string& path, bool directory) {
 }
 
 Status write_manifest_file(const std::string& dir, const std::string& name,
-                           const std::string& header, const std::vector<std::string>& lines) {
+                           const std::string& header, const std::vector<std::string>& lines,
+                           bool* renamed) {
+  if (renamed != nullptr) *renamed = false;
   std::string body = header + "\n";
   for (const std::string& line : lines) body += line + "\n";
   body += "checksum " + hex32(checksum32(body.data(), body.size())) + "\n";
   const std::string tmp = dir + "/" + name + ".tmp", final_path = dir + "/" + name;
-  crash_point::step();
+  auto fail = [](const std::string& what, int e) {
+    return Status::IOError("cannot " + what + ": " + std::strerror(e));
+  };
+  if (const int e = crash_point::step()) return fail("write " + tmp, e);
   {
     std::ofstream out(tmp, std::ios::trunc);
     out << body;
     out.flush();
     if (!out) return Status::IOError("cannot write " + tmp);
   }
-  crash_point::step();
+  if (const int e = crash_point::step()) return fail("sync " + tmp, e);
   WEAVER_RETURN_IF_ERROR(sync_path(tmp, false));
-  crash_point::step();
-  if (::rename(tmp.c_str(), final_path.c_str()) != 0) {
-    return Status::IOError("cannot rename " + tmp + ": " + std::strerror(errno));
-  }
-  crash_point::step();
+  if (const int e = crash_point::step()) return fail("rename " + tmp, e);
+  if (::rename(tmp.c_str(), final_path.c_str()) != 0) return fail("rename " + tmp, errno);
+  if (renamed != nullptr) *renamed = true;
+  if (const int e = crash_point::step()) return fail("sync " + dir, e);
   return sync_path(dir, true);
 }
 
@@ -67,6 +71,9 @@ Status read_manifest_file(const std::string& path, const std::string& header,
     if (line.rfind("checksum ", 0) == 0) {
       if (line.substr(9) != hex32(checksum32(body.data(), body.size()))) {
         return Status::Corruption(path + ": checksum mismatch");
+      }
+      if (in.peek() != std::char_traits<char>::eof()) {
+        return Status::Corruption(path + ": bytes after the checksum line");
       }
       return Status::Ok();
     }

@@ -13,8 +13,12 @@
 
 namespace weaver {
 
+// *renamed (if given) tells whether the new file took the old one's place:
+// after an error it may have (the directory sync failed), and then readers
+// see the new contents though they may not survive a power cut.
 Status write_manifest_file(const std::string& dir, const std::string& name,
-                           const std::string& header, const std::vector<std::string>& lines);
+                           const std::string& header, const std::vector<std::string>& lines,
+                           bool* renamed = nullptr);
 // Reads dir/name back: Corruption for a wrong header, a bad checksum or a
 // missing checksum line.
 Status read_manifest_file(const std::string& path, const std::string& header,

@@ -6,39 +6,20 @@
 #include <fstream>
 #include <sys/wait.h>
 
-#include "test_util.h"
+#include "cli_run.h"
 
 namespace weaver {
 namespace {
 
-struct CommandRun {
-  int code;
-  std::string out;  // stdout
-  std::string err;  // stderr
-};
-
-CommandRun run(const std::string& args) {
-  testing::TempDir tmp;
-  const std::string cmd = std::string(WEAVER_BINARY) + " " + args + " 2>" + tmp.file("err");
-  FILE* p = ::popen(cmd.c_str(), "r");
-  CommandRun r{};
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int status = ::pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(tmp.file("err"));
-  r.err.assign(std::istreambuf_iterator<char>(e), {});
-  return r;
-}
-
-int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+using testing::CommandRun;
+using testing::lines;
+using testing::run;
 
 TEST(Cli, EveryCommandHasHelp) {
   const CommandRun top = run("--help");
   EXPECT_EQ(top.code, 0);
   for (const char* cmd : {"generate", "import", "construct", "balance", "mesh", "extract",
-                          "export", "stat", "query"}) {
+                          "export", "stat", "query", "verify", "recover"}) {
     EXPECT_NE(top.out.find(cmd), std::string::npos);
     const CommandRun r = run(std::string(cmd) + " --help");
     EXPECT_EQ(r.code, 0) << cmd;
@@ -90,12 +71,6 @@ TEST(Cli, DataErrorsAreOneLineWithStatus1) {
   EXPECT_EQ(q.code, 1);
   EXPECT_EQ(lines(q.err), 1) << q.err;
 }
-
-}  // namespace
-}  // namespace weaver
-
-namespace weaver {
-namespace {
 
 TEST(Cli, MeshRunsThePipelineAndBalanceCheckAgrees) {
   testing::TempDir d;

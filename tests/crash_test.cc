@@ -15,6 +15,8 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <functional>
 #include <map>
 #include <random>
 #include <thread>
@@ -57,14 +59,30 @@ Fingerprint fingerprint(const std::string& dir) {
   return f;
 }
 
+// An I/O fault to inject instead of a crash: the step and the errno name.
+struct Fault {
+  uint64_t at = 0;  // 0: none
+  const char* errno_name = "EIO";
+  std::string stderr_file;  // where the writer's stderr goes ("": /dev/null)
+};
+
 // Runs the weaver binary; crash_at > 0 arms the crash point, kill_after_us
-// >= 0 sends SIGKILL after that delay.  Returns the wait status.
-int run_writer(const std::vector<std::string>& args, uint64_t crash_at, int64_t kill_after_us) {
+// >= 0 sends SIGKILL after that delay, fault.at > 0 fails that step.
+// Returns the wait status.
+int run_writer(const std::vector<std::string>& args, uint64_t crash_at, int64_t kill_after_us,
+               const Fault& fault = {}) {
   const pid_t pid = fork();
   if (pid == 0) {
     if (crash_at > 0) setenv("WEAVER_CRASH_AT", std::to_string(crash_at).c_str(), 1);
+    if (fault.at > 0) {
+      setenv("WEAVER_FAIL_AT", std::to_string(fault.at).c_str(), 1);
+      setenv("WEAVER_FAIL_ERRNO", fault.errno_name, 1);
+    }
     const int null = ::open("/dev/null", O_WRONLY);
-    dup2(null, 1), dup2(null, 2);
+    const int err = fault.stderr_file.empty()
+                        ? null
+                        : ::open(fault.stderr_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(null, 1), dup2(err, 2);
     std::vector<char*> argv;
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
@@ -138,13 +156,20 @@ class CrashTest : public ::testing::Test {
 
   // One kill point: from a copy of the old state, run and crash, then check.
   void check_one(const Writer& w, const std::string& old_db, const Fingerprint& before,
-                 const Fingerprint& after, uint64_t crash_at, int64_t kill_after_us) {
+                 const Fingerprint& after, uint64_t crash_at, int64_t kill_after_us,
+                 Fault fault = {}) {
     const std::string db = dir_.file("crash.db");
     fs::remove_all(db);
     if (fs::exists(old_db)) fs::copy(old_db, db, fs::copy_options::recursive);
-    run_writer(with_db(w, db), crash_at, kill_after_us);
-    const std::string where = w.name + (crash_at ? " at step " + std::to_string(crash_at)
-                                                 : " killed after " + std::to_string(kill_after_us) + " us");
+    if (fault.at > 0) fault.stderr_file = dir_.file("fault.err");
+    const int status = run_writer(with_db(w, db), crash_at, kill_after_us, fault);
+    const std::string where =
+        w.name + (fault.at      ? " failing step " + std::to_string(fault.at) + " with " + fault.errno_name
+                  : crash_at    ? " at step " + std::to_string(crash_at)
+                                : " killed after " + std::to_string(kill_after_us) + " us");
+    if (fault.at > 0) {
+      ASSERT_NO_FATAL_FAILURE(check_fault_report(fault, status, where));
+    }
     if (fs::exists(db)) {  // the next writer's open removes leftovers, and says so
       auto files = [&] {
         size_t n = 0;
@@ -175,10 +200,28 @@ class CrashTest : public ::testing::Test {
     ++(now == after ? new_states_ : old_states_);
   }
 
+  // A failed step: exit status 1 and one line naming the I/O error, unless
+  // the step was one the writer may retry or ignore (then it succeeds).
+  void check_fault_report(const Fault& fault, int status, const std::string& where) {
+    std::ifstream in(fault.stderr_file);
+    std::string err((std::istreambuf_iterator<char>(in)), {});
+    ASSERT_TRUE(WIFEXITED(status)) << where << ": died";
+    if (WEXITSTATUS(status) == 0) {
+      ++faults_absorbed_;
+      return;
+    }
+    ASSERT_EQ(WEXITSTATUS(status), 1) << where << ": " << err;
+    ASSERT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << where << ": " << err;
+    const std::string want = std::string(fault.errno_name) == "ENOSPC" ? "No space left" : "Input/output error";
+    ASSERT_NE(err.find(want), std::string::npos) << where << ": " << err;
+    ++faults_reported_;
+  }
+
   // Kills the writer at every durable step (or `steps` of them, spread
-  // evenly) and at `kills` random moments of its run.
+  // evenly) and at `kills` random moments of its run; with `faults`, also
+  // fails each of those steps with EIO and ENOSPC instead.
   void torture(const Writer& w, const std::vector<std::vector<std::string>>& setup, uint64_t steps,
-               int kills) {
+               int kills, bool faults = false) {
     const std::string old_db = dir_.file("old.db"), new_db = dir_.file("new.db");
     ASSERT_NO_FATAL_FAILURE(prepare(old_db, setup));
     const Fingerprint before = fingerprint(old_db);
@@ -197,6 +240,12 @@ class CrashTest : public ::testing::Test {
     ASSERT_GT(n, 0u) << w.name;
     const uint64_t points = std::min(n, steps);
     for (uint64_t i = 0; i < points; ++i) {
+      if (faults) {
+        for (const char* e : {"EIO", "ENOSPC"}) {
+          ASSERT_NO_FATAL_FAILURE(check_one(w, old_db, before, after, 0, -1, {1 + i * n / points, e, ""}));
+        }
+        continue;
+      }
       ASSERT_NO_FATAL_FAILURE(check_one(w, old_db, before, after, 1 + i * n / points, -1));
       ++points_;
     }
@@ -210,7 +259,39 @@ class CrashTest : public ::testing::Test {
   testing::TempDir dir_;
   std::string text_a_, text_b_;
   int points_ = 0, old_states_ = 0, new_states_ = 0;
+  int faults_reported_ = 0, faults_absorbed_ = 0;
+
+  // Every writer of the database, from its state before (setup commands).
+  void each_writer(const std::function<void(const Writer&, const std::vector<std::vector<std::string>>&)>& f) {
+    const std::vector<std::string> import_a = {"import", "{db}", "--octants", text_a_, "--memory", "1M"};
+    const std::vector<std::string> import_b = {"import", "{db}", "--octants", text_b_, "--memory", "1M"};
+    const std::vector<std::string> balance = {"balance", "{db}", "--memory", "1M"};
+    const std::vector<std::string> extract = {"extract", "{db}", "--memory", "1M"};
+    f({"import over a mesh", import_b}, {import_a, balance, extract});
+    f({"import into a new database", import_b}, {});
+    f({"construct", {"construct", "{db}", "--model", "basin", "--freq", "0.08", "--memory", "1M"}},
+      {import_a});
+    f({"balance", balance}, {import_a});
+    f({"extract (sort)", extract}, {import_a, balance});
+    f({"extract (search, lsm)",
+       {"extract", "{db}", "--algorithm", "search", "--store", "lsm", "--memory", "1M"}},
+      {import_a, balance});
+  }
 };
+
+// I/O errors (EIO, a full disk) at every durable step of every writer: the
+// writer says so in one line and exits 1, the database holds the old state
+// (or the new one, when only the final directory sync failed) and verifies.
+TEST_F(CrashTest, IoErrorsAtEveryStepLeaveTheOldState) {
+  const uint64_t steps = testing::scaled(60, 8);
+  each_writer([&](const Writer& w, const std::vector<std::vector<std::string>>& setup) {
+    torture(w, setup, steps, 0, true);
+  });
+  std::printf("injected faults: %d reported, %d absorbed; states: %d old, %d new\n",
+              faults_reported_, faults_absorbed_, old_states_, new_states_);
+  EXPECT_GT(faults_reported_, 0);
+  EXPECT_GT(old_states_, 0);
+}
 
 TEST_F(CrashTest, EveryWriterLeavesTheOldOrTheNewState) {
   const uint64_t steps = testing::scaled(200, 25);

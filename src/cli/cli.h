@@ -23,10 +23,13 @@ int cmd_export(int argc, char** argv);
 int cmd_stat(int argc, char** argv);
 int cmd_query(int argc, char** argv);
 int cmd_verify(int argc, char** argv);
+int cmd_recover(int argc, char** argv);
 
 // Prints "weaver <command>: <message>" to stderr; returns 1 (2 for usage
 // errors, which are InvalidArgument statuses raised while parsing).
 int report(const std::string& command, const Status& st);
+// The message report() prints for st.
+std::string error_text(const Status& st);
 int usage_error(const std::string& command, const std::string& message, const char* usage);
 
 int cmd_mesh(int argc, char** argv);
@@ -37,7 +40,10 @@ void print_construct_plan(const weaver::ConstructOptions& o, const weaver::Const
 
 // The default memory budget when --memory is absent.
 inline constexpr uint64_t kDefaultMemory = 256ull << 20;
+// --memory: at least 1M and at most the machine's physical memory.
 Status memory_option(const ParsedArgs& args, uint64_t* bytes);
+// Bytes of physical memory (0 if unknown).
+uint64_t physical_memory();
 Status threads_option(const ParsedArgs& args, int default_threads, int* threads);
 
 }  // namespace weaver::cli

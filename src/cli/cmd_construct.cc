@@ -12,7 +12,8 @@ namespace {
 constexpr char kUsage[] =
     "usage: weaver construct DB --model NAME [--grid FILE] [--freq F] [--ppw N]\n"
     "                           [--vs-min V] [--domain LX,LY,LZ] [--min-level L]\n"
-    "                           [--max-level L] [--memory BYTES] [--plain]\n"
+    "                           [--max-level L] [--max-elements N] [--memory BYTES]\n"
+    "                           [--plain]\n"
     "\n"
     "Builds the octant table of DB from a velocity model: every leaf satisfies\n"
     "edge <= Vs_min / (F * N), Vs_min being the least Vs of the model over 27\n"
@@ -27,6 +28,10 @@ constexpr char kUsage[] =
     "  --vs-min V         Vs floor in the rule, m/s (default none)\n"
     "  --domain LX,LY,LZ  metres (default 100000,100000,37500)\n"
     "  --min-level L, --max-level L   bounds on leaf levels (default 0, 20)\n"
+    "  --max-elements N   refuse to start when a coarse sampling of the model\n"
+    "                     estimates more leaves than N (default 5G), or more\n"
+    "                     disk than is free; the estimate is printed first\n"
+    "  --memory BYTES     memory budget (default 256M)\n"
     "  --plain            write plain leaf pages (default: packed, where keys are\n"
     "                     delta-coded and payload fields stored column-wise)\n";
 
@@ -54,6 +59,9 @@ Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
   WEAVER_RETURN_IF_ERROR(number("vs-min", &o->vs_min));
   WEAVER_RETURN_IF_ERROR(level("min-level", &o->min_level));
   WEAVER_RETURN_IF_ERROR(level("max-level", &o->max_level));
+  if (args.values.count("max-elements")) {
+    WEAVER_RETURN_IF_ERROR(parse_count(args.values.at("max-elements"), "--max-elements", &o->max_elements));
+  }
   if (args.values.count("domain")) {
     std::vector<double> d;
     WEAVER_RETURN_IF_ERROR(parse_double_list(args.values.at("domain"), "--domain", 3, &d));
@@ -72,13 +80,15 @@ void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
               p.rounded_up ? ", rounded up to whole blocks" : "");
   std::printf("root       %g m, tick %.6g m, levels %d..%d\n", p.root_edge_m, p.tick_m,
               std::max(o.min_level, p.block_level), o.max_level);
+  std::printf("estimate   about %.3g elements, %.3g GB of disk (a coarse sampling of the model)\n",
+              p.estimated_elements, p.estimated_disk_bytes / 1e9);
 }
 
 int cmd_construct(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(argc, argv, 2,
                          {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level",
-                          "max-level", "memory"},
+                          "max-level", "memory", "max-elements"},
                          {"plain"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
@@ -88,6 +98,7 @@ int cmd_construct(int argc, char** argv) {
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
   ConstructPlan plan;
   st = plan_construct(o, &plan);
+  if (st.is_invalid_argument()) return usage_error("construct", st.message(), kUsage);
   if (!st.ok()) return report("construct", st);
   print_construct_plan(o, plan);
   std::fflush(stdout);

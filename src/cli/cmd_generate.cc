@@ -76,6 +76,7 @@ int cmd_generate(int argc, char** argv) {
   if (!st.ok()) return usage_error("generate", st.message(), kUsage);
   std::vector<Octant> leaves;
   st = generate_octree(o, &leaves);
+  if (st.is_invalid_argument()) return usage_error("generate", st.message(), kUsage);
   if (st.ok()) st = write_octant_text(args.positional[0], leaves, "weaver sample octree");
   if (!st.ok()) return report("generate", st);
   std::printf("wrote %zu leaves to %s\n", leaves.size(), args.positional[0].c_str());

@@ -23,8 +23,10 @@ constexpr char kUsage[] =
     "                  one out of order on, the rest go through an LSM store\n"
     "                  (runs spilled in the database directory) and are merged\n"
     "                  in at the end\n"
-    "  --tick METRES   size of one tick in metres (default 1)\n"
-    "  --origin X,Y,Z  position of tick (0,0,0) in metres (default 0,0,0)\n"
+    "  --tick METRES   size of one tick in metres (default: that of the octant\n"
+    "                  table being replaced, else 1)\n"
+    "  --origin X,Y,Z  position of tick (0,0,0) in metres (default: that of the\n"
+    "                  table being replaced, else 0,0,0)\n"
     "  --plain         write plain leaf pages (default: packed, where keys are\n"
     "                  delta-coded and payload fields stored column-wise)\n";
 
@@ -44,6 +46,8 @@ int cmd_import(int argc, char** argv) {
   ImportOptions o;
   o.packed = !args.flags.count("plain");
   st = memory_option(args, &o.memory_bytes);
+  o.tick_given = args.values.count("tick");
+  o.origin_given = args.values.count("origin");
   if (st.ok() && args.values.count("tick")) {
     st = parse_double(args.values["tick"], "--tick", &o.units.tick_m);
     if (st.ok() && !(o.units.tick_m > 0)) st = Status::InvalidArgument("--tick must be positive");

@@ -15,15 +15,16 @@ namespace {
 constexpr char kUsage[] =
     "usage: weaver mesh DB --model NAME --freq F [--ppw N] [--vs-min V] [--domain LX,LY,LZ]\n"
     "                      [--min-level L] [--max-level L] [--grid FILE] [--threads N]\n"
-    "                      [--memory BYTES] [--plain]\n"
+    "                      [--max-elements N] [--memory BYTES] [--plain]\n"
     "\n"
     "The whole pipeline: construct the octree from the model, 2:1 balance it, extract\n"
     "the mesh.  Prints a line per stage (count, rate, time, peak memory), then the\n"
     "mesh summary (elements, nodes, dangling nodes, as in the paper's Figure 11) and\n"
     "its quality: elements per level, smallest and largest edge, and the fewest\n"
     "points per wavelength at any element.  Options as for 'weaver construct';\n"
-    "--threads is for the extract stage (default 2); --plain writes plain leaf\n"
-    "pages in every table (default: packed).\n";
+    "--threads is for the extract stage (default 1, as for 'weaver extract');\n"
+    "--plain writes plain leaf pages in every table (default: packed).  If a\n"
+    "stage fails, the error says which stages had committed their tables.\n";
 
 // Peak resident memory since the last reset_peak(), from the kernel's high
 // water mark (Linux); 0 where unavailable.
@@ -50,28 +51,36 @@ void stage_line(const char* name, uint64_t count, const char* what, double secs)
   std::fflush(stdout);
 }
 
+// A later stage failed: say so, and what the earlier ones left committed.
+int report_after(const char* stage, const Status& st, const char* committed) {
+  std::fprintf(stderr, "weaver mesh: %s failed: %s (%s)\n", stage, error_text(st).c_str(), committed);
+  return 1;
+}
+
 }  // namespace
 
 int cmd_mesh(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(argc, argv, 2,
                          {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level",
-                          "max-level", "memory", "threads"},
+                          "max-level", "memory", "threads", "max-elements"},
                          {"plain"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("mesh", "expected one DB", kUsage);
   if (!args.values.count("freq")) return usage_error("mesh", "--freq F is required", kUsage);
   ConstructOptions co;
+  co.whole_pipeline = true;
   st = parse_construct_options(args, &co);
   ExtractOptions eo;
-  if (st.ok()) st = threads_option(args, 2, &eo.threads);
+  if (st.ok()) st = threads_option(args, 1, &eo.threads);
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   eo.memory_bytes = co.memory_bytes;
   eo.packed = co.packed;
   const std::string& db = args.positional[0];
   ConstructPlan plan;
   st = plan_construct(co, &plan);
+  if (st.is_invalid_argument()) return usage_error("mesh", st.message(), kUsage);
   if (!st.ok()) return report("mesh", st);
   print_construct_plan(co, plan);
   const Stage total;
@@ -89,14 +98,16 @@ int cmd_mesh(int argc, char** argv) {
   bo.memory_bytes = co.memory_bytes;
   BalanceResult br;
   st = balance_octree(db, bo, &br);
-  if (!st.ok()) return report("mesh", st);
+  if (!st.ok()) return report_after("balance", st, "construct committed the octant table");
   stage_line("balance", br.output_leaves, "leaves", s2.seconds());
 
   reset_peak();
   Stage s3;
   ExtractResult er;
   st = extract_mesh(db, eo, &er);
-  if (!st.ok()) return report("mesh", st);
+  if (!st.ok()) {
+    return report_after("extract", st, "construct and balance committed the balanced octant table");
+  }
   stage_line("extract", er.nodes, "nodes", s3.seconds());
 
   std::printf("\nmesh at %g Hz, %g points per wavelength, in %.2fs\n", co.freq, co.ppw,

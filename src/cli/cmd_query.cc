@@ -69,9 +69,13 @@ std::string ids_text(const uint64_t* ids, int n) {
   return s;
 }
 
+bool in_root(const std::vector<uint32_t>& c, uint32_t limit) {
+  return c[0] <= limit && c[1] <= limit && c[2] <= limit;
+}
+
 int run_locate(BTree& t, BTree* nodes, const Units& u, const std::vector<uint32_t>& c, bool json) {
   LocateResult r;
-  Status st = locate(t, {c[0], c[1], c[2]}, &r);
+  Status st = in_root(c, kRootEdge - 1) ? locate(t, {c[0], c[1], c[2]}, &r) : Status::Ok();
   std::array<uint64_t, 8> ids{};
   if (st.ok() && r.inside && nodes != nullptr) st = element_nodes(*nodes, r.leaf, &ids);
   if (!st.ok()) return report("query", st);
@@ -178,7 +182,9 @@ int cmd_query(int argc, char** argv) {
   if (want == 1) {
     st = parse_u64(p[2], "ID", &id);
   } else {
-    st = parse_coords(p, 2, want, kind == "node-at" ? kRootEdge : kRootEdge - 1, &c);
+    // A point past the root is a fine question for locate and node-at (the
+    // answer is "outside" / "no node"); a box must lie in the address space.
+    st = parse_coords(p, 2, want, kind == "range" ? kRootEdge - 1 : UINT32_MAX, &c);
   }
   if (st.ok()) st = memory_option(args, &memory);
   if (!st.ok()) return usage_error("query", st.message(), kUsage);
@@ -204,7 +210,7 @@ int cmd_query(int argc, char** argv) {
     return print_node(n, u, json);
   }
   bool found = false;
-  st = node_at(*nodes, {c[0], c[1], c[2]}, &n, &found);
+  if (in_root(c, kRootEdge)) st = node_at(*nodes, {c[0], c[1], c[2]}, &n, &found);
   if (!st.ok()) return report("query", st);
   if (!found) {
     if (json) {

@@ -1,14 +1,19 @@
+#include <unistd.h>
+
 #include <cstdio>
 
 #include "cli/cli.h"
 
 namespace weaver::cli {
 
+std::string error_text(const Status& st) {
+  if (st.is_corruption()) return "corrupt data: " + st.message();
+  if (st.is_io_error()) return "I/O error: " + st.message();
+  return st.message();
+}
+
 int report(const std::string& command, const Status& st) {
-  std::string msg = st.message();
-  if (st.is_corruption()) msg = "corrupt data: " + msg;
-  if (st.is_io_error()) msg = "I/O error: " + msg;
-  std::fprintf(stderr, "weaver %s: %s\n", command.c_str(), msg.c_str());
+  std::fprintf(stderr, "weaver %s: %s\n", command.c_str(), error_text(st).c_str());
   return 1;
 }
 
@@ -18,11 +23,23 @@ int usage_error(const std::string& command, const std::string& message, const ch
   return 2;
 }
 
+uint64_t physical_memory() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? uint64_t(pages) * uint64_t(page) : 0;
+}
+
 Status memory_option(const ParsedArgs& args, uint64_t* bytes) {
   *bytes = kDefaultMemory;
   if (!args.values.count("memory")) return Status::Ok();
   WEAVER_RETURN_IF_ERROR(parse_bytes(args.values.at("memory"), "--memory", bytes));
   if (*bytes < (1u << 20)) return Status::InvalidArgument("--memory must be at least 1M");
+  const uint64_t machine = physical_memory();
+  if (machine > 0 && *bytes > machine) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "--memory %s is more than this machine's memory (%.1f GiB)",
+                  args.values.at("memory").c_str(), machine / double(1ull << 30));
+    return Status::InvalidArgument(buf);
+  }
   return Status::Ok();
 }
 

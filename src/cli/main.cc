@@ -1,6 +1,9 @@
 // weaver: an embedded mesh database for octree hexahedral meshes.
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <exception>
+#include <new>
 #include <string>
 
 #include "cli/cli.h"
@@ -21,12 +24,53 @@ constexpr char kUsage[] =
     "  stat DB           table sizes, per-level counts and storage overhead\n"
     "  query DB ...      locate a point, or list the leaves in a box\n"
     "  verify DB         check pages, keys and the mesh invariants\n"
+    "  recover DB        rebuild a lost or damaged MANIFEST from the table files\n"
     "\n"
     "Run 'weaver <command> --help' for the arguments of one command.\n";
+
+const char* g_command = "";  // for the out-of-memory line
+
+// Running out of memory anywhere, on any thread, ends in one line and exit
+// status 1.  A writer interrupted so leaves its last committed state (the
+// same as a crash: see "Guarantees" in the README).
+[[noreturn]] void out_of_memory() {
+  std::fprintf(stderr, "weaver %s: out of memory (try a smaller --memory)\n", g_command);
+  std::fflush(stderr);
+  std::_Exit(1);
+}
+
+[[noreturn]] void on_terminate() {
+  if (const std::exception_ptr e = std::current_exception()) {
+    try {
+      std::rethrow_exception(e);
+    } catch (const std::bad_alloc&) {
+      out_of_memory();
+    } catch (const std::exception& x) {
+      std::fprintf(stderr, "weaver %s: internal error: %s\n", g_command, x.what());
+    } catch (...) {
+      std::fprintf(stderr, "weaver %s: internal error\n", g_command);
+    }
+  }
+  std::abort();
+}
+
+int dispatch(int argc, char** argv);
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::set_terminate(on_terminate);
+  if (argc >= 2) g_command = argv[1];
+  try {
+    return dispatch(argc, argv);
+  } catch (const std::bad_alloc&) {
+    out_of_memory();
+  }
+}
+
+namespace {
+
+int dispatch(int argc, char** argv) {
   using namespace weaver::cli;
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
       !std::strcmp(argv[1], "help")) {
@@ -44,6 +88,9 @@ int main(int argc, char** argv) {
   if (cmd == "stat") return cmd_stat(argc, argv);
   if (cmd == "query") return cmd_query(argc, argv);
   if (cmd == "verify") return cmd_verify(argc, argv);
+  if (cmd == "recover") return cmd_recover(argc, argv);
   std::fprintf(stderr, "weaver: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
   return 2;
 }
+
+}  // namespace

@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "construct/estimate.h"
 #include "db/database.h"
 #include "model/velocity_model.h"
 #include "schema/octant.h"
@@ -130,6 +131,9 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
   std::unique_ptr<VelocityModel> model;
   WEAVER_RETURN_IF_ERROR(make_model(o.model, o.grid_file, &model));
   p->model = model->describe();
+  const ConstructEstimate e = estimate_construct(o, *p, *model);
+  p->estimated_elements = e.elements;
+  p->estimated_disk_bytes = e.disk_bytes;
   return Status::Ok();
 }
 
@@ -139,6 +143,10 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   WEAVER_RETURN_IF_ERROR(plan_construct(o, p));
   std::unique_ptr<VelocityModel> model;
   WEAVER_RETURN_IF_ERROR(make_model(o.model, o.grid_file, &model));
+  ConstructEstimate e;
+  e.elements = p->estimated_elements;
+  e.disk_bytes = p->estimated_disk_bytes;
+  WEAVER_RETURN_IF_ERROR(check_construct_fits(o, e, db_dir));
   std::unique_ptr<Database> db;
   WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, true, &db));
   TableOptions topt;

@@ -30,6 +30,13 @@ struct ConstructOptions {
   uint64_t memory_bytes = 256ull << 20;
   // Packed leaf pages (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
+  // Refuse to start when the estimated octree (construct/estimate.h) has
+  // more leaves than this, or needs more disk than is free.  5G is ~4x the
+  // paper's 2 Hz mesh.
+  uint64_t max_elements = 5'000'000'000ull;
+  // The run goes on to balance and extract (`weaver mesh`): the disk check
+  // counts their tables too.
+  bool whole_pipeline = false;
   std::function<void(uint64_t leaves)> progress;
 };
 
@@ -42,6 +49,8 @@ struct ConstructPlan {
   std::array<double, 3> domain_m = {0, 0, 0};  // as covered by the blocks
   bool rounded_up = false;  // the domain was not a union of blocks up to level 10
   std::string model;        // the model's description
+  double estimated_elements = 0;  // from a coarse sampling (construct/estimate.h)
+  double estimated_disk_bytes = 0;
 };
 
 struct ConstructResult {

@@ -4,6 +4,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -11,6 +12,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "db/node_table.h"
+#include "db/octant_table.h"
 #include "storage/manifest_file.h"
 
 namespace fs = std::filesystem;
@@ -23,18 +26,58 @@ constexpr char kManifestTmp[] = "MANIFEST.tmp";  // write_manifest_file's tempor
 constexpr char kLock[] = "LOCK";
 constexpr char kManifestHeader[] = "weaver-db 1";  // do not change: on disk
 
-// "octants-12.bt" -> 12; 0 if the name has no number.
-uint64_t file_number(const std::string& file) {
-  const size_t dash = file.rfind('-'), dot = file.rfind('.');
-  if (dash == std::string::npos || dot == std::string::npos || dot < dash) return 0;
+// The entries a new database directory may hold before its first manifest.
+bool is_empty_database_dir(const std::string& dir, bool* has_table_files) {
+  *has_table_files = false;
+  bool empty = true;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name == kLock) continue;
+    empty = false;
+    *has_table_files = *has_table_files || is_table_file_name(name);
+  }
+  return empty;
+}
+
+std::string join(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+}  // namespace
+
+std::string table_source(const std::string& name) {
+  return name == kNodeTable ? kOctantTable : "";
+}
+
+bool is_table_file_name(const std::string& file) {
+  const size_t dash = file.rfind('-');
+  if (dash == std::string::npos || dash == 0 || file.size() < dash + 5) return false;
+  if (file.compare(file.size() - 3, 3, ".bt") != 0) return false;
+  for (size_t i = 0; i < dash; ++i) {
+    if (!std::islower(static_cast<unsigned char>(file[i])) && file[i] != '_') return false;
+  }
+  for (size_t i = dash + 1; i < file.size() - 3; ++i) {
+    if (!std::isdigit(static_cast<unsigned char>(file[i]))) return false;
+  }
+  return true;
+}
+
+uint64_t table_file_number(const std::string& file) {
+  if (!is_table_file_name(file)) return 0;
+  const size_t dash = file.rfind('-');
   try {
-    return std::stoull(file.substr(dash + 1, dot - dash - 1));
+    return std::stoull(file.substr(dash + 1, file.size() - 3 - dash - 1));
   } catch (...) {
     return 0;
   }
 }
 
-}  // namespace
+std::string table_file_table(const std::string& file) {
+  return is_table_file_name(file) ? file.substr(0, file.rfind('-')) : "";
+}
 
 Database::~Database() {
   for (const auto& [name, fd] : snapshot_fds_) ::close(fd);
@@ -46,10 +89,12 @@ Database::~Database() {
 Status Database::open_snapshot() {
   for (int attempt = 0;; ++attempt) {
     bool missing = false;
+    std::pair<std::string, std::string> gone;  // the table whose file was missing
     for (const auto& [name, file] : tables_) {
       const int fd = ::open(table_path(name).c_str(), O_RDONLY | O_CLOEXEC);
       if (fd < 0 && errno == ENOENT) {
         missing = true;
+        gone = {name, file};
         break;
       }
       if (fd < 0) return Status::IOError("cannot open " + table_path(name) + ": " + std::strerror(errno));
@@ -61,47 +106,81 @@ Status Database::open_snapshot() {
     if (attempt == 100) return Status::Busy(dir_ + ": tables keep changing under the reader");
     tables_.clear();
     WEAVER_RETURN_IF_ERROR(read_manifest());
+    // Still named by the newest manifest: deleted, not replaced by a writer.
+    const auto now = tables_.find(gone.first);
+    if (now != tables_.end() && now->second == gone.second) {
+      return Status::Corruption(dir_ + ": the file " + gone.second + " of table '" + gone.first +
+                                "' is missing (named by MANIFEST)");
+    }
   }
 }
 
 Status Database::open(const std::string& dir, Mode mode, bool create_if_missing,
                       std::unique_ptr<Database>* out) {
   std::error_code ec;
-  const bool exists = fs::is_directory(dir, ec);
-  if (!exists) {
+  bool created = false;
+  if (!fs::is_directory(dir, ec)) {
+    if (fs::exists(dir, ec)) return Status::InvalidArgument(dir + ": not a directory");
     if (mode != Mode::kWrite || !create_if_missing) {
       return Status::NotFound(dir + ": no such database directory");
     }
     fs::create_directories(dir, ec);
     if (ec) return Status::IOError("cannot create " + dir + ": " + ec.message());
+    created = true;
   }
   std::unique_ptr<Database> db(new Database(dir, mode));
-  if (mode == Mode::kWrite) {
-    const std::string lock = dir + "/" + kLock;
-    db->lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (db->lock_fd_ < 0) return Status::IOError("cannot open " + lock + ": " + std::strerror(errno));
-    if (::flock(db->lock_fd_, LOCK_EX | LOCK_NB) != 0) {
-      return Status::Busy(dir + ": another weaver process is writing this database");
-    }
-  }
-  if (fs::exists(dir + "/" + kManifest)) {
-    WEAVER_RETURN_IF_ERROR(db->read_manifest());
-  } else if (mode == Mode::kRead) {
-    return Status::NotFound(dir + ": not a weaver database (no MANIFEST)");
-  }
-  if (mode == Mode::kRead) WEAVER_RETURN_IF_ERROR(db->open_snapshot());
-  if (mode == Mode::kWrite) {
-    WEAVER_RETURN_IF_ERROR(db->remove_leftovers());
-    if (!db->cleaned_.empty()) {
-      std::string names;
-      for (const std::string& n : db->cleaned_) names += (names.empty() ? "" : ", ") + n;
-      std::fprintf(stderr, "weaver: %s: removed %zu file%s left by an interrupted writer: %s\n",
-                   dir.c_str(), db->cleaned_.size(), db->cleaned_.size() == 1 ? "" : "s",
-                   names.c_str());
-    }
+  const Status st = db->open_existing(create_if_missing);
+  if (!st.ok()) {
+    db.reset();
+    if (created) fs::remove_all(dir, ec);  // a failed open leaves no trace
+    return st;
   }
   *out = std::move(db);
   return Status::Ok();
+}
+
+Status Database::open_existing(bool create_if_missing) {
+  if (mode_ == Mode::kWrite) WEAVER_RETURN_IF_ERROR(lock());
+  if (fs::exists(dir_ + "/" + kManifest)) {
+    WEAVER_RETURN_IF_ERROR(read_manifest());
+  } else {
+    WEAVER_RETURN_IF_ERROR(start_without_manifest(create_if_missing));
+  }
+  if (mode_ == Mode::kRead) return open_snapshot();
+  WEAVER_RETURN_IF_ERROR(remove_leftovers());
+  if (!cleaned_.empty()) {
+    std::fprintf(stderr, "weaver: %s: removed %zu file%s left by an interrupted writer: %s\n",
+                 dir_.c_str(), cleaned_.size(), cleaned_.size() == 1 ? "" : "s",
+                 join(cleaned_).c_str());
+  }
+  return Status::Ok();
+}
+
+Status Database::lock() {
+  const std::string lock = dir_ + "/" + kLock;
+  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock_fd_ < 0) return Status::IOError("cannot open " + lock + ": " + std::strerror(errno));
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    return Status::Busy(dir_ + ": another weaver process is writing this database");
+  }
+  return Status::Ok();
+}
+
+// No MANIFEST.  Only an empty directory becomes a database (a writer's, with
+// create_if_missing): it gets an empty manifest before any table file, so
+// table files without a manifest are never a writer's leftovers but a
+// damaged database, which nothing here may delete.
+Status Database::start_without_manifest(bool create_if_missing) {
+  bool has_tables = false;
+  const bool empty = is_empty_database_dir(dir_, &has_tables);
+  if (has_tables) {
+    return Status::Corruption(dir_ + ": table files but no MANIFEST; 'weaver recover " + dir_ +
+                              "' rebuilds it from the tables");
+  }
+  if (mode_ == Mode::kRead || !create_if_missing || !empty) {
+    return Status::NotFound(dir_ + ": not a weaver database (no MANIFEST)");
+  }
+  return write_manifest({});
 }
 
 Status Database::read_manifest() {
@@ -116,15 +195,15 @@ Status Database::read_manifest() {
       return Status::Corruption(path + ": bad line '" + line + "'");
     }
     tables_[a] = b;
-    next_file_number_ = std::max(next_file_number_, file_number(b) + 1);
+    next_file_number_ = std::max(next_file_number_, table_file_number(b) + 1);
   }
   return Status::Ok();
 }
 
-Status Database::write_manifest(const std::map<std::string, std::string>& tables) {
+Status Database::write_manifest(const std::map<std::string, std::string>& tables, bool* renamed) {
   std::vector<std::string> lines;
   for (const auto& [name, file] : tables) lines.push_back("table " + name + " " + file);
-  return write_manifest_file(dir_, kManifest, kManifestHeader, lines);
+  return write_manifest_file(dir_, kManifest, kManifestHeader, lines, renamed);
 }
 
 Status Database::remove_leftovers() {
@@ -134,10 +213,10 @@ Status Database::remove_leftovers() {
     if (name == kManifest || name == kLock) continue;
     bool live = false;
     for (const auto& [table, file] : tables_) live = live || file == name;
-    const bool ours = name == kManifestTmp || entry.path().extension() == ".bt" ||
+    const bool ours = name == kManifestTmp || is_table_file_name(name) ||
                       name.rfind("tmp-", 0) == 0;
     if (live || !ours) continue;
-    next_file_number_ = std::max(next_file_number_, file_number(name) + 1);
+    next_file_number_ = std::max(next_file_number_, table_file_number(name) + 1);
     fs::remove_all(entry.path(), ec);
     cleaned_.push_back(name);
   }
@@ -180,16 +259,39 @@ Status Database::create_table(const std::string& name, const TableOptions& optio
 }
 
 Status Database::commit(const std::map<std::string, std::string>& table_files) {
-  if (mode_ != Mode::kWrite) return Status::InvalidArgument(dir_ + ": opened read-only");
   std::map<std::string, std::string> next = tables_;
+  for (const auto& [name, file] : table_files) next[name] = file;
+  std::vector<std::string> dropped;
+  for (const auto& [name, file] : tables_) {
+    const std::string source = table_source(name);
+    if (!source.empty() && table_files.count(source) && !table_files.count(name)) {
+      next.erase(name);
+      dropped.push_back(name);
+    }
+  }
+  WEAVER_RETURN_IF_ERROR(commit_exactly(next));
+  dropped_ = dropped;
+  for (const std::string& name : dropped) {
+    std::fprintf(stderr, "weaver: %s: dropped table '%s', derived from the replaced table '%s'\n",
+                 dir_.c_str(), name.c_str(), table_source(name).c_str());
+  }
+  return Status::Ok();
+}
+
+Status Database::commit_exactly(const std::map<std::string, std::string>& tables) {
+  if (mode_ != Mode::kWrite) return Status::InvalidArgument(dir_ + ": opened read-only");
   std::vector<std::string> replaced;
-  for (const auto& [name, file] : table_files) {
-    if (next.count(name)) replaced.push_back(next[name]);
-    next[name] = file;
+  for (const auto& [name, file] : tables_) {
+    const auto it = tables.find(name);
+    if (it == tables.end() || it->second != file) replaced.push_back(file);
   }
   WEAVER_RETURN_IF_ERROR(sync_path(dir_, true));  // the new files' directory entries
-  WEAVER_RETURN_IF_ERROR(write_manifest(next));
-  tables_ = std::move(next);
+  bool renamed = false;
+  const Status st = write_manifest(tables, &renamed);
+  if (renamed) tables_ = tables;  // readers see the new manifest, error or not
+  // Not known to be durable: a power cut may bring the old manifest back, so
+  // its files stay until the next writer finds them unnamed.
+  if (!st.ok()) return st;
   std::error_code ec;
   for (const std::string& old : replaced) fs::remove(dir_ + "/" + old, ec);
   return Status::Ok();
@@ -207,6 +309,9 @@ Status Database::publish(const std::string& name, const std::string& file,
 }
 
 void Database::abandon(const std::string& file_name) {
+  for (const auto& [name, file] : tables_) {
+    if (file == file_name) return;  // live after all (a commit failed after its rename)
+  }
   std::error_code ec;
   fs::remove(dir_ + "/" + file_name, ec);
 }

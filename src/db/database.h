@@ -8,8 +8,16 @@
 //
 // A writer builds new table files beside the live ones and commits them by
 // writing MANIFEST.tmp, syncing it, renaming it over MANIFEST and syncing the
-// directory.  A crash before the rename leaves the old state; files no
-// manifest names are leftovers, removed by the next writer.
+// directory.  A crash before the rename leaves the old state.  Files no
+// valid manifest names that have a writer's own name patterns (table files
+// "<name>-<n>.bt", MANIFEST.tmp, "tmp-*" scratch directories) are leftovers,
+// removed by the next writer; nothing else is ever removed.  A new database
+// gets an empty manifest before any table file, so a directory with table
+// files and no manifest is refused (`weaver recover` rebuilds one).
+//
+// Some tables derive from others (the node table from the octant table): a
+// commit that replaces a table drops, in the same manifest, every table
+// derived from it that the commit does not also replace.
 //
 // A reader opens every live table file when it opens the database, so it
 // reads one committed state (a snapshot) however many commits and file
@@ -26,6 +34,13 @@
 
 namespace weaver {
 
+// What `Database::recover` found and did, one line per item.
+struct RecoverReport {
+  std::vector<std::string> tables;     // "octants from octants-7.bt (1234 records)"
+  std::vector<std::string> set_aside;  // "octants-3.bt (why)", renamed <file>.unused
+  std::string manifest_set_aside;      // "MANIFEST.damaged" when there was one
+};
+
 class Database {
  public:
   enum class Mode { kRead, kWrite };
@@ -35,6 +50,10 @@ class Database {
   static Status open(const std::string& dir, Mode mode, bool create_if_missing,
                      std::unique_ptr<Database>* out);
   ~Database();
+  // Rebuilds the MANIFEST of a database that lost it (or whose manifest is
+  // damaged, which is kept as MANIFEST.damaged) from its table files
+  // (src/db/recover.cc).  Refuses a database whose manifest is intact.
+  static Status recover(const std::string& dir, RecoverReport* report);
 
   bool has_table(const std::string& name) const { return tables_.count(name) != 0; }
   std::vector<std::string> table_names() const;
@@ -47,9 +66,13 @@ class Database {
   Status create_table(const std::string& name, const TableOptions& options, uint64_t pool_bytes,
                       std::unique_ptr<BTree>* out, std::string* file_name);
   // Writer only: makes the given files (already committed with BTree::commit)
-  // the live tables, atomically, and deletes the files they replace.
+  // the live tables, atomically, drops the tables derived from those it
+  // replaces (saying so on stderr), and deletes the files they replace.
   Status commit(const std::map<std::string, std::string>& table_files);
-  // Writer only: deletes an uncommitted file after a failed build.
+  // Writer only: makes exactly these tables live (recovery).
+  Status commit_exactly(const std::map<std::string, std::string>& tables);
+  // Writer only: deletes an uncommitted file after a failed build (never a
+  // file the manifest names).
   void abandon(const std::string& file_name);
   // Writer only: ends the build of table `name` in `file`.  If `built` is OK,
   // commits the table and makes it live; otherwise (or if that fails) closes
@@ -60,12 +83,17 @@ class Database {
   // Files in the directory that no manifest names (left by a crashed writer);
   // a writer removes them when it opens.
   const std::vector<std::string>& cleaned_leftovers() const { return cleaned_; }
+  // Tables the last commit dropped because a table they derive from changed.
+  const std::vector<std::string>& dropped_tables() const { return dropped_; }
   const std::string& dir() const { return dir_; }
 
  private:
   Database(std::string dir, Mode mode) : dir_(std::move(dir)), mode_(mode) {}
+  Status open_existing(bool create_if_missing);
+  Status lock();
+  Status start_without_manifest(bool create_if_missing);
   Status read_manifest();
-  Status write_manifest(const std::map<std::string, std::string>& tables);
+  Status write_manifest(const std::map<std::string, std::string>& tables, bool* renamed = nullptr);
   Status remove_leftovers();
 
   std::string dir_;
@@ -76,6 +104,16 @@ class Database {
   std::map<std::string, int> snapshot_fds_;    // reader: name -> open descriptor
   Status open_snapshot();
   std::vector<std::string> cleaned_;
+  std::vector<std::string> dropped_;
 };
+
+// The table that `name` is computed from ("" for none): the node table is
+// extracted from the octant table.
+std::string table_source(const std::string& name);
+// Whether a directory entry has the name of a table file, "<name>-<n>.bt".
+bool is_table_file_name(const std::string& file);
+// The <n> of "<name>-<n>.bt" (0 if none) and the <name>.
+uint64_t table_file_number(const std::string& file);
+std::string table_file_table(const std::string& file);
 
 }  // namespace weaver

@@ -188,19 +188,38 @@ Status build_table(Database& db, const std::string& text_path, const ImportOptio
   return st;
 }
 
+Status check_input_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return Status::InvalidArgument(path + ": is a directory");
+  if (!std::filesystem::exists(path, ec)) return Status::NotFound(path + ": no such file");
+  return Status::Ok();
+}
+
+// The units of the table being replaced, for those the options do not give.
+Status keep_units(const Database& db, ImportOptions* o) {
+  if (!db.has_table(kOctantTable) || (o->tick_given && o->origin_given)) return Status::Ok();
+  std::unique_ptr<BTree> old;
+  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, 64 << 10, &old));
+  Units kept;
+  units_from_metadata(old->options().metadata, &kept);
+  if (!o->tick_given) o->units.tick_m = kept.tick_m;
+  if (!o->origin_given) o->units.origin_m = kept.origin_m;
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status import_octants(const std::string& db_dir, const std::string& text_path,
                       const ImportOptions& options, ImportResult* result) {
-  if (!std::filesystem::is_regular_file(text_path)) {
-    return Status::NotFound(text_path + ": no such file");
-  }
+  WEAVER_RETURN_IF_ERROR(check_input_file(text_path));
   const bool existed = std::filesystem::exists(db_dir);
   std::unique_ptr<Database> db;
   WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, true, &db));
+  ImportOptions o = options;
+  WEAVER_RETURN_IF_ERROR(keep_units(*db, &o));
   const std::string scratch = db_dir + "/tmp-import-" + std::to_string(::getpid());
   std::string file_name;
-  Status st = build_table(*db, text_path, options, scratch, &file_name, result);
+  Status st = build_table(*db, text_path, o, scratch, &file_name, result);
   std::error_code ec;
   std::filesystem::remove_all(scratch, ec);
   if (st.ok()) st = db->commit({{kOctantTable, file_name}});

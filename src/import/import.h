@@ -18,7 +18,10 @@ namespace weaver {
 
 struct ImportOptions {
   uint64_t memory_bytes = 256ull << 20;
+  // The units of the new table.  Those not given keep the values of the
+  // octant table being replaced (or the defaults when there is none).
   Units units;
+  bool tick_given = false, origin_given = false;
   // Packed leaf pages (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
   // Called now and then with (phase, items done); may be empty.

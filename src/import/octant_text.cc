@@ -5,17 +5,14 @@
 #include <cstring>
 #include <memory>
 
+#include "util/printable.h"
+
 namespace weaver {
 namespace {
 
 constexpr size_t kReadChunk = 1 << 20;
 
-std::string shorten(std::string_view s) {
-  constexpr size_t kMax = 60;
-  std::string out(s.substr(0, kMax));
-  if (s.size() > kMax) out += "...";
-  return out;
-}
+std::string shorten(std::string_view s) { return printable(s); }
 
 // Parses one non-comment line; returns "" on success or the reason it failed.
 std::string parse_line(std::string_view line, Octant* o) {

@@ -60,7 +60,7 @@ class GridModel final : public VelocityModel {
 };
 
 Status bad(const std::string& path, const std::string& why) {
-  return Status::InvalidArgument(path + ": " + why);
+  return Status::Corruption(path + ": " + why);  // bad data, not bad usage
 }
 
 }  // namespace

@@ -15,6 +15,7 @@ Status parse_args(int argc, char** argv, int start, const std::set<std::string>&
       out->help = true;
     } else if (a.rfind("--", 0) == 0) {
       const std::string name = a.substr(2);
+      if (out->has(name)) return Status::InvalidArgument("option " + a + " given twice");
       if (value_options.count(name)) {
         if (i + 1 >= argc) return Status::InvalidArgument("option " + a + " needs a value");
         out->values[name] = argv[++i];
@@ -47,7 +48,13 @@ Status parse_double(const std::string& text, const std::string& what, double* ou
   return Status::Ok();
 }
 
-Status parse_bytes(const std::string& text, const std::string& what, uint64_t* out) {
+namespace {
+
+// A number with an optional K/M/G/T suffix in powers of `base`; `extra`
+// letters may end the suffix ("B", "iB" for sizes).  The result must be
+// below 2^64: anything larger would wrap.
+Status parse_scaled(const std::string& text, const std::string& what, double base, bool bytes,
+                    const char* like, uint64_t* out) {
   size_t digits = 0;
   while (digits < text.size() && (std::isdigit(static_cast<unsigned char>(text[digits])) ||
                                   text[digits] == '.')) {
@@ -55,20 +62,31 @@ Status parse_bytes(const std::string& text, const std::string& what, uint64_t* o
   }
   std::string unit = text.substr(digits);
   for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  if (unit.size() > 1 && unit.back() == 'B') unit.pop_back();
-  if (unit.size() > 1 && unit.back() == 'I') unit.pop_back();
-  double scale = 0;
-  if (unit.empty() || unit == "B") scale = 1;
-  if (unit == "K") scale = 1024.0;
-  if (unit == "M") scale = 1024.0 * 1024;
-  if (unit == "G") scale = 1024.0 * 1024 * 1024;
-  if (unit == "T") scale = 1024.0 * 1024 * 1024 * 1024;
+  if (bytes && unit.size() > 1 && unit.back() == 'B') unit.pop_back();
+  if (bytes && unit.size() > 1 && unit.back() == 'I') unit.pop_back();
+  const std::string letters = bytes ? "BKMGT" : " KMGT";
+  const size_t power = unit.size() == 1 ? letters.find(unit[0]) : std::string::npos;
+  const double scale = unit.empty() ? 1 : power == std::string::npos ? 0 : std::pow(base, double(power));
   double value = 0;
   if (digits == 0 || scale == 0 || !parse_double(text.substr(0, digits), what, &value).ok()) {
-    return Status::InvalidArgument(what + " must be a size like 256M or 2G, got '" + text + "'");
+    return Status::InvalidArgument(what + " must be " + like + ", got '" + text + "'");
+  }
+  // 2^64 is exactly representable; anything at or above it would wrap.
+  if (!(value * scale < 18446744073709551616.0)) {
+    return Status::InvalidArgument(what + " is too large: '" + text + "'");
   }
   *out = static_cast<uint64_t>(value * scale);
   return Status::Ok();
+}
+
+}  // namespace
+
+Status parse_bytes(const std::string& text, const std::string& what, uint64_t* out) {
+  return parse_scaled(text, what, 1024, true, "a size like 256M or 2G", out);
+}
+
+Status parse_count(const std::string& text, const std::string& what, uint64_t* out) {
+  return parse_scaled(text, what, 1000, false, "a count like 5000000 or 5G", out);
 }
 
 namespace {

@@ -21,13 +21,17 @@ struct ParsedArgs {
 };
 
 // Splits argv[start..] into positionals, options that take a value and
-// boolean flags; anything else starting with "--" is an error.
+// boolean flags; anything else starting with "--" is an error, and so is an
+// option given twice (rather than silently taking the last value).
 Status parse_args(int argc, char** argv, int start, const std::set<std::string>& value_options,
                   const std::set<std::string>& flag_options, ParsedArgs* out);
 
 // "256M", "2G", "512K", "1048576" (K/M/G are powers of 1024; a trailing "B"
-// or "iB" is accepted).  `what` names the argument in the error.
+// or "iB" is accepted).  `what` names the argument in the error; sizes of
+// 2^64 bytes or more are refused, never wrapped.
 Status parse_bytes(const std::string& text, const std::string& what, uint64_t* out);
+// "5000000", "5M", "5G": K/M/G/T are powers of 1000.
+Status parse_count(const std::string& text, const std::string& what, uint64_t* out);
 Status parse_u64(const std::string& text, const std::string& what, uint64_t* out);
 Status parse_double(const std::string& text, const std::string& what, double* out);
 // "a,b,c" into n numbers.

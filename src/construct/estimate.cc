@@ -1,0 +1,99 @@
+#include "construct/estimate.h"
+
+#include <sys/statvfs.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+namespace weaver {
+namespace {
+
+// Sampling cells per domain: enough to see a basin's bowls, cheap (one model
+// sample each, a few milliseconds).
+constexpr double kSampleCells = 32768;
+// Bytes per leaf of an octant table with materials (measured: packed 5.6,
+// plain 20.2 on the 0.5 Hz basin), rounded up.
+constexpr double kPackedLeafBytes = 6, kPlainLeafBytes = 21;
+// A whole `mesh` run needs, besides the octant table: balance's output (up
+// to ~1.1x the input) and scratch spools, and the node table (~0.7 bytes a
+// node, ~1.1 nodes per leaf): about 3 octant tables' worth.
+constexpr double kPipelineTables = 3;
+// Room kept free for everything else on the disk.
+constexpr double kHeadroom = 1.1;
+
+std::string human(double v) {
+  char buf[32];
+  const char* units[] = {"", "K", "M", "G", "T", "P", "E"};
+  int u = 0;
+  while (v >= 1000 && u < 6) v /= 1000, ++u;
+  std::snprintf(buf, sizeof buf, "%.3g%s", v, units[u]);
+  return buf;
+}
+
+// Free bytes on the file system of dir (or of its nearest existing parent).
+double free_bytes(const std::string& dir) {
+  std::filesystem::path p = std::filesystem::absolute(dir);
+  std::error_code ec;
+  while (!p.empty() && !std::filesystem::exists(p, ec) && p != p.parent_path()) p = p.parent_path();
+  struct statvfs s;
+  if (::statvfs(p.c_str(), &s) != 0) return -1;
+  return double(s.f_bavail) * double(s.f_frsize);
+}
+
+}  // namespace
+
+ConstructEstimate estimate_construct(const ConstructOptions& o, const ConstructPlan& p,
+                                     const VelocityModel& model) {
+  ConstructEstimate e;
+  const double blocks = double(p.blocks[0]) * p.blocks[1] * p.blocks[2];
+  int level = p.block_level;
+  while (level < o.max_level && blocks * std::pow(8.0, level + 1 - p.block_level) <= kSampleCells) {
+    ++level;
+  }
+  e.sample_level = level;
+  const uint64_t n = uint64_t{1} << (level - p.block_level);  // cells per block side
+  const uint64_t cells[3] = {p.blocks[0] * n, p.blocks[1] * n, p.blocks[2] * n};
+  // Very many blocks (a domain rounded up to level-10 blocks): every
+  // step-th cell per axis, each standing for step^3 cells.
+  const double total = double(cells[0]) * cells[1] * cells[2];
+  const uint64_t step = std::max<uint64_t>(1, uint64_t(std::ceil(std::cbrt(total / kSampleCells))));
+  const double weight = total / (double((cells[0] + step - 1) / step) *
+                                 double((cells[1] + step - 1) / step) * double((cells[2] + step - 1) / step));
+  const double cell_m = p.root_edge_m / std::ldexp(1.0, level), rate = o.freq * o.ppw;
+  for (uint64_t k = 0; k < cells[2]; k += step)
+    for (uint64_t j = 0; j < cells[1]; j += step)
+      for (uint64_t i = 0; i < cells[0]; i += step) {
+        // Vs at the cell centre: the least Vs over a cell as coarse as this
+        // one would ask for leaves much finer than the material around.
+        const double vs = std::max<double>(
+            model.at((i + 0.5) * cell_m, (j + 0.5) * cell_m, (k + 0.5) * cell_m).vs, o.vs_min);
+        // The leaf level the rule asks for here: edge <= vs / rate.
+        double want = std::ceil(std::log2(p.root_edge_m * rate / std::max(vs, 1e-300)));
+        want = std::clamp(want, double(std::max(o.min_level, p.block_level)), double(o.max_level));
+        e.elements += weight * std::pow(8.0, want - level);
+      }
+  e.table_bytes = e.elements * (o.packed ? kPackedLeafBytes : kPlainLeafBytes);
+  e.disk_bytes = e.table_bytes * (o.whole_pipeline ? kPipelineTables : 1) * kHeadroom;
+  return e;
+}
+
+Status check_construct_fits(const ConstructOptions& o, const ConstructEstimate& e,
+                            const std::string& db_dir) {
+  if (e.elements > double(o.max_elements)) {
+    return Status::InvalidArgument("the octree would have about " + human(e.elements) +
+                                   " elements, more than --max-elements " +
+                                   human(double(o.max_elements)) +
+                                   " (lower --freq or --domain, or raise --max-elements)");
+  }
+  const double avail = free_bytes(db_dir);
+  if (avail >= 0 && e.disk_bytes > avail) {
+    return Status::InvalidArgument("the octree would have about " + human(e.elements) +
+                                   " elements needing about " + human(e.disk_bytes) +
+                                   "B of disk, but " + db_dir + " has " + human(avail) + "B free");
+  }
+  return Status::Ok();
+}
+
+}  // namespace weaver
