@@ -42,8 +42,6 @@ void print_construct_plan(const weaver::ConstructOptions& o, const weaver::Const
 inline constexpr uint64_t kDefaultMemory = 256ull << 20;
 // --memory: at least 1M and at most the machine's physical memory.
 Status memory_option(const ParsedArgs& args, uint64_t* bytes);
-// Bytes of physical memory (0 if unknown).
-uint64_t physical_memory();
 Status threads_option(const ParsedArgs& args, int default_threads, int* threads);
 
 }  // namespace weaver::cli

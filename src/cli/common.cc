@@ -1,5 +1,3 @@
-#include <unistd.h>
-
 #include <cstdio>
 
 #include "cli/cli.h"
@@ -21,11 +19,6 @@ int usage_error(const std::string& command, const std::string& message, const ch
   std::fprintf(stderr, "weaver %s: %s (see 'weaver %s --help')\n", command.c_str(),
                message.c_str(), command.c_str());
   return 2;
-}
-
-uint64_t physical_memory() {
-  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && page > 0 ? uint64_t(pages) * uint64_t(page) : 0;
 }
 
 Status memory_option(const ParsedArgs& args, uint64_t* bytes) {

@@ -33,7 +33,8 @@ bool is_empty_database_dir(const std::string& dir, bool* has_table_files) {
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
-    if (name == kLock) continue;
+    // A crash while the first manifest was written leaves MANIFEST.tmp.
+    if (name == kLock || name == kManifestTmp) continue;
     empty = false;
     *has_table_files = *has_table_files || is_table_file_name(name);
   }
@@ -140,11 +141,14 @@ Status Database::open(const std::string& dir, Mode mode, bool create_if_missing,
 }
 
 Status Database::open_existing(bool create_if_missing) {
+  // Checked before the lock too, so that a directory that is not a database
+  // does not even get a LOCK file.
+  if (!fs::exists(dir_ + "/" + kManifest)) WEAVER_RETURN_IF_ERROR(start_without_manifest(false, true));
   if (mode_ == Mode::kWrite) WEAVER_RETURN_IF_ERROR(lock());
   if (fs::exists(dir_ + "/" + kManifest)) {
     WEAVER_RETURN_IF_ERROR(read_manifest());
   } else {
-    WEAVER_RETURN_IF_ERROR(start_without_manifest(create_if_missing));
+    WEAVER_RETURN_IF_ERROR(start_without_manifest(create_if_missing, false));
   }
   if (mode_ == Mode::kRead) return open_snapshot();
   WEAVER_RETURN_IF_ERROR(remove_leftovers());
@@ -170,16 +174,19 @@ Status Database::lock() {
 // create_if_missing): it gets an empty manifest before any table file, so
 // table files without a manifest are never a writer's leftovers but a
 // damaged database, which nothing here may delete.
-Status Database::start_without_manifest(bool create_if_missing) {
+Status Database::start_without_manifest(bool create_if_missing, bool check_only) {
   bool has_tables = false;
   const bool empty = is_empty_database_dir(dir_, &has_tables);
   if (has_tables) {
     return Status::Corruption(dir_ + ": table files but no MANIFEST; 'weaver recover " + dir_ +
                               "' rebuilds it from the tables");
   }
+  if (check_only && (empty && mode_ == Mode::kWrite)) return Status::Ok();
   if (mode_ == Mode::kRead || !create_if_missing || !empty) {
     return Status::NotFound(dir_ + ": not a weaver database (no MANIFEST)");
   }
+  std::error_code ec;
+  if (fs::remove(dir_ + "/" + kManifestTmp, ec)) cleaned_.push_back(kManifestTmp);
   return write_manifest({});
 }
 

@@ -91,7 +91,7 @@ class Database {
   Database(std::string dir, Mode mode) : dir_(std::move(dir)), mode_(mode) {}
   Status open_existing(bool create_if_missing);
   Status lock();
-  Status start_without_manifest(bool create_if_missing);
+  Status start_without_manifest(bool create_if_missing, bool check_only);
   Status read_manifest();
   Status write_manifest(const std::map<std::string, std::string>& tables, bool* renamed = nullptr);
   Status remove_leftovers();

@@ -1,11 +1,18 @@
 #include "util/args.h"
 
+#include <unistd.h>
+
 #include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
 
 namespace weaver {
+
+uint64_t physical_memory() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? uint64_t(pages) * uint64_t(page) : 0;
+}
 
 Status parse_args(int argc, char** argv, int start, const std::set<std::string>& value_options,
                   const std::set<std::string>& flag_options, ParsedArgs* out) {

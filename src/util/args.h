@@ -30,6 +30,9 @@ Status parse_args(int argc, char** argv, int start, const std::set<std::string>&
 // or "iB" is accepted).  `what` names the argument in the error; sizes of
 // 2^64 bytes or more are refused, never wrapped.
 Status parse_bytes(const std::string& text, const std::string& what, uint64_t* out);
+// Bytes of physical memory of this machine (0 if unknown): the ceiling of
+// every --memory.
+uint64_t physical_memory();
 // "5000000", "5M", "5G": K/M/G/T are powers of 1000.
 Status parse_count(const std::string& text, const std::string& what, uint64_t* out);
 Status parse_u64(const std::string& text, const std::string& what, uint64_t* out);
