@@ -12,4 +12,15 @@ namespace weaver {
 
 uint32_t checksum32(const void* data, size_t n);
 
+// Whether readers compare stored checksums.  Always, except in the fuzzing
+// build (fuzz/, clang defines FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION there
+// by our CMake option), where a mismatch would stop every mutated input at
+// the checksum and the decoders behind it would never be exercised.
+constexpr bool kChecksumsEnforced =
+#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+    false;
+#else
+    true;
+#endif
+
 }  // namespace weaver
