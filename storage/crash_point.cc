@@ -73,6 +73,27 @@ int step() {
   return s.steps == s.fail_at ? s.fail_errno : 0;
 }
 
+void arm(uint64_t n) {
+  State& s = State::instance();
+  std::lock_guard<std::mutex> lock(s.mu);
+  s.enabled = true;
+  s.steps = 0;
+  s.crash_at = n;
+}
+
+void disarm() {
+  State& s = State::instance();
+  std::lock_guard<std::mutex> lock(s.mu);
+  s.enabled = false;
+  s.unsynced.clear();
+}
+
+uint64_t steps_taken() {
+  State& s = State::instance();
+  std::lock_guard<std::mutex> lock(s.mu);
+  return s.steps;
+}
+
 void note_write(int fd, uint64_t offset, size_t n) {
   State& s = State::instance();
   if (!s.enabled) return;

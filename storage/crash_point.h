@@ -22,6 +22,12 @@ namespace weaver::crash_point {
 // Counts a step; dies if it is the chosen one, or returns the errno it
 // must fail with (0: go ahead).  Cheap when idle.
 [[nodiscard]] int step();
+// Tests that fork a writer arm the simulator in the child instead of through
+// the environment: die at step n from now (0: only count).  steps_taken()
+// is the count so far.
+void arm(uint64_t n);
+void disarm();
+uint64_t steps_taken();
 // Bookkeeping for the zeroing: a write of n bytes at offset to fd, a sync of
 // fd, and fd closing.
 void note_write(int fd, uint64_t offset, size_t n);
