@@ -187,6 +187,17 @@ Status BTree::fetch_typed(uint32_t page_no, page::PageType type, PageRef* ref) {
                               std::to_string(static_cast<int>(type)) + ", found " +
                               std::to_string(found));
   }
+  // The entry count is trusted by every search of the page: past the
+  // capacity it would walk off the page.
+  const uint32_t n = page::count(ref->data());
+  const uint32_t cap = type == page::PageType::kInternal ? internal_cap_
+                       : type == page::PageType::kLeaf   ? leaf_cap_
+                                                         : UINT32_MAX;  // packed: PackedLeaf::open checks
+  if (n > cap) {
+    ref->reset();
+    return Status::Corruption(where(page_no) + ": entry count " + std::to_string(n) +
+                              " exceeds the page's capacity " + std::to_string(cap));
+  }
   return Status::Ok();
 }
 
