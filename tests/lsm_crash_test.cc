@@ -84,7 +84,7 @@ TEST(LsmCrash, EveryStepLeavesACommittedState) {
   const uint64_t steps = crash_point::steps_taken();
   crash_point::disarm();
   ASSERT_GT(steps, 100u);
-  const uint64_t points = std::min<uint64_t>(steps, testing::scaled(120, 30));
+  const uint64_t points = std::min<uint64_t>(steps, testing::scaled(120, 15));
   int recovered = 0, fresh = 0;
   for (uint64_t p = 0; p < points; ++p) {
     const uint64_t at = 1 + p * steps / points;
