@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <fstream>
 #include <string>
 
 #include "storage/file.h"
@@ -29,6 +30,18 @@ class MemoryPath {
  private:
   int fd_;
 };
+
+// Writes the bytes as `name` in a scratch directory made once per process,
+// for the readers that open a directory (database, LSM); returns the directory.
+inline std::string write_scratch_file(const char* name, const uint8_t* data, size_t size) {
+  static const std::string dir = [] {
+    std::string tmpl = "/tmp/weaver-fuzz-XXXXXX";
+    return std::string(::mkdtemp(tmpl.data()));
+  }();
+  std::ofstream out(dir + "/" + name, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  return dir;
+}
 
 // A read-only File over the fuzzer's bytes.
 class MemoryFile final : public File {
