@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
         ConstructOptions o;
         o.model = "basin";
         o.freq = f;
-        o.memory_bytes = memory;
+        o.memory = MemoryBudget(memory);
         ConstructPlan plan;
         ConstructResult res;
         const double t0 = now_seconds();
@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
       ::sync();
       const std::string b = run_in_child([&](Json* j) {
         BalanceOptions o;
-        o.memory_bytes = memory;
+        o.memory = MemoryBudget(memory);
         BalanceResult res;
         const double t0 = now_seconds();
         if (!balance_octree(db, o, &res).ok()) return false;

@@ -13,6 +13,7 @@
 // Functions assert their REQUIRES clauses in debug builds.
 #pragma once
 
+#include <array>
 #include <bit>
 #include <cassert>
 #include <cstdint>
@@ -35,7 +36,10 @@ struct Octant {
 };
 
 // Edge length in ticks of an octant at `level`.  REQUIRES: 0 <= level <= 20.
-constexpr uint32_t octant_edge(int level) { return kRootEdge >> level; }
+constexpr uint32_t octant_edge(int level) {
+  assert(level >= 0 && level <= kMaxLevel);
+  return kRootEdge >> level;
+}
 constexpr uint32_t octant_edge(const Octant& o) { return octant_edge(o.level); }
 
 constexpr bool pixel_is_valid(Coord p) {
@@ -46,7 +50,7 @@ constexpr bool node_is_valid(Coord p) {
 }
 constexpr bool octant_is_valid(const Octant& o) {
   if (o.level > kMaxLevel) return false;
-  const uint32_t mask = octant_edge(o.level) - 1;
+  const uint32_t mask = (kRootEdge >> o.level) - 1;
   return pixel_is_valid({o.x, o.y, o.z}) && ((o.x | o.y | o.z) & mask) == 0;
 }
 
@@ -56,26 +60,27 @@ constexpr Coord octant_corner(const Octant& o) { return {o.x, o.y, o.z}; }
 // Corner k (0..7) of the octant: x varies fastest.  Accepts: octant.
 // Returns: node.
 constexpr Coord octant_corner(const Octant& o, int k) {
+  assert(octant_is_valid(o) && k >= 0 && k < 8);
   const uint32_t s = octant_edge(o);
   return {o.x + s * (k & 1), o.y + s * ((k >> 1) & 1), o.z + s * ((k >> 2) & 1)};
 }
 
 // The ancestor of `o` at `level`.  REQUIRES: octant, level <= o.level.
 constexpr Octant octant_ancestor(const Octant& o, int level) {
-  assert(level <= o.level);
+  assert(octant_is_valid(o) && level >= 0 && level <= o.level);
   const uint32_t mask = ~(octant_edge(level) - 1);
   return {o.x & mask, o.y & mask, o.z & mask, static_cast<uint8_t>(level)};
 }
 
 // REQUIRES: octant, level > 0.
 constexpr Octant octant_parent(const Octant& o) {
-  assert(o.level > 0);
+  assert(octant_is_valid(o) && o.level > 0);
   return octant_ancestor(o, o.level - 1);
 }
 
 // Child k (0..7), x fastest.  REQUIRES: octant, level < kMaxLevel.
 constexpr Octant octant_child(const Octant& o, int k) {
-  assert(o.level < kMaxLevel && k >= 0 && k < 8);
+  assert(octant_is_valid(o) && o.level < kMaxLevel && k >= 0 && k < 8);
   const uint32_t h = octant_edge(o.level + 1);
   return {o.x + h * (k & 1), o.y + h * ((k >> 1) & 1), o.z + h * ((k >> 2) & 1),
           static_cast<uint8_t>(o.level + 1)};
@@ -83,6 +88,7 @@ constexpr Octant octant_child(const Octant& o, int k) {
 
 // Which child of its parent `o` is (0..7).  REQUIRES: octant, level > 0.
 constexpr int octant_child_id(const Octant& o) {
+  assert(octant_is_valid(o) && o.level > 0);
   const int shift = kMaxLevel - o.level;
   return static_cast<int>(((o.x >> shift) & 1) | (((o.y >> shift) & 1) << 1) |
                           (((o.z >> shift) & 1) << 2));
@@ -91,6 +97,7 @@ constexpr int octant_child_id(const Octant& o) {
 // Whether tick point p lies in the half-open box [corner, corner + edge).
 // Accepts: octant, node.
 constexpr bool octant_contains_point(const Octant& o, Coord p) {
+  assert(octant_is_valid(o) && node_is_valid(p));
   const uint32_t s = octant_edge(o);
   // Unsigned subtraction wraps for p < corner, so one compare per axis suffices.
   return p.x - o.x < s && p.y - o.y < s && p.z - o.z < s;
@@ -98,6 +105,7 @@ constexpr bool octant_contains_point(const Octant& o, Coord p) {
 
 // Whether `a` is a strict ancestor of `b`.  Accepts: octants.
 constexpr bool octant_is_ancestor(const Octant& a, const Octant& b) {
+  assert(octant_is_valid(a) && octant_is_valid(b));
   if (a.level >= b.level) return false;
   const int shift = kMaxLevel - a.level;  // up to 20: fine for uint32_t
   return (a.x >> shift) == (b.x >> shift) && (a.y >> shift) == (b.y >> shift) &&
@@ -106,6 +114,7 @@ constexpr bool octant_is_ancestor(const Octant& a, const Octant& b) {
 
 // The smallest octant containing both.  Accepts: octants.
 constexpr Octant octant_nearest_common_ancestor(const Octant& a, const Octant& b) {
+  assert(octant_is_valid(a) && octant_is_valid(b));
   const uint32_t diff = (a.x ^ b.x) | (a.y ^ b.y) | (a.z ^ b.z);
   int level = kMaxLevel - static_cast<int>(std::bit_width(diff));
   if (a.level < level) level = a.level;
@@ -113,12 +122,49 @@ constexpr Octant octant_nearest_common_ancestor(const Octant& a, const Octant& b
   return octant_ancestor(a, level);
 }
 
-// The same-size neighbour across the face (one of dx, dy, dz non-zero), edge
-// (two) or corner (three); each d in {-1, 0, 1}, not all zero.  Returns false
-// when the neighbour lies outside the root.  Accepts: octant.
-constexpr bool octant_neighbour(const Octant& o, int dx, int dy, int dz, Octant* out) {
+// A neighbour direction: each component in {-1, 0, 1}, not all zero.  One
+// non-zero component crosses a face, two an edge, three a corner.
+struct Direction {
+  int8_t dx = 0, dy = 0, dz = 0;
+  enum class Kind { kFace = 1, kEdge = 2, kCorner = 3 };
+
+  constexpr int nonzero() const { return (dx != 0) + (dy != 0) + (dz != 0); }
+  constexpr Kind kind() const { return static_cast<Kind>(nonzero()); }
+  constexpr bool is_valid() const {
+    return dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1 && dz >= -1 && dz <= 1 && nonzero() > 0;
+  }
+  friend bool operator==(const Direction&, const Direction&) = default;
+};
+
+namespace octant_detail {
+// The directions whose kind is in `kinds` (a bit per Kind), z slowest, x fastest.
+template <size_t N>
+constexpr std::array<Direction, N> directions(unsigned kinds) {
+  std::array<Direction, N> out{};
+  size_t n = 0;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const Direction d{static_cast<int8_t>(dx), static_cast<int8_t>(dy), static_cast<int8_t>(dz)};
+        if (d.nonzero() > 0 && (kinds >> d.nonzero() & 1)) out[n++] = d;
+      }
+  return out;
+}
+}  // namespace octant_detail
+
+inline constexpr auto kFaceDirections = octant_detail::directions<6>(1u << 1);
+inline constexpr auto kEdgeDirections = octant_detail::directions<12>(1u << 2);
+inline constexpr auto kCornerDirections = octant_detail::directions<8>(1u << 3);
+// What 2:1 balance looks at (weaver balances across faces and edges).
+inline constexpr auto kFaceAndEdgeDirections = octant_detail::directions<18>((1u << 1) | (1u << 2));
+inline constexpr auto kAllDirections = octant_detail::directions<26>((1u << 1) | (1u << 2) | (1u << 3));
+
+// The same-size neighbour of `o` in direction d.  Returns false when it lies
+// outside the root.  REQUIRES: octant, d.is_valid().
+constexpr bool octant_neighbour(const Octant& o, Direction d, Octant* out) {
+  assert(octant_is_valid(o) && d.is_valid());
   const int64_t s = octant_edge(o);
-  const int64_t nx = o.x + dx * s, ny = o.y + dy * s, nz = o.z + dz * s;
+  const int64_t nx = o.x + d.dx * s, ny = o.y + d.dy * s, nz = o.z + d.dz * s;
   const int64_t lim = kRootEdge;
   if (nx < 0 || ny < 0 || nz < 0 || nx >= lim || ny >= lim || nz >= lim) return false;
   *out = {static_cast<uint32_t>(nx), static_cast<uint32_t>(ny), static_cast<uint32_t>(nz),
@@ -148,6 +194,7 @@ constexpr uint64_t octant_morton(const Octant& o) { return morton_encode(o.x, o.
 
 // Accepts: octant.
 constexpr uint64_t octant_key(const Octant& o) {
+  assert(octant_is_valid(o));
   const uint64_t m = octant_morton(o);
   const uint64_t slot = o.level < kMaxLevel ? o.level : kKeyLevel20Slot + (m & 7);
   return ((m >> 3) << 7) | slot;
@@ -165,6 +212,7 @@ constexpr bool octant_key_is_valid(uint64_t key) {
 
 // REQUIRES: octant_key_is_valid(key).
 constexpr Octant octant_from_key(uint64_t key) {
+  assert(octant_key_is_valid(key));
   const uint64_t slot = key & 127;
   uint64_t m = (key >> 7) << 3;
   uint8_t level = static_cast<uint8_t>(slot);
@@ -179,10 +227,13 @@ constexpr Octant octant_from_key(uint64_t key) {
 // The Morton code of the octant's corner, straight from its key (no decode).
 // REQUIRES: octant_key_is_valid(key).
 constexpr uint64_t octant_key_morton(uint64_t key) {
+  assert(octant_key_is_valid(key));
   const uint64_t slot = key & 127;
   return ((key >> 7) << 3) | (slot >= kKeyLevel20Slot ? slot - kKeyLevel20Slot : 0);
 }
+// REQUIRES: octant_key_is_valid(key).
 constexpr int octant_key_level(uint64_t key) {
+  assert(octant_key_is_valid(key));
   const uint64_t slot = key & 127;
   return slot >= kKeyLevel20Slot ? kMaxLevel : static_cast<int>(slot);
 }
@@ -190,12 +241,16 @@ constexpr int octant_key_level(uint64_t key) {
 // The key of the level-20 octant at pixel p; the floor of this key in a leaf
 // table is the leaf that contains p, if any (the "aggregate hit").
 // Accepts: pixel.
-constexpr uint64_t pixel_key(Coord p) { return octant_key({p.x, p.y, p.z, kMaxLevel}); }
+constexpr uint64_t pixel_key(Coord p) {
+  assert(pixel_is_valid(p));
+  return octant_key({p.x, p.y, p.z, kMaxLevel});
+}
 
-// The smallest key greater than every key in o's subtree; UINT64_MAX (never a
-// valid key) for the root.  Accepts: octant.
-// Accepts: a valid octant key.
+// The smallest key greater than every key in the subtree of the octant with
+// this key; UINT64_MAX (never a valid key) for the root.
+// REQUIRES: octant_key_is_valid(key).
 constexpr uint64_t octant_key_subtree_end(uint64_t key) {
+  assert(octant_key_is_valid(key));
   const int level = octant_key_level(key);
   if (level == kMaxLevel) return key + 1;  // the next slot
   const uint64_t span = uint64_t{1} << (3 * (kMaxLevel - level));
@@ -203,12 +258,16 @@ constexpr uint64_t octant_key_subtree_end(uint64_t key) {
   if (m_end >> (3 * kMaxLevel)) return UINT64_MAX;  // the subtree reaches the root's end
   return (m_end >> 3) << 7;
 }
-constexpr uint64_t octant_subtree_key_end(const Octant& o) {
+// The same for an octant.  Accepts: octant.
+constexpr uint64_t octant_key_subtree_end(const Octant& o) {
   return octant_key_subtree_end(octant_key(o));
 }
 
 // The node key of a node coordinate: its Morton code.  Accepts: node.
-constexpr uint64_t node_key(Coord p) { return morton_encode(p); }
+constexpr uint64_t node_key(Coord p) {
+  assert(node_is_valid(p));
+  return morton_encode(p);
+}
 
 // "(x y z level)" in ticks, for messages.
 inline std::string describe_octant(const Octant& o) {

@@ -32,7 +32,7 @@ Status validate_options(const TableOptions& o, const std::string& name) {
     }
   }
   const size_t var = o.schema.to_text().size() + o.metadata.size();
-  if (page::kHdrVarStart + var > page::kFileHeaderBytes) {
+  if (!page::file_header_fits(o.schema.to_text().size(), o.metadata.size())) {
     return Status::InvalidArgument(name + ": schema and metadata (" + std::to_string(var) +
                                    " bytes) do not fit in the file header");
   }
@@ -78,52 +78,29 @@ Status BTree::open(std::unique_ptr<File> file, uint64_t pool_bytes, std::unique_
     return Status::Corruption(name + ": file is truncated (" + std::to_string(size) +
                               " bytes, no complete header)");
   }
-  std::byte hdr[page::kFileHeaderBytes];
-  WEAVER_RETURN_IF_ERROR(read_fully(*file, 0, hdr, sizeof hdr));
-  if (std::memcmp(hdr + page::kHdrMagic, page::kMagic, 8) != 0) {
-    return Status::Corruption(name + ": not a weaver B+tree file (bad magic)");
-  }
-  if (kChecksumsEnforced && page::load32(hdr + page::kHdrChecksum) != checksum32(hdr + 4, sizeof hdr - 4)) {
-    return Status::Corruption(name + ": header checksum mismatch");
-  }
-  const uint32_t version = page::load32(hdr + page::kHdrVersion);
-  if (version != page::kFormatVersion) {
-    return Status::Corruption(name + ": unsupported format version " + std::to_string(version) +
-                              " (this build reads version " +
-                              std::to_string(page::kFormatVersion) + ")");
-  }
+  std::byte bytes[page::kFileHeaderBytes];
+  WEAVER_RETURN_IF_ERROR(read_fully(*file, 0, bytes, sizeof bytes));
+  page::FileHeader h;
+  WEAVER_RETURN_IF_ERROR(page::decode_file_header(bytes, name, &h));
   TableOptions o;
-  o.page_size = page::load32(hdr + page::kHdrPageSize);
-  o.key_kind = static_cast<KeyKind>(hdr[page::kHdrKeyKind]);
-  const auto leaf_format = static_cast<uint8_t>(hdr[page::kHdrLeafFormat]);
-  if (leaf_format > 1) {
-    return Status::Corruption(name + ": unknown leaf format " + std::to_string(leaf_format));
-  }
-  o.packed = leaf_format == 1;
-  const uint32_t schema_len = page::load32(hdr + page::kHdrSchemaLen);
-  const uint32_t meta_len = page::load32(hdr + page::kHdrMetaLen);
-  if (uint64_t{schema_len} + meta_len + page::kHdrVarStart > page::kFileHeaderBytes) {
-    return Status::Corruption(name + ": header schema/metadata lengths out of range");
-  }
+  o.page_size = h.page_size;
+  o.key_kind = static_cast<KeyKind>(h.key_kind);
+  o.packed = h.leaf_format == 1;
   std::string error;
-  const auto schema = RecordSchema::parse(
-      std::string_view(reinterpret_cast<const char*>(hdr + page::kHdrVarStart), schema_len),
-      &error);
+  const auto schema = RecordSchema::parse(h.schema_text, &error);
   if (!schema) return Status::Corruption(name + ": bad schema in header: " + error);
   o.schema = *schema;
-  o.metadata.assign(reinterpret_cast<const char*>(hdr + page::kHdrVarStart + schema_len),
-                    meta_len);
-  if (o.schema.record_size() != page::load32(hdr + page::kHdrPayloadSize)) {
+  o.metadata = std::move(h.metadata);
+  if (o.schema.record_size() != h.payload_size) {
     return Status::Corruption(name + ": header payload size disagrees with its schema");
   }
   WEAVER_RETURN_IF_ERROR(validate_options(o, name));
-
   std::unique_ptr<BTree> t(new BTree(std::move(file), o, pool_bytes));
-  t->height_ = page::load32(hdr + page::kHdrHeight);
-  t->root_ = page::load32(hdr + page::kHdrRoot);
-  t->page_count_ = page::load32(hdr + page::kHdrPageCount);
-  t->free_head_ = page::load32(hdr + page::kHdrFreeHead);
-  t->record_count_ = page::load64(hdr + page::kHdrRecordCount);
+  t->height_ = h.height;
+  t->root_ = h.root;
+  t->page_count_ = h.page_count;
+  t->free_head_ = h.free_head;
+  t->record_count_ = h.record_count;
   if (size < t->file_bytes()) {
     return Status::Corruption(name + ": file is truncated: header lists " +
                               std::to_string(t->page_count_) + " pages, file holds " +
@@ -138,26 +115,21 @@ Status BTree::open(std::unique_ptr<File> file, uint64_t pool_bytes, std::unique_
 }
 
 Status BTree::write_header() {
-  std::byte hdr[page::kFileHeaderBytes] = {};
-  page::store32(hdr + page::kHdrVersion, page::kFormatVersion);
-  std::memcpy(hdr + page::kHdrMagic, page::kMagic, 8);
-  page::store32(hdr + page::kHdrPageSize, options_.page_size);
-  page::store32(hdr + page::kHdrPayloadSize, payload_);
-  hdr[page::kHdrKeyKind] = static_cast<std::byte>(options_.key_kind);
-  hdr[page::kHdrLeafFormat] = static_cast<std::byte>(options_.packed ? 1 : 0);
-  page::store32(hdr + page::kHdrHeight, height_);
-  page::store32(hdr + page::kHdrRoot, root_);
-  page::store32(hdr + page::kHdrPageCount, page_count_);
-  page::store32(hdr + page::kHdrFreeHead, free_head_);
-  page::store64(hdr + page::kHdrRecordCount, record_count_);
-  const std::string schema = options_.schema.to_text();
-  page::store32(hdr + page::kHdrSchemaLen, static_cast<uint32_t>(schema.size()));
-  page::store32(hdr + page::kHdrMetaLen, static_cast<uint32_t>(options_.metadata.size()));
-  std::memcpy(hdr + page::kHdrVarStart, schema.data(), schema.size());
-  std::memcpy(hdr + page::kHdrVarStart + schema.size(), options_.metadata.data(),
-              options_.metadata.size());
-  page::store32(hdr + page::kHdrChecksum, checksum32(hdr + 4, sizeof hdr - 4));
-  return write_fully(*file_, 0, hdr, sizeof hdr);
+  page::FileHeader h;
+  h.page_size = options_.page_size;
+  h.payload_size = payload_;
+  h.key_kind = static_cast<uint8_t>(options_.key_kind);
+  h.leaf_format = options_.packed ? 1 : 0;
+  h.height = height_;
+  h.root = root_;
+  h.page_count = page_count_;
+  h.free_head = free_head_;
+  h.record_count = record_count_;
+  h.schema_text = options_.schema.to_text();
+  h.metadata = options_.metadata;
+  std::byte bytes[page::kFileHeaderBytes];
+  page::encode_file_header(h, bytes);
+  return write_fully(*file_, 0, bytes, sizeof bytes);
 }
 
 Status BTree::commit() {

@@ -82,7 +82,6 @@ class BTree final : public Store {
   };
 
   BTree(std::unique_ptr<File> file, const TableOptions& options, uint64_t pool_bytes);
-  Status read_header();
   Status write_header();
   std::string where(uint32_t page_no) const;
 

@@ -61,6 +61,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <string>
+
+#include "schema/status.h"
 
 namespace weaver::page {
 
@@ -78,6 +81,30 @@ inline constexpr size_t kHdrChecksum = 0, kHdrVersion = 4, kHdrMagic = 8, kHdrPa
                         kHdrPayloadSize = 20, kHdrKeyKind = 24, kHdrLeafFormat = 25, kHdrHeight = 28, kHdrRoot = 32,
                         kHdrPageCount = 36, kHdrFreeHead = 40, kHdrRecordCount = 48,
                         kHdrSchemaLen = 56, kHdrMetaLen = 60, kHdrVarStart = 64;
+
+// The file header's fields (the byte table at the top of this file).
+struct FileHeader {
+  uint32_t page_size = 0;
+  uint32_t payload_size = 0;
+  uint8_t key_kind = 0;     // KeyKind (storage/store.h): 0 or 1
+  uint8_t leaf_format = 0;  // 0 plain, 1 packed
+  uint32_t height = 0, root = 0, page_count = 0, free_head = 0;
+  uint64_t record_count = 0;
+  std::string schema_text;  // schema/record_schema.h's text form
+  std::string metadata;
+  friend bool operator==(const FileHeader&, const FileHeader&) = default;
+};
+
+// Whether the schema text and metadata fit in the header.
+bool file_header_fits(size_t schema_bytes, size_t metadata_bytes);
+// Writes h over out[0, kFileHeaderBytes), checksum last.
+// REQUIRES: file_header_fits(h.schema_text.size(), h.metadata.size()).
+void encode_file_header(const FileHeader& h, std::byte* out);
+// Reads the header in in[0, kFileHeaderBytes).  Corruption, naming `name`,
+// for a bad magic, checksum (where checksums are enforced), version, key
+// kind, leaf format, or schema and metadata lengths.  The fields' meaning
+// (page size, schema, tree shape) is for the reader to check.
+Status decode_file_header(const std::byte* in, const std::string& name, FileHeader* h);
 
 // Page header field offsets.
 inline constexpr size_t kPgChecksum = 0, kPgNumber = 4, kPgType = 8, kPgVersion = 9,

@@ -68,7 +68,7 @@ TEST_F(BalanceTest, MatchesReferenceOnRandomUnbalancedOctrees) {
     ASSERT_OK(balance_octree(db, check, &cr));
     ASSERT_EQ(cr.balanced, want == leaves) << cr.violation;
     BalanceOptions o;
-    o.memory_bytes = (t % 3 == 0) ? (64 << 10) : (64 << 20);  // tiny: sorts spill
+    o.memory = MemoryBudget((t % 3 == 0) ? (64 << 10) : (64 << 20));  // tiny: sorts spill
     BalanceResult r;
     ASSERT_OK(balance_octree(db, o, &r));
     ASSERT_EQ(table(db), want);

@@ -196,7 +196,7 @@ class CrashTest : public ::testing::Test {
     if (!now.empty()) {
       VerifyReport r;
       VerifyOptions o;
-      o.memory_bytes = 4 << 20;
+      o.memory = MemoryBudget(4 << 20);
       ASSERT_OK(verify_database(db, o, &r));
       ASSERT_TRUE(r.ok()) << where << ": " << r.problems[0];
     }

@@ -164,7 +164,7 @@ TEST_F(ExtractTest, RandomBalancedOctreesAcrossDomainsAndBudgets) {
     const auto leaves = random_balanced(rng(), bx, by, bz, block_level, target, max_level);
     ExtractOptions o;
     o.bucket_level = static_cast<int>(rng() % (max_level + 2));  // from one bucket to tiny ones
-    o.memory_bytes = 1 << 16;  // forces spill files
+    o.memory = MemoryBudget(1 << 16);  // forces spill files
     SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) +
                  " leaves, blocks " + std::to_string(bx) + "x" + std::to_string(by) + "x" +
                  std::to_string(bz) + " at level " + std::to_string(block_level) +
@@ -178,13 +178,13 @@ TEST_F(ExtractTest, GradedAroundASphereWithManyBucketsAndSpillFiles) {
   for (int bucket_level : {-1, 3, 5}) {
     ExtractOptions o;
     o.bucket_level = bucket_level;
-    o.memory_bytes = 1 << 14;  // a tiny cap: spills go through files
+    o.memory = MemoryBudget(1 << 14);  // a tiny cap: spills go through files
     ExtractResult r;
     ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
   }
   ExtractOptions o;
   o.bucket_level = 5;
-  o.memory_bytes = 1 << 14;
+  o.memory = MemoryBudget(1 << 14);
   ExtractResult r;
   ASSERT_OK(extract(leaves, o, &r));
   EXPECT_GT(r.buckets, 1000u);
@@ -221,7 +221,7 @@ TEST_F(ExtractTest, SearchAlgorithmMatchesReferenceAndSortByteForByte) {
     SCOPED_TRACE("case " + std::to_string(t));
     ExtractOptions search;
     search.algorithm = ExtractOptions::Algorithm::kSearch;
-    search.memory_bytes = 1 << 16;  // a small pool: the node B-tree lives on disk
+    search.memory = MemoryBudget(1 << 16);  // a small pool: the node B-tree lives on disk
     search.store = t % 2 ? ExtractOptions::Store::kLsm : ExtractOptions::Store::kBTree;
     ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, search));
     std::unique_ptr<Database> db;
@@ -249,7 +249,7 @@ TEST_F(ExtractTest, ThreadCountsOneToFourGiveTheSameNodeTable) {
       ExtractOptions o;
       o.threads = threads;
       o.bucket_level = 3 + static_cast<int>(rng() % 3);  // many buckets in flight
-      o.memory_bytes = 1 << 16;
+      o.memory = MemoryBudget(1 << 16);
       if (threads == 1) {
         ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
       } else {

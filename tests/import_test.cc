@@ -22,7 +22,7 @@ class ImportTest : public ::testing::Test {
   }
   Status run(const std::string& text_path, uint64_t memory = 64 << 20) {
     ImportOptions o;
-    o.memory_bytes = memory;
+    o.memory = MemoryBudget(memory);
     return import_octants(db_path(), text_path, o, &result_);
   }
   std::string db_path() const { return dir_.file("db"); }

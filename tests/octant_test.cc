@@ -1,3 +1,6 @@
+#include <set>
+#include <tuple>
+
 #include <gtest/gtest.h>
 
 #include <random>
@@ -44,20 +47,17 @@ void check_one(const Octant& o) {
       ASSERT_EQ(c, reference::child(o, k));
       ASSERT_TRUE(octant_is_ancestor(o, c));
       ASSERT_LT(key, octant_key(c));
-      ASSERT_LT(octant_key(c), octant_subtree_key_end(o));
+      ASSERT_LT(octant_key(c), octant_key_subtree_end(o));
     }
   }
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        if (dx == 0 && dy == 0 && dz == 0) continue;
-        Octant fast{}, slow{};
-        const bool in_fast = octant_neighbour(o, dx, dy, dz, &fast);
-        ASSERT_EQ(in_fast, reference::neighbour(o, dx, dy, dz, &slow));
-        if (in_fast) {
-          ASSERT_EQ(fast, slow);
-        }
-      }
+  for (const Direction d : kAllDirections) {
+    Octant fast{}, slow{};
+    const bool in_fast = octant_neighbour(o, d, &fast);
+    ASSERT_EQ(in_fast, reference::neighbour(o, d.dx, d.dy, d.dz, &slow));
+    if (in_fast) {
+      ASSERT_EQ(fast, slow);
+    }
+  }
   for (int k = 0; k < 8; ++k) {
     const Coord c = octant_corner(o, k);
     const uint64_t e = reference::edge(o.level);
@@ -150,11 +150,41 @@ TEST(Octant, KeyValidityRejectsMisalignedAndBadSlots) {
   EXPECT_TRUE(octant_key_is_valid(octant_key({0, 0, 0, 0})));
   EXPECT_FALSE(octant_key_is_valid(28));           // slot 28 is unused
   EXPECT_FALSE(octant_key_is_valid((8 >> 3) << 7));  // Morton 8 at level 0: misaligned
-  EXPECT_EQ(octant_subtree_key_end(octant_root()), UINT64_MAX);
+  EXPECT_EQ(octant_key_subtree_end(octant_root()), UINT64_MAX);
   EXPECT_FALSE(octant_is_valid({1, 0, 0, 19}));
   EXPECT_FALSE(octant_is_valid({kRootEdge, 0, 0, 20}));
   EXPECT_TRUE(node_is_valid({kRootEdge, kRootEdge, kRootEdge}));
   EXPECT_FALSE(pixel_is_valid({kRootEdge, 0, 0}));
+}
+
+}  // namespace
+}  // namespace weaver
+
+namespace weaver {
+namespace {
+
+// The direction tables hold each of the 26 directions once, by kind.
+TEST(OctantTest, DirectionTablesHoldEveryDirectionOnceByKind) {
+  std::set<std::tuple<int, int, int>> seen;
+  auto check = [&](const auto& table, Direction::Kind kind) {
+    for (const Direction d : table) {
+      EXPECT_TRUE(d.is_valid());
+      EXPECT_EQ(d.kind(), kind);
+      EXPECT_TRUE(seen.insert({d.dx, d.dy, d.dz}).second);
+    }
+  };
+  check(kFaceDirections, Direction::Kind::kFace);
+  check(kEdgeDirections, Direction::Kind::kEdge);
+  check(kCornerDirections, Direction::Kind::kCorner);
+  EXPECT_EQ(seen.size(), 26u);
+  std::set<std::tuple<int, int, int>> all, face_edge;
+  for (const Direction d : kAllDirections) all.insert({d.dx, d.dy, d.dz});
+  for (const Direction d : kFaceAndEdgeDirections) face_edge.insert({d.dx, d.dy, d.dz});
+  EXPECT_EQ(all, seen);
+  EXPECT_EQ(face_edge.size(), 18u);
+  for (const auto& [dx, dy, dz] : face_edge) EXPECT_LT((dx != 0) + (dy != 0) + (dz != 0), 3);
+  EXPECT_FALSE((Direction{0, 0, 0}.is_valid()));
+  EXPECT_FALSE((Direction{2, 0, 0}.is_valid()));
 }
 
 }  // namespace

@@ -22,7 +22,7 @@ class QueryTest : public ::testing::Test {
     const std::string text = dir_.file("octants.txt");
     ASSERT_OK(write_octant_text(text, leaves_, "test"));
     ImportOptions o;
-    o.memory_bytes = 64 << 20;
+    o.memory = MemoryBudget(64 << 20);
     ImportResult r;
     ASSERT_OK(import_octants(dir_.file("db"), text, o, &r));
     ASSERT_OK(Database::open(dir_.file("db"), Database::Mode::kRead, false, &db_));

@@ -64,7 +64,7 @@ class VerifyTest : public ::testing::Test {
   VerifyReport verify() {
     VerifyReport r;
     VerifyOptions o;
-    o.memory_bytes = 8 << 20;
+    o.memory = MemoryBudget(8 << 20);
     EXPECT_OK(verify_database(db_, o, &r));
     return r;
   }

@@ -1,15 +1,14 @@
 // `weaver balance`: the minimal face+edge 2:1 balanced refinement of the
-// octant table, out of core.
+// octant table, out of core, in three parts:
 //
-// Every leaf (or required octant) q at level l requires the face and edge
-// neighbours of its parent, at level l-1, to be resolved: covered by leaves
-// of level >= l-1.  These requirements ripple from fine to coarse, one level
-// at a time; each level's set is sorted and deduplicated out of core, and
-// octants outside the domain are dropped (they hold no leaves to balance
-// against).  Every requirement is necessary, so the result is minimal: each
-// leaf is kept or split just enough to resolve the required octants inside
-// it.  Leaves are written in Z-order by sorted append; split children take
-// their material from the model that built the table, or from the parent.
+//  - closure.h: the octants the balance requires to be resolved, level by
+//    level from fine to coarse, each level sorted out of core;
+//  - refinement.h: the leaves written in Z-order by sorted append, each
+//    split just enough to resolve the required octants inside it; new
+//    leaves take their material from the model that built the table (a
+//    callback built in balance.cc), or keep their parent's;
+//  - check.cc: --check (and verify): the closure without propagation, and
+//    the first violation, named.
 #pragma once
 
 #include <cstdint>
@@ -17,12 +16,27 @@
 
 #include "db/octant_table.h"
 #include "schema/status.h"
+#include "util/memory_budget.h"
 
 namespace weaver {
 
+class BTree;
+
 struct BalanceOptions {
-  uint64_t memory_bytes = 256ull << 20;
+  MemoryBudget memory;
   bool check_only = false;  // verify only; name the first violation
+};
+
+// Where balance's memory goes: the shares of options.memory.
+struct BalanceMemory {
+  explicit BalanceMemory(MemoryBudget budget);
+
+  MemoryPlan plan;
+  uint64_t leaf_pool = 0;       // the input leaves, read in order by several cursors
+  uint64_t output_pool = 0;     // the output table, written by sorted append
+  uint64_t spool_buffer = 0;    // each of the closure's spools (3 per level)
+  uint64_t parent_chunk = 0;    // a chunk of parents and its key set
+  uint64_t candidate_sort = 0;  // the sorter of a level's candidates
 };
 
 struct BalanceResult {
@@ -39,8 +53,12 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& options,
 // The check of --check on an octant table already open (a reader's
 // snapshot): result->balanced and, if false, result->violation.  Sorter
 // scratch goes in a directory under scratch_parent, removed at the end.
-class BTree;
+// The leaves' pool is the caller's, outside options.memory.
 Status check_balance(BTree& leaves, const BalanceOptions& options,
                      const std::string& scratch_parent, BalanceResult* result);
+
+// The finest level with leaves, from the metadata when the writer kept it
+// (else kMaxLevel).
+int finest_level_bound(BTree& leaves);
 
 }  // namespace weaver

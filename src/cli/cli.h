@@ -6,6 +6,7 @@
 
 #include "schema/status.h"
 #include "util/args.h"
+#include "util/memory_budget.h"
 
 namespace weaver {
 struct ConstructOptions;
@@ -38,10 +39,9 @@ int cmd_mesh(int argc, char** argv);
 Status parse_construct_options(const ParsedArgs& args, weaver::ConstructOptions* o);
 void print_construct_plan(const weaver::ConstructOptions& o, const weaver::ConstructPlan& p);
 
-// The default memory budget when --memory is absent.
-inline constexpr uint64_t kDefaultMemory = 256ull << 20;
-// --memory: at least 1M and at most the machine's physical memory.
-Status memory_option(const ParsedArgs& args, uint64_t* bytes);
+// --memory: at least MemoryBudget::kMinBytes and at most the machine's
+// physical memory; MemoryBudget::kDefaultBytes when absent.
+Status memory_option(const ParsedArgs& args, MemoryBudget* budget);
 Status threads_option(const ParsedArgs& args, int default_threads, int* threads);
 
 }  // namespace weaver::cli

@@ -17,7 +17,8 @@ constexpr char kUsage[] =
     "keeps the old one's leaf page format (packed or plain).\n"
     "  --check          only verify; name the first violation (exit status 1 if\n"
     "                   the octree is not balanced)\n"
-    "  --memory BYTES   memory budget (default 256M)\n";
+    "  --memory BYTES   memory budget (default 256M): the table caches, the\n"
+    "                   buffers and sorter of the out-of-core closure\n";
 
 }  // namespace
 
@@ -29,7 +30,7 @@ int cmd_balance(int argc, char** argv) {
   if (args.positional.size() != 1) return usage_error("balance", "expected one DB", kUsage);
   BalanceOptions o;
   o.check_only = args.flags.count("check") != 0;
-  st = memory_option(args, &o.memory_bytes);
+  st = memory_option(args, &o.memory);
   if (!st.ok()) return usage_error("balance", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   BalanceResult r;

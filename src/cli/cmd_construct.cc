@@ -31,7 +31,8 @@ constexpr char kUsage[] =
     "  --max-elements N   refuse to start when a coarse sampling of the model\n"
     "                     estimates more leaves than N (default 5G), or more\n"
     "                     disk than is free; the estimate is printed first\n"
-    "  --memory BYTES     memory budget (default 256M)\n"
+    "  --memory BYTES     memory budget (default 256M): the octant table's cache\n"
+    "                     (the descent itself holds one path of octants)\n"
     "  --plain            write plain leaf pages (default: packed, where keys are\n"
     "                     delta-coded and payload fields stored column-wise)\n";
 
@@ -67,7 +68,7 @@ Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
     WEAVER_RETURN_IF_ERROR(parse_double_list(args.values.at("domain"), "--domain", 3, &d));
     o->domain_m = {d[0], d[1], d[2]};
   }
-  return memory_option(args, &o->memory_bytes);
+  return memory_option(args, &o->memory);
 }
 
 void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {

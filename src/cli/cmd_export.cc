@@ -14,7 +14,9 @@ constexpr char kUsage[] =
     "  --nodes FILE     id,x,y,z,kind,a0,a1,a2,a3  (kind anchored|edge|face; anchors\n"
     "                   are node ids, ascending, empty where fewer than 4)\n"
     "  --elements FILE  id,x,y,z,level,n0,...,n7   (node ids of corners 0..7, x fastest)\n"
-    "Coordinates are in ticks.  Each file is renamed into place when complete.\n";
+    "Coordinates are in ticks.  Each file is renamed into place when complete.\n"
+    "  --memory BYTES   memory budget (default 256M): the node table's cache (half)\n"
+    "                   and the octant table's (an eighth, at most 4M)\n";
 
 }  // namespace
 
@@ -30,7 +32,7 @@ int cmd_export(int argc, char** argv) {
   if (o.nodes_path.empty() && o.elements_path.empty()) {
     return usage_error("export", "give --nodes FILE and/or --elements FILE", kUsage);
   }
-  st = memory_option(args, &o.memory_bytes);
+  st = memory_option(args, &o.memory);
   if (!st.ok()) return usage_error("export", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   ExportResult r;

@@ -31,8 +31,11 @@ constexpr char kUsage[] =
     "  --plain             write the node table with plain leaf pages (default:\n"
     "                      packed, about 0.7 bytes per node)\n"
     "  --json              print the result as one JSON object\n"
-    "  --memory BYTES  memory budget, e.g. 256M (default 256M); it sets the size\n"
-    "                  of the high-level buckets\n";
+    "  --memory BYTES      memory budget, e.g. 256M (default 256M): the octant and\n"
+    "                      node table caches, the high-level buckets (their size\n"
+    "                      comes from it), spilled corners held before a file,\n"
+    "                      buckets read ahead for the threads; with search, the\n"
+    "                      scratch node store's cache or memtable\n";
 
 }  // namespace
 
@@ -45,7 +48,7 @@ int cmd_extract(int argc, char** argv) {
   if (args.positional.size() != 1) return usage_error("extract", "expected one DB", kUsage);
   ExtractOptions o;
   o.packed = !args.flags.count("plain");
-  st = memory_option(args, &o.memory_bytes);
+  st = memory_option(args, &o.memory);
   if (st.ok() && args.values.count("algorithm")) {
     const std::string& a = args.values["algorithm"];
     if (a == "search") {
@@ -90,7 +93,7 @@ int cmd_extract(int argc, char** argv) {
                 "\"bucket_level\": %d, \"spilled\": %llu, \"node_table_bytes\": %llu, "
                 "\"search_tree_bytes\": %llu}\n",
                 search ? "search" : "sort",
-                o.store == ExtractOptions::Store::kLsm ? "lsm" : "btree", o.threads, (unsigned long long)o.memory_bytes,
+                o.store == ExtractOptions::Store::kLsm ? "lsm" : "btree", o.threads, (unsigned long long)o.memory.bytes(),
                 (unsigned long long)r.elements, (unsigned long long)r.nodes,
                 (unsigned long long)r.anchored, (unsigned long long)r.edge,
                 (unsigned long long)r.face, secs, r.nodes / secs, (unsigned long long)r.buckets,

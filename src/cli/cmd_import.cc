@@ -18,7 +18,8 @@ constexpr char kUsage[] =
     "directory DB, created if absent.  Rejects malformed lines, coordinates or\n"
     "levels out of range, misaligned corners, duplicate and overlapping octants,\n"
     "naming the line; on any error the database is left as it was.\n"
-    "  --memory BYTES  memory budget, e.g. 256M or 2G (default 256M).  Octants\n"
+    "  --memory BYTES  memory budget, e.g. 256M or 2G (default 256M): the table\n"
+    "                  caches and the LSM's memtable and run caches.  Octants\n"
     "                  in key order are appended as they come; from the first\n"
     "                  one out of order on, the rest go through an LSM store\n"
     "                  (runs spilled in the database directory) and are merged\n"
@@ -45,7 +46,7 @@ int cmd_import(int argc, char** argv) {
   if (!args.values.count("octants")) return usage_error("import", "--octants FILE is required", kUsage);
   ImportOptions o;
   o.packed = !args.flags.count("plain");
-  st = memory_option(args, &o.memory_bytes);
+  st = memory_option(args, &o.memory);
   o.tick_given = args.values.count("tick");
   o.origin_given = args.values.count("origin");
   if (st.ok() && args.values.count("tick")) {

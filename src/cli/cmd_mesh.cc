@@ -24,7 +24,8 @@ constexpr char kUsage[] =
     "points per wavelength at any element.  Options as for 'weaver construct';\n"
     "--threads is for the extract stage (default 1, as for 'weaver extract');\n"
     "--plain writes plain leaf pages in every table (default: packed).  If a\n"
-    "stage fails, the error says which stages had committed their tables.\n";
+    "stage fails, the error says which stages had committed their tables.\n"
+    "--memory (default 256M) bounds each stage in turn, as in that stage's command.\n";
 
 // Peak resident memory since the last reset_peak(), from the kernel's high
 // water mark (Linux); 0 where unavailable.
@@ -75,7 +76,7 @@ int cmd_mesh(int argc, char** argv) {
   ExtractOptions eo;
   if (st.ok()) st = threads_option(args, 1, &eo.threads);
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
-  eo.memory_bytes = co.memory_bytes;
+  eo.memory = co.memory;
   eo.packed = co.packed;
   const std::string& db = args.positional[0];
   ConstructPlan plan;
@@ -95,7 +96,7 @@ int cmd_mesh(int argc, char** argv) {
   reset_peak();
   Stage s2;
   BalanceOptions bo;
-  bo.memory_bytes = co.memory_bytes;
+  bo.memory = co.memory;
   BalanceResult br;
   st = balance_octree(db, bo, &br);
   if (!st.ok()) return report_after("balance", st, "construct committed the octant table");

@@ -28,7 +28,8 @@ constexpr char kUsage[] =
     "node     coordinate, kind (anchored, edge, face) and anchors of node ID.\n"
     "node-at  the node at tick point (X,Y,Z) (up to 1048576, the far side).\n"
     "Coordinates are in ticks; lengths are also shown in metres.\n"
-    "  --memory BYTES  buffer pool size (default 256M)\n";
+    "  --memory BYTES  memory budget (default 256M): the octant and node table\n"
+    "                  caches, half each\n";
 
 std::string octant_text(const Octant& o) {
   return std::to_string(o.x) + " " + std::to_string(o.y) + " " + std::to_string(o.z) + " " +
@@ -178,7 +179,8 @@ int cmd_query(int argc, char** argv) {
     return usage_error("query", kind + " takes " + std::to_string(want) + " number(s)", kUsage);
   }
   std::vector<uint32_t> c;
-  uint64_t id = 0, memory = 0;
+  uint64_t id = 0;
+  MemoryBudget memory;
   if (want == 1) {
     st = parse_u64(p[2], "ID", &id);
   } else {
@@ -191,8 +193,9 @@ int cmd_query(int argc, char** argv) {
   std::unique_ptr<Database> db;
   std::unique_ptr<BTree> t, nodes;
   st = Database::open(p[0], Database::Mode::kRead, false, &db);
-  if (st.ok()) st = db->open_table(kOctantTable, memory / 2, &t);
-  if (st.ok() && db->has_table(kNodeTable)) st = db->open_table(kNodeTable, memory / 2, &nodes);
+  const QueryMemory shares(memory);
+  if (st.ok()) st = db->open_table(kOctantTable, shares.octant_pool, &t);
+  if (st.ok() && db->has_table(kNodeTable)) st = db->open_table(kNodeTable, shares.node_pool, &nodes);
   if (st.ok() && !nodes && (kind == "node" || kind == "node-at")) {
     st = Status::NotFound(p[0] + ": no mesh yet (run 'weaver extract' first)");
   }

@@ -20,7 +20,8 @@ constexpr char kUsage[] =
     "           element corner a node and every node a corner; every dangling\n"
     "           node's anchors present and anchored\n"
     "  --storage-only   skip the mesh checks\n"
-    "  --memory BYTES   memory budget (default 256M)\n";
+    "  --memory BYTES   memory budget (default 256M): the table caches and the\n"
+    "                   balance check's out-of-core sort (half)\n";
 
 }  // namespace
 
@@ -32,7 +33,7 @@ int cmd_verify(int argc, char** argv) {
   if (args.positional.size() != 1) return usage_error("verify", "expected one DB", kUsage);
   VerifyOptions o;
   o.mesh = args.flags.count("storage-only") == 0;
-  st = memory_option(args, &o.memory_bytes);
+  st = memory_option(args, &o.memory);
   if (!st.ok()) return usage_error("verify", st.message(), kUsage);
   o.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()), std::fflush(stdout); };
   const auto t0 = std::chrono::steady_clock::now();

@@ -21,18 +21,20 @@ int usage_error(const std::string& command, const std::string& message, const ch
   return 2;
 }
 
-Status memory_option(const ParsedArgs& args, uint64_t* bytes) {
-  *bytes = kDefaultMemory;
+Status memory_option(const ParsedArgs& args, MemoryBudget* budget) {
+  *budget = MemoryBudget();
   if (!args.values.count("memory")) return Status::Ok();
-  WEAVER_RETURN_IF_ERROR(parse_bytes(args.values.at("memory"), "--memory", bytes));
-  if (*bytes < (1u << 20)) return Status::InvalidArgument("--memory must be at least 1M");
+  uint64_t bytes = 0;
+  WEAVER_RETURN_IF_ERROR(parse_bytes(args.values.at("memory"), "--memory", &bytes));
+  if (bytes < MemoryBudget::kMinBytes) return Status::InvalidArgument("--memory must be at least 1M");
   const uint64_t machine = physical_memory();
-  if (machine > 0 && *bytes > machine) {
+  if (machine > 0 && bytes > machine) {
     char buf[160];
     std::snprintf(buf, sizeof buf, "--memory %s is more than this machine's memory (%.1f GiB)",
                   args.values.at("memory").c_str(), machine / double(1ull << 30));
     return Status::InvalidArgument(buf);
   }
+  *budget = MemoryBudget(bytes);
   return Status::Ok();
 }
 

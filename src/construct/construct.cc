@@ -137,6 +137,11 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
   return Status::Ok();
 }
 
+ConstructMemory::ConstructMemory(MemoryBudget budget) : plan(budget) {
+  // A sorted append touches only the right spine of the table.
+  table_pool = plan.take("octant table pool", 1, 8, 8ull << 20);
+}
+
 Status construct_octree(const std::string& db_dir, const ConstructOptions& o, ConstructPlan* p,
                         ConstructResult* r) {
   *r = ConstructResult{};
@@ -157,7 +162,7 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   std::unique_ptr<BTree> table;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt,
-                                          std::min<uint64_t>(o.memory_bytes / 8, 8ull << 20),
+                                          ConstructMemory(o.memory).table_pool,
                                           &table, &file));
   Descent descent(o, *p, *model, *table, r);
   Status st = descent.run();

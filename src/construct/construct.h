@@ -16,6 +16,7 @@
 #include "db/octant_table.h"
 #include "schema/octant.h"
 #include "schema/status.h"
+#include "util/memory_budget.h"
 
 namespace weaver {
 
@@ -27,7 +28,7 @@ struct ConstructOptions {
   double vs_min = 0;      // floor on Vs in the rule (m/s); 0: none
   std::array<double, 3> domain_m = {100000, 100000, 37500};
   int min_level = 0, max_level = kMaxLevel;
-  uint64_t memory_bytes = 256ull << 20;
+  MemoryBudget memory;
   // Packed leaf pages (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
   // Refuse to start when the estimated octree (construct/estimate.h) has
@@ -38,6 +39,15 @@ struct ConstructOptions {
   // counts their tables too.
   bool whole_pipeline = false;
   std::function<void(uint64_t leaves)> progress;
+};
+
+// Where construct's memory goes: the shares of options.memory.  The descent
+// itself holds one path of octants, whatever the mesh.
+struct ConstructMemory {
+  explicit ConstructMemory(MemoryBudget budget);
+
+  MemoryPlan plan;
+  uint64_t table_pool = 0;  // the octant table, written by sorted append
 };
 
 // The domain as a union of blocks: resolved before anything is written.

@@ -124,6 +124,14 @@ Status write_elements(BTree& octants, BTree& nodes, const std::string& path, uin
 
 }  // namespace
 
+ExportMemory::ExportMemory(MemoryBudget budget) : plan(budget) {
+  // Every element looks up its 8 corners and every dangling node its
+  // anchors: the larger the node pool, the fewer of those go to disk.
+  node_pool = plan.take("node table pool", 1, 2);
+  // The leaves are read once, in order.
+  octant_pool = plan.take("octant table pool", 1, 8, 4ull << 20);
+}
+
 Status export_csv(const std::string& db_dir, const ExportOptions& options, ExportResult* result) {
   *result = ExportResult{};
   std::unique_ptr<Database> db;
@@ -132,9 +140,9 @@ Status export_csv(const std::string& db_dir, const ExportOptions& options, Expor
     return Status::NotFound(db_dir + ": no mesh yet (run 'weaver extract' first)");
   }
   std::unique_ptr<BTree> nodes, octants;
-  const uint64_t pool = std::max<uint64_t>(options.memory_bytes / 2, 1 << 20);
-  WEAVER_RETURN_IF_ERROR(db->open_table(kNodeTable, pool, &nodes));
-  WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, 4 << 20, &octants));
+  const ExportMemory memory(options.memory);
+  WEAVER_RETURN_IF_ERROR(db->open_table(kNodeTable, memory.node_pool, &nodes));
+  WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, memory.octant_pool, &octants));
   if (!options.nodes_path.empty()) {
     WEAVER_RETURN_IF_ERROR(write_nodes(*nodes, options.nodes_path, &result->nodes));
   }

@@ -10,13 +10,23 @@
 #include <string>
 
 #include "schema/status.h"
+#include "util/memory_budget.h"
 
 namespace weaver {
 
 struct ExportOptions {
   std::string nodes_path;     // empty: skip
   std::string elements_path;  // empty: skip
-  uint64_t memory_bytes = 256ull << 20;
+  MemoryBudget memory;
+};
+
+// Where export's memory goes: the shares of options.memory.
+struct ExportMemory {
+  explicit ExportMemory(MemoryBudget budget);
+
+  MemoryPlan plan;
+  uint64_t node_pool = 0;    // the node table: corners and anchors are found in it by key
+  uint64_t octant_pool = 0;  // the octant table, read in order
 };
 
 struct ExportResult {

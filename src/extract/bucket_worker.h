@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "extract/extract.h"
-#include "extract/leaf_reader.h"
+#include "db/leaf_reader.h"
 #include "extract/node_classifier.h"
 #include "extract/node_hash.h"
 #include "extract/spill_store.h"

@@ -1,6 +1,21 @@
 // `weaver extract`: the mesh (nodes, their kinds; elements are the leaves)
-// from a balanced octant table, by the two-level bucket sort of Tu &
-// O'Hallaron (section 4), out of core.
+// from a balanced octant table, out of core, by either of two algorithms
+// that write the same node table:
+//
+//  - kSort, the two-level bucket sort of Tu & O'Hallaron (section 4;
+//    extract_sort.cc, bucket_worker.cc, extract_parallel.cc): the leaves are
+//    read once in Z-order in high-level buckets (aligned octants of one
+//    level); each leaf's 8 corners are merged in the bucket's hash table,
+//    corners on a later bucket's side are spilled to it (spill_store.h), and
+//    each node is classified from the cells around it (node_classifier.h).
+//    Buckets are written in Z-order, by sorted append, whatever the threads.
+//  - kSearch, the conventional baseline (section 3; extract_search.cc): every
+//    element vertex is searched for in a scratch node store (a B+tree as in
+//    the paper, or the LSM) and inserted when new; the store is then read in
+//    order, numbered and classified.
+//
+// extract.cc holds the entry point, the memory layout and the bucketing
+// policy (which bucket level a budget affords).
 #pragma once
 
 #include <cstdint>
@@ -8,6 +23,7 @@
 #include <string>
 
 #include "schema/status.h"
+#include "util/memory_budget.h"
 
 namespace weaver {
 
@@ -20,7 +36,7 @@ struct ExtractOptions {
   // The node store of kSearch: the B+tree, as in the paper, or the LSM.
   enum class Store { kBTree, kLsm };
   Store store = Store::kBTree;
-  uint64_t memory_bytes = 256ull << 20;
+  MemoryBudget memory;
   // Worker threads for the sort algorithm; the output is the same for any count.
   int threads = 1;
   // The level of the high-level buckets; -1 derives it from the budget.
@@ -28,6 +44,23 @@ struct ExtractOptions {
   // Packed leaf pages for the node table (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
   std::function<void(const char* phase, uint64_t done)> progress;
+};
+
+// Where extraction's memory goes: the shares of options.memory.  Fields an
+// algorithm does not use stay 0.
+struct ExtractMemory {
+  explicit ExtractMemory(const ExtractOptions& options);
+
+  MemoryPlan plan;
+  uint64_t octant_pool = 0;  // the octant table read in order
+  uint64_t node_pool = 0;    // the node table written by sorted append
+  // kSort:
+  uint64_t spill = 0;        // spilled pixels held in memory before a file
+  uint64_t bucket = 0;       // one worker's bucket: its leaves and hash table
+  uint64_t worker_pool = 0;  // threads > 1: each worker's octant table pool
+  uint64_t in_flight = 0;    // threads > 1: buckets read ahead of the workers
+  // kSearch:
+  uint64_t search_store = 0;  // the scratch node store
 };
 
 struct ExtractResult {

@@ -82,13 +82,13 @@ uint64_t task_bytes(const BucketTask& t) {
 }  // namespace
 
 Status run_parallel(Database& db, BTree& octants, BTree& nodes, const Bucketing& b,
-                    SpillStore& spills, const ExtractOptions& options, ExtractResult* result) {
+                    SpillStore& spills, const ExtractMemory& memory, const ExtractOptions& options,
+                    ExtractResult* result) {
   const int n = options.threads;
   // Each worker reads the octant table through its own handle: a buffer pool
   // serves one thread.
   std::vector<std::unique_ptr<BTree>> handles(n);
-  const uint64_t pool = std::max<uint64_t>(options.memory_bytes / 16 / n, 1 << 20);
-  for (auto& h : handles) WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, pool, &h));
+  for (auto& h : handles) WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.worker_pool, &h));
   WorkQueue queue;
   std::deque<std::unique_ptr<BucketTask>> in_flight;  // Z-order
   std::vector<std::thread> workers;
@@ -102,12 +102,12 @@ Status run_parallel(Database& db, BTree& octants, BTree& nodes, const Bucketing&
   Status st = c.open(octants);
   bool more = true;
   // Read ahead far enough that workers never wait for the writer (8 tasks a
-  // thread measured 1.63x on 2 cores, 2 tasks only 1.41x), but within half
-  // the budget.
+  // thread measured 1.63x on 2 cores, 2 tasks only 1.41x), but within the
+  // in-flight share of the budget.
   const size_t max_tasks = static_cast<size_t>(kTasksPerThread * n);
   uint64_t in_flight_bytes = 0;
   while (st.ok()) {
-    while (more && in_flight.size() < max_tasks && in_flight_bytes < options.memory_bytes / 2) {
+    while (more && in_flight.size() < max_tasks && in_flight_bytes < memory.in_flight) {
       auto t = std::make_unique<BucketTask>();
       st = read_bucket(c, b, spills, t.get(), &more);
       if (!st.ok() || !more) break;

@@ -10,7 +10,8 @@
 namespace weaver {
 
 Status run_parallel(Database& db, BTree& octants, BTree& nodes, const Bucketing& b,
-                    SpillStore& spills, const ExtractOptions& options, ExtractResult* result);
+                    SpillStore& spills, const ExtractMemory& memory, const ExtractOptions& options,
+                    ExtractResult* result);
 
 // Appends a finished bucket's nodes and adds up its counts.
 Status write_bucket(const BucketTask& t, BTree& nodes, ExtractResult* result);

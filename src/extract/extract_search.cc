@@ -12,7 +12,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "extract/leaf_reader.h"
+#include "db/leaf_reader.h"
 #include "extract/node_classifier.h"
 #include "schema/node.h"
 #include "schema/octant.h"
@@ -108,13 +108,15 @@ Status build_and_number(BTree& octants, Store& scratch, BTree& nodes, ExtractRes
 }  // namespace
 
 Status extract_by_search(BTree& octants, BTree& nodes, const std::string& scratch_path,
-                         uint64_t memory_bytes, bool lsm, ExtractResult* result) {
+                         uint64_t store_bytes, bool lsm, ExtractResult* result) {
   Status st;
   if (lsm) {
+    // Half the share to the memtable, half to the pools of its runs (at
+    // most 16 of them at once).
     LsmOptions o;
     o.table = scratch_options();
-    o.memtable_bytes = memory_bytes / 2;
-    o.run_pool_bytes = std::max<uint64_t>(memory_bytes / 2 / 16, 1 << 16);
+    o.memtable_bytes = store_bytes / 2;
+    o.run_pool_bytes = std::max<uint64_t>(store_bytes / 2 / 16, 1 << 16);
     std::unique_ptr<LsmTree> scratch;
     st = LsmTree::create(scratch_path + ".lsm", o, &scratch);
     if (st.ok()) st = build_and_number(octants, *scratch, nodes, result);
@@ -126,7 +128,7 @@ Status extract_by_search(BTree& octants, BTree& nodes, const std::string& scratc
   std::unique_ptr<File> f;
   WEAVER_RETURN_IF_ERROR(open_posix_file(scratch_path + ".bt", OpenMode::kCreateTruncate, &f));
   std::unique_ptr<BTree> scratch;
-  st = BTree::create(std::move(f), scratch_options(), memory_bytes, &scratch);
+  st = BTree::create(std::move(f), scratch_options(), store_bytes, &scratch);
   if (st.ok()) st = build_and_number(octants, *scratch, nodes, result);
   scratch.reset();
   std::remove((scratch_path + ".bt").c_str());

@@ -9,9 +9,9 @@
 namespace weaver {
 
 // Appends the nodes of the octree in `octants` to `nodes` (empty), using a
-// scratch node store within memory_bytes: a B+tree file scratch_path.bt, or
+// scratch node store within store_bytes: a B+tree file scratch_path.bt, or
 // with lsm an LSM store in the directory scratch_path.lsm.
 Status extract_by_search(BTree& octants, BTree& nodes, const std::string& scratch_path,
-                         uint64_t memory_bytes, bool lsm, ExtractResult* result);
+                         uint64_t store_bytes, bool lsm, ExtractResult* result);
 
 }  // namespace weaver

@@ -12,26 +12,23 @@
 #include "import/octant_text.h"
 
 namespace weaver {
+
+ImportMemory::ImportMemory(MemoryBudget budget) : plan(budget) {
+  // A sorted append touches only the right spine of a table: a small pool
+  // each for the table of the octants in order and for the merged one.
+  table_pool = plan.take("table pools (2 tables)", 1, 4, 16ull << 20) / 2;
+  // The LSM's runs are only read by cursors, in order: a small pool each, and
+  // at most 3 runs per tier (5 tiers cover 4^5 memtables).
+  run_pool = plan.take("LSM run pools (16 runs)", 1, 8, kMaxRuns * (256ull << 10)) / kMaxRuns;
+  // The 1 MiB text read chunk and allocator slack.
+  plan.take("text chunk and slack", 1, 8, 4ull << 20);
+  // The larger the memtable, the fewer runs to merge.
+  memtable = plan.take_rest("LSM memtable");
+}
+
 namespace {
 
 constexpr uint64_t kProgressEvery = 1 << 20;
-// Memory outside the LSM and the pools: the 1 MiB text read chunk, code and
-// allocator slack.
-constexpr uint64_t kFixedOverhead = 4ull << 20;
-
-// The B+tree pool for the sorted append: it needs only the right spine, so a
-// small pool suffices; the sorter gets the rest of the budget.
-uint64_t append_pool_bytes(uint64_t budget) { return std::min<uint64_t>(budget / 8, 8ull << 20); }
-// The LSM's runs are only read by cursors, in order: a small pool each, and
-// at most 3 runs per tier (5 tiers cover 4^5 memtables).
-constexpr uint64_t kRunPoolBytes = 256 << 10;
-constexpr uint64_t kMaxRuns = 16;
-// The memtable gets what is left after the two tables' pools (the table of
-// the octants in order, and the merged one), the runs and the overhead.
-uint64_t lsm_bytes(uint64_t budget) {
-  const uint64_t reserved = 2 * append_pool_bytes(budget) + kRunPoolBytes * kMaxRuns + kFixedOverhead;
-  return budget > 2 * reserved ? budget - reserved : budget / 2;
-}
 
 // In key order (preorder) two octants overlap iff they are equal or one is
 // the other's ancestor, and every key between an ancestor and its descendant
@@ -97,14 +94,14 @@ class TableBuilder {
 
 // Octants that arrive out of order go to an LSM store keyed by octant, with
 // the line as payload; a repeated octant is reported when the LSM finds it.
-Status make_lsm(const std::string& dir, const std::string& path, uint64_t memory_bytes,
+Status make_lsm(const std::string& dir, const std::string& path, const ImportMemory& memory,
                 bool packed, std::unique_ptr<LsmTree>* out) {
   LsmOptions o;
   std::string error;
   o.table.schema = *RecordSchema::parse("line:u64", &error);
   o.table.packed = packed;
-  o.memtable_bytes = memory_bytes;
-  o.run_pool_bytes = kRunPoolBytes;
+  o.memtable_bytes = memory.memtable;
+  o.run_pool_bytes = memory.run_pool;
   o.on_shadow = [path](uint64_t key, const std::byte* newer, const std::byte* older) {
     KeyTag a{key, 0}, b{key, 0};
     std::memcpy(&a.tag, older, 8);
@@ -124,7 +121,7 @@ Status read_input(const std::string& text_path, const ImportOptions& options,
     if (options.progress && ++count % kProgressEvery == 0) options.progress("read", count);
     const uint64_t key = octant_key(o);
     if (*lsm == nullptr && direct.in_order(key)) return direct.add({key, line});
-    if (*lsm == nullptr) WEAVER_RETURN_IF_ERROR(make_lsm(scratch, text_path, lsm_bytes(options.memory_bytes),
+    if (*lsm == nullptr) WEAVER_RETURN_IF_ERROR(make_lsm(scratch, text_path, ImportMemory(options.memory),
                                                  options.packed, lsm));
     return (*lsm)->put(key, reinterpret_cast<const std::byte*>(&line), nullptr);
   });
@@ -167,7 +164,7 @@ Status build_table(Database& db, const std::string& text_path, const ImportOptio
   TableOptions topt;
   topt.key_kind = KeyKind::kOctant;
   topt.packed = options.packed;
-  const uint64_t pool = append_pool_bytes(options.memory_bytes);
+  const uint64_t pool = ImportMemory(options.memory).table_pool;
   std::unique_ptr<BTree> table;
   WEAVER_RETURN_IF_ERROR(db.create_table(kOctantTable, topt, pool, &table, file_name));
   TableBuilder direct(text_path, *table);

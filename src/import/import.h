@@ -13,11 +13,12 @@
 
 #include "db/octant_table.h"
 #include "schema/status.h"
+#include "util/memory_budget.h"
 
 namespace weaver {
 
 struct ImportOptions {
-  uint64_t memory_bytes = 256ull << 20;
+  MemoryBudget memory;
   // The units of the new table.  Those not given keep the values of the
   // octant table being replaced (or the defaults when there is none).
   Units units;
@@ -26,6 +27,17 @@ struct ImportOptions {
   bool packed = true;
   // Called now and then with (phase, items done); may be empty.
   std::function<void(const char*, uint64_t)> progress;
+};
+
+// Where import's memory goes: the shares of options.memory.
+struct ImportMemory {
+  explicit ImportMemory(MemoryBudget budget);
+
+  MemoryPlan plan;
+  uint64_t table_pool = 0;  // each of the two tables written by sorted append
+  uint64_t run_pool = 0;    // each of the LSM's runs (at most kMaxRuns at once)
+  uint64_t memtable = 0;    // the LSM's memtable: the octants that came out of order
+  static constexpr uint64_t kMaxRuns = 16;
 };
 
 struct ImportResult {

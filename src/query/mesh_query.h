@@ -8,8 +8,22 @@
 #include "schema/octant.h"
 #include "schema/status.h"
 #include "storage/btree.h"
+#include "util/memory_budget.h"
 
 namespace weaver {
+
+// Where a query's memory goes: the shares of --memory.
+struct QueryMemory {
+  explicit QueryMemory(MemoryBudget budget) : plan(budget) {
+    // Each question is a few root-to-leaf paths in each table: the pools
+    // only cache them between the questions of one process.
+    octant_pool = plan.take("octant table pool", 1, 2);
+    node_pool = plan.take("node table pool", 1, 2);
+  }
+
+  MemoryPlan plan;
+  uint64_t octant_pool = 0, node_pool = 0;
+};
 
 struct ElementInfo {
   uint64_t id = 0;

@@ -36,7 +36,7 @@ struct RangeWalk {
     }
     uint64_t first = 0, end = 0;
     WEAVER_RETURN_IF_ERROR(t.rank(key, &first));
-    WEAVER_RETURN_IF_ERROR(t.rank(octant_subtree_key_end(o), &end));
+    WEAVER_RETURN_IF_ERROR(t.rank(octant_key_subtree_end(o), &end));
     if (end == first) return Status::Ok();  // no leaves under o
     if (inside(o, box)) return emit_all(key, first, end);
     for (int k = 0; k < 8; ++k) {

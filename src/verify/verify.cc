@@ -8,7 +8,7 @@
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "storage/btree.h"
-#include "extract/leaf_reader.h"
+#include "db/leaf_reader.h"
 #include "verify/mesh_check.h"
 
 namespace weaver {
@@ -65,7 +65,7 @@ Status check_table(const Database& db, const std::string& name, const VerifyOpti
                    Problems& problems, VerifyReport* r, bool* usable) {
   *usable = false;
   std::unique_ptr<BTree> t;
-  Status st = db.open_table(name, o.memory_bytes / 4, &t);
+  Status st = db.open_table(name, VerifyMemory(o.memory).table_pool, &t);
   if (st.ok()) st = t->check_invariants();
   if (!st.ok()) {
     problems.add("table " + name + ": " + st.message());
@@ -89,10 +89,11 @@ Status check_table(const Database& db, const std::string& name, const VerifyOpti
 Status check_mesh(const Database& db, const VerifyOptions& o, Problems& problems,
                   VerifyReport* r) {
   std::unique_ptr<BTree> octants, nodes;
-  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, o.memory_bytes / 2, &octants));
-  WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, o.memory_bytes / 4, &nodes));
+  const VerifyMemory memory(o.memory);
+  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &octants));
+  WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, memory.node_pool, &nodes));
   BalanceOptions bo;
-  bo.memory_bytes = o.memory_bytes;
+  bo.memory = memory.balance_check;
   bo.check_only = true;
   BalanceResult br;
   WEAVER_RETURN_IF_ERROR(
@@ -111,6 +112,17 @@ Status check_mesh(const Database& db, const VerifyOptions& o, Problems& problems
 }
 
 }  // namespace
+
+VerifyMemory::VerifyMemory(MemoryBudget budget) : plan(budget) {
+  // The storage check reads one table at a time, in page order.
+  table_pool = plan.take("table pool (storage check)", 1, 8);
+  // The mesh check finds the leaves around every node by aggregate hits
+  // near a cursor, and reads the nodes in order.
+  octant_pool = plan.take("octant table pool", 1, 4);
+  node_pool = plan.take("node table pool", 1, 8);
+  // The balance check sorts the leaves' requirements out of core.
+  balance_check = plan.take_budget("balance check", 1, 2);
+}
 
 Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyReport* r) {
   *r = VerifyReport{};

@@ -19,14 +19,26 @@
 #include <vector>
 
 #include "schema/status.h"
+#include "util/memory_budget.h"
 
 namespace weaver {
 
 struct VerifyOptions {
-  uint64_t memory_bytes = 256ull << 20;
+  MemoryBudget memory;
   bool mesh = true;      // also check the mesh invariants
   size_t max_problems = 20;  // stop collecting after this many
   std::function<void(const std::string& line)> progress;  // one line per finished check
+};
+
+// Where verify's memory goes: the shares of options.memory.
+struct VerifyMemory {
+  explicit VerifyMemory(MemoryBudget budget);
+
+  MemoryPlan plan;
+  uint64_t table_pool = 0;      // the storage check, one table at a time
+  uint64_t octant_pool = 0;     // the mesh check: leaves found by aggregate hits
+  uint64_t node_pool = 0;       // the mesh check: nodes read in order and found by key
+  MemoryBudget balance_check;   // the balance check's own budget (balance.h)
 };
 
 struct VerifyReport {

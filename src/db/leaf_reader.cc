@@ -1,4 +1,4 @@
-#include "extract/leaf_reader.h"
+#include "db/leaf_reader.h"
 
 #include "schema/octant.h"
 

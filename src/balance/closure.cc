@@ -1,0 +1,192 @@
+#include "balance/closure.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "schema/octant.h"
+#include "sort/external_sort.h"
+#include "util/key_set.h"
+
+namespace weaver {
+namespace {
+
+// Walks the octant table alongside a nondecreasing stream of keys and tells
+// whether each octant overlaps the domain (the union of the leaves).
+class DomainProbe {
+ public:
+  Status open(BTree& leaves) { return leaves.seek_cursor(0, &cursor_); }
+  Status overlaps(uint64_t key, bool* yes) {
+    while (cursor_.valid() && cursor_.key() <= key) {
+      last_ = cursor_.key();
+      has_last_ = true;
+      WEAVER_RETURN_IF_ERROR(cursor_.next());
+    }
+    // A leaf equal to or containing the octant, or a leaf inside it.
+    *yes = (has_last_ && key < octant_key_subtree_end(last_)) ||
+           (cursor_.valid() && cursor_.key() < octant_key_subtree_end(key));
+    return Status::Ok();
+  }
+
+ private:
+  BTreeCursor cursor_;
+  uint64_t last_ = 0;
+  bool has_last_ = false;
+};
+
+// Reads a sorted source, skipping repeated keys.
+Status next_unique(KeyTagSource& s, uint64_t* prev, bool* has_prev, KeyTag* out, bool* done) {
+  while (true) {
+    WEAVER_RETURN_IF_ERROR(s.next(out, done));
+    if (*done) return Status::Ok();
+    if (!*has_prev || out->key != *prev) {
+      *prev = out->key;
+      *has_prev = true;
+      return Status::Ok();
+    }
+  }
+}
+
+}  // namespace
+
+Closure::Closure(BTree& leaves, const BalanceMemory& memory, const std::string& scratch_dir,
+                 BalanceResult* result)
+    : leaves_(leaves), memory_(memory), scratch_(scratch_dir), r_(result) {}
+
+Closure::~Closure() = default;
+
+Status Closure::build(int max_level, bool propagate) {
+  for (int l = 0; l <= max_level; ++l) {
+    leaf_parents_.push_back(spool("lp", l));
+    required_parents_.push_back(spool("rp", l));
+    required_.push_back(spool("r", l));
+  }
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(leaves_.seek_cursor(0, &c));
+  while (c.valid()) {
+    const Octant q = octant_from_key(c.key());
+    ++r_->input_leaves;
+    // Tag: the leaf that asks, for naming violations.
+    if (q.level > 0) {
+      WEAVER_RETURN_IF_ERROR(
+          leaf_parents_[q.level - 1]->add({octant_key(octant_parent(q)), c.key()}));
+    }
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  for (int l = max_level - 1; l >= 0; --l) {
+    WEAVER_RETURN_IF_ERROR(leaf_parents_[l]->finish());
+    WEAVER_RETURN_IF_ERROR(required_parents_[l]->finish());
+    KeyTagMerge parents({leaf_parents_[l].get(), required_parents_[l].get()});
+    WEAVER_RETURN_IF_ERROR(expand_level(l, parents, propagate));
+    leaf_parents_[l].reset();
+    required_parents_[l].reset();
+  }
+  std::vector<KeyTagSource*> levels;
+  for (auto& level : required_) {
+    WEAVER_RETURN_IF_ERROR(level->finish());
+    if (level->size() > 0) levels.push_back(level.get());
+  }
+  required_merge_ = std::make_unique<KeyTagMerge>(std::move(levels));
+  return Status::Ok();
+}
+
+std::unique_ptr<SortedSpool> Closure::spool(const char* name, int level) const {
+  return std::make_unique<SortedSpool>(scratch_ + "/" + name + std::to_string(level),
+                                       memory_.spool_buffer);
+}
+
+// The face and edge neighbours of the level's parents, into candidates.
+// Parents pass through memory in chunks of what fits in the chunk share
+// (16 bytes each in the list, and a key set of twice as many slots); a
+// neighbour that is a parent of the same chunk is skipped (see
+// expand_level).  Any subset may be skipped, and Z-order keeps most
+// neighbours in one chunk.
+Status Closure::emit_candidates(KeyTagSource& parents, ExternalSorter& candidates) {
+  size_t fits = 1024;
+  while (2 * fits * sizeof(KeyTag) + KeySet::slots_for(2 * fits) * 8 <= memory_.parent_chunk) {
+    fits *= 2;
+  }
+  std::vector<KeyTag> chunk;
+  chunk.reserve(fits);
+  KeySet chunk_keys;
+  auto flush_chunk = [&]() -> Status {
+    chunk_keys.reset(chunk.size());
+    for (const KeyTag& q : chunk) chunk_keys.add(q.key);
+    for (const KeyTag& q : chunk) {
+      const Octant po = octant_from_key(q.key);
+      for (const Direction& d : kFaceAndEdgeDirections) {
+        Octant n;
+        if (!octant_neighbour(po, d, &n)) continue;
+        const uint64_t nk = octant_key(n);
+        if (!chunk_keys.contains(nk)) WEAVER_RETURN_IF_ERROR(candidates.add({nk, q.tag}));
+      }
+    }
+    chunk.clear();
+    return Status::Ok();
+  };
+  KeyTag p;
+  bool done = false, has_prev = false;
+  uint64_t prev = 0;
+  while (true) {
+    WEAVER_RETURN_IF_ERROR(next_unique(parents, &prev, &has_prev, &p, &done));
+    if (done) break;
+    chunk.push_back(p);
+    if (chunk.size() == fits) WEAVER_RETURN_IF_ERROR(flush_chunk());
+  }
+  return flush_chunk();
+}
+
+// Neighbours of the level-l parents, kept where they meet the domain.  A
+// neighbour that is itself a parent (it has finer children) is resolved
+// already, and its own parent enters the next level through its siblings,
+// so it is skipped: inside refined regions almost every candidate goes.
+Status Closure::expand_level(int l, KeyTagSource& parents, bool propagate) {
+  ExternalSorter candidates(scratch_ + "/c" + std::to_string(l), memory_.candidate_sort);
+  WEAVER_RETURN_IF_ERROR(emit_candidates(parents, candidates));
+  WEAVER_RETURN_IF_ERROR(candidates.finish());
+  DomainProbe probe;
+  WEAVER_RETURN_IF_ERROR(probe.open(leaves_));
+  bool done = false, has_prev = false;
+  uint64_t prev = 0;
+  KeyTag n;
+  while (true) {
+    WEAVER_RETURN_IF_ERROR(next_unique(candidates, &prev, &has_prev, &n, &done));
+    if (done) return Status::Ok();
+    bool inside = false;
+    WEAVER_RETURN_IF_ERROR(probe.overlaps(n.key, &inside));
+    if (!inside) continue;
+    WEAVER_RETURN_IF_ERROR(required_[l]->add(n));
+    ++r_->required;
+    if (l > 0 && propagate) {
+      WEAVER_RETURN_IF_ERROR(required_parents_[l - 1]->add(
+          {octant_key(octant_parent(octant_from_key(n.key))), n.tag}));
+    }
+  }
+}
+
+Status for_each_leaf(BTree& leaves, KeyTagSource& required, const LeafVisit& visit) {
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(leaves.seek_cursor(0, &c));
+  KeyTag req;
+  bool done = false, has_prev = false, stop = false;
+  uint64_t prev = 0;
+  WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
+  std::vector<KeyTag> inside;
+  while (c.valid() && !stop) {
+    const uint64_t key = c.key(), end = octant_key_subtree_end(key);
+    inside.clear();
+    while (!done && req.key < end) {  // required octants up to the end of this leaf
+      if (req.key > key) inside.push_back(req);
+      WEAVER_RETURN_IF_ERROR(next_unique(required, &prev, &has_prev, &req, &done));
+    }
+    WEAVER_RETURN_IF_ERROR(visit(c, inside, &stop));
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  return Status::Ok();
+}
+
+ScratchDir::~ScratchDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path, ec);
+}
+
+}  // namespace weaver

@@ -1,0 +1,75 @@
+// The closure of balance: the octants that 2:1 balance requires to be
+// resolved (covered by leaves at least as fine), found out of core.
+//
+// Every leaf (or required octant) q at level l requires the face and edge
+// neighbours of its parent, at level l-1, to be resolved.  These
+// requirements ripple from fine to coarse, one level at a time; each level's
+// set is sorted and deduplicated out of core, and octants outside the domain
+// are dropped (they hold no leaves to balance against).  Every requirement
+// is necessary, so a refinement that resolves exactly these is minimal.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "balance/balance.h"
+#include "schema/status.h"
+#include "sort/key_tag.h"
+#include "sort/sorted_spool.h"
+#include "storage/btree.h"
+
+namespace weaver {
+
+class ExternalSorter;
+
+// Where the budget goes.  Everything else is sorted already: a level's
+// parents arrive as two sorted streams (of the leaves, of the octants
+// required one level finer), and each level's required octants come out of
+// the candidate sorter in order.
+class Closure {
+ public:
+  // leaves: the input octant table, open.  Spools and sorter runs go in scratch_dir.
+  Closure(BTree& leaves, const BalanceMemory& memory, const std::string& scratch_dir,
+          BalanceResult* result);
+  ~Closure();
+
+  // Builds the required octants of levels 0..max_level-1.  Without
+  // propagation (a check) only the leaves' own requirements are made: enough
+  // to tell whether the octree is balanced.
+  Status build(int max_level, bool propagate);
+
+  // The required octants, deduplicated, in key order; tag = a leaf that
+  // asks (for naming violations).  REQUIRES: build() succeeded.
+  KeyTagSource& required() { return *required_merge_; }
+
+ private:
+  std::unique_ptr<SortedSpool> spool(const char* name, int level) const;
+  Status emit_candidates(KeyTagSource& parents, ExternalSorter& candidates);
+  Status expand_level(int l, KeyTagSource& parents, bool propagate);
+
+  BTree& leaves_;
+  const BalanceMemory& memory_;
+  std::string scratch_;
+  BalanceResult* r_;
+  // By level: parents of leaves, parents of required octants, the required.
+  std::vector<std::unique_ptr<SortedSpool>> leaf_parents_, required_parents_, required_;
+  std::unique_ptr<KeyTagMerge> required_merge_;
+};
+
+// Calls visit(leaf cursor, required octants strictly inside the leaf) for
+// every leaf in key order, until visit sets *stop: the merge of the leaves
+// with the closure that both the refinement and the check walk.
+using LeafVisit = std::function<Status(const BTreeCursor&, const std::vector<KeyTag>&, bool* stop)>;
+Status for_each_leaf(BTree& leaves, KeyTagSource& required, const LeafVisit& visit);
+
+// Removes a scratch directory however the run ends.
+struct ScratchDir {
+  std::string path;
+  ~ScratchDir();
+};
+
+}  // namespace weaver

@@ -1,0 +1,83 @@
+#include "balance/refinement.h"
+
+#include <cstring>
+#include <vector>
+
+#include "balance/closure.h"
+
+namespace weaver {
+namespace {
+
+constexpr size_t kBatch = 4096;
+
+// Writes leaf t, split just enough that every required octant strictly
+// inside it is resolved.  `inside` holds those, in key order.
+class Completion {
+ public:
+  Completion(BTree& out, const FillPayload& fill, uint32_t payload)
+      : out_(out), fill_(fill), payload_(payload) {}
+
+  Status write(const Octant& t, const std::byte* parent_payload, const std::vector<KeyTag>& inside,
+               BalanceResult* r) {
+    size_t pos = 0;
+    return split(t, false, parent_payload, inside, &pos, r);
+  }
+  Status flush() {
+    WEAVER_RETURN_IF_ERROR(out_.append_batch(keys_.data(), payloads_.data(), keys_.size()));
+    keys_.clear();
+    payloads_.clear();
+    return Status::Ok();
+  }
+
+ private:
+  // is_new: o is a child made by a split, not a leaf of the input.
+  Status split(const Octant& o, bool is_new, const std::byte* parent_payload,
+               const std::vector<KeyTag>& inside, size_t* pos, BalanceResult* r) {
+    const uint64_t key = octant_key(o), end = octant_key_subtree_end(o);
+    while (*pos < inside.size() && inside[*pos].key <= key) ++*pos;  // o itself is resolved
+    if (*pos < inside.size() && inside[*pos].key < end) {
+      for (int c = 0; c < 8; ++c) {
+        WEAVER_RETURN_IF_ERROR(split(octant_child(o, c), true, parent_payload, inside, pos, r));
+      }
+      return Status::Ok();
+    }
+    return emit(o, is_new, parent_payload, r);
+  }
+
+  Status emit(const Octant& o, bool is_new, const std::byte* parent_payload, BalanceResult* r) {
+    keys_.push_back(octant_key(o));
+    const size_t at = payloads_.size();
+    payloads_.resize(at + payload_);
+    if (payload_ > 0) {
+      std::memcpy(payloads_.data() + at, parent_payload, payload_);
+      if (is_new && fill_) fill_(o, payloads_.data() + at);
+    }
+    ++r->levels[o.level];
+    ++r->output_leaves;
+    if (keys_.size() == kBatch) return flush();
+    return Status::Ok();
+  }
+
+  BTree& out_;
+  const FillPayload& fill_;
+  uint32_t payload_;
+  std::vector<uint64_t> keys_;
+  std::vector<std::byte> payloads_;
+};
+
+}  // namespace
+
+Status write_refinement(BTree& leaves, KeyTagSource& required, const FillPayload& fill, BTree& out,
+                        BalanceResult* r) {
+  Completion completion(out, fill, leaves.payload_size());
+  std::vector<std::byte> payload(leaves.payload_size());
+  WEAVER_RETURN_IF_ERROR(for_each_leaf(
+      leaves, required, [&](const BTreeCursor& c, const std::vector<KeyTag>& inside, bool*) {
+        if (!inside.empty()) ++r->split;
+        if (!payload.empty()) std::memcpy(payload.data(), c.payload(), payload.size());
+        return completion.write(octant_from_key(c.key()), payload.data(), inside, r);
+      }));
+  return completion.flush();
+}
+
+}  // namespace weaver
