@@ -28,7 +28,12 @@ void seal_page(std::byte* pg, uint32_t page_no, uint32_t page_size) {
 
 BufferPool::BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes)
     : file_(file), page_size_(page_size) {
-  const uint64_t n = std::max<uint64_t>(kMinFrames, budget_bytes / page_size);
+  // The budget pays for the write staging buffer, then for frames with their
+  // bookkeeping (the Frame, and up to 4 table slots of 4 bytes).
+  const uint64_t staging = uint64_t{kMaxWriteRun} * page_size;
+  const uint64_t per_frame = page_size + sizeof(Frame) + 4 * sizeof(uint32_t);
+  const uint64_t n =
+      std::max<uint64_t>(kMinFrames, budget_bytes > staging ? (budget_bytes - staging) / per_frame : 0);
   // 2 MiB alignment lets the kernel back the arena with huge pages: a large
   // pool then takes far fewer TLB misses and page faults.
   constexpr size_t kHugePage = size_t{2} << 20;

@@ -41,7 +41,9 @@ using AlignedBytes = std::unique_ptr<std::byte[], AlignedArrayDelete>;
 
 class BufferPool {
  public:
-  // The pool keeps at least kMinFrames frames whatever the budget, so that a
+  // The pool holds its frames, their bookkeeping and a write staging buffer
+  // of kMaxWriteRun pages within budget_bytes (memory_bytes() <= budget),
+  // but keeps at least kMinFrames frames whatever the budget, so that a
   // root-to-leaf path plus split siblings always fits.
   static constexpr uint32_t kMinFrames = 64;
   // Longest run of consecutive dirty pages coalesced into one write.

@@ -9,7 +9,8 @@
 // to no more than the budget, for budgets from the smallest --memory up.
 //
 // What the shares do not count: a B+tree's buffer pool keeps at least
-// BufferPool::kMinFrames pages (256 KiB of 4 KiB pages) whatever its share,
+// BufferPool::kMinFrames pages and its write staging buffer (512 KiB with 4
+// KiB pages) whatever its share, so at the smallest budgets pools exceed it;
 // and code, stacks and allocator slack come on top; tests/memory_bound_test.cc
 // measures the resident size a user sees.
 #pragma once
