@@ -1,7 +1,7 @@
 // The Store interface: an ordered map from 64-bit keys to fixed-size payloads,
-// implemented by the B+tree (and later by the LSM).  Keys are either node
-// keys (Morton codes) or packed octant keys (schema/octant.h); both order as
-// plain unsigned integers.
+// implemented by the B+tree (btree.h) and the LSM store (lsm.h).  Keys are
+// either node keys (Morton codes) or packed octant keys (schema/octant.h);
+// both order as plain unsigned integers.
 #pragma once
 
 #include <cstddef>
