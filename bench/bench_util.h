@@ -181,7 +181,8 @@ inline void print_table(const std::vector<std::map<std::string, std::string>>& r
       if (it != r.end()) width[c] = std::max(width[c], it->second.size());
     }
   }
-  for (size_t c = 0; c < columns.size(); ++c) std::printf("%-*s  ", int(width[c]), columns[c].c_str());
+  for (size_t c = 0; c < columns.size(); ++c)
+    std::printf("%-*s  ", int(width[c]), columns[c].c_str());
   std::printf("\n");
   for (const auto& r : rows) {
     for (size_t c = 0; c < columns.size(); ++c) {

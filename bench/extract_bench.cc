@@ -1,10 +1,9 @@
 // Extraction throughput: sphere-graded octrees (2:1 balanced by
 // construction) are generated and imported, then `weaver extract --json` runs
-// in a fresh process per run, so time and peak RSS are what a user sees.  Prints one JSON object per
-// run, then a table of medians laid out like the paper's Figure 12.
-// Both algorithms run on every mesh; the table adds the speedup of sort over
-// search and the storage of each (Figure 13: the node B-tree with element
-// codes vs the node table).
+// in a fresh process per run, so time and peak RSS are what a user sees.  Prints one JSON object
+// per run, then a table of medians laid out like the paper's Figure 12. Both algorithms run on
+// every mesh; the table adds the speedup of sort over search and the storage of each (Figure 13:
+// the node B-tree with element codes vs the node table).
 #include <unistd.h>
 
 #include <filesystem>
@@ -28,7 +27,6 @@ struct Mesh {
   uint64_t points;  // points
 };
 
-
 }  // namespace
 }  // namespace weaver::bench
 
@@ -47,10 +45,14 @@ int main(int argc, char** argv) {
                               {"random-10M", GenOptions::Kind::kPoints, 9, 0, 7200}};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--small") meshes.resize(2);
-    else if (a == "--repeat" && i + 1 < argc) repeat = std::stoi(argv[++i]);
-    else if (a == "--search-repeat" && i + 1 < argc) search_repeat = std::stoi(argv[++i]);
-    else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
+    if (a == "--small")
+      meshes.resize(2);
+    else if (a == "--repeat" && i + 1 < argc)
+      repeat = std::stoi(argv[++i]);
+    else if (a == "--search-repeat" && i + 1 < argc)
+      search_repeat = std::stoi(argv[++i]);
+    else if (a == "--dir" && i + 1 < argc)
+      dir = argv[++i];
     else {
       std::printf("usage: extract_bench [--small] [--repeat N] [--search-repeat N] [--dir DIR]\n");
       return 2;
@@ -95,9 +97,16 @@ int main(int argc, char** argv) {
       std::map<std::string, std::string> last;
       for (int r = 0; r < runs; ++r) {
         uint64_t peak = 0;
-        std::vector<std::string> args = {WEAVER_BINARY, "extract", db, "--json", "--algorithm",
-                                         algorithm, "--threads", std::to_string(v.threads),
-                                         "--memory", std::to_string(memory)};
+        std::vector<std::string> args = {WEAVER_BINARY,
+                                         "extract",
+                                         db,
+                                         "--json",
+                                         "--algorithm",
+                                         algorithm,
+                                         "--threads",
+                                         std::to_string(v.threads),
+                                         "--memory",
+                                         std::to_string(memory)};
         if (search) args.insert(args.end(), {"--store", v.store});
         const std::string out = run_program(args, &peak);
         if (out.empty()) {
@@ -113,7 +122,8 @@ int main(int argc, char** argv) {
         j.add("elements", static_cast<uint64_t>(std::stod(res["elements"])));
         j.add("nodes", static_cast<uint64_t>(nodes));
         j.add("dangling", static_cast<uint64_t>(std::stod(res["edge"]) + std::stod(res["face"])));
-        j.add("seconds", std::stod(res["seconds"])).add("nodes_per_s", std::stod(res["nodes_per_s"]));
+        j.add("seconds", std::stod(res["seconds"]))
+            .add("nodes_per_s", std::stod(res["nodes_per_s"]));
         j.add("bytes_per_node", std::stod(res["node_table_bytes"]) / nodes);
         // The storage the algorithm builds: the node B-tree with element codes
         // for search, the node table for sort (Figure 13).
@@ -144,17 +154,18 @@ int main(int argc, char** argv) {
         char buf[64];
         std::snprintf(buf, sizeof buf, "%.1f", std::stod(last["seconds"]) / sort_seconds);
         last["speedup_of_sort"] = buf;  // over 1-thread sort
-        std::snprintf(buf, sizeof buf, "%.1f%%", 100.0 * (1 - sort_bytes / std::stod(last["built_bytes"])));
+        std::snprintf(buf, sizeof buf, "%.1f%%",
+                      100.0 * (1 - sort_bytes / std::stod(last["built_bytes"])));
         last["storage_saved_by_sort"] = buf;
       }
       table.push_back(last);
     }
     std::filesystem::remove_all(db);
   }
-  std::printf("\nmedians (Figure 12: T and rho per mesh and algorithm; Figure 13: storage built):\n");
-  print_table(table, {"mesh", "algorithm", "store", "threads", "elements", "nodes", "dangling", "seconds",
-                      "nodes_per_s", "speedup_over_1_thread", "speedup_of_sort",
-                      "built_bytes_per_node",
-                      "storage_saved_by_sort", "peak_rss_bytes", "runs"});
+  std::printf(
+      "\nmedians (Figure 12: T and rho per mesh and algorithm; Figure 13: storage built):\n");
+  print_table(table, {"mesh", "algorithm", "store", "threads", "elements", "nodes", "dangling",
+                      "seconds", "nodes_per_s", "speedup_over_1_thread", "speedup_of_sort",
+                      "built_bytes_per_node", "storage_saved_by_sort", "peak_rss_bytes", "runs"});
   return 0;
 }

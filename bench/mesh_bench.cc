@@ -21,9 +21,12 @@ int main(int argc, char** argv) {
   const uint64_t memory = 256ull << 20;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--large") freqs.push_back(1.0);
-    else if (a == "--repeat" && i + 1 < argc) repeat = std::stoi(argv[++i]);
-    else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
+    if (a == "--large")
+      freqs.push_back(1.0);
+    else if (a == "--repeat" && i + 1 < argc)
+      repeat = std::stoi(argv[++i]);
+    else if (a == "--dir" && i + 1 < argc)
+      dir = argv[++i];
     else {
       std::printf("usage: mesh_bench [--large (adds 1 Hz)] [--repeat N] [--dir DIR]\n");
       return 2;
@@ -68,7 +71,8 @@ int main(int argc, char** argv) {
       });
       ::sync();
       uint64_t rss = 0;
-      const std::string e = run_program({WEAVER_BINARY, "extract", db, "--json", "--threads", "2"}, &rss);
+      const std::string e =
+          run_program({WEAVER_BINARY, "extract", db, "--json", "--threads", "2"}, &rss);
       if (c.empty() || b.empty() || e.empty()) return 1;
       std::printf("%s\n%s\n", c.c_str(), b.c_str());
       last_c = parse_flat_json(c);
@@ -80,9 +84,10 @@ int main(int argc, char** argv) {
       b_rss.push_back(std::stod(last_b["peak_rss_bytes"]));
     }
     const double danglings = std::stod(last_e["edge"]) + std::stod(last_e["face"]);
-    std::printf("{\"bench\": \"mesh\", \"figure\": 11, \"model\": \"basin\", \"freq\": %g, "
-                "\"elements\": %s, \"nodes\": %s, \"danglings\": %.0f}\n",
-                f, last_b["balanced_elements"].c_str(), last_e["nodes"].c_str(), danglings);
+    std::printf(
+        "{\"bench\": \"mesh\", \"figure\": 11, \"model\": \"basin\", \"freq\": %g, "
+        "\"elements\": %s, \"nodes\": %s, \"danglings\": %.0f}\n",
+        f, last_b["balanced_elements"].c_str(), last_e["nodes"].c_str(), danglings);
     row["freq_hz"] = fmt(f);
     row["elements"] = last_b["balanced_elements"];
     row["nodes"] = last_e["nodes"];
@@ -94,11 +99,14 @@ int main(int argc, char** argv) {
     table.push_back(row);
     std::filesystem::remove_all(db);
   }
-  std::printf("\nFigure 11 for the synthetic basin (10 points per wavelength), and stage medians of "
-              "%d runs:\n", repeat);
+  std::printf(
+      "\nFigure 11 for the synthetic basin (10 points per wavelength), and stage medians of "
+      "%d runs:\n",
+      repeat);
   print_table(table, {"freq_hz", "elements", "nodes", "danglings", "construct_per_s",
                       "construct_rss", "balance_per_s", "balance_rss"});
-  std::printf("paper (SCEC LA basin): 0.2 Hz 433k / 556k / 125k; 0.5 Hz 9.92m / 11.3m / 1.43m; "
-              "1 Hz 113m / 134m / 20m; 2 Hz 1.22b / 1.37b / 147m\n");
+  std::printf(
+      "paper (SCEC LA basin): 0.2 Hz 433k / 556k / 125k; 0.5 Hz 9.92m / 11.3m / 1.43m; "
+      "1 Hz 113m / 134m / 20m; 2 Hz 1.22b / 1.37b / 147m\n");
   return 0;
 }

@@ -96,7 +96,8 @@ bool one_run(const Data& d, bool packed, const std::string& path, uint64_t queri
     constexpr size_t kBatch = 1 << 16;
     for (size_t i = 0; i < d.keys.size(); i += kBatch) {
       const size_t n = std::min(kBatch, d.keys.size() - i);
-      if (!check(t->append_batch(d.keys.data() + i, d.vals.data() + i * p, n), "append")) return false;
+      if (!check(t->append_batch(d.keys.data() + i, d.vals.data() + i * p, n), "append"))
+        return false;
     }
     if (!check(t->commit(), "commit")) return false;
     r->build_s = now_seconds() - t0;
@@ -135,11 +136,16 @@ int main(int argc, char** argv) {
   uint64_t queries = 1'000'000;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--repeat" && i + 1 < argc) repeat = std::stoi(argv[++i]);
-    else if (a == "--freq" && i + 1 < argc) freq = argv[++i];
-    else if (a == "--db" && i + 1 < argc) db_dir = argv[++i];
-    else if (a == "--dir" && i + 1 < argc) dir = argv[++i];
-    else if (a == "--queries" && i + 1 < argc) queries = std::stoull(argv[++i]);
+    if (a == "--repeat" && i + 1 < argc)
+      repeat = std::stoi(argv[++i]);
+    else if (a == "--freq" && i + 1 < argc)
+      freq = argv[++i];
+    else if (a == "--db" && i + 1 < argc)
+      db_dir = argv[++i];
+    else if (a == "--dir" && i + 1 < argc)
+      dir = argv[++i];
+    else if (a == "--queries" && i + 1 < argc)
+      queries = std::stoull(argv[++i]);
     else {
       std::printf(
           "usage: packed_bench [--freq F] [--db DB] [--repeat N] [--queries N] [--dir DIR]\n"
@@ -191,7 +197,9 @@ int main(int argc, char** argv) {
       }
       const double bpr = r.bytes / n;
       Json j;
-      j.add("table", d.name).add("format", packed ? "packed" : "plain").add("records", d.keys.size());
+      j.add("table", d.name)
+          .add("format", packed ? "packed" : "plain")
+          .add("records", d.keys.size());
       j.add("schema", d.options.schema.to_text()).add("file_bytes", r.bytes);
       j.add("bytes_per_record", bpr).add("build_records_per_s", median(build));
       j.add("scan_8MiB_pool_records_per_s", median(small));
@@ -208,14 +216,17 @@ int main(int argc, char** argv) {
         plain_get = median(get);
       }
       std::printf("%s\n", j.str().c_str());
-      auto ratio = [&](const char* k) { return j.get(k).empty() ? "" : " (" + fmt(std::stod(j.get(k))) + "x)"; };
-      table.push_back({{"table", d.name},
-                       {"format", packed ? "packed" : "plain"},
-                       {"B/record", fmt(bpr)},
-                       {"build rec/s", fmt(median(build))},
-                       {"scan rec/s, 8 MiB pool", fmt(median(small)) + ratio("scan_8MiB_pool_vs_plain")},
-                       {"scan rec/s, in pool", fmt(median(large)) + ratio("scan_in_pool_vs_plain")},
-                       {"get/s", fmt(median(get)) + ratio("get_vs_plain")}});
+      auto ratio = [&](const char* k) {
+        return j.get(k).empty() ? "" : " (" + fmt(std::stod(j.get(k))) + "x)";
+      };
+      table.push_back(
+          {{"table", d.name},
+           {"format", packed ? "packed" : "plain"},
+           {"B/record", fmt(bpr)},
+           {"build rec/s", fmt(median(build))},
+           {"scan rec/s, 8 MiB pool", fmt(median(small)) + ratio("scan_8MiB_pool_vs_plain")},
+           {"scan rec/s, in pool", fmt(median(large)) + ratio("scan_in_pool_vs_plain")},
+           {"get/s", fmt(median(get)) + ratio("get_vs_plain")}});
     }
   }
   std::printf("\nmedians of %d runs; tables of %s (records: nodes %zu, octants %zu)\n", repeat,

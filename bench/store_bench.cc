@@ -71,7 +71,8 @@ class Permutation {
     mask_ = (uint64_t{1} << half_bits_) - 1;
   }
   uint64_t operator()(uint64_t i) const {
-    do i = feistel(i); while (i >= n_);
+    do i = feistel(i);
+    while (i >= n_);
     return i;
   }
 
@@ -245,8 +246,8 @@ bool lookup_pass(Store& t, uint64_t n, uint64_t queries, bool floor, uint64_t se
 
 // A cold pass (fresh pool: reads and first-touch faults) and then a warm,
 // steady-state pass with other random keys; both rates are reported.
-bool lookups(const Backend& b, const std::string& path, uint64_t n, uint64_t pool,
-             uint64_t queries, bool floor, Json* j) {
+bool lookups(const Backend& b, const std::string& path, uint64_t n, uint64_t pool, uint64_t queries,
+             bool floor, Json* j) {
   std::unique_ptr<Store> t;
   if (!open_store(b, path, pool, &t)) return false;
   const double t0 = now_seconds();
@@ -384,7 +385,7 @@ int main(int argc, char** argv) {
   }
   std::printf("\nmedians (octant key + %u-byte payload):\n", kPayload);
   print_table(table, {"backend", "workload", "n", "pool_bytes", "records_per_s", "queries_per_s",
-                      "cold_queries_per_s", "bytes_per_record", "overhead_pct", "height", "write_amplification",
-                      "peak_rss_bytes", "runs"});
+                      "cold_queries_per_s", "bytes_per_record", "overhead_pct", "height",
+                      "write_amplification", "peak_rss_bytes", "runs"});
   return all_ok ? 0 : 1;
 }

@@ -46,7 +46,8 @@ inline std::string write_scratch_file(const char* name, const uint8_t* data, siz
 // A read-only File over the fuzzer's bytes.
 class MemoryFile final : public File {
  public:
-  MemoryFile(const uint8_t* data, size_t size) : bytes_(reinterpret_cast<const char*>(data), size) {}
+  MemoryFile(const uint8_t* data, size_t size)
+      : bytes_(reinterpret_cast<const char*>(data), size) {}
   Status read_at(uint64_t offset, void* buf, size_t n, size_t* done) override {
     *done = offset >= bytes_.size() ? 0 : std::min<uint64_t>(n, bytes_.size() - offset);
     if (*done > 0) std::memcpy(buf, bytes_.data() + offset, *done);

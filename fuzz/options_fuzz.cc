@@ -22,11 +22,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::vector<std::string> words;
   size_t start = 0;
   for (size_t i = 0; i <= text.size(); ++i) {
-    if (i == text.size() || text[i] == '\0') words.push_back(text.substr(start, i - start)), start = i + 1;
+    if (i == text.size() || text[i] == '\0')
+      words.push_back(text.substr(start, i - start)), start = i + 1;
   }
   std::vector<char*> argv;
   for (std::string& w : words) argv.push_back(w.data());
   ParsedArgs args;
-  (void)parse_args(static_cast<int>(argv.size()), argv.data(), 0, {"memory", "freq"}, {"json"}, &args);
+  (void)parse_args(static_cast<int>(argv.size()), argv.data(), 0, {"memory", "freq"}, {"json"},
+                   &args);
   return 0;
 }

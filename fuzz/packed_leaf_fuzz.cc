@@ -13,7 +13,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   page::PackedShape shape;
   shape.key_kind = data[0] & 1 ? KeyKind::kOctant : KeyKind::kNode;
   const uint32_t widths[] = {1, 2, 4, 8};
-  for (int f = 0; f < (data[1] & 3); ++f) shape.field_sizes.push_back(widths[(data[1] >> (2 + 2 * f)) & 3]);
+  for (int f = 0; f < (data[1] & 3); ++f)
+    shape.field_sizes.push_back(widths[(data[1] >> (2 + 2 * f)) & 3]);
   for (uint32_t w : shape.field_sizes) shape.payload += w;
   shape.page_size = 4096;  // as tables use
   std::vector<std::byte> pg(shape.page_size);

@@ -145,7 +145,8 @@ constexpr std::array<Direction, N> directions(unsigned kinds) {
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
-        const Direction d{static_cast<int8_t>(dx), static_cast<int8_t>(dy), static_cast<int8_t>(dz)};
+        const Direction d{static_cast<int8_t>(dx), static_cast<int8_t>(dy),
+                          static_cast<int8_t>(dz)};
         if (d.nonzero() > 0 && (kinds >> d.nonzero() & 1)) out[n++] = d;
       }
   return out;
@@ -157,7 +158,8 @@ inline constexpr auto kEdgeDirections = octant_detail::directions<12>(1u << 2);
 inline constexpr auto kCornerDirections = octant_detail::directions<8>(1u << 3);
 // What 2:1 balance looks at (weaver balances across faces and edges).
 inline constexpr auto kFaceAndEdgeDirections = octant_detail::directions<18>((1u << 1) | (1u << 2));
-inline constexpr auto kAllDirections = octant_detail::directions<26>((1u << 1) | (1u << 2) | (1u << 3));
+inline constexpr auto kAllDirections =
+    octant_detail::directions<26>((1u << 1) | (1u << 2) | (1u << 3));
 
 // The same-size neighbour of `o` in direction d.  Returns false when it lies
 // outside the root.  REQUIRES: octant, d.is_valid().
@@ -167,8 +169,7 @@ constexpr bool octant_neighbour(const Octant& o, Direction d, Octant* out) {
   const int64_t nx = o.x + d.dx * s, ny = o.y + d.dy * s, nz = o.z + d.dz * s;
   const int64_t lim = kRootEdge;
   if (nx < 0 || ny < 0 || nz < 0 || nx >= lim || ny >= lim || nz >= lim) return false;
-  *out = {static_cast<uint32_t>(nx), static_cast<uint32_t>(ny), static_cast<uint32_t>(nz),
-          o.level};
+  *out = {static_cast<uint32_t>(nx), static_cast<uint32_t>(ny), static_cast<uint32_t>(nz), o.level};
   return true;
 }
 
@@ -255,7 +256,7 @@ constexpr uint64_t octant_key_subtree_end(uint64_t key) {
   if (level == kMaxLevel) return key + 1;  // the next slot
   const uint64_t span = uint64_t{1} << (3 * (kMaxLevel - level));
   const uint64_t m_end = octant_key_morton(key) + span;  // a multiple of 8 below level 20
-  if (m_end >> (3 * kMaxLevel)) return UINT64_MAX;  // the subtree reaches the root's end
+  if (m_end >> (3 * kMaxLevel)) return UINT64_MAX;       // the subtree reaches the root's end
   return (m_end >> 3) << 7;
 }
 // The same for an octant.  Accepts: octant.

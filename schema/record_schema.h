@@ -46,7 +46,7 @@ class RecordSchema {
 
   // Typed access.  REQUIRES: `record` holds record_size() bytes.
   static double get_double(const std::byte* record, const Field& f);
-  static int64_t get_int(const std::byte* record, const Field& f);  // integer fields only
+  static int64_t get_int(const std::byte* record, const Field& f);    // integer fields only
   static uint64_t get_uint(const std::byte* record, const Field& f);  // unsigned fields only
   static void set_double(std::byte* record, const Field& f, double v);
   static void set_int(std::byte* record, const Field& f, int64_t v);

@@ -43,13 +43,20 @@ class Status {
 
 inline std::string Status::to_string() const {
   switch (code_) {
-    case Code::kOk: return "ok";
-    case Code::kNotFound: return "not found: " + msg_;
-    case Code::kCorruption: return "corruption: " + msg_;
-    case Code::kIOError: return "I/O error: " + msg_;
-    case Code::kInvalidArgument: return "invalid argument: " + msg_;
-    case Code::kBusy: return "busy: " + msg_;
-    case Code::kInternal: return "internal error: " + msg_;
+    case Code::kOk:
+      return "ok";
+    case Code::kNotFound:
+      return "not found: " + msg_;
+    case Code::kCorruption:
+      return "corruption: " + msg_;
+    case Code::kIOError:
+      return "I/O error: " + msg_;
+    case Code::kInvalidArgument:
+      return "invalid argument: " + msg_;
+    case Code::kBusy:
+      return "busy: " + msg_;
+    case Code::kInternal:
+      return "internal error: " + msg_;
   }
   return msg_;
 }
@@ -57,8 +64,8 @@ inline std::string Status::to_string() const {
 }  // namespace weaver
 
 // Returns from the enclosing function when `expr` is not OK.
-#define WEAVER_RETURN_IF_ERROR(expr)        \
-  do {                                      \
-    ::weaver::Status _st = (expr);          \
-    if (!_st.ok()) return _st;              \
+#define WEAVER_RETURN_IF_ERROR(expr) \
+  do {                               \
+    ::weaver::Status _st = (expr);   \
+    if (!_st.ok()) return _st;       \
   } while (0)

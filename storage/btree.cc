@@ -16,8 +16,7 @@ Status validate_options(const TableOptions& o, const std::string& name) {
                                    " is not a power of two in [128, 65536]");
   }
   if (page::leaf_capacity(p, o.schema.record_size()) < 2) {
-    return Status::InvalidArgument(name + ": records of " +
-                                   std::to_string(o.schema.record_size()) +
+    return Status::InvalidArgument(name + ": records of " + std::to_string(o.schema.record_size()) +
                                    " bytes do not fit two to a page of " + std::to_string(p));
   }
   if (o.packed) {
@@ -25,10 +24,9 @@ Status validate_options(const TableOptions& o, const std::string& name) {
     const std::vector<std::byte> widest(o.schema.record_size(), std::byte{0xff});
     const std::vector<std::byte> zero(o.schema.record_size());
     if (!one.add(0, zero.data()) || !one.add(UINT64_MAX, widest.data())) {
-      return Status::InvalidArgument(name + ": records of " +
-                                     std::to_string(o.schema.record_size()) +
-                                     " bytes do not fit two to a packed page of " +
-                                     std::to_string(p));
+      return Status::InvalidArgument(
+          name + ": records of " + std::to_string(o.schema.record_size()) +
+          " bytes do not fit two to a packed page of " + std::to_string(p));
     }
   }
   const size_t var = o.schema.to_text().size() + o.metadata.size();
@@ -61,8 +59,8 @@ std::string BTree::where(uint32_t page_no) const {
   return file_->name() + ": page " + std::to_string(page_no);
 }
 
-Status BTree::create(std::unique_ptr<File> file, const TableOptions& options,
-                     uint64_t pool_bytes, std::unique_ptr<BTree>* out) {
+Status BTree::create(std::unique_ptr<File> file, const TableOptions& options, uint64_t pool_bytes,
+                     std::unique_ptr<BTree>* out) {
   WEAVER_RETURN_IF_ERROR(validate_options(options, file->name()));
   std::unique_ptr<BTree> t(new BTree(std::move(file), options, pool_bytes));
   WEAVER_RETURN_IF_ERROR(t->write_header());
@@ -163,8 +161,9 @@ Status BTree::fetch_typed(uint32_t page_no, page::PageType type, PageRef* ref) {
   // capacity it would walk off the page.
   const uint32_t n = page::count(ref->data());
   const uint32_t cap = type == page::PageType::kInternal ? internal_cap_
-                       : type == page::PageType::kLeaf   ? leaf_cap_
-                                                         : UINT32_MAX;  // packed: PackedLeaf::open checks
+                       : type == page::PageType::kLeaf
+                           ? leaf_cap_
+                           : UINT32_MAX;  // packed: PackedLeaf::open checks
   if (n > cap) {
     ref->reset();
     return Status::Corruption(where(page_no) + ": entry count " + std::to_string(n) +

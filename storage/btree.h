@@ -28,8 +28,8 @@ namespace weaver {
 class BTree final : public Store {
  public:
   // Makes an empty tree in `file` (which should be empty).
-  static Status create(std::unique_ptr<File> file, const TableOptions& options,
-                       uint64_t pool_bytes, std::unique_ptr<BTree>* out);
+  static Status create(std::unique_ptr<File> file, const TableOptions& options, uint64_t pool_bytes,
+                       std::unique_ptr<BTree>* out);
   // Opens an existing tree, verifying the header.
   static Status open(std::unique_ptr<File> file, uint64_t pool_bytes, std::unique_ptr<BTree>* out);
   ~BTree() override;
@@ -181,8 +181,8 @@ class BTree final : public Store {
   page::PackedShape shape_;
   std::unique_ptr<page::PackedLeafBuilder> tail_;  // packed only
   std::unique_ptr<page::PackedLeafBuilder> edit_;  // packed only: re-packs edited leaves
-  bool tail_dirty_ = false;  // tail_ holds entries its page does not
-  page::PackedLeaf reader_;  // for point lookups
+  bool tail_dirty_ = false;                        // tail_ holds entries its page does not
+  page::PackedLeaf reader_;                        // for point lookups
 };
 
 }  // namespace weaver

@@ -24,12 +24,11 @@ Status BTree::check_invariants() {
 }
 
 // Keys under page_no must lie in [lo, hi]; reports the count and key span.
-Status BTree::check_subtree(uint32_t page_no, int level, uint64_t lo, uint64_t hi,
-                            uint64_t* count, uint64_t* first_key, uint64_t* last_key) {
+Status BTree::check_subtree(uint32_t page_no, int level, uint64_t lo, uint64_t hi, uint64_t* count,
+                            uint64_t* first_key, uint64_t* last_key) {
   const bool is_leaf = static_cast<uint32_t>(level) + 1 == height_;
   PageRef p;
-  WEAVER_RETURN_IF_ERROR(
-      fetch_typed(page_no, is_leaf ? leaf_type() : PageType::kInternal, &p));
+  WEAVER_RETURN_IF_ERROR(fetch_typed(page_no, is_leaf ? leaf_type() : PageType::kInternal, &p));
   const uint32_t n = page::count(p.data());
   const uint32_t leaf_cap = options_.packed ? page::kPackedMaxEntries : leaf_cap_;
   const uint32_t cap = is_leaf ? leaf_cap : internal_cap_;

@@ -63,8 +63,8 @@ Status BTree::packed_write(std::byte* pg, const std::vector<uint64_t>& keys,
 // Writes the edited entries of s.leaf (now keys/vals, not empty) back: the
 // leaf's path counts change by delta, and entries that no longer fit go to
 // new right siblings.
-Status BTree::packed_rewrite(LeafSlot& s, std::vector<uint64_t>& keys,
-                             std::vector<std::byte>& vals, int64_t delta) {
+Status BTree::packed_rewrite(LeafSlot& s, std::vector<uint64_t>& keys, std::vector<std::byte>& vals,
+                             int64_t delta) {
   if (delta != 0) WEAVER_RETURN_IF_ERROR(add_to_path_counts(s.path, s.path.depth, delta));
   const bool at_end = s.pos >= s.n && path_is_rightmost(s.path);
   const auto pieces = pack_pieces(keys, vals, !at_end);
@@ -83,8 +83,8 @@ Status BTree::packed_rewrite(LeafSlot& s, std::vector<uint64_t>& keys,
     {
       PageRef fresh;
       WEAVER_RETURN_IF_ERROR(new_page(leaf_type(), false, &fresh));
-      WEAVER_RETURN_IF_ERROR(packed_write(fresh.data(), keys, vals, pieces[j].first,
-                                          pieces[j].second));
+      WEAVER_RETURN_IF_ERROR(
+          packed_write(fresh.data(), keys, vals, pieces[j].first, pieces[j].second));
       fresh.mark_dirty();
       split.page_no = fresh.page_no();
     }
@@ -113,7 +113,9 @@ Status BTree::packed_edit(uint64_t key, const std::byte* payload, bool erase, bo
   std::vector<uint64_t> keys;
   std::vector<std::byte> vals;
   WEAVER_RETURN_IF_ERROR(leaf_entries(s.leaf, &keys, &vals));
-  auto val = [&](uint32_t i) { return vals.begin() + static_cast<ptrdiff_t>(size_t{i} * payload_); };
+  auto val = [&](uint32_t i) {
+    return vals.begin() + static_cast<ptrdiff_t>(size_t{i} * payload_);
+  };
   int64_t delta = 0;
   if (!erase && s.exact) {
     std::copy(payload, payload + payload_, val(s.pos));

@@ -101,7 +101,8 @@ Status BTree::leaf_entries(const PageRef& lf, std::vector<uint64_t>* keys,
   if (!options_.packed) {
     const page::LeafView v = leaf(lf);
     if (n > 0) std::memcpy(keys->data(), v.key_at(0), 8 * size_t{n});
-    if (vals != nullptr && n > 0 && payload_ > 0) std::memcpy(vals->data(), v.value(0), vals->size());
+    if (vals != nullptr && n > 0 && payload_ > 0)
+      std::memcpy(vals->data(), v.value(0), vals->size());
     return Status::Ok();
   }
   WEAVER_RETURN_IF_ERROR(open_packed(lf, &reader_));

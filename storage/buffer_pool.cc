@@ -32,8 +32,8 @@ BufferPool::BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes)
   // bookkeeping (the Frame, and up to 4 table slots of 4 bytes).
   const uint64_t staging = uint64_t{kMaxWriteRun} * page_size;
   const uint64_t per_frame = page_size + sizeof(Frame) + 4 * sizeof(uint32_t);
-  const uint64_t n =
-      std::max<uint64_t>(kMinFrames, budget_bytes > staging ? (budget_bytes - staging) / per_frame : 0);
+  const uint64_t n = std::max<uint64_t>(
+      kMinFrames, budget_bytes > staging ? (budget_bytes - staging) / per_frame : 0);
   // 2 MiB alignment lets the kernel back the arena with huge pages: a large
   // pool then takes far fewer TLB misses and page faults.
   constexpr size_t kHugePage = size_t{2} << 20;
@@ -58,9 +58,7 @@ uint64_t BufferPool::memory_bytes() const {
          size_t{kMaxWriteRun} * page_size_;
 }
 
-size_t BufferPool::slot_of(uint32_t page_no) const {
-  return (page_no * 0x9E3779B1u) & table_mask_;
-}
+size_t BufferPool::slot_of(uint32_t page_no) const { return (page_no * 0x9E3779B1u) & table_mask_; }
 
 Frame* BufferPool::lookup(uint32_t page_no) const {
   for (size_t s = slot_of(page_no);; s = (s + 1) & table_mask_) {
@@ -121,7 +119,8 @@ void BufferPool::unpin_recycle(Frame* f) {
   if (--f->pins > 0) return;
   f->referenced = false;  // a later hit sets it again and saves the page
   // Bounded: a frame offered twice is harmless, the check below skips it.
-  if (recycle_.size() < frames_.size()) recycle_.push_back(static_cast<uint32_t>(f - frames_.data()));
+  if (recycle_.size() < frames_.size())
+    recycle_.push_back(static_cast<uint32_t>(f - frames_.data()));
 }
 
 Status BufferPool::find_victim(Frame** out) {

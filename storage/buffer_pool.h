@@ -89,7 +89,7 @@ class BufferPool {
   AlignedBytes staging_{nullptr, AlignedArrayDelete{64}};  // kMaxWriteRun pages, coalesced writes
   std::vector<Frame> frames_;
   std::vector<uint32_t> recycle_;  // frame indices offered by unpin_recycle
-  std::vector<uint32_t> table_;  // open addressing: frame index + 1, 0 = empty
+  std::vector<uint32_t> table_;    // open addressing: frame index + 1, 0 = empty
   size_t table_mask_ = 0;
   size_t clock_hand_ = 0;
   PoolStats stats_;

@@ -4,8 +4,8 @@
 
 #include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <cstdlib>
+#include <cstring>
 #include <map>
 #include <mutex>
 #include <vector>
@@ -38,7 +38,10 @@ struct State {
     if (v == nullptr || *v == '\0') return;
     enabled = true;
     crash_at = std::strtoull(v, nullptr, 10);
-    if (crash_at == 0) std::atexit([] { std::fprintf(stderr, "crash steps: %llu\n", (unsigned long long)instance().steps); });
+    if (crash_at == 0)
+      std::atexit([] {
+        std::fprintf(stderr, "crash steps: %llu\n", (unsigned long long)instance().steps);
+      });
   }
   static State& instance();
 

@@ -50,7 +50,9 @@ uint64_t run_number(const std::string& file) {  // "run-12.bt" -> 12
 }  // namespace
 
 LsmTree::LsmTree(std::string dir, const LsmOptions& o)
-    : dir_(std::move(dir)), o_(o), payload_(o.table.schema.record_size()),
+    : dir_(std::move(dir)),
+      o_(o),
+      payload_(o.table.schema.record_size()),
       mem_(payload_, o.memtable_bytes) {
   scratch_.resize(payload_ + 1);
   floor_candidate_.resize(payload_ + 1);
@@ -117,8 +119,8 @@ Status LsmTree::open(const std::string& dir, const LsmOptions& options,
   uint64_t max_key = 0;
   bool found = false;
   size_t skip = 0;
-  WEAVER_RETURN_IF_ERROR(t->live_floor(std::numeric_limits<uint64_t>::max(), &max_key, &found,
-                                       &skip));
+  WEAVER_RETURN_IF_ERROR(
+      t->live_floor(std::numeric_limits<uint64_t>::max(), &max_key, &found, &skip));
   t->has_max_ = found;
   t->max_key_ = max_key;
   *out = std::move(t);
@@ -290,7 +292,8 @@ Status LsmTree::get(uint64_t key, std::byte* payload_out, bool* found) {
     if (!in_run) continue;
     const size_t skip = runs_[r].flags ? 1 : 0;
     *found = skip == 0 || scratch_[0] == std::byte{0};
-    if (*found && payload_out != nullptr) std::memcpy(payload_out, scratch_.data() + skip, payload_);
+    if (*found && payload_out != nullptr)
+      std::memcpy(payload_out, scratch_.data() + skip, payload_);
     return Status::Ok();
   }
   return Status::Ok();
@@ -307,8 +310,8 @@ Status LsmTree::live_floor(uint64_t key, uint64_t* key_out, bool* found, size_t*
     *found = false;
     bool live = false;
     uint64_t best = 0;
-    const size_t pos = key == std::numeric_limits<uint64_t>::max() ? mem_.size()
-                                                                    : mem_.lower_bound(key + 1);
+    const size_t pos =
+        key == std::numeric_limits<uint64_t>::max() ? mem_.size() : mem_.lower_bound(key + 1);
     if (pos > 0) {
       best = mem_.key_at(pos - 1);
       *found = true;

@@ -53,7 +53,7 @@ using LsmShadowHook =
     std::function<Status(uint64_t key, const std::byte* newer, const std::byte* older)>;
 
 struct LsmOptions {
-  TableOptions table;                    // key kind, payload schema, page size, metadata
+  TableOptions table;  // key kind, payload schema, page size, metadata
   LsmShadowHook on_shadow;
   uint64_t memtable_bytes = 64ull << 20;  // flush when the memtable holds this much
   uint64_t run_pool_bytes = 1ull << 20;   // buffer pool of each run
@@ -96,8 +96,8 @@ class LsmTree final : public Store {
   Status compact_into(BTree& out);
 
   size_t run_count() const { return runs_.size(); }
-  uint64_t file_bytes() const;  // of the runs
-  uint64_t runs_written() const { return runs_written_; }    // flushes and merges
+  uint64_t file_bytes() const;                                   // of the runs
+  uint64_t runs_written() const { return runs_written_; }        // flushes and merges
   uint64_t records_written() const { return records_written_; }  // into runs, in all
   const TableOptions& options() const { return o_.table; }
   // The single run of a compacted store, else null.
@@ -106,8 +106,8 @@ class LsmTree final : public Store {
  private:
   struct Run {
     std::unique_ptr<BTree> tree;
-    std::string file;   // name within dir_
-    bool flags = false; // has the tombstone byte
+    std::string file;    // name within dir_
+    bool flags = false;  // has the tombstone byte
     int tier = 0;
   };
   friend class LsmMergeIterator;
@@ -129,7 +129,7 @@ class LsmTree final : public Store {
   LsmOptions o_;
   uint32_t payload_ = 0;
   Memtable mem_;
-  std::vector<Run> runs_;  // oldest first
+  std::vector<Run> runs_;               // oldest first
   std::vector<std::string> committed_;  // the run files the committed list names
   std::vector<std::string> obsolete_;   // merged away, named by that list
   uint64_t next_file_ = 1;
@@ -138,7 +138,7 @@ class LsmTree final : public Store {
   bool has_max_ = false;
   uint64_t max_key_ = 0;  // the largest key ever written (for append)
   uint64_t runs_written_ = 0, records_written_ = 0;
-  std::vector<std::byte> scratch_;  // a run record: flag byte + payload
+  std::vector<std::byte> scratch_;          // a run record: flag byte + payload
   std::vector<std::byte> floor_candidate_;  // live_floor's other record buffer
 };
 

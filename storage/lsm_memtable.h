@@ -58,7 +58,7 @@ class Memtable {
   std::vector<uint32_t> slots_;  // entry index + 1; 0 is empty
   std::vector<uint32_t> order_;  // entry indexes, sorted by key up to sorted_
   std::vector<std::pair<uint64_t, uint32_t>> sort_pairs_;
-  size_t sorted_ = 0;            // entries covered by order_
+  size_t sorted_ = 0;  // entries covered by order_
   size_t tombstones_ = 0;
   bool in_order_ = true;
 };

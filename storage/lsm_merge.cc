@@ -2,8 +2,8 @@
 
 namespace weaver {
 
-Status LsmMergeIterator::init(LsmTree& tree, size_t first_run, bool with_memtable,
-                              uint64_t from, bool keep_tombstones) {
+Status LsmMergeIterator::init(LsmTree& tree, size_t first_run, bool with_memtable, uint64_t from,
+                              bool keep_tombstones) {
   mem_ = &tree.mem_;
   on_shadow_ = &tree.o_.on_shadow;
   keep_tombstones_ = keep_tombstones;

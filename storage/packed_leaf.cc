@@ -29,10 +29,14 @@ uint64_t successor(uint64_t key) { return octant_key_subtree_end(key); }
 // memcpy of a run-time size is a library call, and this is on every append.
 inline uint64_t load_field(const std::byte* p, uint32_t size) {
   switch (size) {
-    case 1: return static_cast<uint64_t>(p[0]);
-    case 2: return load16(p);
-    case 4: return load32(p);
-    default: return load64(p);
+    case 1:
+      return static_cast<uint64_t>(p[0]);
+    case 2:
+      return load16(p);
+    case 4:
+      return load32(p);
+    default:
+      return load64(p);
   }
 }
 
@@ -282,8 +286,7 @@ bool PackedLeaf::block_keys(uint32_t j, uint64_t* out, uint32_t* cnt_out) const 
   return true;
 }
 
-bool PackedLeaf::bound(uint64_t k, bool upper, uint32_t* pos, uint64_t* below,
-                       uint64_t* at) const {
+bool PackedLeaf::bound(uint64_t k, bool upper, uint32_t* pos, uint64_t* below, uint64_t* at) const {
   const uint32_t c = upper ? upper_bound(bases_, m_, k) : lower_bound(bases_, m_, k);
   if (c == 0) {
     *pos = 0;
@@ -332,10 +335,18 @@ bool PackedLeaf::decode(uint64_t* keys, std::byte* vals) const {
     const uint32_t size = shape_->field_sizes[f];
     std::byte* out = vals + field_off;
     switch (size) {
-      case 1: decode_column<uint8_t>(cols_[f], w, min, n_, out, stride); break;
-      case 2: decode_column<uint16_t>(cols_[f], w, min, n_, out, stride); break;
-      case 4: decode_column<uint32_t>(cols_[f], w, min, n_, out, stride); break;
-      default: decode_column<uint64_t>(cols_[f], w, min, n_, out, stride); break;
+      case 1:
+        decode_column<uint8_t>(cols_[f], w, min, n_, out, stride);
+        break;
+      case 2:
+        decode_column<uint16_t>(cols_[f], w, min, n_, out, stride);
+        break;
+      case 4:
+        decode_column<uint32_t>(cols_[f], w, min, n_, out, stride);
+        break;
+      default:
+        decode_column<uint64_t>(cols_[f], w, min, n_, out, stride);
+        break;
     }
     field_off += size;
   }

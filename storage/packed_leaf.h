@@ -42,8 +42,8 @@
 
 namespace weaver::page {
 
-inline constexpr uint32_t kPackedBlock = 64;      // entries per block; do not change: on disk
-inline constexpr uint32_t kPackedSlack = 16;      // unused tail bytes; do not change: on disk
+inline constexpr uint32_t kPackedBlock = 64;          // entries per block; do not change: on disk
+inline constexpr uint32_t kPackedSlack = 16;          // unused tail bytes; do not change: on disk
 inline constexpr uint32_t kPackedMaxEntries = 65535;  // the page header's count is a u16
 
 // What a packed page needs to know of its table.
@@ -76,15 +76,17 @@ class PackedLeafBuilder {
   uint32_t size() const { return static_cast<uint32_t>(keys_.size()); }
   uint64_t key(uint32_t i) const { return keys_[i]; }
   const std::byte* payload(uint32_t i) const { return vals_.data() + size_t{i} * shape_.payload; }
-  uint64_t encoded_bytes() const { return bytes_for(keys_.size(), key_bytes_closed_, open_, cols_); }
+  uint64_t encoded_bytes() const {
+    return bytes_for(keys_.size(), key_bytes_closed_, open_, cols_);
+  }
 
  private:
   struct OpenBlock {  // the residual widths each mode needs for the last block
     uint32_t count = 0;
     uint64_t base = 0, prev = 0;
-    int shift = 63;            // mode 0: common trailing zeros of the deltas
-    uint64_t max_delta = 0;    // mode 0
-    bool successor_ok = true;  // mode 1: every key at or past its predecessor's subtree end
+    int shift = 63;             // mode 0: common trailing zeros of the deltas
+    uint64_t max_delta = 0;     // mode 0
+    bool successor_ok = true;   // mode 1: every key at or past its predecessor's subtree end
     uint64_t max_residual = 0;  // mode 1
   };
   struct Column {

@@ -78,9 +78,10 @@ enum class PageType : uint8_t { kLeaf = 1, kInternal = 2, kFree = 3, kPackedLeaf
 
 // File header field offsets.
 inline constexpr size_t kHdrChecksum = 0, kHdrVersion = 4, kHdrMagic = 8, kHdrPageSize = 16,
-                        kHdrPayloadSize = 20, kHdrKeyKind = 24, kHdrLeafFormat = 25, kHdrHeight = 28, kHdrRoot = 32,
-                        kHdrPageCount = 36, kHdrFreeHead = 40, kHdrRecordCount = 48,
-                        kHdrSchemaLen = 56, kHdrMetaLen = 60, kHdrVarStart = 64;
+                        kHdrPayloadSize = 20, kHdrKeyKind = 24, kHdrLeafFormat = 25,
+                        kHdrHeight = 28, kHdrRoot = 32, kHdrPageCount = 36, kHdrFreeHead = 40,
+                        kHdrRecordCount = 48, kHdrSchemaLen = 56, kHdrMetaLen = 60,
+                        kHdrVarStart = 64;
 
 // The file header's fields (the byte table at the top of this file).
 struct FileHeader {
@@ -107,8 +108,8 @@ void encode_file_header(const FileHeader& h, std::byte* out);
 Status decode_file_header(const std::byte* in, const std::string& name, FileHeader* h);
 
 // Page header field offsets.
-inline constexpr size_t kPgChecksum = 0, kPgNumber = 4, kPgType = 8, kPgVersion = 9,
-                        kPgCount = 10, kPgNextFree = 12;
+inline constexpr size_t kPgChecksum = 0, kPgNumber = 4, kPgType = 8, kPgVersion = 9, kPgCount = 10,
+                        kPgNextFree = 12;
 
 inline uint64_t load64(const std::byte* p) {
   uint64_t v;
@@ -142,7 +143,9 @@ inline uint32_t internal_capacity(uint32_t page_size) {
 
 inline PageType type(const std::byte* pg) { return static_cast<PageType>(pg[kPgType]); }
 inline uint32_t count(const std::byte* pg) { return load16(pg + kPgCount); }
-inline void set_count(std::byte* pg, uint32_t n) { store16(pg + kPgCount, static_cast<uint16_t>(n)); }
+inline void set_count(std::byte* pg, uint32_t n) {
+  store16(pg + kPgCount, static_cast<uint16_t>(n));
+}
 
 // Typed views over a page in memory; `cap` is the page's capacity.
 struct LeafView {

@@ -1,11 +1,12 @@
 // util/args: sizes, counts, numbers and lists, and the splitting of argv.
+#include "util/args.h"
+
 #include <gtest/gtest.h>
 
 #include <string>
 #include <vector>
 
 #include "test_util.h"
-#include "util/args.h"
 
 namespace weaver {
 namespace {
@@ -93,8 +94,8 @@ TEST(ArgsTest, IntegersNumbersAndLists) {
 Status parse(std::vector<std::string> words, ParsedArgs* out) {
   std::vector<char*> argv;
   for (std::string& w : words) argv.push_back(w.data());
-  return parse_args(static_cast<int>(argv.size()), argv.data(), 2, {"memory", "threads"},
-                    {"json"}, out);
+  return parse_args(static_cast<int>(argv.size()), argv.data(), 2, {"memory", "threads"}, {"json"},
+                    out);
 }
 
 TEST(ArgsTest, ArgvSplitsIntoPositionalsValuesAndFlags) {

@@ -4,8 +4,8 @@
 #include <fstream>
 
 #include "fault_file.h"
-#include "storage/checksum.h"
 #include "storage/btree.h"
+#include "storage/checksum.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -114,7 +114,8 @@ TEST_F(BTreeFaultTest, EntryCountBeyondThePageIsCorruptionNotAnOverrun) {
     {
       std::fstream f(path_, std::ios::in | std::ios::out | std::ios::binary);
       std::vector<std::byte> pg(page_size);
-      const auto at = static_cast<std::streamoff>(page::kFileHeaderBytes + uint64_t{page_no} * page_size);
+      const auto at =
+          static_cast<std::streamoff>(page::kFileHeaderBytes + uint64_t{page_no} * page_size);
       f.seekg(at);
       f.read(reinterpret_cast<char*>(pg.data()), page_size);
       page::set_count(pg.data(), 65000);

@@ -28,9 +28,9 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
  protected:
   using Map = std::map<uint64_t, std::vector<std::byte>>;
   // The same key set with O(log n) rank and select, to check ours against.
-  using OrderTree = __gnu_pbds::tree<uint64_t, __gnu_pbds::null_type, std::less<uint64_t>,
-                                     __gnu_pbds::rb_tree_tag,
-                                     __gnu_pbds::tree_order_statistics_node_update>;
+  using OrderTree =
+      __gnu_pbds::tree<uint64_t, __gnu_pbds::null_type, std::less<uint64_t>,
+                       __gnu_pbds::rb_tree_tag, __gnu_pbds::tree_order_statistics_node_update>;
 
   void SetUp() override {
     const Params p = GetParam();
@@ -120,7 +120,7 @@ TEST_P(BTreeModel, RandomMixMatchesStdMap) {
       ASSERT_OK(tree_->append(k, v.data()));
       model_[k] = v;
       order_.insert(k);
-    } else if (r < 12) {  // append a batch (sometimes one with a key out of order)
+    } else if (r < 12) {                // append a batch (sometimes one with a key out of order)
       const size_t n = 1 + rng() % 20;  // crosses leaves: tiny pages hold 3 to 14 records
       uint64_t k = model_.empty() ? rng() % 1000 : model_.rbegin()->first + 1 + rng() % 50;
       std::vector<uint64_t> keys;

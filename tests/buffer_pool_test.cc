@@ -1,12 +1,13 @@
 // BufferPool on its own: it holds no more frames than its budget (or its
 // floor), writes evicted dirty pages back, never evicts a pinned page, and
 // verifies every page it reads.
+#include "storage/buffer_pool.h"
+
 #include <gtest/gtest.h>
 
 #include <memory>
 #include <vector>
 
-#include "storage/buffer_pool.h"
 #include "storage/checksum.h"
 #include "storage/file.h"
 #include "storage/page_format.h"

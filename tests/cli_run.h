@@ -24,7 +24,8 @@ struct CommandRun {
 // `prefix` (e.g. "ulimit -v 100000; ") go before it.
 inline CommandRun run(const std::string& args, const std::string& prefix = "") {
   TempDir tmp;
-  const std::string cmd = prefix + std::string(WEAVER_BINARY) + " " + args + " 2>" + tmp.file("err");
+  const std::string cmd =
+      prefix + std::string(WEAVER_BINARY) + " " + args + " 2>" + tmp.file("err");
   FILE* p = ::popen(cmd.c_str(), "r");
   CommandRun r{};
   std::array<char, 4096> buf;
@@ -37,6 +38,8 @@ inline CommandRun run(const std::string& args, const std::string& prefix = "") {
   return r;
 }
 
-inline int lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
+inline int lines(const std::string& s) {
+  return static_cast<int>(std::count(s.begin(), s.end(), '\n'));
+}
 
 }  // namespace weaver::testing

@@ -1,10 +1,10 @@
 // The weaver binary as a user runs it: exit codes, one-line errors, output.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <array>
 #include <cstdio>
 #include <fstream>
-#include <sys/wait.h>
 
 #include "cli_run.h"
 
@@ -18,8 +18,8 @@ using testing::run;
 TEST(Cli, EveryCommandHasHelp) {
   const CommandRun top = run("--help");
   EXPECT_EQ(top.code, 0);
-  for (const char* cmd : {"generate", "import", "construct", "balance", "mesh", "extract",
-                          "export", "stat", "query", "verify", "recover"}) {
+  for (const char* cmd : {"generate", "import", "construct", "balance", "mesh", "extract", "export",
+                          "stat", "query", "verify", "recover"}) {
     EXPECT_NE(top.out.find(cmd), std::string::npos);
     const CommandRun r = run(std::string(cmd) + " --help");
     EXPECT_EQ(r.code, 0) << cmd;
@@ -28,9 +28,9 @@ TEST(Cli, EveryCommandHasHelp) {
 }
 
 TEST(Cli, UsageErrorsAreOneLineWithStatus2) {
-  for (const char* args : {"frobnicate", "import", "import db --octants x --memory lots",
-                           "query db locate 1 2", "query db locate 1 2 -3", "stat --bogus db",
-                           "generate f --kind fancy"}) {
+  for (const char* args :
+       {"frobnicate", "import", "import db --octants x --memory lots", "query db locate 1 2",
+        "query db locate 1 2 -3", "stat --bogus db", "generate f --kind fancy"}) {
     const CommandRun r = run(args);
     EXPECT_EQ(r.code, 2) << args;
     if (std::string(args) != "frobnicate") {
@@ -43,7 +43,8 @@ TEST(Cli, ImportStatQueryRoundTrip) {
   testing::TempDir d;
   const CommandRun gen = run("generate " + d.file("o.txt") + " --kind uniform --level 3 --shuffle");
   ASSERT_EQ(gen.code, 0) << gen.err;
-  const CommandRun imp = run("import " + d.file("db") + " --octants " + d.file("o.txt") + " --tick 2.5");
+  const CommandRun imp =
+      run("import " + d.file("db") + " --octants " + d.file("o.txt") + " --tick 2.5");
   ASSERT_EQ(imp.code, 0) << imp.err;
   EXPECT_NE(imp.out.find("imported 512 octants"), std::string::npos) << imp.out;
   const CommandRun stat = run("stat " + d.file("db") + " --json");
@@ -77,8 +78,8 @@ TEST(Cli, MeshRunsThePipelineAndBalanceCheckAgrees) {
   const CommandRun mesh = run("mesh " + d.file("db") +
                               " --model loh1 --freq 0.5 --domain 20000,20000,10000 --threads 2");
   ASSERT_EQ(mesh.code, 0) << mesh.err;
-  for (const char* word : {"construct", "balance", "extract", "elements", "danglings",
-                           "points per wavelength"}) {
+  for (const char* word :
+       {"construct", "balance", "extract", "elements", "danglings", "points per wavelength"}) {
     EXPECT_NE(mesh.out.find(word), std::string::npos) << word << "\n" << mesh.out;
   }
   const CommandRun check = run("balance " + d.file("db") + " --check");
@@ -110,7 +111,8 @@ TEST(Cli, PackedAndPlainTablesHoldTheSameMesh) {
     const size_t at = stat.out.find("\"bytes\": ");
     ASSERT_NE(at, std::string::npos);
     bytes[plain] = std::stoull(stat.out.substr(at + 9));
-    const CommandRun exp = run("export " + db + " --nodes " + db + "/n.csv --elements " + db + "/e.csv");
+    const CommandRun exp =
+        run("export " + db + " --nodes " + db + "/n.csv --elements " + db + "/e.csv");
     ASSERT_EQ(exp.code, 0) << exp.err;
     std::ifstream n(db + "/n.csv"), e(db + "/e.csv");
     csv[plain].assign(std::istreambuf_iterator<char>(n), {});

@@ -4,10 +4,9 @@
 
 #include <gtest/gtest.h>
 
-#include <random>
-
 #include <cstring>
 #include <fstream>
+#include <random>
 
 #include "db/database.h"
 #include "model/grid_model.h"
@@ -32,8 +31,8 @@ TEST(Models, ValuesAtKnownPoints) {
   EXPECT_EQ(at("loh1", 0, 0, 500).vs, 2000);
   EXPECT_EQ(at("loh1", 0, 0, 500).vp, 4000);
   EXPECT_EQ(at("loh1", 0, 0, 1500).vs, 3464);
-  EXPECT_FLOAT_EQ(at("basin", 42000, 55000, 0).vs, 575);      // a bowl's centre, at the surface
-  EXPECT_FLOAT_EQ(at("basin", 95000, 95000, 0).vs, 2600);     // rock outside the bowls
+  EXPECT_FLOAT_EQ(at("basin", 42000, 55000, 0).vs, 575);       // a bowl's centre, at the surface
+  EXPECT_FLOAT_EQ(at("basin", 95000, 95000, 0).vs, 2600);      // rock outside the bowls
   EXPECT_FLOAT_EQ(at("basin", 95000, 95000, 30000).vs, 3900);  // deep rock, capped
   EXPECT_FLOAT_EQ(at("basin", 42000, 55000, 1000).vs, 1325);   // Vs rises with depth
   std::unique_ptr<VelocityModel> m;
@@ -69,7 +68,8 @@ TEST(Models, BasinLatticeMinimumMatchesSampling) {
   std::uniform_real_distribution<double> x(0, 100000), z(0, 8000), h(1, 400);
   for (int i = 0; i < 20000; ++i) {
     const double px = x(rng), py = x(rng), pz = z(rng), ph = h(rng);
-    ASSERT_EQ(m->min_vs_on_lattice(px, py, pz, ph), m->VelocityModel::min_vs_on_lattice(px, py, pz, ph))
+    ASSERT_EQ(m->min_vs_on_lattice(px, py, pz, ph),
+              m->VelocityModel::min_vs_on_lattice(px, py, pz, ph))
         << px << " " << py << " " << pz << " " << ph;
   }
 }
@@ -82,13 +82,14 @@ TEST(GridModel, InterpolatesAndClamps) {
   std::vector<Material> v;
   for (int k = 0; k < 3; ++k)
     for (int j = 0; j < 2; ++j)
-      for (int i = 0; i < 2; ++i) v.push_back({float(3000 + 100 * k + 10 * i), float(1000 + 100 * k), 2000});
+      for (int i = 0; i < 2; ++i)
+        v.push_back({float(3000 + 100 * k + 10 * i), float(1000 + 100 * k), 2000});
   ASSERT_OK(write_grid_model(dir.file("g"), s, v));
   std::unique_ptr<VelocityModel> m;
   ASSERT_OK(make_model("grid", dir.file("g"), &m));
-  EXPECT_FLOAT_EQ(m->at(0.5, 0.5, 50).vs, 1050);   // halfway between k=0 and k=1
-  EXPECT_FLOAT_EQ(m->at(0.5, 0, 0).vp, 3005);      // halfway in x
-  EXPECT_FLOAT_EQ(m->at(-9, -9, 1e6).vs, 1200);    // clamped to the last layer
+  EXPECT_FLOAT_EQ(m->at(0.5, 0.5, 50).vs, 1050);  // halfway between k=0 and k=1
+  EXPECT_FLOAT_EQ(m->at(0.5, 0, 0).vp, 3005);     // halfway in x
+  EXPECT_FLOAT_EQ(m->at(-9, -9, 1e6).vs, 1200);   // clamped to the last layer
 }
 
 TEST(GridModel, BadFilesGetOneLineErrorsNamingTheFile) {
@@ -123,7 +124,8 @@ double vs_min(const VelocityModel& m, const Octant& o, double tick, double floor
   for (double fz : {0.0, 0.5, 1.0})
     for (double fy : {0.0, 0.5, 1.0})
       for (double fx : {0.0, 0.5, 1.0}) {
-        v = std::min<double>(v, m.at(o.x * tick + fx * e, o.y * tick + fy * e, o.z * tick + fz * e).vs);
+        v = std::min<double>(
+            v, m.at(o.x * tick + fx * e, o.y * tick + fy * e, o.z * tick + fz * e).vs);
       }
   return std::max(v, floor);
 }
@@ -172,8 +174,10 @@ TEST(Construct, EveryLeafMeetsTheRuleAndNoneIsFinerThanNeeded) {
       float mat[3];
       std::memcpy(mat, cur.payload(), sizeof mat);
       const double h = edge / 2;
-      EXPECT_FLOAT_EQ(mat[1], model->at(leaf.x * plan.tick_m + h, leaf.y * plan.tick_m + h,
-                                        leaf.z * plan.tick_m + h).vs);
+      EXPECT_FLOAT_EQ(
+          mat[1],
+          model->at(leaf.x * plan.tick_m + h, leaf.y * plan.tick_m + h, leaf.z * plan.tick_m + h)
+              .vs);
       ++n;
       ASSERT_OK(cur.next());
     }

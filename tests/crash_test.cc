@@ -165,9 +165,10 @@ class CrashTest : public ::testing::Test {
     if (fault.at > 0) fault.stderr_file = dir_.file("fault.err");
     const int status = run_writer(with_db(w, db), crash_at, kill_after_us, fault);
     const std::string where =
-        w.name + (fault.at      ? " failing step " + std::to_string(fault.at) + " with " + fault.errno_name
-                  : crash_at    ? " at step " + std::to_string(crash_at)
-                                : " killed after " + std::to_string(kill_after_us) + " us");
+        w.name + (fault.at
+                      ? " failing step " + std::to_string(fault.at) + " with " + fault.errno_name
+                  : crash_at ? " at step " + std::to_string(crash_at)
+                             : " killed after " + std::to_string(kill_after_us) + " us");
     if (fault.at > 0) {
       ASSERT_NO_FATAL_FAILURE(check_fault_report(fault, status, where));
     }
@@ -187,7 +188,8 @@ class CrashTest : public ::testing::Test {
       for (const auto& e : fs::directory_iterator(db)) {
         const std::string f = e.path().filename().string();
         bool live = f == "MANIFEST" || f == "LOCK";
-        for (const std::string& t : d->table_names()) live = live || d->table_path(t) == e.path().string();
+        for (const std::string& t : d->table_names())
+          live = live || d->table_path(t) == e.path().string();
         ASSERT_TRUE(live) << where << ": leftover " << f << " survived the open";
       }
     }
@@ -215,7 +217,8 @@ class CrashTest : public ::testing::Test {
     }
     ASSERT_EQ(WEXITSTATUS(status), 1) << where << ": " << err;
     ASSERT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << where << ": " << err;
-    const std::string want = std::string(fault.errno_name) == "ENOSPC" ? "No space left" : "Input/output error";
+    const std::string want =
+        std::string(fault.errno_name) == "ENOSPC" ? "No space left" : "Input/output error";
     ASSERT_NE(err.find(want), std::string::npos) << where << ": " << err;
     ++faults_reported_;
   }
@@ -232,8 +235,9 @@ class CrashTest : public ::testing::Test {
     if (fs::exists(old_db)) fs::copy(old_db, new_db, fs::copy_options::recursive);
     const auto t0 = std::chrono::steady_clock::now();
     ASSERT_EQ(run_writer(with_db(w, new_db), 0, -1), 0) << w.name;
-    const auto run_us = std::chrono::duration_cast<std::chrono::microseconds>(
-                            std::chrono::steady_clock::now() - t0).count();
+    const auto run_us =
+        std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0)
+            .count();
     const Fingerprint after = fingerprint(new_db);
     ASSERT_NE(before, after) << w.name << " changed nothing";
     const std::string count_db = new_db + ".count";
@@ -245,7 +249,8 @@ class CrashTest : public ::testing::Test {
     for (uint64_t i = 0; i < points; ++i) {
       if (faults) {
         for (const char* e : {"EIO", "ENOSPC"}) {
-          ASSERT_NO_FATAL_FAILURE(check_one(w, old_db, before, after, 0, -1, {1 + i * n / points, e, ""}));
+          ASSERT_NO_FATAL_FAILURE(
+              check_one(w, old_db, before, after, 0, -1, {1 + i * n / points, e, ""}));
         }
         continue;
       }
@@ -254,7 +259,8 @@ class CrashTest : public ::testing::Test {
     }
     std::mt19937_64 rng(w.name.size());
     for (int k = 0; k < kills; ++k) {
-      ASSERT_NO_FATAL_FAILURE(check_one(w, old_db, before, after, 0, rng() % (run_us * 13 / 10 + 1)));
+      ASSERT_NO_FATAL_FAILURE(
+          check_one(w, old_db, before, after, 0, rng() % (run_us * 13 / 10 + 1)));
       ++points_;
     }
   }
@@ -265,9 +271,12 @@ class CrashTest : public ::testing::Test {
   int faults_reported_ = 0, faults_absorbed_ = 0;
 
   // Every writer of the database, from its state before (setup commands).
-  void each_writer(const std::function<void(const Writer&, const std::vector<std::vector<std::string>>&)>& f) {
-    const std::vector<std::string> import_a = {"import", "{db}", "--octants", text_a_, "--memory", "1M"};
-    const std::vector<std::string> import_b = {"import", "{db}", "--octants", text_b_, "--memory", "1M"};
+  void each_writer(
+      const std::function<void(const Writer&, const std::vector<std::vector<std::string>>&)>& f) {
+    const std::vector<std::string> import_a = {"import", "{db}",     "--octants",
+                                               text_a_,  "--memory", "1M"};
+    const std::vector<std::string> import_b = {"import", "{db}",     "--octants",
+                                               text_b_,  "--memory", "1M"};
     const std::vector<std::string> balance = {"balance", "{db}", "--memory", "1M"};
     const std::vector<std::string> extract = {"extract", "{db}", "--memory", "1M"};
     f({"import over a mesh", import_b}, {import_a, balance, extract});
@@ -308,8 +317,9 @@ TEST_F(CrashTest, EveryWriterLeavesTheOldOrTheNewState) {
   const std::vector<std::string> balance = {"balance", "{db}", "--memory", "1M"};
   torture({"import over a table", import_of(text_b_)}, {import_of(text_a_)}, steps, kills);
   torture({"import into a new database", import_of(text_b_)}, {}, steps, kills);
-  torture({"construct", {"construct", "{db}", "--model", "basin", "--freq", "0.08", "--memory", "1M"}},
-          {import_of(text_a_)}, steps, kills);
+  torture(
+      {"construct", {"construct", "{db}", "--model", "basin", "--freq", "0.08", "--memory", "1M"}},
+      {import_of(text_a_)}, steps, kills);
   torture({"balance", balance}, {import_of(text_a_)}, steps, kills);
   torture({"extract (sort)", {"extract", "{db}", "--memory", "1M"}}, {import_of(text_a_), balance},
           steps, kills);
@@ -363,7 +373,8 @@ TEST_F(CrashTest, ReadersSeeWholeStatesWhileEveryWriterCommits) {
   });
   int reads = 0;
   std::set<size_t> seen;
-  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(testing::scaled(3000, 1000));
+  const auto until =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(testing::scaled(3000, 1000));
   while (std::chrono::steady_clock::now() < until || commits < static_cast<int>(cycle.size())) {
     const Fingerprint f = fingerprint(db);
     const auto at = std::find(states.begin(), states.end(), f);

@@ -28,9 +28,12 @@ class DatabaseTest : public ::testing::Test {
 
 TEST_F(DatabaseTest, CommitReplacesTablesAndRemovesOldFiles) {
   make_table("octants", 10);
-  const std::string first = std::filesystem::path(
-      [&] { std::unique_ptr<Database> d; EXPECT_OK(Database::open(db(), Database::Mode::kRead, false, &d)); return d->table_path("octants"); }())
-      .filename();
+  const std::string first = std::filesystem::path([&] {
+                              std::unique_ptr<Database> d;
+                              EXPECT_OK(Database::open(db(), Database::Mode::kRead, false, &d));
+                              return d->table_path("octants");
+                            }())
+                                .filename();
   make_table("octants", 20);
   std::unique_ptr<Database> d;
   ASSERT_OK(Database::open(db(), Database::Mode::kRead, false, &d));

@@ -1,6 +1,4 @@
 // weaver export: the CSV files against the reference mesh, row for row.
-#include "export/export_csv.h"
-
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -9,11 +7,12 @@
 #include "db/database.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
+#include "export/export_csv.h"
 #include "extract/extract.h"
-#include "query/mesh_query.h"
 #include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
+#include "query/mesh_query.h"
 #include "reference/reference_mesh.h"
 #include "test_util.h"
 

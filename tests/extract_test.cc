@@ -1,7 +1,6 @@
 // The sort-based extractor against the brute-force reference, node for node
 // (id, coordinate, kind, anchors), on many generated balanced octrees.
 #include "extract/extract.h"
-#include "export/export_csv.h"
 
 #include <gtest/gtest.h>
 
@@ -10,6 +9,7 @@
 
 #include "db/database.h"
 #include "db/node_table.h"
+#include "export/export_csv.h"
 #include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
@@ -164,7 +164,7 @@ TEST_F(ExtractTest, RandomBalancedOctreesAcrossDomainsAndBudgets) {
     const auto leaves = random_balanced(rng(), bx, by, bz, block_level, target, max_level);
     ExtractOptions o;
     o.bucket_level = static_cast<int>(rng() % (max_level + 2));  // from one bucket to tiny ones
-    o.memory = MemoryBudget(1 << 16);  // forces spill files
+    o.memory = MemoryBudget(1 << 16);                            // forces spill files
     SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) +
                  " leaves, blocks " + std::to_string(bx) + "x" + std::to_string(by) + "x" +
                  std::to_string(bz) + " at level " + std::to_string(block_level) +

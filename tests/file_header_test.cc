@@ -144,7 +144,8 @@ TEST(FileHeaderTest, OpenRefusesHeadersWhoseFieldsDisagreeWithTheTree) {
     o.schema = *RecordSchema::parse("v:u32", &error);
     std::unique_ptr<BTree> t;
     ASSERT_OK(BTree::create(std::move(f), o, 1 << 20, &t));
-    for (uint32_t k = 0; k < 5000; ++k) ASSERT_OK(t->put(k * 128, reinterpret_cast<std::byte*>(&k), nullptr));
+    for (uint32_t k = 0; k < 5000; ++k)
+      ASSERT_OK(t->put(k * 128, reinterpret_cast<std::byte*>(&k), nullptr));
     ASSERT_OK(t->commit());
   }
   Bytes good(page::kFileHeaderBytes);

@@ -64,9 +64,9 @@ class ImportTest : public ::testing::Test {
 };
 
 TEST_F(ImportTest, AcceptsAnyOrderCommentsBlankLinesAndCrlf) {
-  const std::string path =
-      write_text("# a comment\n\n524288 0 0 1\r\n0 0 0 1\n  \t\n0 524288 0 1\n524288 524288 0 1\n"
-                 "0 0 524288 1\n524288 0 524288 1\n0 524288 524288 1\n524288 524288 524288 1");
+  const std::string path = write_text(
+      "# a comment\n\n524288 0 0 1\r\n0 0 0 1\n  \t\n0 524288 0 1\n524288 524288 0 1\n"
+      "0 0 524288 1\n524288 0 524288 1\n0 524288 524288 1\n524288 524288 524288 1");
   ASSERT_OK(run(path));
   EXPECT_EQ(result_.octants, 8u);
   const auto keys = table_keys();
@@ -132,7 +132,7 @@ TEST_F(ImportTest, OutOfCoreSortMatchesInMemorySort) {
   ASSERT_OK(generate_octree(g, &leaves));
   const std::string path = dir_.file("big.txt");
   ASSERT_OK(write_octant_text(path, leaves, ""));
-  ASSERT_OK(run(path, 1 << 20));  // 1 MiB: sorted runs spill to disk
+  ASSERT_OK(run(path, 1 << 20));        // 1 MiB: sorted runs spill to disk
   EXPECT_GE(result_.runs_spilled, 1u);  // the merge path ran
   std::vector<uint64_t> expected;
   for (const Octant& o : leaves) expected.push_back(octant_key(o));

@@ -8,8 +8,8 @@
 
 #include <filesystem>
 #include <functional>
-#include <optional>
 #include <map>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -119,8 +119,9 @@ TEST(LsmCrash, EveryStepLeavesACommittedState) {
     ++recovered;
   }
   crash_point::disarm();
-  std::printf("LSM kill points: %llu of %llu steps; %d reopened to a committed state, %d before any\n",
-              (unsigned long long)points, (unsigned long long)steps, recovered, fresh);
+  std::printf(
+      "LSM kill points: %llu of %llu steps; %d reopened to a committed state, %d before any\n",
+      (unsigned long long)points, (unsigned long long)steps, recovered, fresh);
   EXPECT_GT(recovered, 0);
 }
 

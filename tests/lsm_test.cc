@@ -2,6 +2,8 @@
 // a memtable so small that flushes and tiered merges happen all the time; a
 // compacted store against a B+tree built by sorted append (byte for byte);
 // and commit / reopen / leftover removal.
+#include "storage/lsm.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,7 +14,6 @@
 #include <random>
 #include <vector>
 
-#include "storage/lsm.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -277,7 +278,7 @@ TEST(LsmShadowHook, ReportsEachHiddenEntryAndCanFailTheOperation) {
   ASSERT_OK(t->put(5, payload_for(5, 2).data(), nullptr));  // over the memtable
   ASSERT_EQ(seen.size(), 1u);
   EXPECT_EQ(seen[0], std::make_pair(uint64_t{5}, uint64_t{1}));
-  ASSERT_OK(t->commit());                                    // 5 moves to a run
+  ASSERT_OK(t->commit());                                   // 5 moves to a run
   ASSERT_OK(t->put(5, payload_for(5, 3).data(), nullptr));  // no memtable entry to hide
   ASSERT_EQ(seen.size(), 1u);
   ASSERT_OK(t->compact());  // the merge meets version 3 over version 2

@@ -1,5 +1,7 @@
 // storage/manifest_file: the atomically committed, checksummed line files
 // behind MANIFEST and the LSM's run list.
+#include "storage/manifest_file.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -9,7 +11,6 @@
 #include <vector>
 
 #include "storage/checksum.h"
-#include "storage/manifest_file.h"
 #include "test_util.h"
 
 namespace weaver {

@@ -33,10 +33,8 @@ TEST(MemoryBound, ExtractStaysWithinBudgetOnAMeshFarLargerThanIt) {
   make_db(dir, {"--kind", "sphere", "--level", "3", "--max-level", "8"}, db);
   const uint64_t budget = 2ull << 20;
   for (const char* threads : {"1", "2"}) {
-    const std::string out =
-        bench::run_program({WEAVER_BINARY, "extract", db, "--memory", "2M", "--threads", threads,
-                            "--json"},
-                           &rss);
+    const std::string out = bench::run_program(
+        {WEAVER_BINARY, "extract", db, "--memory", "2M", "--threads", threads, "--json"}, &rss);
     ASSERT_FALSE(out.empty());
     auto r = bench::parse_flat_json(out);
     EXPECT_GT(std::stod(r["elements"]), 900000);

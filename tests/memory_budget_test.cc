@@ -1,5 +1,7 @@
 // Every command's memory shares add up to no more than its --memory budget,
 // for budgets from the smallest --memory up, and none is empty.
+#include "util/memory_budget.h"
+
 #include <gtest/gtest.h>
 
 #include <string>
@@ -11,14 +13,13 @@
 #include "extract/extract.h"
 #include "import/import.h"
 #include "query/mesh_query.h"
-#include "util/memory_budget.h"
 #include "verify/verify.h"
 
 namespace weaver {
 namespace {
 
 const std::vector<uint64_t> kBudgets = {
-    MemoryBudget::kMinBytes, (2ull << 20) + 3, 16ull << 20,  MemoryBudget::kDefaultBytes,
+    MemoryBudget::kMinBytes, (2ull << 20) + 3, 16ull << 20, MemoryBudget::kDefaultBytes,
     (1ull << 30) + 12345,    7ull << 30,       64ull << 30, 1ull << 40};
 
 std::string describe(const MemoryPlan& plan) {
@@ -69,8 +70,8 @@ TEST(MemoryBudgetTest, BalanceSharesFitEveryBudget) {
     const BalanceMemory m{MemoryBudget(bytes)};
     expect_fits(m.plan);
     // 3 spools a level for levels 0..kMaxLevel, each with its buffer.
-    EXPECT_LE(m.leaf_pool + m.output_pool + 3 * (kMaxLevel + 1) * m.spool_buffer +
-                  m.parent_chunk + m.candidate_sort,
+    EXPECT_LE(m.leaf_pool + m.output_pool + 3 * (kMaxLevel + 1) * m.spool_buffer + m.parent_chunk +
+                  m.candidate_sort,
               bytes);
     EXPECT_GT(m.spool_buffer, 0u);
   }

@@ -1,9 +1,10 @@
+#include "schema/morton.h"
+
 #include <gtest/gtest.h>
 
 #include <random>
 
 #include "reference/octant_reference.h"
-#include "schema/morton.h"
 #include "test_util.h"
 
 namespace weaver {

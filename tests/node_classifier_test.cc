@@ -6,13 +6,14 @@
 // around it (absent, a leaf it is a corner of, or a coarser leaf it lies on
 // the edge or face of), so this covers every case the classifier tells
 // apart, with and without the active bucket's leaves searched first.
+#include "extract/node_classifier.h"
+
 #include <gtest/gtest.h>
 
 #include <map>
 #include <memory>
 #include <vector>
 
-#include "extract/node_classifier.h"
 #include "reference/reference_mesh.h"
 #include "storage/btree.h"
 #include "storage/file.h"

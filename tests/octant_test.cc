@@ -1,13 +1,13 @@
-#include <set>
-#include <tuple>
+#include "schema/octant.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
+#include <set>
+#include <tuple>
 #include <vector>
 
 #include "reference/octant_reference.h"
-#include "schema/octant.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -148,7 +148,7 @@ TEST(Octant, PixelKeyFloorIsTheContainingLeafInPreorder) {
 
 TEST(Octant, KeyValidityRejectsMisalignedAndBadSlots) {
   EXPECT_TRUE(octant_key_is_valid(octant_key({0, 0, 0, 0})));
-  EXPECT_FALSE(octant_key_is_valid(28));           // slot 28 is unused
+  EXPECT_FALSE(octant_key_is_valid(28));             // slot 28 is unused
   EXPECT_FALSE(octant_key_is_valid((8 >> 3) << 7));  // Morton 8 at level 0: misaligned
   EXPECT_EQ(octant_key_subtree_end(octant_root()), UINT64_MAX);
   EXPECT_FALSE(octant_is_valid({1, 0, 0, 19}));

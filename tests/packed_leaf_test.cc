@@ -2,6 +2,8 @@
 // back from every access path on octree leaves, mesh node keys and arbitrary
 // keys; the models compress what they are for; and damaged pages read as
 // damaged, never out of bounds (the sanitizer build checks the latter).
+#include "storage/packed_leaf.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,7 +12,6 @@
 #include <vector>
 
 #include "schema/octant.h"
-#include "storage/packed_leaf.h"
 #include "storage/page_format.h"
 #include "test_util.h"
 
@@ -54,7 +55,8 @@ std::vector<uint64_t> graded_node_keys(std::mt19937_64& rng) {
     const uint32_t x0 = s * (rng() % 40), y0 = s * (rng() % 40), z0 = s * (rng() % 40);
     for (uint32_t i = 0; i <= n; ++i)
       for (uint32_t j = 0; j <= n; ++j)
-        for (uint32_t k = 0; k <= n; ++k) keys.push_back(node_key({x0 + i * s, y0 + j * s, z0 + k * s}));
+        for (uint32_t k = 0; k <= n; ++k)
+          keys.push_back(node_key({x0 + i * s, y0 + j * s, z0 + k * s}));
   }
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
@@ -111,7 +113,8 @@ size_t pack_and_check(const PackedShape& shape, const Entries& e, std::mt19937_6
       EXPECT_EQ(k, keys[i]);
       leaf.payload(i, one.data());
       EXPECT_TRUE(std::equal(one.begin(), one.end(), vals.begin() + size_t{i} * shape.payload));
-      for (const uint64_t probe : {keys[i], keys[i] - 1, keys[i] + 1, uint64_t(rng()), uint64_t{0}}) {
+      for (const uint64_t probe :
+           {keys[i], keys[i] - 1, keys[i] + 1, uint64_t(rng()), uint64_t{0}}) {
         for (const bool upper : {false, true}) {
           uint32_t pos = 0;
           EXPECT_TRUE(leaf.bound(probe, upper, &pos));

@@ -1,6 +1,4 @@
 // locate and range queries against brute force over the leaf list.
-#include "query/octant_query.h"
-
 #include <gtest/gtest.h>
 
 #include <random>
@@ -9,6 +7,7 @@
 #include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
+#include "query/octant_query.h"
 #include "test_util.h"
 
 namespace weaver {

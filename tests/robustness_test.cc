@@ -110,7 +110,7 @@ TEST_F(Robustness, RecoverLeavesOutANodeTableOlderThanItsOctants) {
   }
   fs::copy_file(nodes_file, dir_.file("saved-nodes"));
   ASSERT_EQ(run("import " + db + " --octants " + other_).code, 0);  // drops the nodes
-  fs::copy_file(dir_.file("saved-nodes"), nodes_file);            // a stale one comes back
+  fs::copy_file(dir_.file("saved-nodes"), nodes_file);              // a stale one comes back
   {
     std::ofstream(db + "/MANIFEST", std::ios::app) << "garbage";  // damaged
   }
@@ -125,9 +125,7 @@ TEST_F(Robustness, RecoverLeavesOutANodeTableOlderThanItsOctants) {
 
 TEST_F(Robustness, ManifestProblemsAreNamed) {
   const std::string db = mesh_db();
-  {
-    std::ofstream(db + "/MANIFEST", std::ios::app) << "x";
-  }
+  { std::ofstream(db + "/MANIFEST", std::ios::app) << "x"; }
   CommandRun r = run("stat " + db);
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("bytes after the checksum"), std::string::npos) << r.err;
@@ -146,12 +144,14 @@ TEST_F(Robustness, ManifestProblemsAreNamed) {
 
 TEST_F(Robustness, WritersLeaveOtherFilesAlone) {
   const std::string db = mesh_db();
-  for (const char* mine : {"notes.txt", "octants-old.bt", "my.bt"}) std::ofstream(db + "/" + mine) << "mine";
+  for (const char* mine : {"notes.txt", "octants-old.bt", "my.bt"})
+    std::ofstream(db + "/" + mine) << "mine";
   std::ofstream(db + "/octants-77.bt") << "a leftover";  // a writer's own name pattern
   const CommandRun r = run("balance " + db);
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("octants-77.bt"), std::string::npos) << r.err;
-  for (const char* mine : {"notes.txt", "octants-old.bt", "my.bt"}) EXPECT_TRUE(fs::exists(db + "/" + mine));
+  for (const char* mine : {"notes.txt", "octants-old.bt", "my.bt"})
+    EXPECT_TRUE(fs::exists(db + "/" + mine));
   EXPECT_FALSE(fs::exists(db + "/octants-77.bt"));
   // A non-empty directory that is not a database is not made one.
   fs::create_directories(dir_.file("home"));
@@ -167,12 +167,13 @@ TEST_F(Robustness, MemoryBudgetsAreCheckedNotWrapped) {
   ASSERT_GT(machine, 0u);
   const std::string db = mesh_db();
   const std::string too_big = std::to_string(machine / (1 << 20) + 1024) + "M";
-  for (const std::string& cmd : {"mesh " + dir_.file("m") + " --model halfspace --freq 0.05",
-                                 "verify " + db, "export " + db + " --nodes " + dir_.file("n.csv"),
-                                 "query " + db + " node 0", "balance " + db, "extract " + db,
-                                 "import " + db + " --octants " + octants_,
-                                 "construct " + db + " --model halfspace"}) {
-    for (const std::string& memory : {too_big, std::string("9999999999999999999G"), std::string("16E")}) {
+  for (const std::string& cmd :
+       {"mesh " + dir_.file("m") + " --model halfspace --freq 0.05", "verify " + db,
+        "export " + db + " --nodes " + dir_.file("n.csv"), "query " + db + " node 0",
+        "balance " + db, "extract " + db, "import " + db + " --octants " + octants_,
+        "construct " + db + " --model halfspace"}) {
+    for (const std::string& memory :
+         {too_big, std::string("9999999999999999999G"), std::string("16E")}) {
       const CommandRun r = run(cmd + " --memory " + memory);
       EXPECT_EQ(r.code, 2) << cmd << " --memory " << memory << ": " << r.err;
       EXPECT_EQ(lines(r.err), 1) << r.err;
@@ -192,7 +193,8 @@ TEST_F(Robustness, MemoryBudgetsAreCheckedNotWrapped) {
 TEST_F(Robustness, OutOfMemoryIsOneLineAndExitOne) {
   const std::string db = mesh_db();
   // 200 MB of address space, a 1G budget: the pools cannot be had.
-  for (const std::string& cmd : {"verify " + db + " --memory 1G", "query " + db + " node 0 --memory 1G"}) {
+  for (const std::string& cmd :
+       {"verify " + db + " --memory 1G", "query " + db + " node 0 --memory 1G"}) {
     const CommandRun r = run(cmd, "ulimit -v 200000; ");
     EXPECT_EQ(r.code, 1) << cmd << ": " << r.err;
     EXPECT_EQ(lines(r.err), 1) << r.err;
@@ -211,7 +213,8 @@ TEST_F(Robustness, RunawaySizesAreRefusedBeforeWriting) {
     EXPECT_NE(r.err.find("--max-elements"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(db));
   }
-  const CommandRun small = run("construct " + db + " --model halfspace --freq 0.1 --max-elements 1000");
+  const CommandRun small =
+      run("construct " + db + " --model halfspace --freq 0.1 --max-elements 1000");
   EXPECT_EQ(small.code, 1) << small.err;
   const CommandRun ok = run("construct " + db + " --model halfspace --freq 0.1 --max-elements 1M");
   EXPECT_EQ(ok.code, 0) << ok.err;
@@ -228,7 +231,8 @@ TEST_F(Robustness, MeshSaysWhichStagesCommittedWhenALaterOneFails) {
   const CommandRun count = run(with(dir_.file("count")), "WEAVER_CRASH_AT=0 ");
   ASSERT_EQ(count.code, 0) << count.err;
   const uint64_t steps = std::stoull(count.err.substr(count.err.find("crash steps: ") + 13));
-  const CommandRun late = run(with(dir_.file("late")), "WEAVER_FAIL_AT=" + std::to_string(steps - 6) + " ");
+  const CommandRun late =
+      run(with(dir_.file("late")), "WEAVER_FAIL_AT=" + std::to_string(steps - 6) + " ");
   EXPECT_EQ(late.code, 1);
   EXPECT_EQ(lines(late.err), 1) << late.err;
   EXPECT_NE(late.err.find("extract failed"), std::string::npos) << late.err;
@@ -242,23 +246,27 @@ TEST_F(Robustness, SmallProbes) {
   EXPECT_EQ(r.code, 1);
   EXPECT_NE(r.err.find("is a directory"), std::string::npos) << r.err;
   // Binary garbage is escaped, never echoed raw.
-  std::ofstream(dir_.file("bin.txt"), std::ios::binary) << std::string("\x1b[2J\x07\x01\xff 1 2 3\n", 13);
+  std::ofstream(dir_.file("bin.txt"), std::ios::binary)
+      << std::string("\x1b[2J\x07\x01\xff 1 2 3\n", 13);
   r = run("import " + dir_.file("db") + " --octants " + dir_.file("bin.txt"));
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(lines(r.err), 1) << r.err;
   for (char c : r.err) EXPECT_TRUE(c == '\n' || (c >= 0x20 && c < 0x7f)) << int(c);
   EXPECT_NE(r.err.find("\\x1b"), std::string::npos) << r.err;
   // Invalid option values are usage errors (2) everywhere.
-  for (const char* bad : {"construct D --model basin --freq 0", "construct D --model basin --freq -1",
-                          "mesh D --model basin --freq 0", "construct D --model lava",
-                          "construct D --model basin --min-level 9 --max-level 3",
-                          "generate F --kind sphere --level 9 --max-level 3",
-                          "extract D --threads 0", "import D --octants O --tick -1",
-                          "balance D --memory 10", "import D --octants O --octants O"}) {
+  for (const char* bad :
+       {"construct D --model basin --freq 0", "construct D --model basin --freq -1",
+        "mesh D --model basin --freq 0", "construct D --model lava",
+        "construct D --model basin --min-level 9 --max-level 3",
+        "generate F --kind sphere --level 9 --max-level 3", "extract D --threads 0",
+        "import D --octants O --tick -1", "balance D --memory 10",
+        "import D --octants O --octants O"}) {
     std::string args = bad;
-    if (args.find(" D") != std::string::npos) args.replace(args.find(" D"), 2, " " + dir_.file("d"));
+    if (args.find(" D") != std::string::npos)
+      args.replace(args.find(" D"), 2, " " + dir_.file("d"));
     while (args.find(" O") != std::string::npos) args.replace(args.find(" O"), 2, " " + octants_);
-    if (args.find(" F") != std::string::npos) args.replace(args.find(" F"), 2, " " + dir_.file("f"));
+    if (args.find(" F") != std::string::npos)
+      args.replace(args.find(" F"), 2, " " + dir_.file("f"));
     r = run(args);
     EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
     EXPECT_EQ(lines(r.err), 1) << bad << ": " << r.err;

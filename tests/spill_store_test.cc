@@ -1,6 +1,8 @@
 // SpillStore against a map: buckets taken in increasing order get back
 // exactly the records added to them, whether they waited in memory or in
 // the spill log.
+#include "extract/spill_store.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,7 +11,6 @@
 #include <random>
 #include <vector>
 
-#include "extract/spill_store.h"
 #include "test_util.h"
 
 namespace weaver {

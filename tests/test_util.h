@@ -35,13 +35,13 @@ class TempDir {
 
 }  // namespace weaver::testing
 
-#define ASSERT_OK(expr)                                   \
-  do {                                                    \
-    const ::weaver::Status _s = (expr);                   \
+#define ASSERT_OK(expr)                                      \
+  do {                                                       \
+    const ::weaver::Status _s = (expr);                      \
     ASSERT_TRUE(_s.ok()) << #expr << ": " << _s.to_string(); \
   } while (0)
-#define EXPECT_OK(expr)                                   \
-  do {                                                    \
-    const ::weaver::Status _s = (expr);                   \
+#define EXPECT_OK(expr)                                      \
+  do {                                                       \
+    const ::weaver::Status _s = (expr);                      \
     EXPECT_TRUE(_s.ok()) << #expr << ": " << _s.to_string(); \
   } while (0)

@@ -184,8 +184,9 @@ TEST_F(VerifyTest, NamesAnUnbalancedOctree) {
   ASSERT_OK(Database::open(other, Database::Mode::kRead, false, &from));
   ASSERT_OK(Database::open(db_, Database::Mode::kWrite, false, &to));
   std::filesystem::copy_file(from->table_path(kOctantTable), db_ + "/octants-99.bt");
-  ASSERT_OK(to->commit_exactly({{kOctantTable, "octants-99.bt"},
-                                {kNodeTable, std::filesystem::path(to->table_path(kNodeTable)).filename()}}));
+  ASSERT_OK(to->commit_exactly(
+      {{kOctantTable, "octants-99.bt"},
+       {kNodeTable, std::filesystem::path(to->table_path(kNodeTable)).filename()}}));
   to.reset();
   expect_problem("not 2:1 balanced");
 }
@@ -232,9 +233,13 @@ TEST_F(VerifyTest, CommandExitStatus) {
   write_nodes(bad);
   const std::string cmd = std::string(WEAVER_BINARY) + " verify " + db_ + " >/dev/null 2>&1";
   EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 1);
-  EXPECT_EQ(WEXITSTATUS(std::system((std::string(WEAVER_BINARY) + " verify " + db_ +
-                                     " --storage-only >/dev/null 2>&1").c_str())), 0);
-  EXPECT_EQ(WEXITSTATUS(std::system((std::string(WEAVER_BINARY) + " verify >/dev/null 2>&1").c_str())), 2);
+  EXPECT_EQ(WEXITSTATUS(std::system(
+                (std::string(WEAVER_BINARY) + " verify " + db_ + " --storage-only >/dev/null 2>&1")
+                    .c_str())),
+            0);
+  EXPECT_EQ(
+      WEXITSTATUS(std::system((std::string(WEAVER_BINARY) + " verify >/dev/null 2>&1").c_str())),
+      2);
 }
 
 }  // namespace

@@ -77,7 +77,8 @@ BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
 
 int finest_level_bound(BTree& leaves) {
   LevelCounts levels{};
-  return levels_from_metadata(leaves.options().metadata, &levels) ? finest_level(levels) : kMaxLevel;
+  return levels_from_metadata(leaves.options().metadata, &levels) ? finest_level(levels)
+                                                                  : kMaxLevel;
 }
 
 Status balance_octree(const std::string& db_dir, const BalanceOptions& o, BalanceResult* r) {
@@ -101,8 +102,8 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, memory.output_pool, &out, &file));
   const std::unique_ptr<VelocityModel> model = model_of(topt.metadata);
-  const Status st = write_refinement(*leaves, closure.required(), material_fill(model.get(), topt),
-                                     *out, r);
+  const Status st =
+      write_refinement(*leaves, closure.required(), material_fill(model.get(), topt), *out, r);
   if (st.ok()) out->set_metadata(replace_levels(topt.metadata, r->levels));
   return db->publish(kOctantTable, file, out, st);
 }

@@ -41,11 +41,11 @@ struct BalanceMemory {
 
 struct BalanceResult {
   uint64_t input_leaves = 0, output_leaves = 0;
-  uint64_t required = 0;   // distinct required octants in the domain
-  uint64_t split = 0;      // input leaves that were split
-  LevelCounts levels{};    // of the output
-  bool balanced = true;    // check_only: the verdict
-  std::string violation;   // check_only: the first violation, named
+  uint64_t required = 0;  // distinct required octants in the domain
+  uint64_t split = 0;     // input leaves that were split
+  LevelCounts levels{};   // of the output
+  bool balanced = true;   // check_only: the verdict
+  std::string violation;  // check_only: the first violation, named
 };
 
 Status balance_octree(const std::string& db_dir, const BalanceOptions& options,

@@ -24,7 +24,7 @@ Status touching_leaf(BTree& leaves, const Octant& coarse, const Octant& asker, O
     if (clo[a] >= lo[a] + s) {
       px[a] = lo[a] + s - 1;  // coarse lies beyond on this axis
     } else if (clo[a] + e <= lo[a]) {
-      px[a] = lo[a];          // coarse lies before
+      px[a] = lo[a];  // coarse lies before
     } else {
       px[a] = std::max(lo[a], clo[a]);  // overlapping range: a shared coordinate
     }
@@ -43,7 +43,8 @@ Status find_violation(BTree& leaves, KeyTagSource& required, BalanceResult* r) {
         if (inside.empty()) return Status::Ok();
         const Octant coarse = octant_from_key(c.key());
         Octant fine;
-        WEAVER_RETURN_IF_ERROR(touching_leaf(leaves, coarse, octant_from_key(inside[0].tag), &fine));
+        WEAVER_RETURN_IF_ERROR(
+            touching_leaf(leaves, coarse, octant_from_key(inside[0].tag), &fine));
         r->balanced = false;
         r->violation = "octants " + describe_octant(coarse) + " and " + describe_octant(fine) +
                        " are face or edge neighbours more than one level apart";

@@ -11,7 +11,7 @@
 namespace weaver {
 struct ConstructOptions;
 struct ConstructPlan;
-}
+}  // namespace weaver
 
 namespace weaver::cli {
 

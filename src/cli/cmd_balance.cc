@@ -36,8 +36,7 @@ int cmd_balance(int argc, char** argv) {
   BalanceResult r;
   st = balance_octree(args.positional[0], o, &r);
   if (!st.ok()) return report("balance", st);
-  const double secs =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (o.check_only) {
     if (!r.balanced) {
       std::fprintf(stderr, "weaver balance: not 2:1 balanced: %s\n", r.violation.c_str());
@@ -47,11 +46,11 @@ int cmd_balance(int argc, char** argv) {
                 (unsigned long long)r.input_leaves, secs);
     return 0;
   }
-  std::printf("balanced %llu leaves into %llu (%llu split, %llu required octants) in %.2fs "
-              "(%.0f leaves/s)\n",
-              (unsigned long long)r.input_leaves, (unsigned long long)r.output_leaves,
-              (unsigned long long)r.split, (unsigned long long)r.required, secs,
-              r.input_leaves / secs);
+  std::printf(
+      "balanced %llu leaves into %llu (%llu split, %llu required octants) in %.2fs "
+      "(%.0f leaves/s)\n",
+      (unsigned long long)r.input_leaves, (unsigned long long)r.output_leaves,
+      (unsigned long long)r.split, (unsigned long long)r.required, secs, r.input_leaves / secs);
   return 0;
 }
 

@@ -61,7 +61,8 @@ Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
   WEAVER_RETURN_IF_ERROR(level("min-level", &o->min_level));
   WEAVER_RETURN_IF_ERROR(level("max-level", &o->max_level));
   if (args.values.count("max-elements")) {
-    WEAVER_RETURN_IF_ERROR(parse_count(args.values.at("max-elements"), "--max-elements", &o->max_elements));
+    WEAVER_RETURN_IF_ERROR(
+        parse_count(args.values.at("max-elements"), "--max-elements", &o->max_elements));
   }
   if (args.values.count("domain")) {
     std::vector<double> d;
@@ -106,20 +107,20 @@ int cmd_construct(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   if (isatty(STDERR_FILENO)) {
     o.progress = [](uint64_t n) {
-      if (n % (1 << 20) < 4096) std::fprintf(stderr, "\rconstruct: %llu leaves   ", (unsigned long long)n);
+      if (n % (1 << 20) < 4096)
+        std::fprintf(stderr, "\rconstruct: %llu leaves   ", (unsigned long long)n);
     };
   }
   ConstructResult r;
   st = construct_octree(args.positional[0], o, &plan, &r);
   if (o.progress) std::fprintf(stderr, "\r%40s\r", "");
   if (!st.ok()) return report("construct", st);
-  const double secs =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("constructed %llu leaves in %.2fs (%.0f leaves/s), edges %g..%g m, deepest level "
-              "%d, worst %.2f points per wavelength, %.2f bytes/leaf\n",
-              (unsigned long long)r.elements, secs, r.elements / secs, r.smallest_edge_m,
-              r.largest_edge_m, finest_level(r.levels), r.worst_ppw,
-              double(r.table_bytes) / r.elements);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf(
+      "constructed %llu leaves in %.2fs (%.0f leaves/s), edges %g..%g m, deepest level "
+      "%d, worst %.2f points per wavelength, %.2f bytes/leaf\n",
+      (unsigned long long)r.elements, secs, r.elements / secs, r.smallest_edge_m, r.largest_edge_m,
+      finest_level(r.levels), r.worst_ppw, double(r.table_bytes) / r.elements);
   return 0;
 }
 

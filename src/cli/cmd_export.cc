@@ -38,8 +38,7 @@ int cmd_export(int argc, char** argv) {
   ExportResult r;
   st = export_csv(args.positional[0], o, &r);
   if (!st.ok()) return report("export", st);
-  const double secs =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("exported %llu nodes and %llu elements in %.2fs\n", (unsigned long long)r.nodes,
               (unsigned long long)r.elements, secs);
   return 0;

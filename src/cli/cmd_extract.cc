@@ -41,8 +41,8 @@ constexpr char kUsage[] =
 
 int cmd_extract(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "store", "threads"}, {"json", "plain"},
-                         &args);
+  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "store", "threads"},
+                         {"json", "plain"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("extract", "expected one DB", kUsage);
@@ -87,34 +87,35 @@ int cmd_extract(int argc, char** argv) {
   const double secs = elapsed();
   if (args.flags.count("json")) {
     const bool search = o.algorithm == ExtractOptions::Algorithm::kSearch;
-    std::printf("{\"algorithm\": \"%s\", \"store\": \"%s\", \"threads\": %d, \"memory_budget\": %llu, "
-                "\"elements\": %llu, \"nodes\": %llu, \"anchored\": %llu, \"edge\": %llu, "
-                "\"face\": %llu, \"seconds\": %.6f, \"nodes_per_s\": %.1f, \"buckets\": %llu, "
-                "\"bucket_level\": %d, \"spilled\": %llu, \"node_table_bytes\": %llu, "
-                "\"search_tree_bytes\": %llu}\n",
-                search ? "search" : "sort",
-                o.store == ExtractOptions::Store::kLsm ? "lsm" : "btree", o.threads, (unsigned long long)o.memory.bytes(),
-                (unsigned long long)r.elements, (unsigned long long)r.nodes,
-                (unsigned long long)r.anchored, (unsigned long long)r.edge,
-                (unsigned long long)r.face, secs, r.nodes / secs, (unsigned long long)r.buckets,
-                r.bucket_level, (unsigned long long)r.spilled,
-                (unsigned long long)r.node_table_bytes, (unsigned long long)r.search_tree_bytes);
+    std::printf(
+        "{\"algorithm\": \"%s\", \"store\": \"%s\", \"threads\": %d, \"memory_budget\": %llu, "
+        "\"elements\": %llu, \"nodes\": %llu, \"anchored\": %llu, \"edge\": %llu, "
+        "\"face\": %llu, \"seconds\": %.6f, \"nodes_per_s\": %.1f, \"buckets\": %llu, "
+        "\"bucket_level\": %d, \"spilled\": %llu, \"node_table_bytes\": %llu, "
+        "\"search_tree_bytes\": %llu}\n",
+        search ? "search" : "sort", o.store == ExtractOptions::Store::kLsm ? "lsm" : "btree",
+        o.threads, (unsigned long long)o.memory.bytes(), (unsigned long long)r.elements,
+        (unsigned long long)r.nodes, (unsigned long long)r.anchored, (unsigned long long)r.edge,
+        (unsigned long long)r.face, secs, r.nodes / secs, (unsigned long long)r.buckets,
+        r.bucket_level, (unsigned long long)r.spilled, (unsigned long long)r.node_table_bytes,
+        (unsigned long long)r.search_tree_bytes);
     return 0;
   }
-  std::printf("extracted %llu nodes (%llu anchored, %llu edge-dangling, %llu face-dangling) from "
-              "%llu elements in %.2fs (%.0f nodes/s)\n",
-              (unsigned long long)r.nodes, (unsigned long long)r.anchored,
-              (unsigned long long)r.edge, (unsigned long long)r.face,
-              (unsigned long long)r.elements, secs, r.nodes / secs);
+  std::printf(
+      "extracted %llu nodes (%llu anchored, %llu edge-dangling, %llu face-dangling) from "
+      "%llu elements in %.2fs (%.0f nodes/s)\n",
+      (unsigned long long)r.nodes, (unsigned long long)r.anchored, (unsigned long long)r.edge,
+      (unsigned long long)r.face, (unsigned long long)r.elements, secs, r.nodes / secs);
   if (o.algorithm == ExtractOptions::Algorithm::kSearch) {
     std::printf("node %s with element codes %.2f bytes/node, node table %.2f bytes/node\n",
                 o.store == ExtractOptions::Store::kLsm ? "LSM store" : "B-tree",
                 double(r.search_tree_bytes) / r.nodes, double(r.node_table_bytes) / r.nodes);
   } else {
-    std::printf("%llu buckets at level %d, %llu nodal pixels spilled (%llu through the spill "
-                "log), node table %.2f bytes/node\n",
-                (unsigned long long)r.buckets, r.bucket_level, (unsigned long long)r.spilled,
-                (unsigned long long)r.spilled_to_disk, double(r.node_table_bytes) / r.nodes);
+    std::printf(
+        "%llu buckets at level %d, %llu nodal pixels spilled (%llu through the spill "
+        "log), node table %.2f bytes/node\n",
+        (unsigned long long)r.buckets, r.bucket_level, (unsigned long long)r.spilled,
+        (unsigned long long)r.spilled_to_disk, double(r.node_table_bytes) / r.nodes);
   }
   return 0;
 }

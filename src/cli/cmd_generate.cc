@@ -31,9 +31,10 @@ constexpr char kUsage[] =
 
 int cmd_generate(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2,
-                         {"kind", "leaves", "level", "max-level", "blocks", "block-level", "seed", "radius", "points"},
-                         {"shuffle"}, &args);
+  Status st = parse_args(
+      argc, argv, 2,
+      {"kind", "leaves", "level", "max-level", "blocks", "block-level", "seed", "radius", "points"},
+      {"shuffle"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("generate", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("generate", "expected one FILE", kUsage);
@@ -67,7 +68,8 @@ int cmd_generate(int argc, char** argv) {
   if (st.ok() && args.values.count("blocks")) {
     std::vector<uint64_t> b;
     st = parse_u64_list(args.values["blocks"], "--blocks", 3, &b);
-    for (size_t a = 0; st.ok() && a < 3; ++a) o.blocks[a] = static_cast<uint32_t>(std::min<uint64_t>(b[a], UINT32_MAX));
+    for (size_t a = 0; st.ok() && a < 3; ++a)
+      o.blocks[a] = static_cast<uint32_t>(std::min<uint64_t>(b[a], UINT32_MAX));
   }
   if (st.ok() && args.values.count("radius")) {
     st = parse_double(args.values["radius"], "--radius", &o.radius);

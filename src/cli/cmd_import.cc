@@ -43,7 +43,8 @@ int cmd_import(int argc, char** argv) {
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("import", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("import", "expected one DB", kUsage);
-  if (!args.values.count("octants")) return usage_error("import", "--octants FILE is required", kUsage);
+  if (!args.values.count("octants"))
+    return usage_error("import", "--octants FILE is required", kUsage);
   ImportOptions o;
   o.packed = !args.flags.count("plain");
   st = memory_option(args, &o.memory);
@@ -71,10 +72,11 @@ int cmd_import(int argc, char** argv) {
   if (o.progress) std::fprintf(stderr, "\r%60s\r", "");
   if (!st.ok()) return report("import", st);
   const double secs = seconds_since(t0);
-  std::printf("imported %llu octants into %s in %.2fs (%.0f octants/s, %llu LSM runs written, "
-              "%.2f bytes/octant)\n",
-              (unsigned long long)r.octants, args.positional[0].c_str(), secs, r.octants / secs,
-              (unsigned long long)r.runs_spilled, double(r.table_bytes) / r.octants);
+  std::printf(
+      "imported %llu octants into %s in %.2fs (%.0f octants/s, %llu LSM runs written, "
+      "%.2f bytes/octant)\n",
+      (unsigned long long)r.octants, args.positional[0].c_str(), secs, r.octants / secs,
+      (unsigned long long)r.runs_spilled, double(r.table_bytes) / r.octants);
   return 0;
 }
 

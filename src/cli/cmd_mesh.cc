@@ -47,14 +47,15 @@ struct Stage {
 };
 
 void stage_line(const char* name, uint64_t count, const char* what, double secs) {
-  std::printf("%-10s %12llu %-9s %7.2fs %12.0f/s  peak %6.1f MB\n", name,
-              (unsigned long long)count, what, secs, count / secs, peak_rss() / 1e6);
+  std::printf("%-10s %12llu %-9s %7.2fs %12.0f/s  peak %6.1f MB\n", name, (unsigned long long)count,
+              what, secs, count / secs, peak_rss() / 1e6);
   std::fflush(stdout);
 }
 
 // A later stage failed: say so, and what the earlier ones left committed.
 int report_after(const char* stage, const Status& st, const char* committed) {
-  std::fprintf(stderr, "weaver mesh: %s failed: %s (%s)\n", stage, error_text(st).c_str(), committed);
+  std::fprintf(stderr, "weaver mesh: %s failed: %s (%s)\n", stage, error_text(st).c_str(),
+               committed);
   return 1;
 }
 
@@ -113,11 +114,12 @@ int cmd_mesh(int argc, char** argv) {
 
   std::printf("\nmesh at %g Hz, %g points per wavelength, in %.2fs\n", co.freq, co.ppw,
               total.seconds());
-  std::printf("  elements   %llu\n  nodes      %llu\n  danglings  %llu (%llu on edges, %llu on "
-              "faces)\n",
-              (unsigned long long)er.elements, (unsigned long long)er.nodes,
-              (unsigned long long)(er.edge + er.face), (unsigned long long)er.edge,
-              (unsigned long long)er.face);
+  std::printf(
+      "  elements   %llu\n  nodes      %llu\n  danglings  %llu (%llu on edges, %llu on "
+      "faces)\n",
+      (unsigned long long)er.elements, (unsigned long long)er.nodes,
+      (unsigned long long)(er.edge + er.face), (unsigned long long)er.edge,
+      (unsigned long long)er.face);
   int finest = 0, coarsest = kMaxLevel;
   std::printf("  elements per level (edge):\n");
   for (int l = 0; l <= kMaxLevel; ++l) {

@@ -80,20 +80,21 @@ int run_locate(BTree& t, BTree* nodes, const Units& u, const std::vector<uint32_
   std::array<uint64_t, 8> ids{};
   if (st.ok() && r.inside && nodes != nullptr) st = element_nodes(*nodes, r.leaf, &ids);
   if (!st.ok()) return report("query", st);
-  const std::string pt = std::to_string(c[0]) + " " + std::to_string(c[1]) + " " +
-                         std::to_string(c[2]);
+  const std::string pt =
+      std::to_string(c[0]) + " " + std::to_string(c[1]) + " " + std::to_string(c[2]);
   if (json) {
     std::printf("{\"point\": [%u, %u, %u], \"inside\": %s", c[0], c[1], c[2],
                 r.inside ? "true" : "false");
     if (r.inside) std::printf(", \"element\": %s", octant_json(r.leaf, r.element_id).c_str());
-    if (r.inside && nodes != nullptr) std::printf(", \"nodes\": %s", ids_json(ids.data(), 8).c_str());
+    if (r.inside && nodes != nullptr)
+      std::printf(", \"nodes\": %s", ids_json(ids.data(), 8).c_str());
     std::printf("}\n");
   } else if (!r.inside) {
     std::printf("point (%s) is outside the domain\n", pt.c_str());
   } else {
     std::printf("point (%s) is in element %llu: leaf (%s), edge %u ticks = %.10g m\n", pt.c_str(),
-                (unsigned long long)r.element_id, octant_text(r.leaf).c_str(),
-                octant_edge(r.leaf), octant_edge(r.leaf) * u.tick_m);
+                (unsigned long long)r.element_id, octant_text(r.leaf).c_str(), octant_edge(r.leaf),
+                octant_edge(r.leaf) * u.tick_m);
     if (nodes != nullptr) std::printf("  nodes %s\n", ids_text(ids.data(), 8).c_str());
   }
   return 0;
@@ -119,15 +120,17 @@ int run_element(BTree& t, BTree* nodes, const Units& u, uint64_t id, bool json) 
 
 int print_node(const NodeInfo& n, const Units& u, bool json) {
   if (json) {
-    std::printf("{\"id\": %llu, \"x\": %u, \"y\": %u, \"z\": %u, \"kind\": \"%s\", "
-                "\"anchors\": %s}\n",
-                (unsigned long long)n.id, n.c.x, n.c.y, n.c.z, node_kind_name(n.kind),
-                ids_json(n.anchors.data(), n.anchor_count).c_str());
+    std::printf(
+        "{\"id\": %llu, \"x\": %u, \"y\": %u, \"z\": %u, \"kind\": \"%s\", "
+        "\"anchors\": %s}\n",
+        (unsigned long long)n.id, n.c.x, n.c.y, n.c.z, node_kind_name(n.kind),
+        ids_json(n.anchors.data(), n.anchor_count).c_str());
     return 0;
   }
-  std::printf("node %llu: (%u %u %u) ticks = (%.10g %.10g %.10g) m, %s", (unsigned long long)n.id, n.c.x,
-              n.c.y, n.c.z, u.origin_m[0] + n.c.x * u.tick_m, u.origin_m[1] + n.c.y * u.tick_m,
-              u.origin_m[2] + n.c.z * u.tick_m, node_kind_name(n.kind));
+  std::printf("node %llu: (%u %u %u) ticks = (%.10g %.10g %.10g) m, %s", (unsigned long long)n.id,
+              n.c.x, n.c.y, n.c.z, u.origin_m[0] + n.c.x * u.tick_m,
+              u.origin_m[1] + n.c.y * u.tick_m, u.origin_m[2] + n.c.z * u.tick_m,
+              node_kind_name(n.kind));
   if (n.anchor_count > 0) {
     std::printf(", depends on nodes %s", ids_text(n.anchors.data(), n.anchor_count).c_str());
   }
@@ -171,9 +174,9 @@ int cmd_query(int argc, char** argv) {
   if (p.size() < 2) return usage_error("query", "expected DB and a query", kUsage);
   const std::string& kind = p[1];
   const size_t want = kind == "locate" || kind == "node-at" ? 3
-                      : kind == "range"                      ? 6
-                      : kind == "element" || kind == "node"  ? 1
-                                                             : 0;
+                      : kind == "range"                     ? 6
+                      : kind == "element" || kind == "node" ? 1
+                                                            : 0;
   if (want == 0) return usage_error("query", "unknown query '" + kind + "'", kUsage);
   if (p.size() != 2 + want) {
     return usage_error("query", kind + " takes " + std::to_string(want) + " number(s)", kUsage);
@@ -195,7 +198,8 @@ int cmd_query(int argc, char** argv) {
   st = Database::open(p[0], Database::Mode::kRead, false, &db);
   const QueryMemory shares(memory);
   if (st.ok()) st = db->open_table(kOctantTable, shares.octant_pool, &t);
-  if (st.ok() && db->has_table(kNodeTable)) st = db->open_table(kNodeTable, shares.node_pool, &nodes);
+  if (st.ok() && db->has_table(kNodeTable))
+    st = db->open_table(kNodeTable, shares.node_pool, &nodes);
   if (st.ok() && !nodes && (kind == "node" || kind == "node-at")) {
     st = Status::NotFound(p[0] + ": no mesh yet (run 'weaver extract' first)");
   }

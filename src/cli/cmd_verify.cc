@@ -35,13 +35,14 @@ int cmd_verify(int argc, char** argv) {
   o.mesh = args.flags.count("storage-only") == 0;
   st = memory_option(args, &o.memory);
   if (!st.ok()) return usage_error("verify", st.message(), kUsage);
-  o.progress = [](const std::string& line) { std::printf("%s\n", line.c_str()), std::fflush(stdout); };
+  o.progress = [](const std::string& line) {
+    std::printf("%s\n", line.c_str()), std::fflush(stdout);
+  };
   const auto t0 = std::chrono::steady_clock::now();
   VerifyReport r;
   st = verify_database(args.positional[0], o, &r);
   if (!st.ok()) return report("verify", st);
-  const double secs =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (const std::string& p : r.problems) std::fprintf(stderr, "problem: %s\n", p.c_str());
   if (!r.ok()) {
     std::fprintf(stderr, "weaver verify: %zu problem%s found%s\n", r.problems.size(),

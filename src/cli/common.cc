@@ -16,8 +16,8 @@ int report(const std::string& command, const Status& st) {
 }
 
 int usage_error(const std::string& command, const std::string& message, const char* /*usage*/) {
-  std::fprintf(stderr, "weaver %s: %s (see 'weaver %s --help')\n", command.c_str(),
-               message.c_str(), command.c_str());
+  std::fprintf(stderr, "weaver %s: %s (see 'weaver %s --help')\n", command.c_str(), message.c_str(),
+               command.c_str());
   return 2;
 }
 
@@ -26,7 +26,8 @@ Status memory_option(const ParsedArgs& args, MemoryBudget* budget) {
   if (!args.values.count("memory")) return Status::Ok();
   uint64_t bytes = 0;
   WEAVER_RETURN_IF_ERROR(parse_bytes(args.values.at("memory"), "--memory", &bytes));
-  if (bytes < MemoryBudget::kMinBytes) return Status::InvalidArgument("--memory must be at least 1M");
+  if (bytes < MemoryBudget::kMinBytes)
+    return Status::InvalidArgument("--memory must be at least 1M");
   const uint64_t machine = physical_memory();
   if (machine > 0 && bytes > machine) {
     char buf[160];

@@ -96,7 +96,8 @@ class Descent {
 
 Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
   for (double l : o.domain_m) {
-    if (!(l > 0) || !std::isfinite(l)) return Status::InvalidArgument("domain sizes must be positive");
+    if (!(l > 0) || !std::isfinite(l))
+      return Status::InvalidArgument("domain sizes must be positive");
   }
   if (!(o.freq > 0) || !(o.ppw > 0) || o.vs_min < 0) {
     return Status::InvalidArgument("--freq and --ppw must be positive, --vs-min not negative");
@@ -161,9 +162,8 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   topt.packed = o.packed;
   std::unique_ptr<BTree> table;
   std::string file;
-  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt,
-                                          ConstructMemory(o.memory).table_pool,
-                                          &table, &file));
+  WEAVER_RETURN_IF_ERROR(
+      db->create_table(kOctantTable, topt, ConstructMemory(o.memory).table_pool, &table, &file));
   Descent descent(o, *p, *model, *table, r);
   Status st = descent.run();
   if (st.ok()) {

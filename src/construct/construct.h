@@ -57,8 +57,8 @@ struct ConstructPlan {
   int block_level = 0;
   std::array<uint32_t, 3> blocks = {1, 1, 1};
   std::array<double, 3> domain_m = {0, 0, 0};  // as covered by the blocks
-  bool rounded_up = false;  // the domain was not a union of blocks up to level 10
-  std::string model;        // the model's description
+  bool rounded_up = false;        // the domain was not a union of blocks up to level 10
+  std::string model;              // the model's description
   double estimated_elements = 0;  // from a coarse sampling (construct/estimate.h)
   double estimated_disk_bytes = 0;
 };

@@ -59,8 +59,9 @@ ConstructEstimate estimate_construct(const ConstructOptions& o, const ConstructP
   // step-th cell per axis, each standing for step^3 cells.
   const double total = double(cells[0]) * cells[1] * cells[2];
   const uint64_t step = std::max<uint64_t>(1, uint64_t(std::ceil(std::cbrt(total / kSampleCells))));
-  const double weight = total / (double((cells[0] + step - 1) / step) *
-                                 double((cells[1] + step - 1) / step) * double((cells[2] + step - 1) / step));
+  const double weight =
+      total / (double((cells[0] + step - 1) / step) * double((cells[1] + step - 1) / step) *
+               double((cells[2] + step - 1) / step));
   const double cell_m = p.root_edge_m / std::ldexp(1.0, level), rate = o.freq * o.ppw;
   for (uint64_t k = 0; k < cells[2]; k += step)
     for (uint64_t j = 0; j < cells[1]; j += step)

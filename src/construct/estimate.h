@@ -15,10 +15,10 @@
 namespace weaver {
 
 struct ConstructEstimate {
-  double elements = 0;    // leaves of the constructed octree
-  double table_bytes = 0; // its octant table
-  double disk_bytes = 0;  // what the run needs free (all stages for `mesh`)
-  int sample_level = 0;   // the level of the sampling cells
+  double elements = 0;     // leaves of the constructed octree
+  double table_bytes = 0;  // its octant table
+  double disk_bytes = 0;   // what the run needs free (all stages for `mesh`)
+  int sample_level = 0;    // the level of the sampling cells
 };
 
 // Samples `model` on cells of about 2^15 per domain (never finer than

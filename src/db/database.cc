@@ -49,9 +49,7 @@ std::string join(const std::vector<std::string>& names) {
 
 }  // namespace
 
-std::string table_source(const std::string& name) {
-  return name == kNodeTable ? kOctantTable : "";
-}
+std::string table_source(const std::string& name) { return name == kNodeTable ? kOctantTable : ""; }
 
 bool is_table_file_name(const std::string& file) {
   const size_t dash = file.rfind('-');
@@ -98,7 +96,8 @@ Status Database::open_snapshot() {
         gone = {name, file};
         break;
       }
-      if (fd < 0) return Status::IOError("cannot open " + table_path(name) + ": " + std::strerror(errno));
+      if (fd < 0)
+        return Status::IOError("cannot open " + table_path(name) + ": " + std::strerror(errno));
       snapshot_fds_[name] = fd;
     }
     if (!missing) return Status::Ok();
@@ -143,7 +142,8 @@ Status Database::open(const std::string& dir, Mode mode, bool create_if_missing,
 Status Database::open_existing(bool create_if_missing) {
   // Checked before the lock too, so that a directory that is not a database
   // does not even get a LOCK file.
-  if (!fs::exists(dir_ + "/" + kManifest)) WEAVER_RETURN_IF_ERROR(start_without_manifest(false, true));
+  if (!fs::exists(dir_ + "/" + kManifest))
+    WEAVER_RETURN_IF_ERROR(start_without_manifest(false, true));
   if (mode_ == Mode::kWrite) WEAVER_RETURN_IF_ERROR(lock());
   if (fs::exists(dir_ + "/" + kManifest)) {
     WEAVER_RETURN_IF_ERROR(read_manifest());
@@ -220,8 +220,8 @@ Status Database::remove_leftovers() {
     if (name == kManifest || name == kLock) continue;
     bool live = false;
     for (const auto& [table, file] : tables_) live = live || file == name;
-    const bool ours = name == kManifestTmp || is_table_file_name(name) ||
-                      name.rfind("tmp-", 0) == 0;
+    const bool ours =
+        name == kManifestTmp || is_table_file_name(name) || name.rfind("tmp-", 0) == 0;
     if (live || !ours) continue;
     next_file_number_ = std::max(next_file_number_, table_file_number(name) + 1);
     fs::remove_all(entry.path(), ec);

@@ -77,8 +77,8 @@ class Database {
   // Writer only: ends the build of table `name` in `file`.  If `built` is OK,
   // commits the table and makes it live; otherwise (or if that fails) closes
   // and deletes the file.  Returns the first error.
-  Status publish(const std::string& name, const std::string& file,
-                 std::unique_ptr<BTree>& table, Status built);
+  Status publish(const std::string& name, const std::string& file, std::unique_ptr<BTree>& table,
+                 Status built);
 
   // Files in the directory that no manifest names (left by a crashed writer);
   // a writer removes them when it opens.

@@ -16,7 +16,7 @@ class LeafReader {
   Status open(BTree& octants);
   bool valid() const { return cursor_.valid(); }
   uint64_t key() const { return cursor_.key(); }  // REQUIRES: valid()
-  Status next();                                   // REQUIRES: valid()
+  Status next();                                  // REQUIRES: valid()
 
  private:
   Status check_current();

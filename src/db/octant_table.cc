@@ -7,8 +7,8 @@ namespace weaver {
 
 std::string units_to_metadata(const Units& u) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "tick_m=%.17g;origin_m=%.17g,%.17g,%.17g", u.tick_m,
-                u.origin_m[0], u.origin_m[1], u.origin_m[2]);
+  std::snprintf(buf, sizeof buf, "tick_m=%.17g;origin_m=%.17g,%.17g,%.17g", u.tick_m, u.origin_m[0],
+                u.origin_m[1], u.origin_m[2]);
   return buf;
 }
 

@@ -83,7 +83,8 @@ Status Database::recover(const std::string& dir, RecoverReport* report) {
   }
   for (auto it = chosen.begin(); it != chosen.end();) {
     const std::string source = table_source(it->first);
-    if (!source.empty() && (!chosen.count(source) || chosen_number[source] > chosen_number[it->first])) {
+    if (!source.empty() &&
+        (!chosen.count(source) || chosen_number[source] > chosen_number[it->first])) {
       report->set_aside.push_back(it->second + " (older than the table '" + source +
                                   "' it derives from)");
       it = chosen.erase(it);

@@ -27,7 +27,8 @@ class CsvWriter {
   }
   Status open(const char* header) {
     f_ = std::fopen(tmp_.c_str(), "wb");
-    if (f_ == nullptr) return Status::IOError("cannot create " + tmp_ + ": " + std::strerror(errno));
+    if (f_ == nullptr)
+      return Status::IOError("cannot create " + tmp_ + ": " + std::strerror(errno));
     std::setvbuf(f_, nullptr, _IOFBF, 1 << 20);
     std::fputs(header, f_);
     return Status::Ok();
@@ -81,7 +82,8 @@ Status write_nodes(BTree& nodes, const std::string& path, uint64_t* count) {
   for (uint64_t id = 0; c.valid(); ++id) {
     const Coord p = morton_decode(c.key());
     const uint8_t raw = static_cast<uint8_t>(c.payload()[0]);
-    if (raw > 2) return Status::Corruption(nodes.file_name() + ": bad node kind " + std::to_string(raw));
+    if (raw > 2)
+      return Status::Corruption(nodes.file_name() + ": bad node kind " + std::to_string(raw));
     const NodeKind kind = static_cast<NodeKind>(raw);
     out.field(id), out.comma(), out.field(p.x), out.comma(), out.field(p.y), out.comma();
     out.field(p.z), out.comma(), out.text(node_kind_name(kind));

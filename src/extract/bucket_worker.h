@@ -10,8 +10,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "extract/extract.h"
 #include "db/leaf_reader.h"
+#include "extract/extract.h"
 #include "extract/node_classifier.h"
 #include "extract/node_hash.h"
 #include "extract/spill_store.h"
@@ -27,13 +27,13 @@ struct Bucketing {
 
 struct BucketTask {
   uint64_t bucket = 0;
-  std::vector<uint64_t> leaf_keys;     // the bucket's leaves, key order
-  std::vector<SpillRecord> incoming;   // nodal pixels spilled here by earlier buckets
-  std::vector<uint64_t> node_keys;     // result: the bucket's nodes, key order
-  std::vector<std::byte> node_kinds;   // result: their NodeKind, one byte each
-  ExtractResult counts;                // result: node and kind counts
+  std::vector<uint64_t> leaf_keys;    // the bucket's leaves, key order
+  std::vector<SpillRecord> incoming;  // nodal pixels spilled here by earlier buckets
+  std::vector<uint64_t> node_keys;    // result: the bucket's nodes, key order
+  std::vector<std::byte> node_kinds;  // result: their NodeKind, one byte each
+  ExtractResult counts;               // result: node and kind counts
   Status status;
-  bool done = false;                   // set by the worker (under the pipeline's lock)
+  bool done = false;  // set by the worker (under the pipeline's lock)
 };
 
 // Reads the next bucket from the cursor and the spill store into *task;

@@ -2,8 +2,9 @@
 // and the bucketing policy of the sort: the bucket level a budget affords.
 #include "extract/extract.h"
 
-#include <algorithm>
 #include <unistd.h>
+
+#include <algorithm>
 
 #include "db/database.h"
 #include "db/leaf_reader.h"

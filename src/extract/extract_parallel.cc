@@ -11,8 +11,8 @@
 namespace weaver {
 
 Status write_bucket(const BucketTask& t, BTree& nodes, ExtractResult* result) {
-  WEAVER_RETURN_IF_ERROR(nodes.append_batch(t.node_keys.data(), t.node_kinds.data(),
-                                            t.node_keys.size()));
+  WEAVER_RETURN_IF_ERROR(
+      nodes.append_batch(t.node_keys.data(), t.node_kinds.data(), t.node_keys.size()));
   result->elements += t.counts.elements;
   result->nodes += t.counts.nodes;
   result->anchored += t.counts.anchored;
@@ -88,7 +88,8 @@ Status run_parallel(Database& db, BTree& octants, BTree& nodes, const Bucketing&
   // Each worker reads the octant table through its own handle: a buffer pool
   // serves one thread.
   std::vector<std::unique_ptr<BTree>> handles(n);
-  for (auto& h : handles) WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.worker_pool, &h));
+  for (auto& h : handles)
+    WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.worker_pool, &h));
   WorkQueue queue;
   std::deque<std::unique_ptr<BucketTask>> in_flight;  // Z-order
   std::vector<std::thread> workers;

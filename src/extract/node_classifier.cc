@@ -111,8 +111,8 @@ Status NodeClassifier::unbalanced(Coord n, const Octant& coarse, uint8_t mask) {
       break;
     }
   }
-  return Status::InvalidArgument("the octree is not 2:1 balanced: octant " + describe_octant(coarse) +
-                                 " and octant " + fine +
+  return Status::InvalidArgument("the octree is not 2:1 balanced: octant " +
+                                 describe_octant(coarse) + " and octant " + fine +
                                  " are face or edge neighbours more than one level apart");
 }
 

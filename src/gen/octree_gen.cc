@@ -54,9 +54,8 @@ double distance_to_sphere(const Octant& o, double radius) {
 
 // Depth-first in child order, so leaves come out in key order.
 void refine_sphere(const Octant& o, const GenOptions& g, std::vector<Octant>* out) {
-  const bool refine = o.level < g.level ||
-                      (o.level < g.max_level &&
-                       distance_to_sphere(o, g.radius) < 2.0 * octant_edge(o));
+  const bool refine = o.level < g.level || (o.level < g.max_level &&
+                                            distance_to_sphere(o, g.radius) < 2.0 * octant_edge(o));
   if (!refine) {
     out->push_back(o);
     return;

@@ -25,8 +25,8 @@ struct GenOptions {
   Kind kind = Kind::kRandom;
   uint32_t blocks[3] = {1, 1, 1};
   int block_level = 0;
-  int level = 6;             // uniform: the leaf level
-  uint64_t leaves = 100000;  // random: refine until at least this many leaves
+  int level = 6;              // uniform: the leaf level
+  uint64_t leaves = 100000;   // random: refine until at least this many leaves
   int max_level = kMaxLevel;  // random: no leaf finer than this
   double radius = 0.3;        // sphere: radius as a fraction of the root edge
   uint64_t points = 1000;     // points: how many

@@ -7,9 +7,9 @@
 #include <memory>
 
 #include "db/database.h"
+#include "import/octant_text.h"
 #include "sort/key_tag.h"
 #include "storage/lsm.h"
-#include "import/octant_text.h"
 
 namespace weaver {
 
@@ -41,7 +41,8 @@ Status check_neighbours(const std::string& path, const KeyTag& prev, const KeyTa
   if (octant_is_ancestor(a, b)) {
     const bool later_is_b = cur.tag > prev.tag;
     return Status::InvalidArgument(at + "octant " + describe_octant(later_is_b ? b : a) +
-                                   " overlaps octant " + describe_octant(later_is_b ? a : b) + other);
+                                   " overlaps octant " + describe_octant(later_is_b ? a : b) +
+                                   other);
   }
   return Status::Ok();
 }
@@ -121,8 +122,9 @@ Status read_input(const std::string& text_path, const ImportOptions& options,
     if (options.progress && ++count % kProgressEvery == 0) options.progress("read", count);
     const uint64_t key = octant_key(o);
     if (*lsm == nullptr && direct.in_order(key)) return direct.add({key, line});
-    if (*lsm == nullptr) WEAVER_RETURN_IF_ERROR(make_lsm(scratch, text_path, ImportMemory(options.memory),
-                                                 options.packed, lsm));
+    if (*lsm == nullptr)
+      WEAVER_RETURN_IF_ERROR(
+          make_lsm(scratch, text_path, ImportMemory(options.memory), options.packed, lsm));
     return (*lsm)->put(key, reinterpret_cast<const std::byte*>(&line), nullptr);
   });
 }
@@ -187,7 +189,8 @@ Status build_table(Database& db, const std::string& text_path, const ImportOptio
 
 Status check_input_file(const std::string& path) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) return Status::InvalidArgument(path + ": is a directory");
+  if (std::filesystem::is_directory(path, ec))
+    return Status::InvalidArgument(path + ": is a directory");
   if (!std::filesystem::exists(path, ec)) return Status::NotFound(path + ": no such file");
   return Status::Ok();
 }

@@ -22,7 +22,8 @@ std::string parse_line(std::string_view line, Octant* o) {
   while (true) {
     while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
     if (i == line.size()) break;
-    if (fields == 4) return "expected 4 integers 'x y z level', found more: '" + shorten(line) + "'";
+    if (fields == 4)
+      return "expected 4 integers 'x y z level', found more: '" + shorten(line) + "'";
     const char* begin = line.data() + i;
     const auto [ptr, ec] = std::from_chars(begin, line.data() + line.size(), v[fields]);
     const bool ends_field = ptr == line.data() + line.size() || *ptr == ' ' || *ptr == '\t';

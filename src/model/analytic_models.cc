@@ -78,9 +78,8 @@ class Basin final : public VelocityModel {
                   "basin: %d bowls of sediment (Vs %.0f + %.2f/s x depth) in rock (Vs %.0f + "
                   "%.3f/s x depth, at most %.0f) with soft inclusions (Vs %.0f, radius %.0f m, "
                   "1 per %.0f 600 m cells, above %.0f m)",
-                  kBowlCount, kSedimentVs0, kSedimentGradient, kRockVs0, kRockGradient,
-                  kRockVsMax, kInclusionVs, kInclusionRadius, 1 / kInclusionShare,
-                  kInclusionDepth);
+                  kBowlCount, kSedimentVs0, kSedimentGradient, kRockVs0, kRockGradient, kRockVsMax,
+                  kInclusionVs, kInclusionRadius, 1 / kInclusionShare, kInclusionDepth);
     return buf;
   }
 
@@ -89,16 +88,16 @@ class Basin final : public VelocityModel {
     double cx, cy, radius, depth;  // metres
   };
   static constexpr int kBowlCount = 3;
-  static constexpr Bowl kBowls[kBowlCount] = {{42000, 55000, 26000, 6000},
-                                              {72000, 33000, 15000, 3500},
-                                              {22000, 24000, 11000, 2000}};
+  static constexpr Bowl kBowls[kBowlCount] = {
+      {42000, 55000, 26000, 6000}, {72000, 33000, 15000, 3500}, {22000, 24000, 11000, 2000}};
   static constexpr double kSedimentVs0 = 575, kSedimentGradient = 0.75;
   static constexpr double kRockVs0 = 2600, kRockGradient = 0.2, kRockVsMax = 3900;
   static constexpr double kInclusionVs = 100, kInclusionRadius = 40;
   static constexpr double kInclusionCell = 600, kInclusionShare = 0.25, kInclusionDepth = 5000;
 
   static double vs_at(double x, double y, double z, bool sediment) {
-    const double vs = sediment ? kSedimentVs0 + kSedimentGradient * z : kRockVs0 + kRockGradient * z;
+    const double vs =
+        sediment ? kSedimentVs0 + kSedimentGradient * z : kRockVs0 + kRockGradient * z;
     if (!sediment && in_inclusion(x, y, z)) return kInclusionVs;
     return std::min(vs, kRockVsMax);
   }

@@ -50,9 +50,7 @@ class GridModel final : public VelocityModel {
     *i = std::min(static_cast<int>(t), n - 2);
     *f = t - *i;
   }
-  size_t index(int i, int j, int k) const {
-    return (size_t(k) * s_.ny + j) * s_.nx + i;
-  }
+  size_t index(int i, int j, int k) const { return (size_t(k) * s_.ny + j) * s_.nx + i; }
 
   GridSpec s_;
   std::vector<Material> v_;
@@ -79,7 +77,8 @@ Status load_grid_model(const std::string& path, std::unique_ptr<VelocityModel>* 
   std::getline(in, l3);
   std::istringstream dims(l1), origin(l2), step(l3);
   std::string extra;
-  if (!(dims >> s.nx >> s.ny >> s.nz) || (dims >> extra)) return bad(path, "line 2 must be 'NX NY NZ'");
+  if (!(dims >> s.nx >> s.ny >> s.nz) || (dims >> extra))
+    return bad(path, "line 2 must be 'NX NY NZ'");
   if (!(origin >> s.x0 >> s.y0 >> s.z0)) return bad(path, "line 3 must be 'X0 Y0 Z0'");
   if (!(step >> s.dx >> s.dy >> s.dz)) return bad(path, "line 4 must be 'DX DY DZ'");
   if (s.nx < 2 || s.ny < 2 || s.nz < 2 || s.nx > 100000 || s.ny > 100000 || s.nz > 100000) {
@@ -91,8 +90,10 @@ Status load_grid_model(const std::string& path, std::unique_ptr<VelocityModel>* 
   in.seekg(0, std::ios::end);
   const size_t bytes = static_cast<size_t>(in.tellg() - data_start);
   if (bytes != count * 12) {
-    return bad(path, "expected " + std::to_string(count * 12) + " bytes of float32 data after "
-                     "the header, found " + std::to_string(bytes));
+    return bad(path, "expected " + std::to_string(count * 12) +
+                         " bytes of float32 data after "
+                         "the header, found " +
+                         std::to_string(bytes));
   }
   in.seekg(data_start);
   std::vector<Material> values(count);

@@ -26,7 +26,8 @@ class VelocityModel {
     double vs = 1e300;
     for (int k = 0; k < 3; ++k)
       for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 3; ++i) vs = std::min<double>(vs, at(x + i * h, y + j * h, z + k * h).vs);
+        for (int i = 0; i < 3; ++i)
+          vs = std::min<double>(vs, at(x + i * h, y + j * h, z + k * h).vs);
     return vs;
   }
   // A one-line description with the parameters, for logs and metadata.

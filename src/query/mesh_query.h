@@ -28,7 +28,7 @@ struct QueryMemory {
 struct ElementInfo {
   uint64_t id = 0;
   Octant octant;
-  bool has_nodes = false;          // false when no node table exists yet
+  bool has_nodes = false;           // false when no node table exists yet
   std::array<uint64_t, 8> nodes{};  // node ids of corners 0..7
 };
 

@@ -7,8 +7,8 @@ namespace {
 
 bool intersects(const Octant& o, const TickBox& b) {
   const uint32_t s = octant_edge(o);
-  return o.x <= b.hi.x && o.x + s > b.lo.x && o.y <= b.hi.y && o.y + s > b.lo.y &&
-         o.z <= b.hi.z && o.z + s > b.lo.z;
+  return o.x <= b.hi.x && o.x + s > b.lo.x && o.y <= b.hi.y && o.y + s > b.lo.y && o.z <= b.hi.z &&
+         o.z + s > b.lo.z;
 }
 
 bool inside(const Octant& o, const TickBox& b) {

@@ -32,7 +32,8 @@ Status table_stats(const std::string& name, BTree& table, TableStats* out) {
     }
   }
   const bool counted =  // by the table's writer, into its metadata
-      s.key_kind == KeyKind::kOctant && levels_from_metadata(table.options().metadata, &s.per_level);
+      s.key_kind == KeyKind::kOctant &&
+      levels_from_metadata(table.options().metadata, &s.per_level);
   if (s.key_kind == KeyKind::kOctant && !counted) {
     BTreeCursor c;
     WEAVER_RETURN_IF_ERROR(table.seek_cursor(0, &c));
@@ -65,7 +66,8 @@ std::string stats_to_text(const TableStats& s) {
     out += "  leaves per level\n";
     for (int l = 0; l <= 20; ++l) {
       if (s.per_level[l] == 0) continue;
-      std::snprintf(buf, sizeof buf, "    level %2d  %llu\n", l, (unsigned long long)s.per_level[l]);
+      std::snprintf(buf, sizeof buf, "    level %2d  %llu\n", l,
+                    (unsigned long long)s.per_level[l]);
       out += buf;
     }
   }

@@ -20,7 +20,7 @@ struct TableStats {
   uint32_t page_size = 0;
   uint32_t payload_bytes = 0;
   uint32_t depth = 0;
-  bool packed = false;  // packed leaf pages (storage/packed_leaf.h)
+  bool packed = false;                   // packed leaf pages (storage/packed_leaf.h)
   std::array<uint64_t, 21> per_level{};  // octant tables only
   std::array<uint64_t, 3> per_kind{};    // node tables: anchored, edge, face
 

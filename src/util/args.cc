@@ -63,8 +63,8 @@ namespace {
 Status parse_scaled(const std::string& text, const std::string& what, double base, bool bytes,
                     const char* like, uint64_t* out) {
   size_t digits = 0;
-  while (digits < text.size() && (std::isdigit(static_cast<unsigned char>(text[digits])) ||
-                                  text[digits] == '.')) {
+  while (digits < text.size() &&
+         (std::isdigit(static_cast<unsigned char>(text[digits])) || text[digits] == '.')) {
     ++digits;
   }
   std::string unit = text.substr(digits);
@@ -73,7 +73,9 @@ Status parse_scaled(const std::string& text, const std::string& what, double bas
   if (bytes && unit.size() > 1 && unit.back() == 'I') unit.pop_back();
   const std::string letters = bytes ? "BKMGT" : " KMGT";
   const size_t power = unit.size() == 1 ? letters.find(unit[0]) : std::string::npos;
-  const double scale = unit.empty() ? 1 : power == std::string::npos ? 0 : std::pow(base, double(power));
+  const double scale = unit.empty()                 ? 1
+                       : power == std::string::npos ? 0
+                                                    : std::pow(base, double(power));
   double value = 0;
   if (digits == 0 || scale == 0 || !parse_double(text.substr(0, digits), what, &value).ok()) {
     return Status::InvalidArgument(what + " must be " + like + ", got '" + text + "'");

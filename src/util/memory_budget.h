@@ -54,7 +54,9 @@ class MemoryPlan {
     return record(name, std::min(budget_.bytes() / den * num, cap));
   }
   // Takes what the earlier shares left.
-  uint64_t take_rest(const char* name) { return record(name, budget_.bytes() - std::min(taken_, budget_.bytes())); }
+  uint64_t take_rest(const char* name) {
+    return record(name, budget_.bytes() - std::min(taken_, budget_.bytes()));
+  }
   // Hands num/den of the budget to a stage run from within this one (with
   // a plan of its own); recorded as one share.
   MemoryBudget take_budget(const char* name, uint64_t num, uint64_t den) {

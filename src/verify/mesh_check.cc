@@ -4,7 +4,6 @@
 #include <array>
 #include <string>
 
-#include "schema/octant.h"
 #include "schema/node.h"
 #include "schema/octant.h"
 
@@ -23,7 +22,8 @@ class LeafFinder {
 
   Status find(Coord pixel, Octant* leaf, bool* found) {
     for (size_t i = 0; i < filled_; ++i) {
-      if (octant_contains_point(recent_[i], pixel)) return *leaf = recent_[i], *found = true, Status::Ok();
+      if (octant_contains_point(recent_[i], pixel))
+        return *leaf = recent_[i], *found = true, Status::Ok();
     }
     uint64_t key = 0;
     WEAVER_RETURN_IF_ERROR(octants_.floor(pixel_key(pixel), &key, nullptr, found));
@@ -84,9 +84,15 @@ class NodeChecker {
       WEAVER_RETURN_IF_ERROR(finder_.find(cell, &leaf, &found));
       if (!found) continue;
       switch (place_on(p, leaf)) {
-        case Place::kCorner: ++corners; break;
-        case Place::kEdgeMidpoint: edge = true; break;
-        case Place::kFaceCentre: face = true; break;
+        case Place::kCorner:
+          ++corners;
+          break;
+        case Place::kEdgeMidpoint:
+          edge = true;
+          break;
+        case Place::kFaceCentre:
+          face = true;
+          break;
         case Place::kElsewhere:
           return problem(name + " lies on element " + describe_octant(leaf) +
                          " away from its corners and midpoints (unbalanced mesh?)");
@@ -112,7 +118,8 @@ class NodeChecker {
       std::byte k{};
       bool found = false;
       WEAVER_RETURN_IF_ERROR(nodes_.get(node_key(anchors[i]), &k, &found));
-      if (!found) return problem(name + ": its anchor " + describe_point(anchors[i]) + " is not a node");
+      if (!found)
+        return problem(name + ": its anchor " + describe_point(anchors[i]) + " is not a node");
       if (static_cast<NodeKind>(k) != NodeKind::kAnchored) {
         return problem(name + ": its anchor " + describe_point(anchors[i]) + " is not anchored");
       }

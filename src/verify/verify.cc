@@ -5,10 +5,10 @@
 
 #include "balance/balance.h"
 #include "db/database.h"
+#include "db/leaf_reader.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "storage/btree.h"
-#include "db/leaf_reader.h"
 #include "verify/mesh_check.h"
 
 namespace weaver {
@@ -86,8 +86,7 @@ Status check_table(const Database& db, const std::string& name, const VerifyOpti
   return Status::Ok();
 }
 
-Status check_mesh(const Database& db, const VerifyOptions& o, Problems& problems,
-                  VerifyReport* r) {
+Status check_mesh(const Database& db, const VerifyOptions& o, Problems& problems, VerifyReport* r) {
   std::unique_ptr<BTree> octants, nodes;
   const VerifyMemory memory(o.memory);
   WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &octants));

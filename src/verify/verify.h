@@ -25,8 +25,8 @@ namespace weaver {
 
 struct VerifyOptions {
   MemoryBudget memory;
-  bool mesh = true;      // also check the mesh invariants
-  size_t max_problems = 20;  // stop collecting after this many
+  bool mesh = true;                                       // also check the mesh invariants
+  size_t max_problems = 20;                               // stop collecting after this many
   std::function<void(const std::string& line)> progress;  // one line per finished check
 };
 
@@ -35,10 +35,10 @@ struct VerifyMemory {
   explicit VerifyMemory(MemoryBudget budget);
 
   MemoryPlan plan;
-  uint64_t table_pool = 0;      // the storage check, one table at a time
-  uint64_t octant_pool = 0;     // the mesh check: leaves found by aggregate hits
-  uint64_t node_pool = 0;       // the mesh check: nodes read in order and found by key
-  MemoryBudget balance_check;   // the balance check's own budget (balance.h)
+  uint64_t table_pool = 0;     // the storage check, one table at a time
+  uint64_t octant_pool = 0;    // the mesh check: leaves found by aggregate hits
+  uint64_t node_pool = 0;      // the mesh check: nodes read in order and found by key
+  MemoryBudget balance_check;  // the balance check's own budget (balance.h)
 };
 
 struct VerifyReport {

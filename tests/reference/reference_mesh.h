@@ -65,7 +65,7 @@ struct MeshNode {
 };
 
 struct Mesh {
-  std::vector<Octant> elements;                 // id order
+  std::vector<Octant> elements;                  // id order
   std::vector<std::array<uint64_t, 8>> corners;  // node ids of corners 0..7
   std::vector<MeshNode> nodes;                   // id order
 };
