@@ -95,9 +95,9 @@ constexpr int octant_child_id(const Octant& o) {
 }
 
 // Whether tick point p lies in the half-open box [corner, corner + edge).
-// Accepts: octant, node.
+// Accepts: octant, and any point (a point past the root is simply outside).
 constexpr bool octant_contains_point(const Octant& o, Coord p) {
-  assert(octant_is_valid(o) && node_is_valid(p));
+  assert(octant_is_valid(o));
   const uint32_t s = octant_edge(o);
   // Unsigned subtraction wraps for p < corner, so one compare per axis suffices.
   return p.x - o.x < s && p.y - o.y < s && p.z - o.z < s;
@@ -247,17 +247,25 @@ constexpr uint64_t pixel_key(Coord p) {
   return octant_key({p.x, p.y, p.z, kMaxLevel});
 }
 
+// octant_key_subtree_end's arithmetic for any 64-bit value, a valid key or
+// not: packed leaf pages (storage/packed_leaf.h) predict each octant key from
+// the one before with it, whatever the keys hold.  Do not change: on disk.
+constexpr uint64_t octant_key_subtree_end_of_any(uint64_t key) {
+  const uint64_t slot = key & 127;
+  if (slot >= kKeyLevel20Slot) return key + 1;  // level 20: the next slot
+  const int level = static_cast<int>(slot);
+  const uint64_t span = uint64_t{1} << (3 * (kMaxLevel - level));
+  const uint64_t m_end = ((key >> 7) << 3) + span;  // a multiple of 8 below level 20
+  if (m_end >> (3 * kMaxLevel)) return UINT64_MAX;  // the subtree reaches the root's end
+  return (m_end >> 3) << 7;
+}
+
 // The smallest key greater than every key in the subtree of the octant with
 // this key; UINT64_MAX (never a valid key) for the root.
 // REQUIRES: octant_key_is_valid(key).
 constexpr uint64_t octant_key_subtree_end(uint64_t key) {
   assert(octant_key_is_valid(key));
-  const int level = octant_key_level(key);
-  if (level == kMaxLevel) return key + 1;  // the next slot
-  const uint64_t span = uint64_t{1} << (3 * (kMaxLevel - level));
-  const uint64_t m_end = octant_key_morton(key) + span;  // a multiple of 8 below level 20
-  if (m_end >> (3 * kMaxLevel)) return UINT64_MAX;       // the subtree reaches the root's end
-  return (m_end >> 3) << 7;
+  return octant_key_subtree_end_of_any(key);
 }
 // The same for an octant.  Accepts: octant.
 constexpr uint64_t octant_key_subtree_end(const Octant& o) {

@@ -23,7 +23,7 @@ uint64_t block_bytes(uint32_t count, uint32_t width) {
 
 // The predicted next key of mode 1.  Defined for every u64 (damaged pages
 // decode to garbage, never to undefined behaviour).
-uint64_t successor(uint64_t key) { return octant_key_subtree_end(key); }
+uint64_t successor(uint64_t key) { return octant_key_subtree_end_of_any(key); }
 
 // A field's raw little-endian bytes as an integer.  Fixed-size loads: a
 // memcpy of a run-time size is a library call, and this is on every append.
