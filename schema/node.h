@@ -22,12 +22,9 @@ enum class NodeKind : uint8_t { kAnchored = 0, kEdge = 1, kFace = 2 };  // on di
 // "anchored", "edge" or "face": the names the CSV export and messages use.
 constexpr const char* node_kind_name(NodeKind k) {
   switch (k) {
-    case NodeKind::kAnchored:
-      return "anchored";
-    case NodeKind::kEdge:
-      return "edge";
-    case NodeKind::kFace:
-      return "face";
+    case NodeKind::kAnchored: return "anchored";
+    case NodeKind::kEdge: return "edge";
+    case NodeKind::kFace: return "face";
   }
   return "?";
 }

@@ -121,26 +121,16 @@ const Field* RecordSchema::find(std::string_view name) const {
 int64_t RecordSchema::get_int(const std::byte* record, const Field& f) {
   const std::byte* p = record + f.offset;
   switch (f.type) {
-    case FieldType::kI8:
-      return load<int8_t>(p);
-    case FieldType::kU8:
-      return load<uint8_t>(p);
-    case FieldType::kI16:
-      return load<int16_t>(p);
-    case FieldType::kU16:
-      return load<uint16_t>(p);
-    case FieldType::kI32:
-      return load<int32_t>(p);
-    case FieldType::kU32:
-      return load<uint32_t>(p);
-    case FieldType::kI64:
-      return load<int64_t>(p);
-    case FieldType::kU64:
-      return static_cast<int64_t>(load<uint64_t>(p));
-    case FieldType::kF32:
-      return static_cast<int64_t>(load<float>(p));
-    case FieldType::kF64:
-      return static_cast<int64_t>(load<double>(p));
+    case FieldType::kI8: return load<int8_t>(p);
+    case FieldType::kU8: return load<uint8_t>(p);
+    case FieldType::kI16: return load<int16_t>(p);
+    case FieldType::kU16: return load<uint16_t>(p);
+    case FieldType::kI32: return load<int32_t>(p);
+    case FieldType::kU32: return load<uint32_t>(p);
+    case FieldType::kI64: return load<int64_t>(p);
+    case FieldType::kU64: return static_cast<int64_t>(load<uint64_t>(p));
+    case FieldType::kF32: return static_cast<int64_t>(load<float>(p));
+    case FieldType::kF64: return static_cast<int64_t>(load<double>(p));
   }
   return 0;
 }
@@ -161,36 +151,16 @@ double RecordSchema::get_double(const std::byte* record, const Field& f) {
 void RecordSchema::set_int(std::byte* record, const Field& f, int64_t v) {
   std::byte* p = record + f.offset;
   switch (f.type) {
-    case FieldType::kI8:
-      store(p, static_cast<int8_t>(v));
-      break;
-    case FieldType::kU8:
-      store(p, static_cast<uint8_t>(v));
-      break;
-    case FieldType::kI16:
-      store(p, static_cast<int16_t>(v));
-      break;
-    case FieldType::kU16:
-      store(p, static_cast<uint16_t>(v));
-      break;
-    case FieldType::kI32:
-      store(p, static_cast<int32_t>(v));
-      break;
-    case FieldType::kU32:
-      store(p, static_cast<uint32_t>(v));
-      break;
-    case FieldType::kI64:
-      store(p, v);
-      break;
-    case FieldType::kU64:
-      store(p, static_cast<uint64_t>(v));
-      break;
-    case FieldType::kF32:
-      store(p, static_cast<float>(v));
-      break;
-    case FieldType::kF64:
-      store(p, static_cast<double>(v));
-      break;
+    case FieldType::kI8: store(p, static_cast<int8_t>(v)); break;
+    case FieldType::kU8: store(p, static_cast<uint8_t>(v)); break;
+    case FieldType::kI16: store(p, static_cast<int16_t>(v)); break;
+    case FieldType::kU16: store(p, static_cast<uint16_t>(v)); break;
+    case FieldType::kI32: store(p, static_cast<int32_t>(v)); break;
+    case FieldType::kU32: store(p, static_cast<uint32_t>(v)); break;
+    case FieldType::kI64: store(p, v); break;
+    case FieldType::kU64: store(p, static_cast<uint64_t>(v)); break;
+    case FieldType::kF32: store(p, static_cast<float>(v)); break;
+    case FieldType::kF64: store(p, static_cast<double>(v)); break;
   }
 }
 

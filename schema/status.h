@@ -43,20 +43,13 @@ class Status {
 
 inline std::string Status::to_string() const {
   switch (code_) {
-    case Code::kOk:
-      return "ok";
-    case Code::kNotFound:
-      return "not found: " + msg_;
-    case Code::kCorruption:
-      return "corruption: " + msg_;
-    case Code::kIOError:
-      return "I/O error: " + msg_;
-    case Code::kInvalidArgument:
-      return "invalid argument: " + msg_;
-    case Code::kBusy:
-      return "busy: " + msg_;
-    case Code::kInternal:
-      return "internal error: " + msg_;
+    case Code::kOk: return "ok";
+    case Code::kNotFound: return "not found: " + msg_;
+    case Code::kCorruption: return "corruption: " + msg_;
+    case Code::kIOError: return "I/O error: " + msg_;
+    case Code::kInvalidArgument: return "invalid argument: " + msg_;
+    case Code::kBusy: return "busy: " + msg_;
+    case Code::kInternal: return "internal error: " + msg_;
   }
   return msg_;
 }

@@ -83,15 +83,9 @@ class PosixFile final : public File {
 Status open_posix_file(const std::string& path, OpenMode mode, std::unique_ptr<File>* out) {
   int flags = O_CLOEXEC;
   switch (mode) {
-    case OpenMode::kReadOnly:
-      flags |= O_RDONLY;
-      break;
-    case OpenMode::kReadWrite:
-      flags |= O_RDWR;
-      break;
-    case OpenMode::kCreateTruncate:
-      flags |= O_RDWR | O_CREAT | O_TRUNC;
-      break;
+    case OpenMode::kReadOnly: flags |= O_RDONLY; break;
+    case OpenMode::kReadWrite: flags |= O_RDWR; break;
+    case OpenMode::kCreateTruncate: flags |= O_RDWR | O_CREAT | O_TRUNC; break;
   }
   const int fd = ::open(path.c_str(), flags, 0644);
   if (fd < 0) return Status::IOError(errno_text("cannot open", path));

@@ -29,14 +29,10 @@ uint64_t successor(uint64_t key) { return octant_key_subtree_end_of_any(key); }
 // memcpy of a run-time size is a library call, and this is on every append.
 inline uint64_t load_field(const std::byte* p, uint32_t size) {
   switch (size) {
-    case 1:
-      return static_cast<uint64_t>(p[0]);
-    case 2:
-      return load16(p);
-    case 4:
-      return load32(p);
-    default:
-      return load64(p);
+    case 1: return static_cast<uint64_t>(p[0]);
+    case 2: return load16(p);
+    case 4: return load32(p);
+    default: return load64(p);
   }
 }
 
@@ -335,18 +331,10 @@ bool PackedLeaf::decode(uint64_t* keys, std::byte* vals) const {
     const uint32_t size = shape_->field_sizes[f];
     std::byte* out = vals + field_off;
     switch (size) {
-      case 1:
-        decode_column<uint8_t>(cols_[f], w, min, n_, out, stride);
-        break;
-      case 2:
-        decode_column<uint16_t>(cols_[f], w, min, n_, out, stride);
-        break;
-      case 4:
-        decode_column<uint32_t>(cols_[f], w, min, n_, out, stride);
-        break;
-      default:
-        decode_column<uint64_t>(cols_[f], w, min, n_, out, stride);
-        break;
+      case 1: decode_column<uint8_t>(cols_[f], w, min, n_, out, stride); break;
+      case 2: decode_column<uint16_t>(cols_[f], w, min, n_, out, stride); break;
+      case 4: decode_column<uint32_t>(cols_[f], w, min, n_, out, stride); break;
+      default: decode_column<uint64_t>(cols_[f], w, min, n_, out, stride); break;
     }
     field_off += size;
   }

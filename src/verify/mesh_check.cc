@@ -84,15 +84,9 @@ class NodeChecker {
       WEAVER_RETURN_IF_ERROR(finder_.find(cell, &leaf, &found));
       if (!found) continue;
       switch (place_on(p, leaf)) {
-        case Place::kCorner:
-          ++corners;
-          break;
-        case Place::kEdgeMidpoint:
-          edge = true;
-          break;
-        case Place::kFaceCentre:
-          face = true;
-          break;
+        case Place::kCorner: ++corners; break;
+        case Place::kEdgeMidpoint: edge = true; break;
+        case Place::kFaceCentre: face = true; break;
         case Place::kElsewhere:
           return problem(name + " lies on element " + describe_octant(leaf) +
                          " away from its corners and midpoints (unbalanced mesh?)");
