@@ -1,7 +1,9 @@
 // The mesh pipeline on the basin model: construct and balance throughput and
 // peak RSS (each stage in its own process), extraction through the weaver
-// binary, and the paper's Figure 11 table (elements, nodes, danglings) for
-// our synthetic basin at each frequency.  Medians of --repeat runs.
+// binary with 1 and 2 threads (rate, speedup, peak RSS), and the paper's
+// Figure 11 table (elements, nodes, danglings) for our synthetic basin at
+// each frequency.  Medians of --repeat runs.  --weaver BINARY runs another
+// build's extract on the same octrees (construct and balance are this one's).
 #include <unistd.h>
 
 #include <filesystem>
@@ -19,6 +21,7 @@ int main(int argc, char** argv) {
   int repeat = 3;
   std::string dir = "/tmp/weaver-mesh-bench";
   const uint64_t memory = 256ull << 20;
+  std::string weaver = WEAVER_BINARY;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--large")
@@ -27,8 +30,11 @@ int main(int argc, char** argv) {
       repeat = std::stoi(argv[++i]);
     else if (a == "--dir" && i + 1 < argc)
       dir = argv[++i];
+    else if (a == "--weaver" && i + 1 < argc)
+      weaver = argv[++i];
     else {
-      std::printf("usage: mesh_bench [--large (adds 1 Hz)] [--repeat N] [--dir DIR]\n");
+      std::printf(
+          "usage: mesh_bench [--large (adds 1 Hz)] [--repeat N] [--dir DIR] [--weaver BINARY]\n");
       return 2;
     }
   }
@@ -36,7 +42,7 @@ int main(int argc, char** argv) {
   std::vector<std::map<std::string, std::string>> table;
   for (double f : freqs) {
     const std::string db = dir + "/basin-" + fmt(f) + ".db";
-    std::vector<double> c_rate, c_rss, b_rate, b_rss;
+    std::vector<double> c_rate, c_rss, b_rate, b_rss, e1_rate, e2_rate, e2_rss, speedup;
     std::map<std::string, std::string> row, last_c, last_b, last_e;
     for (int r = 0; r < repeat; ++r) {
       std::filesystem::remove_all(db);
@@ -70,14 +76,21 @@ int main(int argc, char** argv) {
         return true;
       });
       ::sync();
-      uint64_t rss = 0;
-      const std::string e =
-          run_program({WEAVER_BINARY, "extract", db, "--json", "--threads", "2"}, &rss);
-      if (c.empty() || b.empty() || e.empty()) return 1;
-      std::printf("%s\n%s\n", c.c_str(), b.c_str());
+      uint64_t rss1 = 0, rss2 = 0;
+      const std::string e1 =
+          run_program({weaver, "extract", db, "--json", "--threads", "1"}, &rss1);
+      const std::string e = run_program({weaver, "extract", db, "--json", "--threads", "2"}, &rss2);
+      if (c.empty() || b.empty() || e1.empty() || e.empty()) return 1;
+      std::printf("%s\n%s\n%s\n%s\n", c.c_str(), b.c_str(), e1.c_str(), e.c_str());
       last_c = parse_flat_json(c);
       last_b = parse_flat_json(b);
       last_e = parse_flat_json(e);
+      const double r1 = std::stod(parse_flat_json(e1)["nodes_per_s"]);
+      const double r2 = std::stod(last_e["nodes_per_s"]);
+      e1_rate.push_back(r1);
+      e2_rate.push_back(r2);
+      e2_rss.push_back(double(rss2));
+      speedup.push_back(r2 / r1);
       c_rate.push_back(std::stod(last_c["elements_per_s"]));
       c_rss.push_back(std::stod(last_c["peak_rss_bytes"]));
       b_rate.push_back(std::stod(last_b["elements_per_s"]));
@@ -96,6 +109,10 @@ int main(int argc, char** argv) {
     row["construct_rss"] = fmt(median(c_rss));
     row["balance_per_s"] = fmt(median(b_rate));
     row["balance_rss"] = fmt(median(b_rss));
+    row["extract_t1_per_s"] = fmt(median(e1_rate));
+    row["extract_t2_per_s"] = fmt(median(e2_rate));
+    row["t2_speedup"] = fmt(median(speedup));
+    row["extract_t2_rss"] = fmt(median(e2_rss));
     table.push_back(row);
     std::filesystem::remove_all(db);
   }
@@ -104,7 +121,8 @@ int main(int argc, char** argv) {
       "%d runs:\n",
       repeat);
   print_table(table, {"freq_hz", "elements", "nodes", "danglings", "construct_per_s",
-                      "construct_rss", "balance_per_s", "balance_rss"});
+                      "construct_rss", "balance_per_s", "balance_rss", "extract_t1_per_s",
+                      "extract_t2_per_s", "t2_speedup", "extract_t2_rss"});
   std::printf(
       "paper (SCEC LA basin): 0.2 Hz 433k / 556k / 125k; 0.5 Hz 9.92m / 11.3m / 1.43m; "
       "1 Hz 113m / 134m / 20m; 2 Hz 1.22b / 1.37b / 147m\n");
