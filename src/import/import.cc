@@ -116,15 +116,15 @@ Status make_lsm(const std::string& dir, const std::string& path, const ImportMem
 // order on, the rest goes to the LSM, and at the end the table so far and
 // the LSM are merged into a second table.
 Status read_input(const std::string& text_path, const ImportOptions& options,
-                  const std::string& scratch, TableBuilder& direct, std::unique_ptr<LsmTree>* lsm) {
+                  const ImportMemory& memory, const std::string& scratch, TableBuilder& direct,
+                  std::unique_ptr<LsmTree>* lsm) {
   uint64_t count = 0;
   return read_octant_text(text_path, [&](const Octant& o, uint64_t line) -> Status {
     if (options.progress && ++count % kProgressEvery == 0) options.progress("read", count);
     const uint64_t key = octant_key(o);
     if (*lsm == nullptr && direct.in_order(key)) return direct.add({key, line});
     if (*lsm == nullptr)
-      WEAVER_RETURN_IF_ERROR(
-          make_lsm(scratch, text_path, ImportMemory(options.memory), options.packed, lsm));
+      WEAVER_RETURN_IF_ERROR(make_lsm(scratch, text_path, memory, options.packed, lsm));
     return (*lsm)->put(key, reinterpret_cast<const std::byte*>(&line), nullptr);
   });
 }
@@ -166,12 +166,13 @@ Status build_table(Database& db, const std::string& text_path, const ImportOptio
   TableOptions topt;
   topt.key_kind = KeyKind::kOctant;
   topt.packed = options.packed;
-  const uint64_t pool = ImportMemory(options.memory).table_pool;
+  const ImportMemory memory(options.memory);
+  const uint64_t pool = memory.table_pool;
   std::unique_ptr<BTree> table;
   WEAVER_RETURN_IF_ERROR(db.create_table(kOctantTable, topt, pool, &table, file_name));
   TableBuilder direct(text_path, *table);
   std::unique_ptr<LsmTree> lsm;
-  WEAVER_RETURN_IF_ERROR(read_input(text_path, options, scratch, direct, &lsm));
+  WEAVER_RETURN_IF_ERROR(read_input(text_path, options, memory, scratch, direct, &lsm));
   if (lsm == nullptr) return finish_table(*table, direct, text_path, options, result);
   result->runs_spilled = lsm->runs_written();
   std::unique_ptr<BTree> merged;

@@ -61,11 +61,11 @@ Status scan_nodes(BTree& t, const std::string& name, Problems& problems) {
 
 // Pages and keys of one table.  *usable is false when the table is too
 // damaged for the mesh checks.
-Status check_table(const Database& db, const std::string& name, const VerifyOptions& o,
+Status check_table(const Database& db, const std::string& name, uint64_t pool_bytes,
                    Problems& problems, VerifyReport* r, bool* usable) {
   *usable = false;
   std::unique_ptr<BTree> t;
-  Status st = db.open_table(name, VerifyMemory(o.memory).table_pool, &t);
+  Status st = db.open_table(name, pool_bytes, &t);
   if (st.ok()) st = t->check_invariants();
   if (!st.ok()) {
     problems.add("table " + name + ": " + st.message());
@@ -86,9 +86,9 @@ Status check_table(const Database& db, const std::string& name, const VerifyOpti
   return Status::Ok();
 }
 
-Status check_mesh(const Database& db, const VerifyOptions& o, Problems& problems, VerifyReport* r) {
+Status check_mesh(const Database& db, const VerifyMemory& memory, Problems& problems,
+                  VerifyReport* r) {
   std::unique_ptr<BTree> octants, nodes;
-  const VerifyMemory memory(o.memory);
   WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &octants));
   WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, memory.node_pool, &nodes));
   BalanceOptions bo;
@@ -132,13 +132,14 @@ Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyRep
     if (st.code() == Status::Code::kCorruption) return problems.add(st.message()), Status::Ok();
     return st;
   }
+  const VerifyMemory memory(o.memory);
   bool mesh_usable = o.mesh && db->has_table(kOctantTable) && db->has_table(kNodeTable);
   for (const std::string& name : db->table_names()) {
     bool usable = false;
-    WEAVER_RETURN_IF_ERROR(check_table(*db, name, o, problems, r, &usable));
+    WEAVER_RETURN_IF_ERROR(check_table(*db, name, memory.table_pool, problems, r, &usable));
     if (!usable && (name == kOctantTable || name == kNodeTable)) mesh_usable = false;
   }
-  if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, o, problems, r));
+  if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, memory, problems, r));
   return Status::Ok();
 }
 
