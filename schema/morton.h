@@ -50,6 +50,16 @@ constexpr uint64_t morton_encode(uint32_t x, uint32_t y, uint32_t z) {
 }
 constexpr uint64_t morton_encode(Coord c) { return morton_encode(c.x, c.y, c.z); }
 
+// The Morton code of the point `code` decodes to, moved by 2^bit along axis
+// (0 x, 1 y, 2 z), without decoding: the axis's bits are added as one
+// dilated integer (the other axes' bits set to 1 carry the sum across them).
+// REQUIRES: the moved coordinate stays below 2^21.
+constexpr uint64_t morton_step(uint64_t code, int axis, int bit) {
+  const uint64_t axis_bits = 0x1249249249249249ULL << axis;
+  const uint64_t moved = ((code | ~axis_bits) + (uint64_t{1} << (3 * bit + axis))) & axis_bits;
+  return moved | (code & ~axis_bits);
+}
+
 // REQUIRES: code < 2^63.
 constexpr Coord morton_decode(uint64_t code) {
   return Coord{morton_detail::compact3(code), morton_detail::compact3(code >> 1),

@@ -163,12 +163,20 @@ TEST_F(ExtractTest, RandomBalancedOctreesAcrossDomainsAndBudgets) {
     const int max_level = block_level + 1 + static_cast<int>(rng() % 8);
     const auto leaves = random_balanced(rng(), bx, by, bz, block_level, target, max_level);
     ExtractOptions o;
-    o.bucket_level = static_cast<int>(rng() % (max_level + 2));  // from one bucket to tiny ones
-    o.memory = MemoryBudget(1 << 16);                            // forces spill files
+    // Even cases: the paper's buckets, from one bucket to tiny ones; odd
+    // cases: buckets of 1 to ~all leaves.
+    if (t % 2 == 0) {
+      o.buckets = ExtractOptions::Buckets::kLevel;
+      o.bucket_level = static_cast<int>(rng() % (max_level + 2));
+    } else {
+      o.bucket_leaves = 1 + rng() % (rng() % 2 ? 8 : leaves.size());
+    }
+    o.memory = MemoryBudget(1 << 16);  // forces spill files
     SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) +
                  " leaves, blocks " + std::to_string(bx) + "x" + std::to_string(by) + "x" +
                  std::to_string(bz) + " at level " + std::to_string(block_level) +
-                 ", bucket level " + std::to_string(o.bucket_level));
+                 ", bucket level " + std::to_string(o.bucket_level) + ", bucket leaves " +
+                 std::to_string(o.bucket_leaves));
     ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
   }
 }
@@ -177,19 +185,58 @@ TEST_F(ExtractTest, GradedAroundASphereWithManyBucketsAndSpillFiles) {
   const auto leaves = graded_sphere(2, testing::small_scale() ? 3 : 4, 0.3);
   for (int bucket_level : {-1, 3, 5}) {
     ExtractOptions o;
+    o.buckets = ExtractOptions::Buckets::kLevel;
     o.bucket_level = bucket_level;
     o.memory = MemoryBudget(1 << 14);  // a tiny cap: spills go through files
     ExtractResult r;
     ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
   }
+  for (uint64_t bucket_leaves : {7, 100, 5000}) {
+    ExtractOptions o;
+    o.bucket_leaves = bucket_leaves;
+    o.memory = MemoryBudget(1 << 14);
+    ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
+  }
+  for (auto buckets : {ExtractOptions::Buckets::kLevel, ExtractOptions::Buckets::kLeaves}) {
+    ExtractOptions o;
+    o.buckets = buckets;
+    o.bucket_level = 5;
+    o.bucket_leaves = 16;
+    o.memory = MemoryBudget(1 << 14);
+    ExtractResult r;
+    ASSERT_OK(extract(leaves, o, &r));
+    EXPECT_GT(r.buckets, 1000u);
+    EXPECT_GT(r.spilled_to_disk, 0u);
+    EXPECT_GT(r.edge + r.face, 0u);
+  }
+}
+
+// Buckets of about K leaves hold K to 1.25 K leaves (the last one fewer).
+// At the same budget they spill less than the paper's buckets on a graded
+// octree, whose buckets are sized for the finest leaves everywhere.
+TEST_F(ExtractTest, LeafCountBucketsAreEvenAndSpillLessOnGradedOctrees) {
+  const auto leaves = graded_sphere(2, testing::small_scale() ? 3 : 4, 0.3);
   ExtractOptions o;
-  o.bucket_level = 5;
-  o.memory = MemoryBudget(1 << 14);
+  o.bucket_leaves = 500;
   ExtractResult r;
   ASSERT_OK(extract(leaves, o, &r));
-  EXPECT_GT(r.buckets, 1000u);
-  EXPECT_GT(r.spilled_to_disk, 0u);
-  EXPECT_GT(r.edge + r.face, 0u);
+  EXPECT_EQ(r.bucket_leaves, 500u);
+  EXPECT_LE(r.buckets, (leaves.size() + 499) / 500);
+  EXPECT_GE(r.buckets, leaves.size() / 625);
+  o.bucket_leaves = 0;
+  o.memory = MemoryBudget(1 << 17);
+  ExtractResult counted, paper;
+  ASSERT_OK(extract(leaves, o, &counted));
+  o.buckets = ExtractOptions::Buckets::kLevel;
+  ASSERT_OK(extract(leaves, o, &paper));
+  EXPECT_GE(paper.bucket_level, 0);
+  EXPECT_EQ(paper.nodes, counted.nodes);
+  EXPECT_LT(counted.buckets, paper.buckets);
+  EXPECT_LT(counted.spilled, paper.spilled);
+  std::printf("%zu leaves: %llu buckets spilled %llu; paper's %llu at level %d spilled %llu\n",
+              leaves.size(), (unsigned long long)counted.buckets,
+              (unsigned long long)counted.spilled, (unsigned long long)paper.buckets,
+              paper.bucket_level, (unsigned long long)paper.spilled);
 }
 
 std::string file_bytes(const std::string& path) {
@@ -248,7 +295,12 @@ TEST_F(ExtractTest, ThreadCountsOneToFourGiveTheSameNodeTable) {
     for (int threads = 1; threads <= 4; ++threads) {
       ExtractOptions o;
       o.threads = threads;
-      o.bucket_level = 3 + static_cast<int>(rng() % 3);  // many buckets in flight
+      if (t % 2) {
+        o.buckets = ExtractOptions::Buckets::kLevel;
+        o.bucket_level = 3 + static_cast<int>(rng() % 3);  // many buckets in flight
+      } else {
+        o.bucket_leaves = 1 + rng() % 40;
+      }
       o.memory = MemoryBudget(1 << 16);
       if (threads == 1) {
         ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
@@ -272,6 +324,7 @@ TEST_F(ExtractTest, ThreadCountsOneToFourGiveTheSameNodeTable) {
   for (int j = 0; j < 8; ++j) bad.push_back(octant_child(octant_child(c0, 7), j));
   ExtractOptions o;
   o.threads = 3;
+  o.buckets = ExtractOptions::Buckets::kLevel;
   o.bucket_level = 2;
   ExtractResult r;
   EXPECT_TRUE(extract(bad, o, &r).is_invalid_argument());
@@ -309,6 +362,7 @@ TEST_F(ExtractTest, RefusesOverlappingOctantsAndScansTablesWithoutLevelCounts) {
       ExtractOptions o;
       o.threads = threads;
       o.algorithm = algorithm;
+      o.buckets = ExtractOptions::Buckets::kLevel;
       o.bucket_level = 2;
       const Status st = extract_mesh(bad, o, &r);
       ASSERT_TRUE(st.is_invalid_argument()) << st.to_string();

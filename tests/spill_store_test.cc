@@ -1,6 +1,6 @@
-// SpillStore against a map: buckets taken in increasing order get back
-// exactly the records added to them, whether they waited in memory or in
-// the spill log.
+// SpillStore against a multiset: buckets, increasing ranges of keys taken
+// in order, get back exactly the records added with keys in their range,
+// whether they waited in memory or in the spill log.
 #include "extract/spill_store.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <map>
 #include <random>
+#include <set>
 #include <vector>
 
 #include "test_util.h"
@@ -26,39 +27,41 @@ Records sorted(const std::vector<SpillRecord>& v) {
   return out;
 }
 
-// Walks buckets 0..n-1 in order as extraction does: while at bucket b,
-// records go only to later buckets; then b is taken.
+// Walks buckets [bounds[b], bounds[b+1]) in order as extraction does: bucket
+// b takes the keys below its end, then adds one sorted run of keys at or past
+// its end (mostly in the next few buckets, some far ahead).
 void run(uint64_t cap, uint64_t seed, uint64_t* written) {
   testing::TempDir dir;
   std::mt19937_64 rng(seed);
-  const uint64_t n = 300;
-  std::map<uint64_t, std::vector<SpillRecord>> expected;
+  const size_t n = 300;
+  std::vector<uint64_t> bounds = {0};
+  for (size_t b = 0; b < n; ++b) bounds.push_back(bounds.back() + 1 + rng() % 1000);
+  bounds.back() = UINT64_MAX;
+  std::multiset<std::pair<uint64_t, int>> waiting;
   {
     SpillStore store(dir.file("spill"), cap);
-    for (uint64_t b = 0; b < n; ++b) {
+    for (size_t b = 0; b < n; ++b) {
+      std::vector<SpillRecord> got;
+      ASSERT_OK(store.take_below(bounds[b + 1], &got));
+      Records want(waiting.begin(), waiting.lower_bound({bounds[b + 1], 0}));
+      waiting.erase(waiting.begin(), waiting.lower_bound({bounds[b + 1], 0}));
+      ASSERT_EQ(sorted(got), want) << "bucket " << b;
+      if (b + 1 == n) break;
+      std::vector<SpillRecord> run;
       const int adds = static_cast<int>(rng() % 200);
       for (int i = 0; i < adds; ++i) {
-        const uint64_t to = b + 1 + rng() % std::min<uint64_t>(8, n);  // mostly near
-        const SpillRecord r{rng(), static_cast<uint8_t>(rng())};
-        ASSERT_OK(store.add(to, r));
-        expected[to].push_back(r);
+        const size_t to = std::min(n - 1, b + 1 + (rng() % 8 == 0 ? rng() % n : rng() % 4));
+        const uint64_t span = std::min<uint64_t>(bounds[to + 1] - bounds[to], 5000);
+        run.push_back({bounds[to] + rng() % span, static_cast<uint8_t>(rng())});
       }
-      if (!store.empty()) {
-        ASSERT_GT(store.first_bucket(), b);
-      }
-      std::vector<SpillRecord> got;
-      ASSERT_OK(store.take(b + 1, &got));
-      ASSERT_EQ(sorted(got), sorted(expected[b + 1])) << "bucket " << b + 1;
-      expected.erase(b + 1);
+      std::sort(run.begin(), run.end(),
+                [](const SpillRecord& x, const SpillRecord& y) { return x.key < y.key; });
+      for (const SpillRecord& r : run) waiting.insert({r.key, r.mask});
+      ASSERT_OK(store.add_run(std::move(run)));
     }
-    for (auto& [bucket, want] : expected) {  // the tail past the last bucket
-      ASSERT_FALSE(store.empty());
-      ASSERT_EQ(store.first_bucket(), bucket);
-      std::vector<SpillRecord> got;
-      ASSERT_OK(store.take(bucket, &got));
-      ASSERT_EQ(sorted(got), sorted(want)) << "bucket " << bucket;
-    }
+    EXPECT_TRUE(waiting.empty());
     EXPECT_TRUE(store.empty());
+    EXPECT_EQ(store.memory_bytes(), 0u);
     *written = store.records_written();
   }
   // The scratch directory goes with the store.

@@ -11,7 +11,7 @@ namespace {
 
 constexpr char kUsage[] =
     "usage: weaver extract DB [--algorithm sort|search] [--store btree|lsm] [--threads N]\n"
-    "                         [--memory BYTES] [--plain] [--json]\n"
+    "                         [--buckets leaves|level] [--memory BYTES] [--plain] [--json]\n"
     "\n"
     "Extracts the mesh nodes of the balanced octree in DB's octant table into\n"
     "its node table (node key + kind: anchored, edge- or face-dangling; ids are\n"
@@ -28,6 +28,13 @@ constexpr char kUsage[] =
     "                      and sorted runs; every lookup may visit each run)\n"
     "  --threads N         worker threads for sort (default 1); the node table is\n"
     "                      the same for every N\n"
+    "  --buckets leaves    sort's high-level buckets hold about the same number of\n"
+    "                      leaves each (default; up to 32768, fewer if the budget\n"
+    "                      is small), cut at aligned boundaries\n"
+    "  --buckets level     the paper's buckets: aligned octants of the coarsest\n"
+    "                      level that would fit the budget if filled with leaves\n"
+    "                      of the finest level present (slow on graded meshes:\n"
+    "                      most buckets then hold a few coarse leaves)\n"
     "  --plain             write the node table with plain leaf pages (default:\n"
     "                      packed, about 0.7 bytes per node)\n"
     "  --json              print the result as one JSON object\n"
@@ -41,7 +48,7 @@ constexpr char kUsage[] =
 
 int cmd_extract(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "store", "threads"},
+  Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "store", "threads", "buckets"},
                          {"json", "plain"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
@@ -69,6 +76,14 @@ int cmd_extract(int argc, char** argv) {
     }
   }
   if (st.ok()) st = threads_option(args, 1, &o.threads);
+  if (st.ok() && args.values.count("buckets")) {
+    const std::string& b = args.values["buckets"];
+    if (b == "level") {
+      o.buckets = ExtractOptions::Buckets::kLevel;
+    } else if (b != "leaves") {
+      st = Status::InvalidArgument("--buckets must be leaves or level");
+    }
+  }
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   auto elapsed = [t0] {
@@ -91,13 +106,15 @@ int cmd_extract(int argc, char** argv) {
         "{\"algorithm\": \"%s\", \"store\": \"%s\", \"threads\": %d, \"memory_budget\": %llu, "
         "\"elements\": %llu, \"nodes\": %llu, \"anchored\": %llu, \"edge\": %llu, "
         "\"face\": %llu, \"seconds\": %.6f, \"nodes_per_s\": %.1f, \"buckets\": %llu, "
-        "\"bucket_level\": %d, \"spilled\": %llu, \"node_table_bytes\": %llu, "
+        "\"bucket_level\": %d, \"bucket_leaves\": %llu, \"spilled\": %llu, \"spilled_to_disk\": "
+        "%llu, \"node_table_bytes\": %llu, "
         "\"search_tree_bytes\": %llu}\n",
         search ? "search" : "sort", o.store == ExtractOptions::Store::kLsm ? "lsm" : "btree",
         o.threads, (unsigned long long)o.memory.bytes(), (unsigned long long)r.elements,
         (unsigned long long)r.nodes, (unsigned long long)r.anchored, (unsigned long long)r.edge,
         (unsigned long long)r.face, secs, r.nodes / secs, (unsigned long long)r.buckets,
-        r.bucket_level, (unsigned long long)r.spilled, (unsigned long long)r.node_table_bytes,
+        r.bucket_level, (unsigned long long)r.bucket_leaves, (unsigned long long)r.spilled,
+        (unsigned long long)r.spilled_to_disk, (unsigned long long)r.node_table_bytes,
         (unsigned long long)r.search_tree_bytes);
     return 0;
   }
@@ -111,10 +128,13 @@ int cmd_extract(int argc, char** argv) {
                 o.store == ExtractOptions::Store::kLsm ? "LSM store" : "B-tree",
                 double(r.search_tree_bytes) / r.nodes, double(r.node_table_bytes) / r.nodes);
   } else {
+    const std::string buckets = r.bucket_level >= 0
+                                    ? "at level " + std::to_string(r.bucket_level)
+                                    : "of about " + std::to_string(r.bucket_leaves) + " leaves";
     std::printf(
-        "%llu buckets at level %d, %llu nodal pixels spilled (%llu through the spill "
-        "log), node table %.2f bytes/node\n",
-        (unsigned long long)r.buckets, r.bucket_level, (unsigned long long)r.spilled,
+        "%llu buckets %s, %llu nodal pixels spilled (%llu through the spill log), node "
+        "table %.2f bytes/node\n",
+        (unsigned long long)r.buckets, buckets.c_str(), (unsigned long long)r.spilled,
         (unsigned long long)r.spilled_to_disk, double(r.node_table_bytes) / r.nodes);
   }
   return 0;

@@ -1,8 +1,18 @@
 // One high-level bucket of the two-level bucket sort as a self-contained
-// task.  The reader (one thread, in Z-order) gathers the bucket's leaves,
-// hands their corners that belong to later buckets to the spill store, and
-// takes the bucket's incoming spills: every earlier bucket has already been
-// read, so they are complete.  A worker (any thread) then merges the nodal
+// task.
+//
+// A bucket is a run of consecutive leaves in Z-order and owns the node keys
+// [start, end): start is its first leaf's Morton code (0 for the first
+// bucket), end the next bucket's start (UINT64_MAX for the last).  Every leaf
+// around a node has a Morton code no larger than the node's (Morton order
+// grows with each coordinate), so when a bucket is read, every earlier bucket
+// has handed it the corners it owns.  Where a bucket ends is the policy's
+// choice (BucketPolicy): the paper's aligned octants of one level, or about
+// K leaves cut at the best-aligned leaf nearby.
+//
+// The reader (one thread, in Z-order) gathers the bucket's leaves, hands
+// their corners at or past `end` to the spill store as one sorted run, and
+// takes the spills below `end`.  A worker (any thread) then merges the nodal
 // pixels in a hash, sorts them and classifies each node.  Tasks are written
 // out in Z-order, so the node table is the same whatever the thread count.
 #pragma once
@@ -19,14 +29,17 @@
 
 namespace weaver {
 
-struct Bucketing {
-  int level;  // bucket level: edge 2^(20-level)
-  int shift;  // bits of a node key below the bucket id
-  uint64_t of_key(uint64_t node_key) const { return node_key >> shift; }
+struct BucketPolicy {
+  // >= 0: the paper's buckets, the aligned octants of this level.
+  int level = -1;
+  // Otherwise: at least this many leaves, up to a quarter more, ending
+  // before the leaf whose Morton code has the most trailing zeros (so that
+  // buckets are nearly aligned subtrees and spill little).
+  uint64_t leaves = 1;
 };
 
 struct BucketTask {
-  uint64_t bucket = 0;
+  uint64_t start = 0, end = 0;        // the node keys the bucket owns
   std::vector<uint64_t> leaf_keys;    // the bucket's leaves, key order
   std::vector<SpillRecord> incoming;  // nodal pixels spilled here by earlier buckets
   std::vector<uint64_t> node_keys;    // result: the bucket's nodes, key order
@@ -36,19 +49,39 @@ struct BucketTask {
   bool done = false;  // set by the worker (under the pipeline's lock)
 };
 
-// Reads the next bucket from the cursor and the spill store into *task;
-// returns false in *more when both are exhausted.
-Status read_bucket(LeafReader& cursor, const Bucketing& b, SpillStore& spills, BucketTask* task,
-                   bool* more);
+// Cuts the octant table into buckets, in Z-order, and routes their spills.
+class BucketReader {
+ public:
+  BucketReader(LeafReader& cursor, const BucketPolicy& policy, SpillStore& spills)
+      : cursor_(cursor), policy_(policy), spills_(spills) {}
+
+  // The next bucket into *task; false in *more after the last one.
+  Status next(BucketTask* task, bool* more);
+
+ private:
+  Status gather_aligned(BucketTask* task);
+  Status gather_counted(BucketTask* task);
+  Status spill_far_corners(const BucketTask& task);
+
+  LeafReader& cursor_;
+  BucketPolicy policy_;
+  SpillStore& spills_;
+  std::vector<uint64_t> carry_;  // leaves read past the last cut
+  uint64_t next_start_ = 0;
+  bool finished_ = false;
+  std::vector<SpillRecord> run_;  // the bucket's spills being built
+};
+
+// The 8 corners of the leaf with this key as node keys, corner k at [k].
+void leaf_corner_keys(uint64_t leaf_key, uint64_t out[8]);
 
 class BucketWorker {
  public:
-  BucketWorker(BTree& octants, const Bucketing& b) : classifier_(octants), b_(b) {}
+  explicit BucketWorker(BTree& octants) : classifier_(octants) {}
   Status run(BucketTask& task);
 
  private:
   NodeClassifier classifier_;
-  Bucketing b_;
   NodeHash hash_;
   std::vector<SpillRecord> sorted_;  // (key, mask) pairs being sorted
 };

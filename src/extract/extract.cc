@@ -21,10 +21,12 @@ namespace {
 // Bytes of memory per finest-level leaf in the active bucket: its key, about
 // one node in a half-full hash table (9 bytes / 0.5), and the sort vector.
 constexpr uint64_t kBytesPerLeaf = 8 + 24 + 16;
-// No bucket holds more than 8^kMaxBucketDepth finest leaves whatever the
-// budget: its hash table then stays in the CPU caches.  Larger buckets only
-// save spills, which cost far less than cache misses on every corner.
+// No bucket holds more than 8^kMaxBucketDepth finest leaves (kLevel) or
+// kMaxBucketLeaves leaves (kLeaves) whatever the budget: its hash table then
+// stays in the CPU caches.  Larger buckets only save spills, which cost far
+// less than cache misses on every corner.
 constexpr int kMaxBucketDepth = 6;
+constexpr uint64_t kMaxBucketLeaves = uint64_t{1} << 15;
 
 // The finest level: from the counts the table's writer kept, else one pass.
 Status finest_level_of(BTree& octants, int* max_level) {
@@ -94,10 +96,17 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
   WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, false, &db));
   std::unique_ptr<BTree> octants;
   WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, memory.octant_pool, &octants));
-  int max_level = 0;
-  WEAVER_RETURN_IF_ERROR(finest_level_of(*octants, &max_level));
-  result->bucket_level = options.bucket_level >= 0 ? std::min(options.bucket_level, kMaxLevel)
-                                                   : bucket_level_for(memory.bucket, max_level);
+  if (options.buckets == ExtractOptions::Buckets::kLevel) {
+    int max_level = 0;
+    WEAVER_RETURN_IF_ERROR(finest_level_of(*octants, &max_level));
+    result->bucket_level = options.bucket_level >= 0 ? std::min(options.bucket_level, kMaxLevel)
+                                                     : bucket_level_for(memory.bucket, max_level);
+  } else {
+    result->bucket_leaves =
+        options.bucket_leaves > 0
+            ? options.bucket_leaves
+            : std::clamp<uint64_t>(memory.bucket / kBytesPerLeaf, 1, kMaxBucketLeaves);
+  }
   TableOptions topt;
   topt.key_kind = KeyKind::kNode;
   std::string error;
@@ -110,7 +119,8 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
   const std::string scratch = db_dir + "/tmp-extract-" + std::to_string(::getpid());
   Status st;
   if (options.algorithm == ExtractOptions::Algorithm::kSearch) {
-    result->bucket_level = 0;
+    result->bucket_level = -1;
+    result->bucket_leaves = 0;
     st = extract_by_search(*octants, *nodes, scratch, memory.search_store,
                            options.store == ExtractOptions::Store::kLsm, result);
   } else {

@@ -39,7 +39,16 @@ struct ExtractOptions {
   MemoryBudget memory;
   // Worker threads for the sort algorithm; the output is the same for any count.
   int threads = 1;
-  // The level of the high-level buckets; -1 derives it from the budget.
+  // How the sort cuts the leaves into high-level buckets (bucket_worker.h).
+  // kLeaves: runs of about bucket_leaves leaves each (0: as many as the
+  // bucket share of the budget holds, up to kMaxBucketLeaves), cut at
+  // aligned boundaries; buckets then hold the same number of leaves however
+  // the octree is graded.  kLevel: the paper's aligned octants of
+  // bucket_level (-1: the coarsest level whose bucket, filled with leaves of
+  // the finest level present, fits the share: its S2).
+  enum class Buckets { kLeaves, kLevel };
+  Buckets buckets = Buckets::kLeaves;
+  uint64_t bucket_leaves = 0;
   int bucket_level = -1;
   // Packed leaf pages for the node table (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
@@ -66,7 +75,8 @@ struct ExtractMemory {
 struct ExtractResult {
   uint64_t elements = 0;
   uint64_t nodes = 0, anchored = 0, edge = 0, face = 0;
-  int bucket_level = 0;
+  int bucket_level = -1;       // kLevel: the level used
+  uint64_t bucket_leaves = 0;  // kLeaves: the leaves aimed at per bucket
   uint64_t buckets = 0;
   uint64_t spilled = 0;          // nodal pixels handed to a later bucket
   uint64_t spilled_to_disk = 0;  // of those, the ones that went through a file

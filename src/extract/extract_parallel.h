@@ -9,7 +9,7 @@
 
 namespace weaver {
 
-Status run_parallel(Database& db, BTree& octants, BTree& nodes, const Bucketing& b,
+Status run_parallel(Database& db, BTree& octants, BTree& nodes, const BucketPolicy& policy,
                     SpillStore& spills, const ExtractMemory& memory, const ExtractOptions& options,
                     ExtractResult* result);
 

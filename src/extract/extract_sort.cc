@@ -1,8 +1,9 @@
 // Two-level bucket sort (paper, section 4), generalised to 3D, to non-cube
 // domains and to any bucket size.
 //
-// High-level buckets are aligned octants of one level, processed in Z-order.
-// The leaves of the active bucket are its low-level buckets.  Each leaf
+// High-level buckets are runs of leaves in Z-order (bucket_worker.h): the
+// paper's aligned octants of one level, or about K leaves each.  The leaves
+// of the active bucket are its low-level buckets.  Each leaf
 // contributes its 8 corners as nodal pixels, tagged with the direction (one
 // of the 8 cells around the node) in which the leaf lies; a pixel that falls
 // into a later bucket (the active bucket's far faces) is spilled and picked
@@ -22,19 +23,20 @@ namespace weaver {
 namespace {
 
 // One thread: read, extract and write each bucket in turn.
-Status run_serial(BTree& octants, BTree& nodes, const Bucketing& b, SpillStore& spills,
+Status run_serial(BTree& octants, BTree& nodes, const BucketPolicy& policy, SpillStore& spills,
                   const ExtractOptions& options, ExtractResult* result) {
-  BucketWorker worker(octants, b);
+  BucketWorker worker(octants);
   LeafReader c;
   WEAVER_RETURN_IF_ERROR(c.open(octants));
+  BucketReader reader(c, policy, spills);
   BucketTask task;
-  bool more = true;
   while (true) {
-    WEAVER_RETURN_IF_ERROR(read_bucket(c, b, spills, &task, &more));
+    bool more = true;
+    WEAVER_RETURN_IF_ERROR(reader.next(&task, &more));
     if (!more) return Status::Ok();
     WEAVER_RETURN_IF_ERROR(worker.run(task));
     WEAVER_RETURN_IF_ERROR(write_bucket(task, nodes, result));
-    if (options.progress && result->buckets % 64 == 0) options.progress("nodes", result->nodes);
+    if (options.progress) options.progress("elements", result->elements);
   }
 }
 
@@ -43,11 +45,11 @@ Status run_serial(BTree& octants, BTree& nodes, const Bucketing& b, SpillStore& 
 Status extract_by_sort(Database& db, BTree& octants, BTree& nodes, const std::string& scratch_path,
                        const ExtractMemory& memory, const ExtractOptions& options,
                        ExtractResult* result) {
-  const Bucketing b{result->bucket_level, 3 * (kMaxLevel - result->bucket_level)};
+  const BucketPolicy policy{result->bucket_level, result->bucket_leaves};
   SpillStore spills(scratch_path, memory.spill);
   const Status st = options.threads > 1
-                        ? run_parallel(db, octants, nodes, b, spills, memory, options, result)
-                        : run_serial(octants, nodes, b, spills, options, result);
+                        ? run_parallel(db, octants, nodes, policy, spills, memory, options, result)
+                        : run_serial(octants, nodes, policy, spills, options, result);
   result->spilled = spills.records_added();
   result->spilled_to_disk = spills.records_written();
   return st;

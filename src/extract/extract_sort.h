@@ -13,7 +13,8 @@ class BTree;
 class Database;
 
 // Appends the nodes of the octree in `octants` to `nodes` (empty), in buckets
-// of level result->bucket_level; spill files go under scratch_path.
+// of level result->bucket_level (if >= 0) or of about result->bucket_leaves
+// leaves; spill files go under scratch_path.
 Status extract_by_sort(Database& db, BTree& octants, BTree& nodes, const std::string& scratch_path,
                        const ExtractMemory& memory, const ExtractOptions& options,
                        ExtractResult* result);

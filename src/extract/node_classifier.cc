@@ -30,13 +30,14 @@ bool direction_pixel(Coord n, int d, Coord* p) {
 Status NodeClassifier::leaf_at(Coord p, Octant* leaf, bool* found) {
   const uint64_t pk = pixel_key(p);
   *found = false;
-  if (leaf_keys_ != nullptr && (node_key(p) >> bucket_shift_) == bucket_) {
+  const uint64_t pm = node_key(p);
+  if (leaf_keys_ != nullptr && pm >= local_start_ && pm < local_end_) {
     auto it = std::upper_bound(leaf_keys_->begin(), leaf_keys_->end(), pk);
     if (it != leaf_keys_->begin() && octant_contains_point(octant_from_key(*(it - 1)), p)) {
       *leaf = octant_from_key(*(it - 1));
       *found = true;
-      return Status::Ok();
     }
+    return Status::Ok();
   }
   uint64_t key = 0;
   bool hit = false;

@@ -34,12 +34,13 @@ class NodeClassifier {
  public:
   explicit NodeClassifier(BTree& octants) : octants_(octants) {}
 
-  // Leaves of the active bucket (sorted keys), searched before the octant
-  // table for pixels whose node key >> shift equals bucket.
-  void set_local(const std::vector<uint64_t>* leaf_keys, uint64_t bucket, int shift) {
+  // Leaves of the active bucket (sorted keys), searched instead of the
+  // octant table for pixels whose Morton code is in [start, end): no other
+  // leaf can hold those (bucket_worker.h).
+  void set_local(const std::vector<uint64_t>* leaf_keys, uint64_t start, uint64_t end) {
     leaf_keys_ = leaf_keys;
-    bucket_ = bucket;
-    bucket_shift_ = shift;
+    local_start_ = start;
+    local_end_ = end;
   }
 
   Status classify(uint64_t key, uint8_t mask, NodeKind* kind);
@@ -51,8 +52,7 @@ class NodeClassifier {
 
   BTree& octants_;
   const std::vector<uint64_t>* leaf_keys_ = nullptr;
-  uint64_t bucket_ = 0;
-  int bucket_shift_ = 0;
+  uint64_t local_start_ = 0, local_end_ = 0;
 };
 
 inline void count_kind(NodeKind k, ExtractResult* r) {
