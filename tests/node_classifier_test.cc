@@ -61,17 +61,21 @@ TEST(NodeClassifierTest, EveryConfigurationOfTheCellsAroundANodeMatchesTheRefere
     const reference::Mesh ref = reference::extract(leaves);
     const std::map<uint64_t, uint8_t> masks = masks_of(leaves);
     ASSERT_EQ(masks.size(), ref.nodes.size());
-    NodeClassifier plain(*table), local(*table);
+    NodeClassifier plain(*table), local(*table), all_local(*table);
+    all_local.set_local(&keys, 0, UINT64_MAX);
     const int shift = 3 * (kMaxLevel - 1);  // level-1 buckets
     for (const reference::MeshNode& node : ref.nodes) {
       const uint64_t key = node_key(node.c);
-      local.set_local(&keys, key >> shift, shift);
-      NodeKind a = NodeKind::kAnchored, b = NodeKind::kAnchored;
+      const uint64_t bucket = key >> shift << shift;
+      local.set_local(&keys, bucket, bucket + (uint64_t{1} << shift));
+      NodeKind a = NodeKind::kAnchored, b = NodeKind::kAnchored, c = NodeKind::kAnchored;
       ASSERT_OK(plain.classify(key, masks.at(key), &a));
       ASSERT_OK(local.classify(key, masks.at(key), &b));
+      ASSERT_OK(all_local.classify(key, masks.at(key), &c));
       ASSERT_EQ(a, node.kind) << "config " << config << " node " << node.c.x << " " << node.c.y
                               << " " << node.c.z;
       ASSERT_EQ(b, node.kind) << "config " << config << " (bucket leaves first)";
+      ASSERT_EQ(c, node.kind) << "config " << config << " (all leaves local)";
       dangling += node.kind != NodeKind::kAnchored;
     }
     ++configs;

@@ -1,9 +1,11 @@
 #include "extract/bucket_worker.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 
 #include "schema/octant.h"
+#include "util/radix_sort.h"
 
 namespace weaver {
 
@@ -85,8 +87,7 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
       if (corners[c] >= task.end) run_.push_back({corners[c], corner_direction_bit(c)});
     }
   }
-  std::sort(run_.begin(), run_.end(),
-            [](const SpillRecord& a, const SpillRecord& b) { return a.key < b.key; });
+  sort_records(run_, packed_, scratch_);
   size_t kept = 0;
   for (size_t i = 0; i < run_.size(); ++i) {
     if (kept > 0 && run_[kept - 1].key == run_[i].key) {
@@ -99,14 +100,102 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
   return spills_.add_run(std::vector<SpillRecord>(run_.begin(), run_.end()));
 }
 
+namespace {
+
+// Whether `first` and `last`, 7 leaves apart in key order, are children 0 and
+// 7 of one parent: then the 6 leaves between are children 1 to 6.
+bool siblings(uint64_t first, uint64_t last) {
+  const int level = octant_key_level(first);
+  if (level == 0 || octant_key_level(last) != level) return false;
+  const int bits = 3 * (kMaxLevel - level);
+  const uint64_t m = octant_key_morton(first);
+  return ((m >> bits) & 7) == 0 && octant_key_morton(last) == m + (uint64_t{7} << bits);
+}
+
+// The direction mask of lattice point (a, b, c), each 0..2, of a complete
+// sibling group: the cells around it that are children.  On an axis where
+// the point is at 0 only the + cell is, at 2 only the - cell, at 1 both.
+constexpr std::array<uint8_t, 27> lattice_masks() {
+  std::array<uint8_t, 27> masks{};
+  for (int p = 0; p < 27; ++p) {
+    const int at[3] = {p % 3, p / 3 % 3, p / 9};
+    for (int d = 0; d < 8; ++d) {
+      bool child = true;
+      for (int axis = 0; axis < 3; ++axis) {
+        const int side = (d >> axis) & 1;
+        child = child && !(at[axis] == 0 && side == 0) && !(at[axis] == 2 && side == 1);
+      }
+      if (child) masks[p] |= static_cast<uint8_t>(1u << d);
+    }
+  }
+  return masks;
+}
+constexpr std::array<uint8_t, 27> kLatticeMasks = lattice_masks();
+
+}  // namespace
+
+// The 27 corners of a complete sibling group (child 0's key given), each
+// once with the bits of all 8 children: a third of the hash updates of
+// adding the 8 leaves' corners one by one.
+void BucketWorker::add_sibling_lattice(uint64_t child0, uint64_t end) {
+  const int bit = kMaxLevel - octant_key_level(child0);
+  uint64_t keys[27];
+  keys[0] = octant_key_morton(child0);
+  for (int p = 1; p < 27; ++p) {
+    const int axis = p % 3 != 0 ? 0 : p % 9 != 0 ? 1 : 2;
+    const int back = axis == 0 ? 1 : axis == 1 ? 3 : 9;  // the point one step lower on axis
+    keys[p] = morton_step(keys[p - back], axis, bit);
+  }
+  for (int p = 0; p < 27; ++p) {
+    if (keys[p] < end) hash_.add(keys[p], kLatticeMasks[p]);
+  }
+}
+
+// Sorts records by key.  A radix sort on the keys' offsets from the
+// smallest, less their common trailing zero bits (corners are multiples of
+// the finest leaves' edge), packed with the mask into one word; std::sort if
+// they do not fit in 56 bits.
+void sort_records(std::vector<SpillRecord>& records, std::vector<uint64_t>& packed,
+                  std::vector<uint64_t>& scratch) {
+  const size_t n = records.size();
+  if (n < 2) return;
+  uint64_t lo = UINT64_MAX, hi = 0;
+  for (const SpillRecord& r : records) {
+    lo = std::min(lo, r.key);
+    hi = std::max(hi, r.key);
+  }
+  uint64_t offsets = 0;
+  for (const SpillRecord& r : records) offsets |= r.key - lo;
+  const int zeros = offsets == 0 ? 0 : std::countr_zero(offsets);
+  const int bits = std::bit_width((hi - lo) >> zeros);
+  if (bits > 56) {
+    std::sort(records.begin(), records.end(),
+              [](const SpillRecord& a, const SpillRecord& b) { return a.key < b.key; });
+    return;
+  }
+  packed.resize(n);
+  for (size_t i = 0; i < n; ++i)
+    packed[i] = ((records[i].key - lo) >> zeros) << 8 | records[i].mask;
+  radix_sort(packed, 8, bits, scratch);
+  for (size_t i = 0; i < n; ++i) {
+    records[i] = {((packed[i] >> 8) << zeros) + lo, static_cast<uint8_t>(packed[i])};
+  }
+}
+
 Status BucketWorker::run(BucketTask& t) {
   t.counts = ExtractResult{};
   t.counts.elements = t.leaf_keys.size();
   classifier_.set_local(&t.leaf_keys, t.start, t.end);
   hash_.reset(t.leaf_keys.size() + t.incoming.size() + 64);
   uint64_t corners[8];
-  for (uint64_t key : t.leaf_keys) {
-    leaf_corner_keys(key, corners);
+  const std::vector<uint64_t>& leaves = t.leaf_keys;
+  for (size_t i = 0; i < leaves.size();) {
+    if (i + 8 <= leaves.size() && siblings(leaves[i], leaves[i + 7])) {
+      add_sibling_lattice(leaves[i], t.end);
+      i += 8;
+      continue;
+    }
+    leaf_corner_keys(leaves[i++], corners);
     for (int c = 0; c < 8; ++c) {
       if (corners[c] < t.end) hash_.add(corners[c], corner_direction_bit(c));
     }
@@ -114,8 +203,7 @@ Status BucketWorker::run(BucketTask& t) {
   for (const SpillRecord& r : t.incoming) hash_.add(r.key, r.mask);
   sorted_.resize(hash_.size());
   for (size_t i = 0; i < hash_.size(); ++i) sorted_[i] = {hash_.key_at(i), hash_.mask_at(i)};
-  std::sort(sorted_.begin(), sorted_.end(),
-            [](const SpillRecord& a, const SpillRecord& b) { return a.key < b.key; });
+  sort_records(sorted_, packed_, scratch_);
   t.node_keys.resize(sorted_.size());
   t.node_kinds.resize(sorted_.size());
   for (size_t i = 0; i < sorted_.size(); ++i) {

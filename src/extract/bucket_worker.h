@@ -69,11 +69,17 @@ class BucketReader {
   std::vector<uint64_t> carry_;  // leaves read past the last cut
   uint64_t next_start_ = 0;
   bool finished_ = false;
-  std::vector<SpillRecord> run_;  // the bucket's spills being built
+  std::vector<SpillRecord> run_;            // the bucket's spills being built
+  std::vector<uint64_t> packed_, scratch_;  // sort_records' buffers
 };
 
 // The 8 corners of the leaf with this key as node keys, corner k at [k].
 void leaf_corner_keys(uint64_t leaf_key, uint64_t out[8]);
+
+// Sorts records by key (a radix sort when their keys span few enough bits);
+// packed and scratch are working buffers.
+void sort_records(std::vector<SpillRecord>& records, std::vector<uint64_t>& packed,
+                  std::vector<uint64_t>& scratch);
 
 class BucketWorker {
  public:
@@ -81,9 +87,12 @@ class BucketWorker {
   Status run(BucketTask& task);
 
  private:
+  void add_sibling_lattice(uint64_t child0, uint64_t end);
+
   NodeClassifier classifier_;
   NodeHash hash_;
-  std::vector<SpillRecord> sorted_;  // (key, mask) pairs being sorted
+  std::vector<SpillRecord> sorted_;         // the bucket's nodes in key order
+  std::vector<uint64_t> packed_, scratch_;  // (offset, mask) words being sorted
 };
 
 }  // namespace weaver

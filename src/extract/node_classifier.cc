@@ -23,18 +23,38 @@ bool direction_pixel(Coord n, int d, Coord* p) {
   return true;
 }
 
+// The last key <= k in sorted `keys`, or null.  Branch-free halving: the
+// bucket's leaves are searched for millions of nodes, and a mispredicted
+// branch at every step of std::upper_bound costs more than the compares.
+const uint64_t* last_at_most(const std::vector<uint64_t>& keys, uint64_t k) {
+  if (keys.empty() || keys[0] > k) return nullptr;
+  const uint64_t* base = keys.data();
+  size_t n = keys.size();
+  while (n > 1) {
+    const size_t half = n / 2;
+    base = base[half] <= k ? base + half : base;
+    n -= half;
+  }
+  return base;
+}
+
 }  // namespace
 
-// The leaf holding pixel p, if any: the active bucket's leaves first, then
-// the octant table (pixels in earlier buckets, and leaves larger than a bucket).
+// The leaf holding pixel p, if any: the active bucket's leaves if p is in
+// its range (no other leaf can hold it), else the octant table.  Works on
+// Morton codes: a leaf holds p iff p's code is in its subtree's code range.
 Status NodeClassifier::leaf_at(Coord p, Octant* leaf, bool* found) {
-  const uint64_t pk = pixel_key(p);
+  const uint64_t pm = morton_encode(p);
+  const uint64_t pk = ((pm >> 3) << 7) | (kKeyLevel20Slot + (pm & 7));  // pixel_key(p)
+  auto holds_p = [pm](uint64_t key) {
+    const int bits = 3 * (kMaxLevel - octant_key_level(key));
+    return ((octant_key_morton(key) ^ pm) >> bits) == 0;
+  };
   *found = false;
-  const uint64_t pm = node_key(p);
   if (leaf_keys_ != nullptr && pm >= local_start_ && pm < local_end_) {
-    auto it = std::upper_bound(leaf_keys_->begin(), leaf_keys_->end(), pk);
-    if (it != leaf_keys_->begin() && octant_contains_point(octant_from_key(*(it - 1)), p)) {
-      *leaf = octant_from_key(*(it - 1));
+    const uint64_t* floor = last_at_most(*leaf_keys_, pk);
+    if (floor != nullptr && holds_p(*floor)) {
+      *leaf = octant_from_key(*floor);
       *found = true;
     }
     return Status::Ok();
@@ -42,7 +62,7 @@ Status NodeClassifier::leaf_at(Coord p, Octant* leaf, bool* found) {
   uint64_t key = 0;
   bool hit = false;
   WEAVER_RETURN_IF_ERROR(octants_.floor(pk, &key, nullptr, &hit));
-  if (hit && octant_contains_point(octant_from_key(key), p)) {
+  if (hit && holds_p(key)) {
     *leaf = octant_from_key(key);
     *found = true;
   }
@@ -65,28 +85,31 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
       continue;
     }
     NodeKind here = NodeKind::kAnchored;
-    WEAVER_RETURN_IF_ERROR(kind_on(n, leaf, mask, &here));
+    uint8_t covered = 0;
+    WEAVER_RETURN_IF_ERROR(kind_on(n, leaf, mask, &here, &covered));
     if (*kind != NodeKind::kAnchored && here != *kind) return unbalanced(n, leaf, mask);
     *kind = here;
-    for (int d2 = 0; d2 < 8; ++d2) {  // every cell this leaf covers is settled
-      Coord p2;
-      if (direction_pixel(n, d2, &p2) && octant_contains_point(leaf, p2)) {
-        settled |= static_cast<uint8_t>(1u << d2);
-      }
-    }
+    settled |= covered;
   }
   return Status::Ok();
 }
 
-// Node n lies on the closure of `leaf` but is not its corner.
-Status NodeClassifier::kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind) {
+// Node n lies on the closure of `leaf` but is not its corner: its kind, and
+// the cells around n the leaf covers (on an axis where n is strictly inside
+// the leaf, both sides; elsewhere the side the leaf is on).
+Status NodeClassifier::kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind,
+                               uint8_t* covered) {
   const uint32_t e = octant_edge(leaf), half = e / 2;
   const uint32_t c[3] = {n.x, n.y, n.z}, lo[3] = {leaf.x, leaf.y, leaf.z};
   int inside = 0;
+  uint8_t cells = 0xFF;
   for (int a = 0; a < 3; ++a) {
+    const uint8_t plus_side = a == 0 ? 0xAA : a == 1 ? 0xCC : 0xF0;  // cells with bit a set
     if (c[a] > lo[a] && c[a] < lo[a] + e) {
       if (c[a] - lo[a] != half) return unbalanced(n, leaf, mask);
       ++inside;
+    } else {
+      cells &= c[a] == lo[a] ? plus_side : static_cast<uint8_t>(~plus_side);
     }
   }
   if (inside == 0 || inside == 3) {
@@ -95,6 +118,7 @@ Status NodeClassifier::kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKi
                               describe_octant(leaf) + ": overlapping octants?");
   }
   *kind = inside == 1 ? NodeKind::kEdge : NodeKind::kFace;
+  *covered = cells;
   return Status::Ok();
 }
 

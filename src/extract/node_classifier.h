@@ -47,7 +47,7 @@ class NodeClassifier {
 
  private:
   Status leaf_at(Coord p, Octant* leaf, bool* found);
-  Status kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind);
+  Status kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind, uint8_t* covered);
   Status unbalanced(Coord n, const Octant& coarse, uint8_t mask);
 
   BTree& octants_;

@@ -1,0 +1,38 @@
+// Least-significant-digit radix sort of 64-bit values on bits [first,
+// first + bits) (higher bits must be zero; lower ones ride along), 11 bits
+// a pass.  For the tens of
+// thousands of nodes of one extraction bucket it is several times faster
+// than std::sort: a few sequential passes instead of log2(n) rounds of
+// unpredictable branches.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace weaver {
+
+// Sorts `values` ascending by bits [first, first + bits), stably;
+// `scratch` is resized and used as the other buffer.
+// REQUIRES: every value < 2^(first + bits) <= 2^64.
+inline void radix_sort(std::vector<uint64_t>& values, int first, int bits,
+                       std::vector<uint64_t>& scratch) {
+  constexpr int kDigit = 11;
+  constexpr size_t kBuckets = size_t{1} << kDigit;
+  scratch.resize(values.size());
+  for (int shift = first; shift < first + bits; shift += kDigit) {
+    std::array<size_t, kBuckets> count{};
+    for (uint64_t v : values) ++count[(v >> shift) & (kBuckets - 1)];
+    size_t sum = 0;
+    for (size_t& c : count) {
+      const size_t n = c;
+      c = sum;
+      sum += n;
+    }
+    for (uint64_t v : values) scratch[count[(v >> shift) & (kBuckets - 1)]++] = v;
+    values.swap(scratch);
+  }
+}
+
+}  // namespace weaver
