@@ -5,6 +5,8 @@
 #include <array>
 #include <cstdio>
 #include <fstream>
+#include <map>
+#include <sstream>
 
 #include "cli_run.h"
 
@@ -88,6 +90,43 @@ TEST(Cli, MeshRunsThePipelineAndBalanceCheckAgrees) {
   const CommandRun bad = run("construct " + d.file("db2") + " --model lava");
   EXPECT_NE(bad.code, 0);
   EXPECT_EQ(lines(bad.err), 1) << bad.err;
+}
+
+// Progress lines (plain, as stderr is a file here; WEAVER_PROGRESS_SECONDS=0
+// prints one per report): each stage's percent never goes back and stays
+// within 0..100, and --quiet prints nothing on stderr.
+TEST(Cli, ProgressLinesPerStageWithHonestPercentsAndQuietSilencesThem) {
+  testing::TempDir d;
+  const std::string args = " --model basin --freq 0.3 --domain 50000,50000,25000";
+  const CommandRun mesh = run("mesh " + d.file("db") + args, "WEAVER_PROGRESS_SECONDS=0 ");
+  ASSERT_EQ(mesh.code, 0) << mesh.err;
+  std::map<std::string, double> last;
+  std::istringstream in(mesh.err);
+  std::string line;
+  int shown = 0;
+  while (std::getline(in, line)) {
+    const size_t colon = line.find(": ");
+    ASSERT_NE(colon, std::string::npos) << line;
+    const std::string stage = line.substr(0, colon);
+    ASSERT_TRUE(stage == "construct" || stage == "balance" || stage == "extract") << line;
+    const double percent = std::stod(line.substr(colon + 2));
+    EXPECT_GE(percent, last[stage]) << line;
+    EXPECT_LE(percent, 100.0) << line;
+    EXPECT_NE(line.find("/s"), std::string::npos) << line;
+    last[stage] = percent;
+    ++shown;
+  }
+  EXPECT_EQ(last.size(), 3u) << mesh.err;
+  EXPECT_GT(shown, 10);
+  EXPECT_GT(last["extract"], 50.0);  // extract reports by elements: it reaches near the end
+  const CommandRun quiet =
+      run("mesh " + d.file("db2") + args + " --quiet", "WEAVER_PROGRESS_SECONDS=0 ");
+  ASSERT_EQ(quiet.code, 0) << quiet.err;
+  EXPECT_EQ(quiet.err, "");
+  for (const char* command : {"construct", "balance", "extract", "import", "export"}) {
+    const CommandRun help = run(std::string(command) + " --help");
+    EXPECT_NE(help.out.find("--quiet"), std::string::npos) << command;
+  }
 }
 
 // The same mesh with packed pages (the default) and with --plain: the stat

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "balance/balance_progress.h"
 #include "balance/closure.h"
 #include "balance/refinement.h"
 #include "db/database.h"
@@ -95,15 +96,21 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
     return check_balance(*leaves, o, std::filesystem::temp_directory_path().string(), r);
   }
   ScratchDir scratch{db_dir + "/tmp-balance-" + std::to_string(::getpid())};
-  Closure closure(*leaves, memory, scratch.path, r);
+  std::unique_ptr<BalanceProgress> progress;
+  if (o.progress) {
+    LevelCounts levels{};
+    levels_from_metadata(leaves->options().metadata, &levels);
+    progress = std::make_unique<BalanceProgress>(o.progress, leaves->size(), levels);
+  }
+  Closure closure(*leaves, memory, scratch.path, progress.get(), r);
   WEAVER_RETURN_IF_ERROR(closure.build(finest_level_bound(*leaves), true));
   const TableOptions topt = leaves->options();
   std::unique_ptr<BTree> out;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, memory.output_pool, &out, &file));
   const std::unique_ptr<VelocityModel> model = model_of(topt.metadata);
-  const Status st =
-      write_refinement(*leaves, closure.required(), material_fill(model.get(), topt), *out, r);
+  const Status st = write_refinement(*leaves, closure.required(), material_fill(model.get(), topt),
+                                     *out, progress.get(), r);
   if (st.ok()) out->set_metadata(replace_levels(topt.metadata, r->levels));
   return db->publish(kOctantTable, file, out, st);
 }

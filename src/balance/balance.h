@@ -17,6 +17,7 @@
 #include "db/octant_table.h"
 #include "schema/status.h"
 #include "util/memory_budget.h"
+#include "util/progress.h"
 
 namespace weaver {
 
@@ -25,6 +26,9 @@ class BTree;
 struct BalanceOptions {
   MemoryBudget memory;
   bool check_only = false;  // verify only; name the first violation
+  // Leaves read by the current pass and the fraction done
+  // (balance_progress.h); not called by a check.
+  ProgressFn progress;
 };
 
 // Where balance's memory goes: the shares of options.memory.

@@ -49,8 +49,8 @@ Status next_unique(KeyTagSource& s, uint64_t* prev, bool* has_prev, KeyTag* out,
 }  // namespace
 
 Closure::Closure(BTree& leaves, const BalanceMemory& memory, const std::string& scratch_dir,
-                 BalanceResult* result)
-    : leaves_(leaves), memory_(memory), scratch_(scratch_dir), r_(result) {}
+                 BalanceProgress* progress, BalanceResult* result)
+    : leaves_(leaves), memory_(memory), scratch_(scratch_dir), progress_(progress), r_(result) {}
 
 Closure::~Closure() = default;
 
@@ -65,6 +65,7 @@ Status Closure::build(int max_level, bool propagate) {
   while (c.valid()) {
     const Octant q = octant_from_key(c.key());
     ++r_->input_leaves;
+    if (progress_ != nullptr) progress_->scanned(r_->input_leaves);
     // Tag: the leaf that asks, for naming violations.
     if (q.level > 0) {
       WEAVER_RETURN_IF_ERROR(
@@ -79,6 +80,7 @@ Status Closure::build(int max_level, bool propagate) {
     WEAVER_RETURN_IF_ERROR(expand_level(l, parents, propagate));
     leaf_parents_[l].reset();
     required_parents_[l].reset();
+    if (progress_ != nullptr) progress_->level_done(l);
   }
   std::vector<KeyTagSource*> levels;
   for (auto& level : required_) {

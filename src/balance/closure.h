@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "balance/balance.h"
+#include "balance/balance_progress.h"
 #include "schema/status.h"
 #include "sort/key_tag.h"
 #include "sort/sorted_spool.h"
@@ -33,8 +34,9 @@ class ExternalSorter;
 class Closure {
  public:
   // leaves: the input octant table, open.  Spools and sorter runs go in scratch_dir.
+  // progress may be null.
   Closure(BTree& leaves, const BalanceMemory& memory, const std::string& scratch_dir,
-          BalanceResult* result);
+          BalanceProgress* progress, BalanceResult* result);
   ~Closure();
 
   // Builds the required octants of levels 0..max_level-1.  Without
@@ -54,6 +56,7 @@ class Closure {
   BTree& leaves_;
   const BalanceMemory& memory_;
   std::string scratch_;
+  BalanceProgress* progress_;
   BalanceResult* r_;
   // By level: parents of leaves, parents of required octants, the required.
   std::vector<std::unique_ptr<SortedSpool>> leaf_parents_, required_parents_, required_;

@@ -68,12 +68,14 @@ class Completion {
 }  // namespace
 
 Status write_refinement(BTree& leaves, KeyTagSource& required, const FillPayload& fill, BTree& out,
-                        BalanceResult* r) {
+                        BalanceProgress* progress, BalanceResult* r) {
+  uint64_t read = 0;
   Completion completion(out, fill, leaves.payload_size());
   std::vector<std::byte> payload(leaves.payload_size());
   WEAVER_RETURN_IF_ERROR(for_each_leaf(
       leaves, required, [&](const BTreeCursor& c, const std::vector<KeyTag>& inside, bool*) {
         if (!inside.empty()) ++r->split;
+        if (progress != nullptr) progress->refined(++read);
         if (!payload.empty()) std::memcpy(payload.data(), c.payload(), payload.size());
         return completion.write(octant_from_key(c.key()), payload.data(), inside, r);
       }));

@@ -8,6 +8,7 @@
 #include <functional>
 
 #include "balance/balance.h"
+#include "balance/balance_progress.h"
 #include "schema/octant.h"
 #include "schema/status.h"
 #include "sort/key_tag.h"
@@ -23,6 +24,6 @@ using FillPayload = std::function<void(const Octant& o, std::byte* payload)>;
 // Closure::required) into `out`, which has the payload size of `leaves`.
 // fill may be empty.  Counts go to r: output_leaves, split, levels.
 Status write_refinement(BTree& leaves, KeyTagSource& required, const FillPayload& fill, BTree& out,
-                        BalanceResult* r);
+                        BalanceProgress* progress, BalanceResult* r);
 
 }  // namespace weaver

@@ -43,5 +43,7 @@ void print_construct_plan(const weaver::ConstructOptions& o, const weaver::Const
 // physical memory; MemoryBudget::kDefaultBytes when absent.
 Status memory_option(const ParsedArgs& args, MemoryBudget* budget);
 Status threads_option(const ParsedArgs& args, int default_threads, int* threads);
+// The number of cores (at least 1): the default of every --threads.
+int default_threads();
 
 }  // namespace weaver::cli

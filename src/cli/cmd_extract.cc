@@ -5,6 +5,7 @@
 
 #include "cli/cli.h"
 #include "extract/extract.h"
+#include "util/progress.h"
 
 namespace weaver::cli {
 namespace {
@@ -12,6 +13,7 @@ namespace {
 constexpr char kUsage[] =
     "usage: weaver extract DB [--algorithm sort|search] [--store btree|lsm] [--threads N]\n"
     "                         [--buckets leaves|level] [--memory BYTES] [--plain] [--json]\n"
+    "                         [--quiet]\n"
     "\n"
     "Extracts the mesh nodes of the balanced octree in DB's octant table into\n"
     "its node table (node key + kind: anchored, edge- or face-dangling; ids are\n"
@@ -26,8 +28,8 @@ constexpr char kUsage[] =
     "  --store btree|lsm   the node store of search: a B+tree (default, as in the\n"
     "                      paper) or the LSM store (writes batched in a memtable\n"
     "                      and sorted runs; every lookup may visit each run)\n"
-    "  --threads N         worker threads for sort (default 1); the node table is\n"
-    "                      the same for every N\n"
+    "  --threads N         worker threads for sort (default: the number of cores);\n"
+    "                      the node table is the same for every N\n"
     "  --buckets leaves    sort's high-level buckets hold about the same number of\n"
     "                      leaves each (default; up to 32768, fewer if the budget\n"
     "                      is small), cut at aligned boundaries\n"
@@ -38,6 +40,9 @@ constexpr char kUsage[] =
     "  --plain             write the node table with plain leaf pages (default:\n"
     "                      packed, about 0.7 bytes per node)\n"
     "  --json              print the result as one JSON object\n"
+    "  --quiet             no progress line on stderr (default: one that updates\n"
+    "                      itself on a terminal, a line every 10 s otherwise;\n"
+    "                      percent = elements done of the octant table's)\n"
     "  --memory BYTES      memory budget, e.g. 256M (default 256M): the octant and\n"
     "                      node table caches, the high-level buckets (their size\n"
     "                      comes from it), spilled corners held before a file,\n"
@@ -49,7 +54,7 @@ constexpr char kUsage[] =
 int cmd_extract(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(argc, argv, 2, {"memory", "algorithm", "store", "threads", "buckets"},
-                         {"json", "plain"}, &args);
+                         {"json", "plain", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("extract", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("extract", "expected one DB", kUsage);
@@ -75,7 +80,7 @@ int cmd_extract(int argc, char** argv) {
       st = Status::InvalidArgument("--store applies to --algorithm search only");
     }
   }
-  if (st.ok()) st = threads_option(args, 1, &o.threads);
+  if (st.ok()) st = threads_option(args, default_threads(), &o.threads);
   if (st.ok() && args.values.count("buckets")) {
     const std::string& b = args.values["buckets"];
     if (b == "level") {
@@ -89,15 +94,12 @@ int cmd_extract(int argc, char** argv) {
   auto elapsed = [t0] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
-  if (isatty(STDERR_FILENO)) {
-    o.progress = [&](const char* phase, uint64_t n) {
-      std::fprintf(stderr, "\rextract: %llu %s (%.1fs)   ", (unsigned long long)n, phase,
-                   elapsed());
-    };
-  }
+  ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "extract",
+                    "elements");
+  o.progress = line.fn();
   ExtractResult r;
   st = extract_mesh(args.positional[0], o, &r);
-  if (o.progress) std::fprintf(stderr, "\r%60s\r", "");
+  line.finish();
   if (!st.ok()) return report("extract", st);
   const double secs = elapsed();
   if (args.flags.count("json")) {

@@ -5,13 +5,14 @@
 
 #include "cli/cli.h"
 #include "import/import.h"
+#include "util/progress.h"
 
 namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
     "usage: weaver import DB --octants FILE [--memory BYTES] [--tick METRES]\n"
-    "                        [--origin X,Y,Z] [--plain]\n"
+    "                        [--origin X,Y,Z] [--plain] [--quiet]\n"
     "\n"
     "Loads octant text (one leaf per line: 'x y z level' in ticks, any order;\n"
     "blank lines and '#' comments ignored) into the octant table of database\n"
@@ -29,7 +30,9 @@ constexpr char kUsage[] =
     "  --origin X,Y,Z  position of tick (0,0,0) in metres (default: that of the\n"
     "                  table being replaced, else 0,0,0)\n"
     "  --plain         write plain leaf pages (default: packed, where keys are\n"
-    "                  delta-coded and payload fields stored column-wise)\n";
+    "                  delta-coded and payload fields stored column-wise)\n"
+    "  --quiet         no progress line on stderr (default: octants read and\n"
+    "                  their rate, updated on a terminal, every 10 s otherwise)\n";
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -39,7 +42,8 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 int cmd_import(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"octants", "memory", "tick", "origin"}, {"plain"}, &args);
+  Status st =
+      parse_args(argc, argv, 2, {"octants", "memory", "tick", "origin"}, {"plain", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("import", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("import", "expected one DB", kUsage);
@@ -61,15 +65,11 @@ int cmd_import(int argc, char** argv) {
   }
   if (!st.ok()) return usage_error("import", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
-  if (isatty(STDERR_FILENO)) {
-    o.progress = [t0](const char* phase, uint64_t n) {
-      std::fprintf(stderr, "\rimport: %s %llu octants (%.1fs)   ", phase, (unsigned long long)n,
-                   seconds_since(t0));
-    };
-  }
+  ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "import", "octants");
+  o.progress = line.fn();
   ImportResult r;
   st = import_octants(args.positional[0], args.values["octants"], o, &r);
-  if (o.progress) std::fprintf(stderr, "\r%60s\r", "");
+  line.finish();
   if (!st.ok()) return report("import", st);
   const double secs = seconds_since(t0);
   std::printf(

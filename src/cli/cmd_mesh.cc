@@ -1,13 +1,16 @@
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <thread>
 
 #include "balance/balance.h"
 #include "cli/cli.h"
 #include "construct/construct.h"
 #include "extract/extract.h"
 #include "schema/octant.h"
+#include "util/progress.h"
 
 namespace weaver::cli {
 namespace {
@@ -15,14 +18,16 @@ namespace {
 constexpr char kUsage[] =
     "usage: weaver mesh DB --model NAME --freq F [--ppw N] [--vs-min V] [--domain LX,LY,LZ]\n"
     "                      [--min-level L] [--max-level L] [--grid FILE] [--threads N]\n"
-    "                      [--max-elements N] [--memory BYTES] [--plain]\n"
+    "                      [--max-elements N] [--memory BYTES] [--plain] [--quiet]\n"
     "\n"
     "The whole pipeline: construct the octree from the model, 2:1 balance it, extract\n"
     "the mesh.  Prints a line per stage (count, rate, time, peak memory), then the\n"
     "mesh summary (elements, nodes, dangling nodes, as in the paper's Figure 11) and\n"
     "its quality: elements per level, smallest and largest edge, and the fewest\n"
     "points per wavelength at any element.  Options as for 'weaver construct';\n"
-    "--threads is for the extract stage (default 1, as for 'weaver extract');\n"
+    "--threads N is for the stages that use threads (default: the number of cores;\n"
+    "the tables are the same for every N); --quiet drops the progress\n"
+    "lines (see each stage's --help for what their percent means);\n"
     "--plain writes plain leaf pages in every table (default: packed).  If a\n"
     "stage fails, the error says which stages had committed their tables.\n"
     "--memory (default 256M) bounds each stage in turn, as in that stage's command.\n";
@@ -66,7 +71,7 @@ int cmd_mesh(int argc, char** argv) {
   Status st = parse_args(argc, argv, 2,
                          {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level",
                           "max-level", "memory", "threads", "max-elements"},
-                         {"plain"}, &args);
+                         {"plain", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("mesh", "expected one DB", kUsage);
@@ -75,7 +80,9 @@ int cmd_mesh(int argc, char** argv) {
   co.whole_pipeline = true;
   st = parse_construct_options(args, &co);
   ExtractOptions eo;
-  if (st.ok()) st = threads_option(args, 1, &eo.threads);
+  if (st.ok()) {
+    st = threads_option(args, default_threads(), &eo.threads);
+  }
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   eo.memory = co.memory;
   eo.packed = co.packed;
@@ -90,7 +97,11 @@ int cmd_mesh(int argc, char** argv) {
   reset_peak();
   Stage s1;
   ConstructResult cr;
+  const ProgressLine::Style style = ProgressLine::style_for_stderr(args.flags.count("quiet"));
+  ProgressLine construct_line(style, "construct", "leaves");
+  co.progress = construct_line.fn();
   st = construct_octree(db, co, &plan, &cr);
+  construct_line.finish();
   if (!st.ok()) return report("mesh", st);
   stage_line("construct", cr.elements, "leaves", s1.seconds());
 
@@ -98,15 +109,21 @@ int cmd_mesh(int argc, char** argv) {
   Stage s2;
   BalanceOptions bo;
   bo.memory = co.memory;
+  ProgressLine balance_line(style, "balance", "leaves");
+  bo.progress = balance_line.fn();
   BalanceResult br;
   st = balance_octree(db, bo, &br);
+  balance_line.finish();
   if (!st.ok()) return report_after("balance", st, "construct committed the octant table");
   stage_line("balance", br.output_leaves, "leaves", s2.seconds());
 
   reset_peak();
   Stage s3;
+  ProgressLine extract_line(style, "extract", "elements");
+  eo.progress = extract_line.fn();
   ExtractResult er;
   st = extract_mesh(db, eo, &er);
+  extract_line.finish();
   if (!st.ok()) {
     return report_after("extract", st, "construct and balance committed the balanced octant table");
   }

@@ -1,4 +1,6 @@
+#include <algorithm>
 #include <cstdio>
+#include <thread>
 
 #include "cli/cli.h"
 
@@ -47,6 +49,10 @@ Status threads_option(const ParsedArgs& args, int default_threads, int* threads)
   if (n < 1 || n > 256) return Status::InvalidArgument("--threads must be 1..256");
   *threads = static_cast<int>(n);
   return Status::Ok();
+}
+
+int default_threads() {
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
 }  // namespace weaver::cli

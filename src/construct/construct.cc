@@ -24,7 +24,9 @@ class Descent {
  public:
   Descent(const ConstructOptions& o, const ConstructPlan& p, const VelocityModel& m, BTree& out,
           ConstructResult* r)
-      : o_(o), p_(p), model_(m), out_(out), r_(r), inv_rate_(1.0 / (o.freq * o.ppw)) {}
+      : o_(o), p_(p), model_(m), out_(out), r_(r), inv_rate_(1.0 / (o.freq * o.ppw)) {
+    if (o_.progress) estimate_construct(o_, p_, model_, &share_);
+  }
 
   Status run() {
     const uint32_t e = octant_edge(p_.block_level);
@@ -76,9 +78,11 @@ class Descent {
 
   Status flush() {
     WEAVER_RETURN_IF_ERROR(out_.append_batch(keys_.data(), payloads_.data(), keys_.size()));
+    if (o_.progress && !keys_.empty()) {
+      o_.progress(r_->elements, share_.fraction_before(keys_.back()));
+    }
     keys_.clear();
     payloads_.clear();
-    if (o_.progress) o_.progress(r_->elements);
     return Status::Ok();
   }
 
@@ -90,6 +94,7 @@ class Descent {
   double inv_rate_;
   std::vector<uint64_t> blocks_, keys_;
   std::vector<std::byte> payloads_;
+  ZOrderShare share_;  // for the progress fraction
 };
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "schema/octant.h"
 #include "schema/status.h"
 #include "util/memory_budget.h"
+#include "util/progress.h"
 
 namespace weaver {
 
@@ -38,7 +39,9 @@ struct ConstructOptions {
   // The run goes on to balance and extract (`weaver mesh`): the disk check
   // counts their tables too.
   bool whole_pipeline = false;
-  std::function<void(uint64_t leaves)> progress;
+  // Leaves written, and the fraction of the estimate (construct/estimate.h)
+  // that lies before the last of them in Z-order.
+  ProgressFn progress;
 };
 
 // Where construct's memory goes: the shares of options.memory.  The descent

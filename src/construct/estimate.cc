@@ -44,8 +44,22 @@ double free_bytes(const std::string& dir) {
 
 }  // namespace
 
+void ZOrderShare::add(uint64_t cell_key, double leaves) { cells_.push_back({cell_key, leaves}); }
+
+void ZOrderShare::finish() {
+  std::sort(cells_.begin(), cells_.end());
+  total_ = 0;
+  for (auto& [key, leaves] : cells_) leaves = total_ += leaves;  // now: up to and with the cell
+}
+
+double ZOrderShare::fraction_before(uint64_t key) const {
+  auto it = std::lower_bound(cells_.begin(), cells_.end(), std::make_pair(key, 0.0));
+  if (it == cells_.begin() || total_ <= 0) return 0;
+  return (it - 1)->second / total_;
+}
+
 ConstructEstimate estimate_construct(const ConstructOptions& o, const ConstructPlan& p,
-                                     const VelocityModel& model) {
+                                     const VelocityModel& model, ZOrderShare* share) {
   ConstructEstimate e;
   const double blocks = double(p.blocks[0]) * p.blocks[1] * p.blocks[2];
   int level = p.block_level;
@@ -73,8 +87,16 @@ ConstructEstimate estimate_construct(const ConstructOptions& o, const ConstructP
         // The leaf level the rule asks for here: edge <= vs / rate.
         double want = std::ceil(std::log2(p.root_edge_m * rate / std::max(vs, 1e-300)));
         want = std::clamp(want, double(std::max(o.min_level, p.block_level)), double(o.max_level));
-        e.elements += weight * std::pow(8.0, want - level);
+        const double leaves = weight * std::pow(8.0, want - level);
+        e.elements += leaves;
+        if (share != nullptr) {
+          const uint32_t edge = octant_edge(level);
+          share->add(octant_key({uint32_t(i * edge), uint32_t(j * edge), uint32_t(k * edge),
+                                 uint8_t(level)}),
+                     leaves);
+        }
       }
+  if (share != nullptr) share->finish();
   e.table_bytes = e.elements * (o.packed ? kPackedLeafBytes : kPlainLeafBytes);
   e.disk_bytes = e.table_bytes * (o.whole_pipeline ? kPipelineTables : 1) * kHeadroom;
   return e;

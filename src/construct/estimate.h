@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "construct/construct.h"
 #include "model/velocity_model.h"
@@ -21,10 +22,27 @@ struct ConstructEstimate {
   int sample_level = 0;    // the level of the sampling cells
 };
 
+// The estimate spread along the Z-order: how much of the octree lies before
+// a key.  Construct's progress reports fraction_before(last leaf written):
+// it moves at the pace of the model's material (fast through rock, slow
+// through sediment) and reaches 1 exactly when the descent ends.
+class ZOrderShare {
+ public:
+  void add(uint64_t cell_key, double leaves);  // any order
+  void finish();                               // sorts; REQUIRES: after the adds
+  // The share of the estimate in cells whose keys are below key.
+  double fraction_before(uint64_t key) const;
+
+ private:
+  std::vector<std::pair<uint64_t, double>> cells_;  // key, estimated leaves up to it
+  double total_ = 0;
+};
+
 // Samples `model` on cells of about 2^15 per domain (never finer than
-// --max-level).  Bytes assume the table's page format.
+// --max-level).  Bytes assume the table's page format.  With `share`, also
+// records each sampled cell's leaves there.
 ConstructEstimate estimate_construct(const ConstructOptions& o, const ConstructPlan& p,
-                                     const VelocityModel& model);
+                                     const VelocityModel& model, ZOrderShare* share = nullptr);
 
 // InvalidArgument naming the numbers when the estimate exceeds
 // o.max_elements or the free space of the file system holding db_dir.

@@ -74,12 +74,24 @@ Status node_id(BTree& nodes, Coord c, uint64_t* id) {
   return Status::Ok();
 }
 
-Status write_nodes(BTree& nodes, const std::string& path, uint64_t* count) {
+// Reports every 2^16 rows: `before` rows written by earlier files, of `total`.
+struct RowProgress {
+  const ProgressFn& fn;
+  uint64_t before, total;
+  void row(uint64_t id) const {
+    if (fn && id % (1 << 16) == 0)
+      fn(before + id, double(before + id) / std::max<uint64_t>(1, total));
+  }
+};
+
+Status write_nodes(BTree& nodes, const std::string& path, const RowProgress& progress,
+                   uint64_t* count) {
   CsvWriter out(path);
   WEAVER_RETURN_IF_ERROR(out.open("id,x,y,z,kind,a0,a1,a2,a3\n"));
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(nodes.seek_cursor(0, &c));
   for (uint64_t id = 0; c.valid(); ++id) {
+    progress.row(id);
     const Coord p = morton_decode(c.key());
     const uint8_t raw = static_cast<uint8_t>(c.payload()[0]);
     if (raw > 2)
@@ -103,12 +115,14 @@ Status write_nodes(BTree& nodes, const std::string& path, uint64_t* count) {
   return out.finish();
 }
 
-Status write_elements(BTree& octants, BTree& nodes, const std::string& path, uint64_t* count) {
+Status write_elements(BTree& octants, BTree& nodes, const std::string& path,
+                      const RowProgress& progress, uint64_t* count) {
   CsvWriter out(path);
   WEAVER_RETURN_IF_ERROR(out.open("id,x,y,z,level,n0,n1,n2,n3,n4,n5,n6,n7\n"));
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(octants.seek_cursor(0, &c));
   for (uint64_t id = 0; c.valid(); ++id) {
+    progress.row(id);
     const Octant o = octant_from_key(c.key());
     out.field(id), out.comma(), out.field(o.x), out.comma(), out.field(o.y), out.comma();
     out.field(o.z), out.comma(), out.field(o.level);
@@ -145,12 +159,16 @@ Status export_csv(const std::string& db_dir, const ExportOptions& options, Expor
   const ExportMemory memory(options.memory);
   WEAVER_RETURN_IF_ERROR(db->open_table(kNodeTable, memory.node_pool, &nodes));
   WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, memory.octant_pool, &octants));
+  const uint64_t node_rows = options.nodes_path.empty() ? 0 : nodes->size();
+  const uint64_t total = node_rows + (options.elements_path.empty() ? 0 : octants->size());
   if (!options.nodes_path.empty()) {
-    WEAVER_RETURN_IF_ERROR(write_nodes(*nodes, options.nodes_path, &result->nodes));
+    WEAVER_RETURN_IF_ERROR(write_nodes(*nodes, options.nodes_path,
+                                       RowProgress{options.progress, 0, total}, &result->nodes));
   }
   if (!options.elements_path.empty()) {
-    WEAVER_RETURN_IF_ERROR(
-        write_elements(*octants, *nodes, options.elements_path, &result->elements));
+    WEAVER_RETURN_IF_ERROR(write_elements(*octants, *nodes, options.elements_path,
+                                          RowProgress{options.progress, node_rows, total},
+                                          &result->elements));
   }
   return Status::Ok();
 }

@@ -11,6 +11,7 @@
 
 #include "schema/status.h"
 #include "util/memory_budget.h"
+#include "util/progress.h"
 
 namespace weaver {
 
@@ -18,6 +19,8 @@ struct ExportOptions {
   std::string nodes_path;     // empty: skip
   std::string elements_path;  // empty: skip
   MemoryBudget memory;
+  // Rows written (nodes, then elements) and their fraction of all rows.
+  ProgressFn progress;
 };
 
 // Where export's memory goes: the shares of options.memory.

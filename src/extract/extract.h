@@ -24,6 +24,7 @@
 
 #include "schema/status.h"
 #include "util/memory_budget.h"
+#include "util/progress.h"
 
 namespace weaver {
 
@@ -52,7 +53,8 @@ struct ExtractOptions {
   int bucket_level = -1;
   // Packed leaf pages for the node table (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
-  std::function<void(const char* phase, uint64_t done)> progress;
+  // Elements done, and their fraction of the octant table (sort only).
+  ProgressFn progress;
 };
 
 // Where extraction's memory goes: the shares of options.memory.  Fields an

@@ -124,7 +124,10 @@ Status run_parallel(Database& db, BTree& octants, BTree& nodes, const BucketPoli
     if (st.ok()) st = write_bucket(*head, nodes, result);
     in_flight_bytes -= task_bytes(*head);
     in_flight.pop_front();
-    if (options.progress) options.progress("elements", result->elements);
+    if (options.progress) {
+      options.progress(result->elements,
+                       double(result->elements) / std::max<uint64_t>(1, octants.size()));
+    }
   }
   // Let running tasks finish before their memory goes away.
   for (auto& t : in_flight) queue.wait_done(t.get());

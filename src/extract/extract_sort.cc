@@ -36,7 +36,10 @@ Status run_serial(BTree& octants, BTree& nodes, const BucketPolicy& policy, Spil
     if (!more) return Status::Ok();
     WEAVER_RETURN_IF_ERROR(worker.run(task));
     WEAVER_RETURN_IF_ERROR(write_bucket(task, nodes, result));
-    if (options.progress) options.progress("elements", result->elements);
+    if (options.progress) {
+      options.progress(result->elements,
+                       double(result->elements) / std::max<uint64_t>(1, octants.size()));
+    }
   }
 }
 

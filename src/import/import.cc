@@ -120,7 +120,7 @@ Status read_input(const std::string& text_path, const ImportOptions& options,
                   std::unique_ptr<LsmTree>* lsm) {
   uint64_t count = 0;
   return read_octant_text(text_path, [&](const Octant& o, uint64_t line) -> Status {
-    if (options.progress && ++count % kProgressEvery == 0) options.progress("read", count);
+    if (options.progress && ++count % kProgressEvery == 0) options.progress(count, -1);
     const uint64_t key = octant_key(o);
     if (*lsm == nullptr && direct.in_order(key)) return direct.add({key, line});
     if (*lsm == nullptr)

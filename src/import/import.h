@@ -14,6 +14,7 @@
 #include "db/octant_table.h"
 #include "schema/status.h"
 #include "util/memory_budget.h"
+#include "util/progress.h"
 
 namespace weaver {
 
@@ -26,7 +27,8 @@ struct ImportOptions {
   // Packed leaf pages (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
   // Called now and then with (phase, items done); may be empty.
-  std::function<void(const char*, uint64_t)> progress;
+  // Octants read (no fraction: the text's line count is not known ahead).
+  ProgressFn progress;
 };
 
 // Where import's memory goes: the shares of options.memory.

@@ -1,0 +1,50 @@
+// Balance's progress: the fraction done of its three parts.  The first pass
+// reads the leaves (counted 10%), the level passes expand the closure from
+// fine to coarse (45%, shared among levels by the leaves one level finer,
+// whose parents each pass expands), the final pass writes the refinement
+// (45%, by leaves read).  The weights are those of a profile of the 0.5 Hz
+// basin; the count shown is the leaves read by the current pass.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "db/octant_table.h"
+#include "schema/octant.h"
+#include "util/progress.h"
+
+namespace weaver {
+
+class BalanceProgress {
+ public:
+  static constexpr double kScan = 0.10, kLevels = 0.45;
+  static constexpr uint64_t kEvery = 1 << 16;  // leaves between reports
+
+  BalanceProgress(ProgressFn fn, uint64_t leaves, const LevelCounts& levels)
+      : fn_(std::move(fn)), leaves_(leaves > 0 ? leaves : 1) {
+    double total = 0;
+    for (int l = 0; l < kMaxLevel; ++l) total += double(levels[l + 1]) + 1;
+    double before = 0;
+    for (int l = kMaxLevel - 1; l >= 0; --l) {  // passes run fine to coarse
+      before += double(levels[l + 1]) + 1;
+      level_end_[l] = kScan + kLevels * before / total;
+    }
+  }
+
+  void scanned(uint64_t n) {
+    if (fn_ && n % kEvery == 0) fn_(n, kScan * double(n) / leaves_);
+  }
+  void level_done(int level) {
+    if (fn_) fn_(leaves_, level_end_[level]);
+  }
+  void refined(uint64_t n) {
+    if (fn_ && n % kEvery == 0) fn_(n, kScan + kLevels + (1 - kScan - kLevels) * n / leaves_);
+  }
+
+ private:
+  ProgressFn fn_;
+  double leaves_;
+  std::array<double, kMaxLevel> level_end_{};
+};
+
+}  // namespace weaver
