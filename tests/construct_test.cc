@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <random>
 
 #include "db/database.h"
@@ -184,6 +185,52 @@ TEST(Construct, EveryLeafMeetsTheRuleAndNoneIsFinerThanNeeded) {
     EXPECT_EQ(n, r.elements);
     const double domain = c.domain[0] * c.domain[1] * c.domain[2];
     EXPECT_NEAR(volume / domain, 1.0, 1e-9) << c.model << ": leaves must tile the domain";
+  }
+}
+
+std::string table_bytes(const std::string& db_dir) {
+  std::unique_ptr<Database> db;
+  EXPECT_OK(Database::open(db_dir, Database::Mode::kRead, false, &db));
+  std::ifstream in(db->table_path(kOctantTable), std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Subtrees on 1 to 4 threads, with budgets from the smallest (subtrees past
+// a small cap are visited again as their children) to the default: the
+// same table byte for byte, and the same figures.
+TEST(Construct, AnyThreadCountAndBudgetWritesTheSameTable) {
+  for (const char* model : {"basin", "loh1"}) {
+    std::string first;
+    ConstructResult first_r;
+    uint64_t over = 0;
+    for (int threads = 1; threads <= 4; ++threads) {
+      for (uint64_t budget : {MemoryBudget::kMinBytes, MemoryBudget::kDefaultBytes}) {
+        testing::TempDir dir;
+        ConstructOptions o;
+        o.model = model;
+        o.freq = 0.25;
+        o.threads = threads;
+        o.memory = MemoryBudget(budget);
+        ConstructPlan plan;
+        ConstructResult r;
+        ASSERT_OK(construct_octree(dir.file("db"), o, &plan, &r));
+        const std::string bytes = table_bytes(dir.file("db"));
+        if (first.empty()) {
+          first = bytes;
+          first_r = r;
+        }
+        SCOPED_TRACE(std::string(model) + ", " + std::to_string(threads) + " threads, budget " +
+                     std::to_string(budget));
+        ASSERT_EQ(bytes, first);
+        EXPECT_EQ(r.elements, first_r.elements);
+        EXPECT_EQ(r.levels, first_r.levels);
+        EXPECT_EQ(r.smallest_edge_m, first_r.smallest_edge_m);
+        EXPECT_EQ(r.worst_ppw, first_r.worst_ppw);
+        EXPECT_GT(r.subtrees, 8u);
+        over += r.subtrees_over;
+      }
+    }
+    EXPECT_GT(over, 0u) << model << ": no subtree went past its cap";
   }
 }
 

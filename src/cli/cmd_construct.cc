@@ -32,8 +32,11 @@ constexpr char kUsage[] =
     "  --max-elements N   refuse to start when a coarse sampling of the model\n"
     "                     estimates more leaves than N (default 5G), or more\n"
     "                     disk than is free; the estimate is printed first\n"
+    "  --threads N        worker threads, each descending its own subtrees\n"
+    "                     (default: the number of cores); the table is the same\n"
+    "                     for every N\n"
     "  --memory BYTES     memory budget (default 256M): the octant table's cache\n"
-    "                     (the descent itself holds one path of octants)\n"
+    "                     and the leaves of subtrees visited ahead of the writer\n"
     "  --plain            write plain leaf pages (default: packed, where keys are\n"
     "                     delta-coded and payload fields stored column-wise)\n"
     "  --quiet            no progress line on stderr (default: one that updates\n"
@@ -95,13 +98,14 @@ int cmd_construct(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(argc, argv, 2,
                          {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level",
-                          "max-level", "memory", "max-elements"},
+                          "max-level", "memory", "max-elements", "threads"},
                          {"plain", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("construct", "expected one DB", kUsage);
   ConstructOptions o;
   st = parse_construct_options(args, &o);
+  if (st.ok()) st = threads_option(args, default_threads(), &o.threads);
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
   ConstructPlan plan;
   st = plan_construct(o, &plan);

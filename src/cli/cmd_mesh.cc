@@ -85,6 +85,7 @@ int cmd_mesh(int argc, char** argv) {
   }
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   eo.memory = co.memory;
+  co.threads = eo.threads;
   eo.packed = co.packed;
   const std::string& db = args.positional[0];
   ConstructPlan plan;

@@ -3,99 +3,117 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <deque>
 #include <memory>
+#include <thread>
 #include <vector>
 
+#include "construct/descent.h"
 #include "construct/estimate.h"
 #include "db/database.h"
 #include "model/velocity_model.h"
 #include "schema/octant.h"
+#include "util/work_queue.h"
 
 namespace weaver {
 namespace {
 
 // The deepest block level tried when fitting the domain: 2^10 blocks a side.
 constexpr int kMaxBlockLevel = 10;
-// Leaves written per append_batch call.
-constexpr size_t kBatch = 4096;
 constexpr char kMaterialSchema[] = "vp:f32,vs:f32,rho:f32";
+// Subtrees are cut so that the estimate puts about this many leaves in
+// each: enough to keep a thread busy for a while, few enough to balance.
+constexpr double kLeavesPerSubtree = 4096;
+// Subtrees in flight per thread: workers run ahead of the writer.
+constexpr size_t kSubtreesPerThread = 8;
 
-class Descent {
- public:
-  Descent(const ConstructOptions& o, const ConstructPlan& p, const VelocityModel& m, BTree& out,
-          ConstructResult* r)
-      : o_(o), p_(p), model_(m), out_(out), r_(r), inv_rate_(1.0 / (o.freq * o.ppw)) {
-    if (o_.progress) estimate_construct(o_, p_, model_, &share_);
-  }
-
-  Status run() {
-    const uint32_t e = octant_edge(p_.block_level);
-    for (uint32_t k = 0; k < p_.blocks[2]; ++k)
-      for (uint32_t j = 0; j < p_.blocks[1]; ++j)
-        for (uint32_t i = 0; i < p_.blocks[0]; ++i) {
-          blocks_.push_back(octant_key({i * e, j * e, k * e, uint8_t(p_.block_level)}));
-        }
-    std::sort(blocks_.begin(), blocks_.end());  // Z-order
-    for (uint64_t key : blocks_) WEAVER_RETURN_IF_ERROR(visit(octant_from_key(key)));
-    return flush();
-  }
-
- private:
-  // The least Vs over the 27 sample points, floored by --vs-min.
-  double vs_min_of(const Octant& o) const {
-    const double t = p_.tick_m, h = octant_edge(o) * t / 2;
-    return std::max(model_.min_vs_on_lattice(o.x * t, o.y * t, o.z * t, h), o_.vs_min);
-  }
-
-  Status visit(const Octant& o) {
-    const double edge_m = octant_edge(o) * p_.tick_m;
-    const double vs = vs_min_of(o);
-    const bool too_big = edge_m > vs * inv_rate_;
-    if (o.level < o_.min_level || (too_big && o.level < o_.max_level)) {
-      for (int c = 0; c < 8; ++c) WEAVER_RETURN_IF_ERROR(visit(octant_child(o, c)));
-      return Status::Ok();
-    }
-    return emit(o, edge_m, vs);
-  }
-
-  Status emit(const Octant& o, double edge_m, double vs) {
-    const double t = p_.tick_m, half = edge_m / 2;
-    const Material m = model_.at(o.x * t + half, o.y * t + half, o.z * t + half);
-    keys_.push_back(octant_key(o));
-    const float f[3] = {m.vp, m.vs, m.rho};
-    const size_t at = payloads_.size();
-    payloads_.resize(at + sizeof f);
-    std::memcpy(payloads_.data() + at, f, sizeof f);
-    ++r_->levels[o.level];
-    const double ppw = vs / (o_.freq * edge_m);
-    if (r_->elements == 0 || edge_m < r_->smallest_edge_m) r_->smallest_edge_m = edge_m;
-    r_->largest_edge_m = std::max(r_->largest_edge_m, edge_m);
-    if (r_->elements == 0 || ppw < r_->worst_ppw) r_->worst_ppw = ppw;
-    ++r_->elements;
-    if (keys_.size() == kBatch) return flush();
-    return Status::Ok();
-  }
-
-  Status flush() {
-    WEAVER_RETURN_IF_ERROR(out_.append_batch(keys_.data(), payloads_.data(), keys_.size()));
-    if (o_.progress && !keys_.empty()) {
-      o_.progress(r_->elements, share_.fraction_before(keys_.back()));
-    }
-    keys_.clear();
-    payloads_.clear();
-    return Status::Ok();
-  }
-
-  const ConstructOptions& o_;
-  const ConstructPlan& p_;
-  const VelocityModel& model_;
-  BTree& out_;
-  ConstructResult* r_;
-  double inv_rate_;
-  std::vector<uint64_t> blocks_, keys_;
-  std::vector<std::byte> payloads_;
-  ZOrderShare share_;  // for the progress fraction
+// One subtree on its way from a worker to the table.
+struct Slot {
+  Octant root;
+  SubtreeLeaves leaves;
+  bool done = false;  // set by the worker (WorkQueue)
 };
+
+// The level of the subtrees: as many levels below the blocks as put about
+// kLeavesPerSubtree estimated leaves in each.
+int subtree_level(const ConstructOptions& o, const ConstructPlan& p) {
+  const double blocks = double(p.blocks[0]) * p.blocks[1] * p.blocks[2];
+  double per_subtree = p.estimated_elements / blocks;
+  int level = p.block_level;
+  while (level < o.max_level && per_subtree > kLeavesPerSubtree) per_subtree /= 8, ++level;
+  return level;
+}
+
+// Visits the domain's subtrees on o.threads workers (or on this thread for
+// one) and appends their leaves in Z-order.  A subtree with more leaves
+// than the cap is visited again as its 8 children, so memory stays bounded
+// wherever the model is dense.
+Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const Descent& descent,
+                      const ConstructMemory& memory, const ZOrderShare& share, BTree& out,
+                      ConstructResult* r) {
+  const int threads = std::max(1, o.threads);
+  const size_t window = kSubtreesPerThread * threads;
+  const size_t cap = std::clamp<uint64_t>(memory.subtrees / window / (8 + Descent::kPayloadBytes),
+                                          64, uint64_t{1} << 16);
+  WorkQueue<Slot> queue;
+  std::vector<std::thread> workers;
+  if (threads > 1) {
+    for (int i = 0; i < threads; ++i) {
+      workers.emplace_back([&] {
+        while (Slot* s = queue.pop()) {
+          descent.visit_subtree(s->root, cap, &s->leaves);
+          queue.finish(s);
+        }
+      });
+    }
+  }
+  SubtreeList subtrees(descent, p, subtree_level(o, p));
+  std::deque<std::unique_ptr<Slot>> in_flight;  // Z-order
+  auto add = [&](const Octant& root, bool front) {
+    auto slot = std::make_unique<Slot>();
+    slot->root = root;
+    if (threads > 1) queue.push(slot.get(), front);
+    if (front) {
+      in_flight.push_front(std::move(slot));
+    } else {
+      in_flight.push_back(std::move(slot));
+    }
+  };
+  Status st;
+  Octant root;
+  while (st.ok()) {
+    while (in_flight.size() < window && subtrees.next(&root)) add(root, false);
+    if (in_flight.empty()) break;
+    Slot* head = in_flight.front().get();
+    if (threads > 1) {
+      queue.wait_done(head);
+    } else {
+      descent.visit_subtree(head->root, cap, &head->leaves);
+    }
+    ++r->subtrees;
+    if (head->leaves.overflow) {
+      ++r->subtrees_over;
+      const Octant big = head->root;
+      in_flight.pop_front();
+      for (int c = 7; c >= 0; --c) add(octant_child(big, c), true);  // child 0 first
+      continue;
+    }
+    const SubtreeLeaves& leaves = head->leaves;
+    st = out.append_batch(leaves.keys.data(), leaves.payloads.data(), leaves.keys.size());
+    leaves.add_to(r);
+    if (o.progress && !leaves.keys.empty()) {
+      o.progress(r->elements, share.fraction_before(leaves.keys.back()));
+    }
+    in_flight.pop_front();
+  }
+  // Let running visits finish before their slots go away.
+  if (threads > 1) {
+    for (auto& s : in_flight) queue.wait_done(s.get());
+    queue.stop();
+    for (auto& w : workers) w.join();
+  }
+  return st;
+}
 
 }  // namespace
 
@@ -146,6 +164,9 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
 ConstructMemory::ConstructMemory(MemoryBudget budget) : plan(budget) {
   // A sorted append touches only the right spine of the table.
   table_pool = plan.take("octant table pool", 1, 8, 8ull << 20);
+  // Leaves of the subtrees visited ahead of the writer (kSubtreesPerThread
+  // a thread); each is capped, so a small share only means smaller caps.
+  subtrees = plan.take("subtrees in flight", 1, 4, 256ull << 20);
 }
 
 Status construct_octree(const std::string& db_dir, const ConstructOptions& o, ConstructPlan* p,
@@ -169,8 +190,10 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   std::string file;
   WEAVER_RETURN_IF_ERROR(
       db->create_table(kOctantTable, topt, ConstructMemory(o.memory).table_pool, &table, &file));
-  Descent descent(o, *p, *model, *table, r);
-  Status st = descent.run();
+  const Descent descent(o, *p, *model);
+  ZOrderShare share;
+  if (o.progress) estimate_construct(o, *p, *model, &share);
+  Status st = write_subtrees(o, *p, descent, ConstructMemory(o.memory), share, *table, r);
   if (st.ok()) {
     Units u;
     u.tick_m = p->tick_m;

@@ -3,9 +3,9 @@
 // where Vs_min is the least Vs of the model over 27 sample points of the leaf
 // (corners, edge midpoints, face centres and centre), raised to at least
 // --vs-min; and no leaf is finer than needed (its parent breaks the rule).
-// Leaves come from a depth-first descent in Z-order and are written by sorted
-// append, each with the material at its centre; memory does not grow with
-// the mesh.
+// Leaves come from depth-first descents of subtrees in Z-order (on worker
+// threads, descent.h) and are written by sorted append, each with the
+// material at its centre; memory does not grow with the mesh.
 #pragma once
 
 #include <array>
@@ -30,6 +30,8 @@ struct ConstructOptions {
   std::array<double, 3> domain_m = {100000, 100000, 37500};
   int min_level = 0, max_level = kMaxLevel;
   MemoryBudget memory;
+  // Worker threads visiting subtrees (descent.h); the table is the same for any count.
+  int threads = 1;
   // Packed leaf pages (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
   // Refuse to start when the estimated octree (construct/estimate.h) has
@@ -51,6 +53,7 @@ struct ConstructMemory {
 
   MemoryPlan plan;
   uint64_t table_pool = 0;  // the octant table, written by sorted append
+  uint64_t subtrees = 0;    // leaves of the subtrees in flight (descent.h)
 };
 
 // The domain as a union of blocks: resolved before anything is written.
@@ -72,6 +75,8 @@ struct ConstructResult {
   double smallest_edge_m = 0, largest_edge_m = 0;
   double worst_ppw = 0;  // the fewest points per wavelength at any leaf (by its Vs_min)
   uint64_t table_bytes = 0;
+  uint64_t subtrees = 0;       // visited by the workers (descent.h), and of those
+  uint64_t subtrees_over = 0;  // the ones past the leaf cap, visited again as 8 children
 };
 
 Status plan_construct(const ConstructOptions& options, ConstructPlan* plan);

@@ -1,12 +1,12 @@
 #include "extract/extract_parallel.h"
 
-#include <condition_variable>
+#include <algorithm>
 #include <deque>
 #include <memory>
-#include <mutex>
 #include <thread>
 
 #include "db/octant_table.h"
+#include "util/work_queue.h"
 
 namespace weaver {
 
@@ -23,52 +23,6 @@ Status write_bucket(const BucketTask& t, BTree& nodes, ExtractResult* result) {
 }
 
 namespace {
-
-// The queue between the reader and the workers.
-class WorkQueue {
- public:
-  void push(BucketTask* t) {
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      queue_.push_back(t);
-    }
-    work_.notify_one();
-  }
-  // Null once stopped.
-  BucketTask* pop() {
-    std::unique_lock<std::mutex> lock(mu_);
-    work_.wait(lock, [&] { return stopped_ || !queue_.empty(); });
-    if (stopped_) return nullptr;
-    BucketTask* t = queue_.front();
-    queue_.pop_front();
-    return t;
-  }
-  void finish(BucketTask* t, Status st) {
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      t->status = std::move(st);
-      t->done = true;
-    }
-    done_.notify_all();
-  }
-  void wait_done(BucketTask* t) {
-    std::unique_lock<std::mutex> lock(mu_);
-    done_.wait(lock, [&] { return t->done; });
-  }
-  void stop() {
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      stopped_ = true;
-    }
-    work_.notify_all();
-  }
-
- private:
-  std::mutex mu_;
-  std::condition_variable work_, done_;
-  std::deque<BucketTask*> queue_;
-  bool stopped_ = false;
-};
 
 constexpr int kTasksPerThread = 8;
 
@@ -90,13 +44,16 @@ Status run_parallel(Database& db, BTree& octants, BTree& nodes, const BucketPoli
   std::vector<std::unique_ptr<BTree>> handles(n);
   for (auto& h : handles)
     WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.worker_pool, &h));
-  WorkQueue queue;
+  WorkQueue<BucketTask> queue;
   std::deque<std::unique_ptr<BucketTask>> in_flight;  // Z-order
   std::vector<std::thread> workers;
   for (int i = 0; i < n; ++i) {
     workers.emplace_back([&, i] {
       BucketWorker worker(*handles[i]);
-      while (BucketTask* t = queue.pop()) queue.finish(t, worker.run(*t));
+      while (BucketTask* t = queue.pop()) {
+        t->status = worker.run(*t);
+        queue.finish(t);
+      }
     });
   }
   LeafReader c;
