@@ -3,6 +3,7 @@
 // table at the end.
 #pragma once
 
+#include <fcntl.h>
 #include <malloc.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -12,6 +13,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <string>
@@ -149,6 +151,20 @@ inline std::string run_program(const std::vector<std::string>& args, uint64_t* p
 }
 
 // Parses the flat objects Json::str() writes: {"k": value, ...}.
+// Drops the files under dir from the kernel's page cache (after writing
+// back what is dirty), so that the next run reads them from disk: --cold.
+inline void drop_page_cache(const std::string& dir) {
+  ::sync();
+  std::error_code ec;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir, ec)) {
+    if (!e.is_regular_file()) continue;
+    const int fd = ::open(e.path().c_str(), O_RDONLY);
+    if (fd < 0) continue;
+    ::posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED);
+    ::close(fd);
+  }
+}
+
 inline std::map<std::string, std::string> parse_flat_json(const std::string& s) {
   std::map<std::string, std::string> out;
   size_t i = 0;

@@ -11,12 +11,22 @@ namespace weaver {
 namespace {
 
 // Walks the octant table alongside a nondecreasing stream of keys and tells
-// whether each octant overlaps the domain (the union of the leaves).
+// whether each octant overlaps the domain (the union of the leaves).  Where
+// the stream is sparse (coarse levels have few candidates) it jumps ahead
+// by a search instead of reading every leaf between: a level's pass then
+// costs its candidates, not the whole table.
 class DomainProbe {
  public:
-  Status open(BTree& leaves) { return leaves.seek_cursor(0, &cursor_); }
+  Status open(BTree& leaves) {
+    leaves_ = &leaves;
+    return leaves.seek_cursor(0, &cursor_);
+  }
   Status overlaps(uint64_t key, bool* yes) {
-    while (cursor_.valid() && cursor_.key() <= key) {
+    for (int steps = 0; cursor_.valid() && cursor_.key() <= key; ++steps) {
+      if (steps == kWalk) {
+        WEAVER_RETURN_IF_ERROR(jump_to(key));
+        break;
+      }
       last_ = cursor_.key();
       has_last_ = true;
       WEAVER_RETURN_IF_ERROR(cursor_.next());
@@ -28,6 +38,23 @@ class DomainProbe {
   }
 
  private:
+  // Leaves read one by one before jumping: about a packed page's worth,
+  // which a jump (two searches through cached inner pages) costs anyway.
+  static constexpr int kWalk = 64;
+
+  // last_ := the last leaf <= key; the cursor at the first leaf > key.
+  Status jump_to(uint64_t key) {
+    uint64_t floor = 0;
+    bool hit = false;
+    WEAVER_RETURN_IF_ERROR(leaves_->floor(key, &floor, nullptr, &hit));
+    if (hit) {
+      last_ = floor;
+      has_last_ = true;
+    }
+    return leaves_->seek_cursor(key + 1, &cursor_);
+  }
+
+  BTree* leaves_ = nullptr;
   BTreeCursor cursor_;
   uint64_t last_ = 0;
   bool has_last_ = false;
