@@ -6,6 +6,7 @@
 // basin; the count shown is the leaves read by the current pass.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 
@@ -33,6 +34,12 @@ class BalanceProgress {
 
   void scanned(uint64_t n) {
     if (fn_ && n % kEvery == 0) fn_(n, kScan * double(n) / leaves_);
+  }
+  // Part way through a level's pass: f in [0, 1] of it.
+  void within_level(int level, double f) {
+    if (!fn_) return;
+    const double start = level + 1 < kMaxLevel ? level_end_[level + 1] : kScan;
+    fn_(leaves_, start + std::min(f, 1.0) * (level_end_[level] - start));
   }
   void level_done(int level) {
     if (fn_) fn_(leaves_, level_end_[level]);

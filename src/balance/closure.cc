@@ -104,7 +104,8 @@ Status Closure::build(int max_level, bool propagate) {
     WEAVER_RETURN_IF_ERROR(leaf_parents_[l]->finish());
     WEAVER_RETURN_IF_ERROR(required_parents_[l]->finish());
     KeyTagMerge parents({leaf_parents_[l].get(), required_parents_[l].get()});
-    WEAVER_RETURN_IF_ERROR(expand_level(l, parents, propagate));
+    const uint64_t parent_count = leaf_parents_[l]->size() + required_parents_[l]->size();
+    WEAVER_RETURN_IF_ERROR(expand_level(l, parents, parent_count, propagate));
     leaf_parents_[l].reset();
     required_parents_[l].reset();
     if (progress_ != nullptr) progress_->level_done(l);
@@ -129,7 +130,8 @@ std::unique_ptr<SortedSpool> Closure::spool(const char* name, int level) const {
 // neighbour that is a parent of the same chunk is skipped (see
 // expand_level).  Any subset may be skipped, and Z-order keeps most
 // neighbours in one chunk.
-Status Closure::emit_candidates(KeyTagSource& parents, ExternalSorter& candidates) {
+Status Closure::emit_candidates(int l, KeyTagSource& parents, uint64_t parent_count,
+                                ExternalSorter& candidates, uint64_t* added) {
   size_t fits = 1024;
   while (2 * fits * sizeof(KeyTag) + KeySet::slots_for(2 * fits) * 8 <= memory_.parent_chunk) {
     fits *= 2;
@@ -146,18 +148,24 @@ Status Closure::emit_candidates(KeyTagSource& parents, ExternalSorter& candidate
         Octant n;
         if (!octant_neighbour(po, d, &n)) continue;
         const uint64_t nk = octant_key(n);
-        if (!chunk_keys.contains(nk)) WEAVER_RETURN_IF_ERROR(candidates.add({nk, q.tag}));
+        if (!chunk_keys.contains(nk)) {
+          WEAVER_RETURN_IF_ERROR(candidates.add({nk, q.tag}));
+          ++*added;
+        }
       }
     }
     chunk.clear();
     return Status::Ok();
   };
+  uint64_t consumed = 0;
   KeyTag p;
   bool done = false, has_prev = false;
   uint64_t prev = 0;
   while (true) {
     WEAVER_RETURN_IF_ERROR(next_unique(parents, &prev, &has_prev, &p, &done));
     if (done) break;
+    ++consumed;
+    report(l, consumed, 0.5 * double(consumed) / std::max<uint64_t>(parent_count, 1));
     chunk.push_back(p);
     if (chunk.size() == fits) WEAVER_RETURN_IF_ERROR(flush_chunk());
   }
@@ -168,9 +176,10 @@ Status Closure::emit_candidates(KeyTagSource& parents, ExternalSorter& candidate
 // neighbour that is itself a parent (it has finer children) is resolved
 // already, and its own parent enters the next level through its siblings,
 // so it is skipped: inside refined regions almost every candidate goes.
-Status Closure::expand_level(int l, KeyTagSource& parents, bool propagate) {
+Status Closure::expand_level(int l, KeyTagSource& parents, uint64_t parent_count, bool propagate) {
   ExternalSorter candidates(scratch_ + "/c" + std::to_string(l), memory_.candidate_sort);
-  WEAVER_RETURN_IF_ERROR(emit_candidates(parents, candidates));
+  uint64_t added = 0, probed = 0;
+  WEAVER_RETURN_IF_ERROR(emit_candidates(l, parents, parent_count, candidates, &added));
   WEAVER_RETURN_IF_ERROR(candidates.finish());
   DomainProbe probe;
   WEAVER_RETURN_IF_ERROR(probe.open(leaves_));
@@ -180,6 +189,8 @@ Status Closure::expand_level(int l, KeyTagSource& parents, bool propagate) {
   while (true) {
     WEAVER_RETURN_IF_ERROR(next_unique(candidates, &prev, &has_prev, &n, &done));
     if (done) return Status::Ok();
+    ++probed;
+    report(l, probed, 0.5 + 0.5 * double(probed) / std::max<uint64_t>(added, 1));
     bool inside = false;
     WEAVER_RETURN_IF_ERROR(probe.overlaps(n.key, &inside));
     if (!inside) continue;

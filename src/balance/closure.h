@@ -50,8 +50,13 @@ class Closure {
 
  private:
   std::unique_ptr<SortedSpool> spool(const char* name, int level) const;
-  Status emit_candidates(KeyTagSource& parents, ExternalSorter& candidates);
-  Status expand_level(int l, KeyTagSource& parents, bool propagate);
+  Status emit_candidates(int l, KeyTagSource& parents, uint64_t parent_count,
+                         ExternalSorter& candidates, uint64_t* added);
+  Status expand_level(int l, KeyTagSource& parents, uint64_t parent_count, bool propagate);
+  // Part way through level l's pass (half emitting, half probing).
+  void report(int l, uint64_t step, double f) const {
+    if (progress_ != nullptr && step % BalanceProgress::kEvery == 0) progress_->within_level(l, f);
+  }
 
   BTree& leaves_;
   const BalanceMemory& memory_;
