@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "balance/closure.h"
+#include "db/async_append.h"
 
 namespace weaver {
 namespace {
@@ -11,7 +12,9 @@ namespace {
 constexpr size_t kBatch = 4096;
 
 // Writes leaf t, split just enough that every required octant strictly
-// inside it is resolved.  `inside` holds those, in key order.
+// inside it is resolved.  `inside` holds those, in key order.  Pages are
+// encoded and written on the appender's thread, alongside this one's
+// reading and splitting.
 class Completion {
  public:
   Completion(BTree& out, const FillPayload& fill, uint32_t payload)
@@ -22,11 +25,10 @@ class Completion {
     size_t pos = 0;
     return split(t, false, parent_payload, inside, &pos, r);
   }
-  Status flush() {
-    WEAVER_RETURN_IF_ERROR(out_.append_batch(keys_.data(), payloads_.data(), keys_.size()));
-    keys_.clear();
-    payloads_.clear();
-    return Status::Ok();
+  Status flush() { return out_.append(&batch_); }
+  Status finish() {
+    WEAVER_RETURN_IF_ERROR(flush());
+    return out_.finish();
   }
 
  private:
@@ -45,24 +47,23 @@ class Completion {
   }
 
   Status emit(const Octant& o, bool is_new, const std::byte* parent_payload, BalanceResult* r) {
-    keys_.push_back(octant_key(o));
-    const size_t at = payloads_.size();
-    payloads_.resize(at + payload_);
+    batch_.keys.push_back(octant_key(o));
+    const size_t at = batch_.payloads.size();
+    batch_.payloads.resize(at + payload_);
     if (payload_ > 0) {
-      std::memcpy(payloads_.data() + at, parent_payload, payload_);
-      if (is_new && fill_) fill_(o, payloads_.data() + at);
+      std::memcpy(batch_.payloads.data() + at, parent_payload, payload_);
+      if (is_new && fill_) fill_(o, batch_.payloads.data() + at);
     }
     ++r->levels[o.level];
     ++r->output_leaves;
-    if (keys_.size() == kBatch) return flush();
+    if (batch_.keys.size() == kBatch) return flush();
     return Status::Ok();
   }
 
-  BTree& out_;
+  AsyncAppender out_;
   const FillPayload& fill_;
   uint32_t payload_;
-  std::vector<uint64_t> keys_;
-  std::vector<std::byte> payloads_;
+  AsyncAppender::Batch batch_;
 };
 
 }  // namespace
@@ -79,7 +80,7 @@ Status write_refinement(BTree& leaves, KeyTagSource& required, const FillPayload
         if (!payload.empty()) std::memcpy(payload.data(), c.payload(), payload.size());
         return completion.write(octant_from_key(c.key()), payload.data(), inside, r);
       }));
-  return completion.flush();
+  return completion.finish();
 }
 
 }  // namespace weaver
