@@ -39,20 +39,35 @@ const PaperColumn kPaper[] = {
     {2, "1.22b", "1.37b", "147m", "n/a", "n/a", "2:38:44", "144k", "n/a", "n/a", "25.0gb", "n/a"},
 };
 
-// 1234567 as "1.23m", as the paper writes counts and bytes.
-std::string short_count(double v, const char* unit = "") {
+// 1234567 as "1.23m", as the paper writes counts.
+std::string short_count(double v) {
   const char* suffix[] = {"", "k", "m", "b", "t"};
   int s = 0;
   while (v >= 1000 && s < 4) v /= 1000, ++s;
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g%s%s", v, suffix[s], unit);
+  std::snprintf(buf, sizeof buf, "%.3g%s", v, suffix[s]);
   return buf;
 }
 
+// Under a minute as "1.52s", else as the paper writes it, "0:12:59".
 std::string clock_text(double seconds) {
-  const long s = static_cast<long>(seconds + 0.5);
   char buf[32];
+  if (seconds < 60) {
+    std::snprintf(buf, sizeof buf, "%.2fs", seconds);
+    return buf;
+  }
+  const long s = static_cast<long>(seconds + 0.5);
   std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", s / 3600, s / 60 % 60, s % 60);
+  return buf;
+}
+
+// 1.51e9 bytes as "1.51gb", as the paper writes sizes.
+std::string bytes_text(double bytes) {
+  const char* unit[] = {"b", "kb", "mb", "gb", "tb"};
+  int u = 0;
+  while (bytes >= 1000 && u < 4) bytes /= 1000, ++u;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g%s", bytes, unit[u]);
   return buf;
 }
 
@@ -181,7 +196,7 @@ int main(int argc, char** argv) {
                {"paper_speedup", paper->speedup}};
     const double sort_bytes = std::stod(s1["node_table_bytes"]);
     Row r13 = {{"mesh", hz},
-               {"sort_actual", short_count(sort_bytes, "b")},
+               {"sort_actual", bytes_text(sort_bytes)},
                {"sort_bytes_per_node", fmt(sort_bytes / nodes)},
                {"paper_sort_actual", paper->sort_bytes},
                {"search_actual", "not run"},
@@ -192,7 +207,7 @@ int main(int argc, char** argv) {
       r12["search_T"] = clock_text(ts);
       r12["search_rho"] = short_count(nodes / ts);
       r12["speedup"] = fmt(ts / t1);
-      r13["search_actual"] = short_count(search_bytes, "b");
+      r13["search_actual"] = bytes_text(search_bytes);
       r13["saved"] = fmt(100 * (1 - sort_bytes / search_bytes)) + "%";
     }
     fig12.push_back(r12);
@@ -201,16 +216,16 @@ int main(int argc, char** argv) {
     stages.push_back({{"mesh", hz},
                       {"construct_s", fmt(std::stod(cj["seconds"]))},
                       {"construct_per_s", short_count(std::stod(cj["leaves_per_s"]))},
-                      {"construct_rss", short_count(std::stod(cj["peak_rss_bytes"]), "B")},
+                      {"construct_rss", bytes_text(std::stod(cj["peak_rss_bytes"]))},
                       {"balance_s", fmt(std::stod(bj["seconds"]))},
                       {"balance_per_s", short_count(std::stod(bj["leaves_per_s"]))},
-                      {"balance_rss", short_count(std::stod(bj["peak_rss_bytes"]), "B")},
+                      {"balance_rss", bytes_text(std::stod(bj["peak_rss_bytes"]))},
                       {"extract_s", fmt(tn)},
                       {"extract_per_s", short_count(nodes / tn)},
-                      {"extract_rss", short_count(std::stod(sn["peak_rss_bytes"]), "B")},
+                      {"extract_rss", bytes_text(std::stod(sn["peak_rss_bytes"]))},
                       {"total_s", fmt(std::stod(cj["seconds"]) + std::stod(bj["seconds"]) + tn)},
-                      {"octant_table", short_count(table_bytes(db, "octants"), "B")},
-                      {"node_table", short_count(sort_bytes, "B")}});
+                      {"octant_table", bytes_text(table_bytes(db, "octants"))},
+                      {"node_table", bytes_text(sort_bytes)}});
     std::filesystem::remove_all(db);
   }
   std::printf("\nFigure 11: the meshes (ours: the synthetic basin; paper: SCEC LA basin)\n");

@@ -283,7 +283,23 @@ Status BTree::append_batch(const uint64_t* keys, const std::byte* payloads, size
   }
   WEAVER_RETURN_IF_ERROR(append(keys[0], payloads));  // checks keys[0] against the tree
   if (options_.packed) {
-    for (size_t i = 1; i < n; ++i) WEAVER_RETURN_IF_ERROR(append(keys[i], payloads + i * payload_));
+    // As many as the tail leaf takes at once, with one update of the spine's
+    // counts; append() then seals the full tail and starts the next leaf.
+    size_t i = 1;
+    while (i < n) {
+      if (!spine_valid_) WEAVER_RETURN_IF_ERROR(load_spine());  // e.g. after a new root leaf
+      const uint32_t to =
+          tail_->add_range(keys, payloads, static_cast<uint32_t>(i), static_cast<uint32_t>(n));
+      if (to > i) {
+        tail_dirty_ = true;
+        bump_spine_counts(static_cast<int>(height_) - 1, to - i);
+        record_count_ += to - i;
+        max_key_ = keys[to - 1];
+        i = to;
+      }
+      if (i < n) WEAVER_RETURN_IF_ERROR(append(keys[i], payloads + i * payload_));
+      ++i;
+    }
     return Status::Ok();
   }
   if (!spine_valid_) WEAVER_RETURN_IF_ERROR(load_spine());
