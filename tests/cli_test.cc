@@ -123,7 +123,12 @@ TEST(Cli, ProgressLinesPerStageWithHonestPercentsAndQuietSilencesThem) {
       run("mesh " + d.file("db2") + args + " --quiet", "WEAVER_PROGRESS_SECONDS=0 ");
   ASSERT_EQ(quiet.code, 0) << quiet.err;
   EXPECT_EQ(quiet.err, "");
-  for (const char* command : {"construct", "balance", "extract", "import", "export"}) {
+  // verify's mesh check counts nodes against the node table.
+  const CommandRun verify = run("verify " + d.file("db"), "WEAVER_PROGRESS_SECONDS=0 ");
+  ASSERT_EQ(verify.code, 0) << verify.err;
+  EXPECT_EQ(verify.err.rfind("verify: ", 0), 0u) << verify.err;
+  EXPECT_NE(verify.err.find(" nodes "), std::string::npos) << verify.err;
+  for (const char* command : {"construct", "balance", "extract", "import", "export", "verify"}) {
     const CommandRun help = run(std::string(command) + " --help");
     EXPECT_NE(help.out.find("--quiet"), std::string::npos) << command;
   }

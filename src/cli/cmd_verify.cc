@@ -2,13 +2,14 @@
 #include <cstdio>
 
 #include "cli/cli.h"
+#include "util/progress.h"
 #include "verify/verify.h"
 
 namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver verify DB [--storage-only] [--memory BYTES]\n"
+    "usage: weaver verify DB [--storage-only] [--memory BYTES] [--quiet]\n"
     "\n"
     "Checks database DB and reports every problem it finds (up to 20), naming\n"
     "the table, page, key, element or node.  Exit status 0 only when all hold.\n"
@@ -21,13 +22,16 @@ constexpr char kUsage[] =
     "           node's anchors present and anchored\n"
     "  --storage-only   skip the mesh checks\n"
     "  --memory BYTES   memory budget (default 256M): the table caches and the\n"
-    "                   balance check's out-of-core sort (half)\n";
+    "                   balance check's out-of-core sort (half)\n"
+    "  --quiet          no progress line on stderr for the mesh check (default: nodes\n"
+    "                   checked of the node table, updated on a terminal, every 10 s\n"
+    "                   otherwise); the line per finished check is always printed\n";
 
 }  // namespace
 
 int cmd_verify(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory"}, {"storage-only"}, &args);
+  Status st = parse_args(argc, argv, 2, {"memory"}, {"storage-only", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("verify", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("verify", "expected one DB", kUsage);
@@ -39,8 +43,11 @@ int cmd_verify(int argc, char** argv) {
     std::printf("%s\n", line.c_str()), std::fflush(stdout);
   };
   const auto t0 = std::chrono::steady_clock::now();
+  ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "verify", "nodes");
+  o.nodes_progress = line.fn();
   VerifyReport r;
   st = verify_database(args.positional[0], o, &r);
+  line.finish();
   if (!st.ok()) return report("verify", st);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (const std::string& p : r.problems) std::fprintf(stderr, "problem: %s\n", p.c_str());

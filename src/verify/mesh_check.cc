@@ -155,13 +155,17 @@ Status find_missing_corner(BTree& octants, BTree& nodes, Problems& problems) {
 
 }  // namespace
 
-Status check_mesh_nodes(BTree& octants, BTree& nodes, Problems& problems, VerifyReport* report) {
+Status check_mesh_nodes(BTree& octants, BTree& nodes, const ProgressFn& progress,
+                        Problems& problems, VerifyReport* report) {
   NodeChecker checker(octants, nodes, problems, report);
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(nodes.seek_cursor(0, &c));
   report->elements = octants.size();
   uint64_t id = 0;
   for (; c.valid() && !problems.full(); ++id) {
+    if (progress && id % (1 << 16) == 0) {
+      progress(id, double(id) / std::max<uint64_t>(1, nodes.size()));
+    }
     WEAVER_RETURN_IF_ERROR(checker.check(c.key(), static_cast<uint8_t>(c.payload()[0]), id));
     WEAVER_RETURN_IF_ERROR(c.next());
   }

@@ -86,8 +86,8 @@ Status check_table(const Database& db, const std::string& name, uint64_t pool_by
   return Status::Ok();
 }
 
-Status check_mesh(const Database& db, const VerifyMemory& memory, Problems& problems,
-                  VerifyReport* r) {
+Status check_mesh(const Database& db, const VerifyMemory& memory, const ProgressFn& progress,
+                  Problems& problems, VerifyReport* r) {
   std::unique_ptr<BTree> octants, nodes;
   WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &octants));
   WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, memory.node_pool, &nodes));
@@ -102,7 +102,7 @@ Status check_mesh(const Database& db, const VerifyMemory& memory, Problems& prob
   if (problems.full()) return Status::Ok();
   r->mesh_checked = true;
   const size_t before = r->problems.size();
-  WEAVER_RETURN_IF_ERROR(check_mesh_nodes(*octants, *nodes, problems, r));
+  WEAVER_RETURN_IF_ERROR(check_mesh_nodes(*octants, *nodes, progress, problems, r));
   problems.progress("mesh: " + count_text(r->nodes, "nodes") + " (" +
                     count_text(r->dangling, "dangling") + "), " +
                     count_text(r->corners, "element corners") +
@@ -139,7 +139,7 @@ Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyRep
     WEAVER_RETURN_IF_ERROR(check_table(*db, name, memory.table_pool, problems, r, &usable));
     if (!usable && (name == kOctantTable || name == kNodeTable)) mesh_usable = false;
   }
-  if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, memory, problems, r));
+  if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, memory, o.nodes_progress, problems, r));
   return Status::Ok();
 }
 

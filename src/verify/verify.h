@@ -20,6 +20,7 @@
 
 #include "schema/status.h"
 #include "util/memory_budget.h"
+#include "util/progress.h"
 
 namespace weaver {
 
@@ -28,6 +29,8 @@ struct VerifyOptions {
   bool mesh = true;                                       // also check the mesh invariants
   size_t max_problems = 20;                               // stop collecting after this many
   std::function<void(const std::string& line)> progress;  // one line per finished check
+  // The mesh check's nodes: checked, and their fraction of the node table.
+  ProgressFn nodes_progress;
 };
 
 // Where verify's memory goes: the shares of options.memory.
