@@ -39,15 +39,19 @@ const PaperColumn kPaper[] = {
     {2, "1.22b", "1.37b", "147m", "n/a", "n/a", "2:38:44", "144k", "n/a", "n/a", "25.0gb", "n/a"},
 };
 
-// 1234567 as "1.23m", as the paper writes counts.
-std::string short_count(double v) {
-  const char* suffix[] = {"", "k", "m", "b", "t"};
-  int s = 0;
-  while (v >= 1000 && s < 4) v /= 1000, ++s;
+// A number the way the paper writes it, three significant digits and a
+// lower-case suffix per factor 1000: counts as "1.23m", bytes as "1.51gb".
+constexpr const char* kCountUnits[] = {"", "k", "m", "b", "t"};
+constexpr const char* kByteUnits[] = {"b", "kb", "mb", "gb", "tb"};
+std::string paper_text(double v, const char* const (&units)[5]) {
+  int u = 0;
+  while (v >= 1000 && u < 4) v /= 1000, ++u;
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g%s", v, suffix[s]);
+  std::snprintf(buf, sizeof buf, "%.3g%s", v, units[u]);
   return buf;
 }
+std::string short_count(double v) { return paper_text(v, kCountUnits); }
+std::string bytes_text(double bytes) { return paper_text(bytes, kByteUnits); }
 
 // Under a minute as "1.52s", else as the paper writes it, "0:12:59".
 std::string clock_text(double seconds) {
@@ -58,16 +62,6 @@ std::string clock_text(double seconds) {
   }
   const long s = static_cast<long>(seconds + 0.5);
   std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", s / 3600, s / 60 % 60, s % 60);
-  return buf;
-}
-
-// 1.51e9 bytes as "1.51gb", as the paper writes sizes.
-std::string bytes_text(double bytes) {
-  const char* unit[] = {"b", "kb", "mb", "gb", "tb"};
-  int u = 0;
-  while (bytes >= 1000 && u < 4) bytes /= 1000, ++u;
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g%s", bytes, unit[u]);
   return buf;
 }
 

@@ -239,12 +239,19 @@ constexpr int octant_key_level(uint64_t key) {
   return slot >= kKeyLevel20Slot ? kMaxLevel : static_cast<int>(slot);
 }
 
+// The key of the level-20 octant whose Morton code is m (a pixel's code).
+// REQUIRES: m < 2^60.
+constexpr uint64_t pixel_key_of_morton(uint64_t m) {
+  assert(m < (uint64_t{1} << (3 * kMaxLevel)));
+  return ((m >> 3) << 7) | (kKeyLevel20Slot + (m & 7));
+}
+
 // The key of the level-20 octant at pixel p; the floor of this key in a leaf
 // table is the leaf that contains p, if any (the "aggregate hit").
 // Accepts: pixel.
 constexpr uint64_t pixel_key(Coord p) {
   assert(pixel_is_valid(p));
-  return octant_key({p.x, p.y, p.z, kMaxLevel});
+  return pixel_key_of_morton(octant_morton({p.x, p.y, p.z, kMaxLevel}));
 }
 
 // octant_key_subtree_end's arithmetic for any 64-bit value, a valid key or

@@ -186,14 +186,14 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   std::string error;
   topt.schema = *RecordSchema::parse(kMaterialSchema, &error);
   topt.packed = o.packed;
+  const ConstructMemory memory(o.memory);
   std::unique_ptr<BTree> table;
   std::string file;
-  WEAVER_RETURN_IF_ERROR(
-      db->create_table(kOctantTable, topt, ConstructMemory(o.memory).table_pool, &table, &file));
+  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, memory.table_pool, &table, &file));
   const Descent descent(o, *p, *model);
   ZOrderShare share;
   if (o.progress) estimate_construct(o, *p, *model, &share);
-  Status st = write_subtrees(o, *p, descent, ConstructMemory(o.memory), share, *table, r);
+  Status st = write_subtrees(o, *p, descent, memory, share, *table, r);
   if (st.ok()) {
     Units u;
     u.tick_m = p->tick_m;

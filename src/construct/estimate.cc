@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "util/printable.h"
+
 namespace weaver {
 namespace {
 
@@ -22,15 +24,6 @@ constexpr double kPackedLeafBytes = 6, kPlainLeafBytes = 21;
 constexpr double kPipelineTables = 3;
 // Room kept free for everything else on the disk.
 constexpr double kHeadroom = 1.1;
-
-std::string human(double v) {
-  char buf[32];
-  const char* units[] = {"", "K", "M", "G", "T", "P", "E"};
-  int u = 0;
-  while (v >= 1000 && u < 6) v /= 1000, ++u;
-  std::snprintf(buf, sizeof buf, "%.3g%s", v, units[u]);
-  return buf;
-}
 
 // Free bytes on the file system of dir (or of its nearest existing parent).
 double free_bytes(const std::string& dir) {
@@ -105,16 +98,16 @@ ConstructEstimate estimate_construct(const ConstructOptions& o, const ConstructP
 Status check_construct_fits(const ConstructOptions& o, const ConstructEstimate& e,
                             const std::string& db_dir) {
   if (e.elements > double(o.max_elements)) {
-    return Status::InvalidArgument("the octree would have about " + human(e.elements) +
+    return Status::InvalidArgument("the octree would have about " + si_text(e.elements) +
                                    " elements, more than --max-elements " +
-                                   human(double(o.max_elements)) +
+                                   si_text(double(o.max_elements)) +
                                    " (lower --freq or --domain, or raise --max-elements)");
   }
   const double avail = free_bytes(db_dir);
   if (avail >= 0 && e.disk_bytes > avail) {
-    return Status::InvalidArgument("the octree would have about " + human(e.elements) +
-                                   " elements needing about " + human(e.disk_bytes) +
-                                   "B of disk, but " + db_dir + " has " + human(avail) + "B free");
+    return Status::InvalidArgument(
+        "the octree would have about " + si_text(e.elements) + " elements needing about " +
+        si_text(e.disk_bytes) + "B of disk, but " + db_dir + " has " + si_text(avail) + "B free");
   }
   return Status::Ok();
 }

@@ -75,7 +75,7 @@ Status BucketReader::gather_counted(BucketTask* task) {
 // store, as one run sorted by key with duplicates merged.
 Status BucketReader::spill_far_corners(const BucketTask& task) {
   if (task.end == UINT64_MAX) return Status::Ok();
-  run_.clear();
+  std::vector<SpillRecord> run;
   uint64_t corners[8];
   for (uint64_t key : task.leaf_keys) {
     const int bit = kMaxLevel - octant_key_level(key);
@@ -84,20 +84,20 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
     if (morton_step(morton_step(morton_step(m, 0, bit), 1, bit), 2, bit) < task.end) continue;
     leaf_corner_keys(key, corners);
     for (int c = 0; c < 8; ++c) {
-      if (corners[c] >= task.end) run_.push_back({corners[c], corner_direction_bit(c)});
+      if (corners[c] >= task.end) run.push_back({corners[c], corner_direction_bit(c)});
     }
   }
-  sort_records(run_, packed_, scratch_);
+  sort_records(run, packed_, scratch_);
   size_t kept = 0;
-  for (size_t i = 0; i < run_.size(); ++i) {
-    if (kept > 0 && run_[kept - 1].key == run_[i].key) {
-      run_[kept - 1].mask |= run_[i].mask;
+  for (size_t i = 0; i < run.size(); ++i) {
+    if (kept > 0 && run[kept - 1].key == run[i].key) {
+      run[kept - 1].mask |= run[i].mask;
     } else {
-      run_[kept++] = run_[i];
+      run[kept++] = run[i];
     }
   }
-  run_.resize(kept);
-  return spills_.add_run(std::vector<SpillRecord>(run_.begin(), run_.end()));
+  run.resize(kept);
+  return spills_.add_run(std::move(run));
 }
 
 namespace {

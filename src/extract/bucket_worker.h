@@ -69,7 +69,6 @@ class BucketReader {
   std::vector<uint64_t> carry_;  // leaves read past the last cut
   uint64_t next_start_ = 0;
   bool finished_ = false;
-  std::vector<SpillRecord> run_;            // the bucket's spills being built
   std::vector<uint64_t> packed_, scratch_;  // sort_records' buffers
 };
 

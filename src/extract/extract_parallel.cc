@@ -10,7 +10,8 @@
 
 namespace weaver {
 
-Status write_bucket(const BucketTask& t, BTree& nodes, ExtractResult* result) {
+Status write_bucket(const BucketTask& t, BTree& nodes, uint64_t elements,
+                    const ExtractOptions& options, ExtractResult* result) {
   WEAVER_RETURN_IF_ERROR(
       nodes.append_batch(t.node_keys.data(), t.node_kinds.data(), t.node_keys.size()));
   result->elements += t.counts.elements;
@@ -19,6 +20,9 @@ Status write_bucket(const BucketTask& t, BTree& nodes, ExtractResult* result) {
   result->edge += t.counts.edge;
   result->face += t.counts.face;
   ++result->buckets;
+  if (options.progress) {
+    options.progress(result->elements, double(result->elements) / std::max<uint64_t>(1, elements));
+  }
   return Status::Ok();
 }
 
@@ -78,13 +82,9 @@ Status run_parallel(Database& db, BTree& octants, BTree& nodes, const BucketPoli
     BucketTask* head = in_flight.front().get();
     queue.wait_done(head);
     st = head->status;
-    if (st.ok()) st = write_bucket(*head, nodes, result);
+    if (st.ok()) st = write_bucket(*head, nodes, octants.size(), options, result);
     in_flight_bytes -= task_bytes(*head);
     in_flight.pop_front();
-    if (options.progress) {
-      options.progress(result->elements,
-                       double(result->elements) / std::max<uint64_t>(1, octants.size()));
-    }
   }
   // Let running tasks finish before their memory goes away.
   for (auto& t : in_flight) queue.wait_done(t.get());

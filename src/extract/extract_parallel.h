@@ -13,7 +13,9 @@ Status run_parallel(Database& db, BTree& octants, BTree& nodes, const BucketPoli
                     SpillStore& spills, const ExtractMemory& memory, const ExtractOptions& options,
                     ExtractResult* result);
 
-// Appends a finished bucket's nodes and adds up its counts.
-Status write_bucket(const BucketTask& t, BTree& nodes, ExtractResult* result);
+// Appends a finished bucket's nodes, adds up its counts and reports
+// progress (elements done of `elements`).
+Status write_bucket(const BucketTask& t, BTree& nodes, uint64_t elements,
+                    const ExtractOptions& options, ExtractResult* result);
 
 }  // namespace weaver

@@ -35,11 +35,7 @@ Status run_serial(BTree& octants, BTree& nodes, const BucketPolicy& policy, Spil
     WEAVER_RETURN_IF_ERROR(reader.next(&task, &more));
     if (!more) return Status::Ok();
     WEAVER_RETURN_IF_ERROR(worker.run(task));
-    WEAVER_RETURN_IF_ERROR(write_bucket(task, nodes, result));
-    if (options.progress) {
-      options.progress(result->elements,
-                       double(result->elements) / std::max<uint64_t>(1, octants.size()));
-    }
+    WEAVER_RETURN_IF_ERROR(write_bucket(task, nodes, octants.size(), options, result));
   }
 }
 

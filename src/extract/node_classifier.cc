@@ -45,7 +45,7 @@ const uint64_t* last_at_most(const std::vector<uint64_t>& keys, uint64_t k) {
 // Morton codes: a leaf holds p iff p's code is in its subtree's code range.
 Status NodeClassifier::leaf_at(Coord p, Octant* leaf, bool* found) {
   const uint64_t pm = morton_encode(p);
-  const uint64_t pk = ((pm >> 3) << 7) | (kKeyLevel20Slot + (pm & 7));  // pixel_key(p)
+  const uint64_t pk = pixel_key_of_morton(pm);
   auto holds_p = [pm](uint64_t key) {
     const int bits = 3 * (kMaxLevel - octant_key_level(key));
     return ((octant_key_morton(key) ^ pm) >> bits) == 0;

@@ -28,8 +28,6 @@ namespace weaver {
 // on the far side of that corner.
 inline uint8_t corner_direction_bit(int k) { return static_cast<uint8_t>(1u << (~k & 7)); }
 
-// "(x y z level)", for messages.
-
 class NodeClassifier {
  public:
   explicit NodeClassifier(BTree& octants) : octants_(octants) {}

@@ -25,4 +25,15 @@ inline std::string printable(std::string_view s, size_t max_chars = 60) {
   return out;
 }
 
+// 3410000 as "3.41M": three significant digits and an SI prefix, for counts,
+// rates and sizes in messages.
+inline std::string si_text(double v) {
+  const char* prefix[] = {"", "K", "M", "G", "T", "P", "E"};
+  int p = 0;
+  while (v >= 1000 && p < 6) v /= 1000, ++p;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g%s", v, prefix[p]);
+  return buf;
+}
+
 }  // namespace weaver

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "util/printable.h"
+
 namespace weaver {
 namespace {
 
@@ -29,16 +31,6 @@ std::string grouped(uint64_t v) {
     out += digits[i];
   }
   return out;
-}
-
-// 3410000 as "3.41M".
-std::string rate_text(double per_s) {
-  const char* units[] = {"", "K", "M", "G"};
-  int u = 0;
-  while (per_s >= 1000 && u < 3) per_s /= 1000, ++u;
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g%s", per_s, units[u]);
-  return buf;
 }
 
 // 95 s as "1:35", 3700 s as "1:01:40".
@@ -78,7 +70,7 @@ std::string ProgressLine::describe(uint64_t items, double fraction, double secon
     text = std::string(pct) + "  ";
   }
   text += grouped(items) + " " + unit;
-  if (seconds > 0) text += "  " + rate_text(items / seconds) + "/s";
+  if (seconds > 0) text += "  " + si_text(items / seconds) + "/s";
   if (fraction > 0.005 && fraction < 1) {
     text += "  " + clock_text(seconds * (1 - fraction) / fraction) + " left";
   }
