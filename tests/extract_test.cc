@@ -9,7 +9,7 @@
 
 #include "db/database.h"
 #include "db/node_table.h"
-#include "export/export_csv.h"
+#include "export/export.h"
 #include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
@@ -250,7 +250,7 @@ std::string exported(const std::string& db) {
   o.nodes_path = db + "-nodes.csv";
   o.elements_path = db + "-elements.csv";
   ExportResult r;
-  EXPECT_OK(export_csv(db, o, &r));
+  EXPECT_OK(export_mesh(db, o, &r));
   return file_bytes(o.nodes_path) + file_bytes(o.elements_path);
 }
 

@@ -9,7 +9,7 @@
 
 #include "balance/balance.h"
 #include "construct/construct.h"
-#include "export/export_csv.h"
+#include "export/export.h"
 #include "extract/extract.h"
 #include "import/import.h"
 #include "query/mesh_query.h"

@@ -2,51 +2,95 @@
 #include <cstdio>
 
 #include "cli/cli.h"
-#include "export/export_csv.h"
+#include "export/export.h"
+#include "util/printable.h"
 #include "util/progress.h"
 
 namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver export DB [--nodes FILE] [--elements FILE] [--memory BYTES] [--quiet]\n"
+    "usage: weaver export DB --format FORMAT --out PATH [--units m|ticks] [--memory BYTES]\n"
+    "                        [--quiet]\n"
+    "       weaver export DB [--nodes FILE] [--elements FILE]     (csv, as --format csv)\n"
     "\n"
-    "Writes the extracted mesh of DB as CSV, rows in id order, streaming:\n"
-    "  --nodes FILE     id,x,y,z,kind,a0,a1,a2,a3  (kind anchored|edge|face; anchors\n"
-    "                   are node ids, ascending, empty where fewer than 4)\n"
-    "  --elements FILE  id,x,y,z,level,n0,...,n7   (node ids of corners 0..7, x fastest)\n"
-    "Coordinates are in ticks.  Each file is renamed into place when complete.\n"
-    "  --memory BYTES   memory budget (default 256M): the node table's cache (half)\n"
-    "                   and the octant table's (an eighth, at most 4M)\n"
-    "  --quiet          no progress line on stderr (default: rows written of all\n"
-    "                   rows, updated on a terminal, every 10 s otherwise)\n";
+    "Writes the extracted mesh of DB for the tools of the field, streaming, in id\n"
+    "order.  Every file is written beside PATH and renamed into place when complete.\n"
+    "  --format vtu         VTK XML UnstructuredGrid (ParaView, VisIt, pyvista):\n"
+    "                       hexahedra in VTK's corner order; cell data element_id,\n"
+    "                       level, edge, vp, vs, rho; point data node_id, kind\n"
+    "                       (0 anchored, 1 edge-dangling, 2 face-dangling)\n"
+    "  --format msh         Gmsh MSH 4.1 (ASCII): hexahedra, element data level\n"
+    "                       (and vp, vs, rho); tags are ids + 1\n"
+    "  --format metis       the element dual graph for gpmetis: elements sharing a\n"
+    "                       face, the 4 finer ones across a 2:1 step included\n"
+    "  --format metis-mesh  the elements as an mpmetis mesh file (its own dual graph\n"
+    "                       misses the 2:1 faces: prefer metis)\n"
+    "  --format raw         a directory PATH with mesh.bin (little-endian arrays) and\n"
+    "                       mesh.json (each array's dtype, shape, offset) for numpy\n"
+    "                       and solvers: coordinates, kinds, corners, levels,\n"
+    "                       material, dangling nodes and their anchors\n"
+    "  --format csv         PATH/nodes.csv and PATH/elements.csv:\n"
+    "  --nodes FILE         id,x,y,z,kind,a0,a1,a2,a3  (kind anchored|edge|face; anchors\n"
+    "                       are node ids, ascending, empty where fewer than 4)\n"
+    "  --elements FILE      id,x,y,z,level,n0,...,n7   (node ids of corners 0..7, x fastest)\n"
+    "                       csv coordinates are in ticks\n"
+    "  --units m|ticks      coordinates of vtu, msh and raw (default m: origin + tick\n"
+    "                       size times ticks, as the octant table's metadata says)\n"
+    "  --memory BYTES       memory budget (default 256M): the node table's cache (half),\n"
+    "                       the octant table's (an eighth, at most 16M) and the output\n"
+    "                       buffers (an eighth, at most 12M)\n"
+    "  --quiet              no progress line on stderr (default: items written of all,\n"
+    "                       updated on a terminal, every 10 s otherwise)\n";
 
 }  // namespace
 
 int cmd_export(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"nodes", "elements", "memory"}, {"quiet"}, &args);
+  Status st = parse_args(argc, argv, 2, {"nodes", "elements", "memory", "format", "out", "units"},
+                         {"quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("export", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("export", "expected one DB", kUsage);
   ExportOptions o;
   o.nodes_path = args.values.count("nodes") ? args.values["nodes"] : "";
   o.elements_path = args.values.count("elements") ? args.values["elements"] : "";
-  if (o.nodes_path.empty() && o.elements_path.empty()) {
-    return usage_error("export", "give --nodes FILE and/or --elements FILE", kUsage);
+  o.out = args.values.count("out") ? args.values["out"] : "";
+  const bool csv_files = !o.nodes_path.empty() || !o.elements_path.empty();
+  if (args.values.count("format")) {
+    if (!export_format_from_name(args.values["format"], &o.format)) {
+      return usage_error("export", "unknown --format '" + args.values["format"] + "'", kUsage);
+    }
+  } else if (!csv_files) {
+    return usage_error("export", "give --format FORMAT --out PATH (or --nodes/--elements)", kUsage);
+  }
+  if (csv_files && (o.format != ExportFormat::kCsv || !o.out.empty())) {
+    return usage_error("export", "--nodes/--elements are csv files: not with --out", kUsage);
+  }
+  if (!csv_files && o.out.empty()) return usage_error("export", "--out PATH is missing", kUsage);
+  if (args.values.count("units")) {
+    const std::string& u = args.values["units"];
+    if (u != "m" && u != "ticks") {
+      return usage_error("export", "--units is m or ticks, not '" + u + "'", kUsage);
+    }
+    o.units = u == "m" ? ExportUnits::kMetres : ExportUnits::kTicks;
   }
   st = memory_option(args, &o.memory);
   if (!st.ok()) return usage_error("export", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   ExportResult r;
-  ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "export", "rows");
+  ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "export", "items");
   o.progress = line.fn();
-  st = export_csv(args.positional[0], o, &r);
+  st = export_mesh(args.positional[0], o, &r);
   line.finish();
   if (!st.ok()) return report("export", st);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("exported %llu nodes and %llu elements in %.2fs\n", (unsigned long long)r.nodes,
-              (unsigned long long)r.elements, secs);
+  std::printf("exported %llu nodes and %llu elements", (unsigned long long)r.nodes,
+              (unsigned long long)r.elements);
+  if (o.format == ExportFormat::kMetis) {
+    std::printf(" (%llu graph edges)", (unsigned long long)r.graph_edges);
+  }
+  std::printf(" in %.2fs, %sB written\n", secs, si_text(double(r.bytes)).c_str());
   return 0;
 }
 

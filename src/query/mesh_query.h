@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 
+#include "mesh/mesh_reader.h"
 #include "schema/node.h"
 #include "schema/octant.h"
 #include "schema/status.h"
@@ -32,13 +33,7 @@ struct ElementInfo {
   std::array<uint64_t, 8> nodes{};  // node ids of corners 0..7
 };
 
-struct NodeInfo {
-  uint64_t id = 0;
-  Coord c;
-  NodeKind kind = NodeKind::kAnchored;
-  int anchor_count = 0;
-  std::array<uint64_t, 4> anchors{};  // node ids, ascending
-};
+using NodeInfo = MeshNode;  // id, coordinate, kind, anchor ids
 
 // The element with this id (its rank in key order); nodes may be null.
 // InvalidArgument if the id is past the last element.

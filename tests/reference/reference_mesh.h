@@ -29,6 +29,20 @@ inline bool face_or_edge_adjacent(const Octant& a, const Octant& b) {
   return positive >= 1;
 }
 
+// Closed boxes of two leaves with disjoint interiors share a piece of face
+// of positive area: they touch on one axis and overlap on the other two.
+inline bool face_adjacent(const Octant& a, const Octant& b) {
+  const int64_t ea = octant_edge(a), eb = octant_edge(b);
+  const int64_t alo[3] = {a.x, a.y, a.z}, blo[3] = {b.x, b.y, b.z};
+  int touching = 0, overlapping = 0;
+  for (int i = 0; i < 3; ++i) {
+    const int64_t lo = std::max(alo[i], blo[i]), hi = std::min(alo[i] + ea, blo[i] + eb);
+    touching += hi == lo;
+    overlapping += hi > lo;
+  }
+  return touching == 1 && overlapping == 2;
+}
+
 // Splits any leaf with a face or edge neighbour two or more levels finer,
 // until none is left.
 inline std::vector<Octant> balance(std::vector<Octant> leaves) {

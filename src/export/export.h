@@ -1,0 +1,66 @@
+// `weaver export`: the mesh out of the database into the files of the tools
+// of the field, streamed in id order (memory bounded by the budget, never by
+// the mesh), each file written beside its final name and renamed into place
+// when complete.
+//
+//   csv        nodes.csv and elements.csv of DESIGN.md (coordinates in ticks)
+//   vtu        VTK XML UnstructuredGrid, raw binary appended data, 64-bit
+//              headers and ids; VTK_HEXAHEDRON cells in VTK's corner order;
+//              cell data element_id, level, edge, vp, vs, rho; point data
+//              node_id, kind (0 anchored, 1 edge, 2 face)      (export_vtu.cc)
+//   msh        Gmsh MSH 4.1 ASCII, hexahedra (type 5) in Gmsh's corner order,
+//              element data level (and vp, vs, rho)            (export_msh.cc)
+//   metis      the element dual graph in METIS's graph format (gpmetis): an
+//              edge for every pair of elements sharing a face, the finer
+//              faces across a 2:1 step included              (export_metis.cc)
+//   metis-mesh the elements as mpmetis's mesh file             (export_metis.cc)
+//   raw        a directory: mesh.bin, little-endian arrays, and mesh.json
+//              naming each array's dtype, shape and offset     (export_raw.cc)
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "schema/status.h"
+#include "util/memory_budget.h"
+#include "util/progress.h"
+
+namespace weaver {
+
+enum class ExportFormat { kCsv, kVtu, kMsh, kMetis, kMetisMesh, kRaw };
+// "csv", "vtu", ...; false for an unknown name.
+bool export_format_from_name(const std::string& name, ExportFormat* out);
+
+enum class ExportUnits { kTicks, kMetres };
+
+struct ExportOptions {
+  ExportFormat format = ExportFormat::kCsv;
+  // csv: either of these (empty: skip), or out as a directory for both.
+  std::string nodes_path, elements_path;
+  std::string out;
+  // Coordinates of vtu, msh and raw (csv is always in ticks).
+  ExportUnits units = ExportUnits::kMetres;
+  MemoryBudget memory;
+  // Items written (nodes, then elements) and their fraction of all of them.
+  ProgressFn progress;
+};
+
+// Where export's memory goes: the shares of options.memory.
+struct ExportMemory {
+  explicit ExportMemory(MemoryBudget budget);
+
+  MemoryPlan plan;
+  uint64_t node_pool = 0;    // the node table: corners and anchors are found in it by key
+  uint64_t octant_pool = 0;  // the octant table, read in order (and searched, for metis)
+  uint64_t buffers = 0;      // the output's section buffers, all together
+};
+
+struct ExportResult {
+  uint64_t nodes = 0, elements = 0;
+  uint64_t graph_edges = 0;  // metis: element pairs sharing a face
+  uint64_t bytes = 0;        // written, all files
+};
+
+Status export_mesh(const std::string& db_dir, const ExportOptions& options, ExportResult* result);
+
+}  // namespace weaver

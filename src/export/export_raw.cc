@@ -1,0 +1,224 @@
+// raw: the paper's flat topology for solvers, as a directory of two files:
+//   mesh.bin   little-endian arrays, each starting at a multiple of 64 bytes
+//   mesh.json  for each array its dtype (numpy's spelling), shape, byte
+//              offset in mesh.bin and units, and the mesh's counts and units
+// Arrays:
+//   node_coords       (nodes, 3)     <f8 metres, or <u4 ticks with --units ticks
+//   node_kind         (nodes,)       |u1  0 anchored, 1 edge, 2 face
+//   element_nodes     (elements, 8)  <i8  node ids of corners 0..7, x fastest
+//   element_level     (elements,)    |u1
+//   element_material  (elements, 3)  <f4  vp, vs, rho (when the mesh has them)
+//   dangling_nodes    (dangling,)    <i8  the node ids of dangling nodes
+//   dangling_anchors  (dangling, 4)  <i8  their anchors' ids, -1 past 2 for edges
+// numpy: np.memmap(dir + "/mesh.bin", dtype, "r", offset, tuple(shape)).
+// The directory is built as OUT.tmp and renamed to OUT when complete; an
+// existing OUT is replaced only if it holds a mesh.json (an earlier export).
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "export/writers.h"
+
+namespace weaver {
+namespace {
+
+struct Array {
+  std::string name, dtype;
+  uint64_t rows;
+  int cols;  // 0: one-dimensional
+  uint64_t item_bytes;
+  const char* units;  // "" for none
+  uint64_t offset = 0;
+  uint64_t bytes() const { return rows * std::max(cols, 1) * item_bytes; }
+};
+
+enum : int { kCoords, kKind, kElementNodes, kLevel, kMaterial, kDangling, kAnchors, kArrays };
+
+std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool material) {
+  std::vector<Array> a = {
+      {"node_coords", ticks ? "<u4" : "<f8", n, 3, ticks ? 4u : 8u, ticks ? "ticks" : "m"},
+      {"node_kind", "|u1", n, 0, 1, ""},
+      {"element_nodes", "<i8", e, 8, 8, ""},
+      {"element_level", "|u1", e, 0, 1, ""},
+      {"element_material", "<f4", material ? e : 0, 3, 4, "m/s, m/s, kg/m^3"},
+      {"dangling_nodes", "<i8", d, 0, 8, ""},
+      {"dangling_anchors", "<i8", d, 4, 8, ""}};
+  uint64_t at = 0;
+  for (Array& x : a) x.offset = at, at = (at + x.bytes() + 63) / 64 * 64;
+  return a;
+}
+
+std::string number(double v) {
+  std::string s;
+  char buf[32];
+  s.assign(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
+  return s;
+}
+
+std::string json(const std::vector<Array>& arrays, const ExportJob& job, uint64_t dangling,
+                 bool material) {
+  const Units& u = job.mesh.units();
+  std::string s = "{\n  \"format\": \"weaver-raw\",\n  \"version\": 1,\n";
+  s += "  \"data_file\": \"mesh.bin\",\n  \"byte_order\": \"little\",\n";
+  s += "  \"nodes\": " + std::to_string(job.mesh.node_count()) + ",\n";
+  s += "  \"elements\": " + std::to_string(job.mesh.element_count()) + ",\n";
+  s += "  \"dangling\": " + std::to_string(dangling) + ",\n";
+  s += std::string("  \"units\": \"") + job.unit_name() + "\",\n";
+  s += "  \"tick_m\": " + number(u.tick_m) + ",\n  \"origin_m\": [" + number(u.origin_m[0]) + ", " +
+       number(u.origin_m[1]) + ", " + number(u.origin_m[2]) + "],\n";
+  s += "  \"corner_order\": \"corner k at (x + s*(k&1), y + s*((k>>1)&1), z + s*((k>>2)&1))\",\n";
+  s += "  \"node_kinds\": [\"anchored\", \"edge\", \"face\"],\n  \"arrays\": {";
+  bool first = true;
+  for (int i = 0; i < kArrays; ++i) {
+    if (i == kMaterial && !material) continue;
+    const Array& a = arrays[i];
+    s += first ? "\n" : ",\n";
+    first = false;
+    s += "    \"" + a.name + "\": {\"dtype\": \"" + a.dtype + "\", \"shape\": [" +
+         std::to_string(a.rows) + (a.cols > 0 ? ", " + std::to_string(a.cols) : "") +
+         "], \"offset\": " + std::to_string(a.offset) + ", \"units\": \"" + a.units + "\"}";
+  }
+  return s + "\n  }\n}\n";
+}
+
+Status count_dangling(Mesh& mesh, uint64_t* d) {
+  *d = 0;
+  NodeScan scan;
+  WEAVER_RETURN_IF_ERROR(scan.start(mesh, false));
+  for (; scan.valid(); scan.next()) {
+    *d += scan.node().kind != NodeKind::kAnchored;
+  }
+  WEAVER_RETURN_IF_ERROR(scan.status());
+  return Status::Ok();
+}
+
+Status write_nodes(ExportJob& job, std::vector<Section>& out) {
+  const bool ticks = job.options.units == ExportUnits::kTicks;
+  NodeScan scan;
+  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, true));
+  for (; scan.valid(); scan.next()) {
+    const MeshNode& n = scan.node();
+    if (ticks) {
+      const uint32_t p[3] = {n.c.x, n.c.y, n.c.z};
+      WEAVER_RETURN_IF_ERROR(out[kCoords].put(p, sizeof p));
+    } else {
+      const double p[3] = {job.coord(0, n.c.x), job.coord(1, n.c.y), job.coord(2, n.c.z)};
+      WEAVER_RETURN_IF_ERROR(out[kCoords].put(p, sizeof p));
+    }
+    WEAVER_RETURN_IF_ERROR(out[kKind].value(uint8_t(n.kind)));
+    if (n.kind != NodeKind::kAnchored) {
+      WEAVER_RETURN_IF_ERROR(out[kDangling].value(int64_t(n.id)));
+      int64_t a[4] = {-1, -1, -1, -1};
+      for (int i = 0; i < n.anchor_count; ++i) a[i] = int64_t(n.anchors[i]);
+      WEAVER_RETURN_IF_ERROR(out[kAnchors].put(a, sizeof a));
+    }
+    ++job.result->nodes;
+    job.tick();
+  }
+  WEAVER_RETURN_IF_ERROR(scan.status());
+  return Status::Ok();
+}
+
+Status write_elements(ExportJob& job, std::vector<Section>& out, bool material) {
+  ElementScan scan;
+  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh));
+  for (; scan.valid(); scan.next()) {
+    const MeshElement& e = scan.element();
+    int64_t ids[8];
+    for (int k = 0; k < 8; ++k) ids[k] = int64_t(e.nodes[k]);
+    WEAVER_RETURN_IF_ERROR(out[kElementNodes].put(ids, sizeof ids));
+    WEAVER_RETURN_IF_ERROR(out[kLevel].value(uint8_t(e.octant.level)));
+    if (material) {
+      const float m[3] = {e.vp, e.vs, e.rho};
+      WEAVER_RETURN_IF_ERROR(out[kMaterial].put(m, sizeof m));
+    }
+    ++job.result->elements;
+    job.tick();
+  }
+  WEAVER_RETURN_IF_ERROR(scan.status());
+  return Status::Ok();
+}
+
+Status write_text_file(const std::string& path, const std::string& text) {
+  OutputFile f(path);
+  WEAVER_RETURN_IF_ERROR(f.open());
+  WEAVER_RETURN_IF_ERROR(f.write_at(0, text.data(), text.size()));
+  return f.finish();
+}
+
+bool is_dir(const std::string& p) {
+  struct stat st;
+  return ::stat(p.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+void remove_export_dir(const std::string& dir) {
+  for (const char* f : {"/mesh.bin", "/mesh.json", "/mesh.bin.tmp", "/mesh.json.tmp"}) {
+    std::remove((dir + f).c_str());
+  }
+  ::rmdir(dir.c_str());
+}
+
+// Moves the finished tmp directory to out, replacing an earlier export there.
+Status install_dir(const std::string& tmp, const std::string& out) {
+  struct stat st;
+  const std::string old = out + ".old";
+  if (::stat(out.c_str(), &st) == 0) {
+    if (!is_dir(out) || ::stat((out + "/mesh.json").c_str(), &st) != 0) {
+      return Status::InvalidArgument(out + " exists and is not a raw export: not replacing it");
+    }
+    remove_export_dir(old);
+    if (std::rename(out.c_str(), old.c_str()) != 0) {
+      return Status::IOError("cannot move " + out + " aside: " + std::strerror(errno));
+    }
+  }
+  if (std::rename(tmp.c_str(), out.c_str()) != 0) {
+    return Status::IOError("cannot rename " + tmp + " to " + out + ": " + std::strerror(errno));
+  }
+  remove_export_dir(old);
+  return Status::Ok();
+}
+
+Status write_raw_files(ExportJob& job, const std::string& dir) {
+  const bool material = job.mesh.has_material();
+  uint64_t dangling = 0;
+  WEAVER_RETURN_IF_ERROR(count_dangling(job.mesh, &dangling));
+  const std::vector<Array> arrays =
+      layout(job.mesh.node_count(), job.mesh.element_count(), dangling,
+             job.options.units == ExportUnits::kTicks, material);
+  job.plan(job.mesh.node_count() + job.mesh.element_count());
+  OutputFile bin(dir + "/mesh.bin");
+  WEAVER_RETURN_IF_ERROR(bin.open());
+  std::vector<Section> out;
+  for (const Array& a : arrays) out.emplace_back(bin, a.offset, job.section_buffer);
+  WEAVER_RETURN_IF_ERROR(write_nodes(job, out));
+  WEAVER_RETURN_IF_ERROR(write_elements(job, out, material));
+  for (Section& s : out) WEAVER_RETURN_IF_ERROR(s.flush());
+  for (const Array& a : arrays)
+    job.result->bytes = std::max(job.result->bytes, a.offset + a.bytes());
+  WEAVER_RETURN_IF_ERROR(bin.finish());
+  const std::string text = json(arrays, job, dangling, material);
+  job.result->bytes += text.size();
+  return write_text_file(dir + "/mesh.json", text);
+}
+
+}  // namespace
+
+Status write_raw(ExportJob& job) {
+  const std::string& out = job.options.out;
+  const std::string tmp = out + ".tmp";
+  remove_export_dir(tmp);  // left by an interrupted export
+  if (::mkdir(tmp.c_str(), 0755) != 0) {
+    return Status::IOError("cannot create directory " + tmp + ": " + std::strerror(errno));
+  }
+  Status st = write_raw_files(job, tmp);
+  if (st.ok()) st = install_dir(tmp, out);
+  if (!st.ok()) remove_export_dir(tmp);
+  return st;
+}
+
+}  // namespace weaver

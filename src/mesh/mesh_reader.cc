@@ -1,0 +1,118 @@
+#include "mesh/mesh_reader.h"
+
+#include "db/node_table.h"
+
+namespace weaver {
+
+Status Mesh::open(const std::string& db_dir, uint64_t octant_pool, uint64_t node_pool,
+                  std::unique_ptr<Mesh>* out) {
+  std::unique_ptr<Mesh> m(new Mesh());
+  WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kRead, false, &m->db_));
+  if (!m->db_->has_table(kNodeTable)) {
+    return Status::NotFound(db_dir + ": no mesh yet (run 'weaver extract' first)");
+  }
+  WEAVER_RETURN_IF_ERROR(m->db_->open_table(kNodeTable, node_pool, &m->nodes_));
+  WEAVER_RETURN_IF_ERROR(m->db_->open_table(kOctantTable, octant_pool, &m->octants_));
+  const TableOptions& t = m->octants_->options();
+  units_from_metadata(t.metadata, &m->units_);
+  m->schema_ = t.schema;
+  const Field* vp = m->schema_.find("vp");
+  const Field* vs = m->schema_.find("vs");
+  const Field* rho = m->schema_.find("rho");
+  if (vp != nullptr && vs != nullptr && rho != nullptr) {
+    m->vp_ = vp, m->vs_ = vs, m->rho_ = rho;
+  }
+  *out = std::move(m);
+  return Status::Ok();
+}
+
+Status Mesh::node_id(Coord c, uint64_t* id) {
+  bool present = false;
+  WEAVER_RETURN_IF_ERROR(nodes_->rank_exact(node_key(c), id, &present));
+  if (!present) {
+    return Status::Corruption("node (" + std::to_string(c.x) + " " + std::to_string(c.y) + " " +
+                              std::to_string(c.z) +
+                              ") is missing from the node table: run 'weaver extract' again");
+  }
+  return Status::Ok();
+}
+
+Status Mesh::fill_element(const std::byte* payload, bool with_nodes, MeshElement* e) {
+  for (int k = 0; with_nodes && k < 8; ++k) {
+    WEAVER_RETURN_IF_ERROR(node_id(octant_corner(e->octant, k), &e->nodes[k]));
+  }
+  if (vp_ != nullptr) {
+    e->vp = float(RecordSchema::get_double(payload, *vp_));
+    e->vs = float(RecordSchema::get_double(payload, *vs_));
+    e->rho = float(RecordSchema::get_double(payload, *rho_));
+  }
+  return Status::Ok();
+}
+
+Status Mesh::fill_anchors(MeshNode* n) {
+  Coord a[4];
+  n->anchor_count = node_anchors(n->c, n->kind, a);
+  for (int i = 0; i < n->anchor_count; ++i) {
+    WEAVER_RETURN_IF_ERROR(node_id(a[i], &n->anchors[i]));
+  }
+  return Status::Ok();
+}
+
+Status ElementScan::start(Mesh& mesh, uint64_t first, bool with_nodes) {
+  mesh_ = &mesh;
+  nodes_ = with_nodes;
+  e_ = MeshElement{};
+  e_.id = first;
+  uint64_t key = 0;
+  if (first > 0 && first < mesh.element_count()) {
+    WEAVER_RETURN_IF_ERROR(mesh.octants().select(first, &key, nullptr));
+  } else if (first > 0) {
+    key = ~uint64_t{0};  // past the end
+  }
+  status_ = mesh.octants().seek_cursor(key, &cursor_);
+  if (status_.ok()) status_ = load();
+  return status_;
+}
+
+void ElementScan::next() {
+  ++e_.id;
+  status_ = cursor_.next();
+  if (status_.ok()) status_ = load();
+}
+
+Status ElementScan::load() {
+  if (!cursor_.valid()) return Status::Ok();
+  e_.octant = octant_from_key(cursor_.key());
+  return mesh_->fill_element(cursor_.payload(), nodes_, &e_);
+}
+
+Status NodeScan::start(Mesh& mesh, bool with_anchors) {
+  mesh_ = &mesh;
+  anchors_ = with_anchors;
+  n_ = MeshNode{};
+  status_ = mesh.nodes().seek_cursor(0, &cursor_);
+  if (status_.ok()) status_ = load();
+  return status_;
+}
+
+void NodeScan::next() {
+  ++n_.id;
+  status_ = cursor_.next();
+  if (status_.ok()) status_ = load();
+}
+
+Status NodeScan::load() {
+  if (!cursor_.valid()) return Status::Ok();
+  n_.c = morton_decode(cursor_.key());
+  const uint8_t raw = static_cast<uint8_t>(cursor_.payload()[0]);
+  if (raw > 2) {
+    return Status::Corruption(mesh_->nodes().file_name() + ": bad node kind " +
+                              std::to_string(raw));
+  }
+  n_.kind = static_cast<NodeKind>(raw);
+  n_.anchor_count = 0;
+  if (anchors_) return mesh_->fill_anchors(&n_);
+  return Status::Ok();
+}
+
+}  // namespace weaver

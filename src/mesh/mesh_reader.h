@@ -1,0 +1,114 @@
+// Read access to an extracted mesh: the octant and node tables of one
+// committed state, the ids of an element's corners and of a dangling node's
+// anchors, the material of an element, and scans of both tables in id order.
+// What the transform (export) and the query layer share.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "db/database.h"
+#include "db/octant_table.h"
+#include "schema/node.h"
+#include "schema/octant.h"
+#include "schema/record_schema.h"
+#include "schema/status.h"
+#include "storage/btree.h"
+
+namespace weaver {
+
+struct MeshElement {
+  uint64_t id = 0;
+  Octant octant;
+  std::array<uint64_t, 8> nodes{};  // node ids of corners 0..7 (x fastest)
+  float vp = 0, vs = 0, rho = 0;    // when the mesh has material
+};
+
+struct MeshNode {
+  uint64_t id = 0;
+  Coord c;
+  NodeKind kind = NodeKind::kAnchored;
+  int anchor_count = 0;
+  std::array<uint64_t, 4> anchors{};  // node ids, ascending
+};
+
+class Mesh {
+ public:
+  // Opens the mesh of db_dir read-only.  NotFound when there is no node table
+  // yet (the octree was never extracted).
+  static Status open(const std::string& db_dir, uint64_t octant_pool, uint64_t node_pool,
+                     std::unique_ptr<Mesh>* out);
+
+  BTree& octants() { return *octants_; }
+  BTree& nodes() { return *nodes_; }
+  uint64_t element_count() const { return octants_->size(); }
+  uint64_t node_count() const { return nodes_->size(); }
+  const Units& units() const { return units_; }
+  // Whether the octant table carries vp, vs and rho (a mesh built from a model).
+  bool has_material() const { return vp_ != nullptr; }
+
+  // The id of the node at c; Corruption naming c when the node table lacks it.
+  Status node_id(Coord c, uint64_t* id);
+  // The element's material and (with_nodes) corner ids; its octant and id
+  // are the caller's.
+  Status fill_element(const std::byte* payload, bool with_nodes, MeshElement* e);
+  // A node's anchors, from its coordinate and kind.
+  Status fill_anchors(MeshNode* n);
+
+ private:
+  Mesh() = default;
+  std::unique_ptr<Database> db_;
+  std::unique_ptr<BTree> octants_, nodes_;
+  Units units_;
+  RecordSchema schema_;
+  const Field *vp_ = nullptr, *vs_ = nullptr, *rho_ = nullptr;
+};
+
+// Scans read as leveldb's iterators do:
+//   ElementScan scan;
+//   WEAVER_RETURN_IF_ERROR(scan.start(mesh));
+//   for (; scan.valid(); scan.next()) { ... }
+//   WEAVER_RETURN_IF_ERROR(scan.status());
+
+// The elements from `first` on, in id order, with material and (unless
+// with_nodes is false, which saves 8 lookups an element) corner ids.
+class ElementScan {
+ public:
+  Status start(Mesh& mesh, uint64_t first = 0, bool with_nodes = true);
+  bool valid() const { return status_.ok() && cursor_.valid(); }
+  const MeshElement& element() const { return e_; }  // REQUIRES: valid()
+  // Moves on; an error ends the scan and stays in status().
+  void next();
+  // Check after the loop: whether the scan ended at the end or on an error.
+  const Status& status() const { return status_; }
+
+ private:
+  Status status_;
+  Status load();
+  Mesh* mesh_ = nullptr;
+  bool nodes_ = true;
+  BTreeCursor cursor_;
+  MeshElement e_;
+};
+
+// The nodes in id order, with kind and (if wanted) anchor ids.
+class NodeScan {
+ public:
+  Status start(Mesh& mesh, bool with_anchors);
+  bool valid() const { return status_.ok() && cursor_.valid(); }
+  const MeshNode& node() const { return n_; }  // REQUIRES: valid()
+  void next();                                 // as ElementScan's
+  const Status& status() const { return status_; }
+
+ private:
+  Status status_;
+  Status load();
+  Mesh* mesh_ = nullptr;
+  bool anchors_ = false;
+  BTreeCursor cursor_;
+  MeshNode n_;
+};
+
+}  // namespace weaver

@@ -1,0 +1,289 @@
+#!/usr/bin/python3
+"""Opens weaver's exports with the real tools of the field and checks them
+against the mesh's csv files (which tests/export_test.cc checks against the
+reference mesh of tests/reference/):
+
+  vtu         VTK's own vtkXMLUnstructuredGridReader
+  msh         gmsh itself (gmsh FILE -0 re-writes it) and meshio
+  metis       gpmetis partitions it; the graph equals a brute-force face
+              adjacency computed here from elements.csv
+  metis-mesh  mpmetis partitions it
+  raw         numpy, through mesh.json
+
+usage: check_exports.py WEAVER_BINARY WORK_DIR
+Exits 77 (ctest's skip) when a tool is missing, unless WEAVER_REQUIRE_TOOLS
+is set (as .ci/run does), where a missing tool is a failure.
+"""
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+SKIP = 77
+
+
+def need(what, ok):
+    if ok:
+        return
+    msg = f"check_exports: {what} is not installed"
+    if os.environ.get("WEAVER_REQUIRE_TOOLS"):
+        sys.exit(msg + " (WEAVER_REQUIRE_TOOLS is set)")
+    print(msg + ": skipped")
+    sys.exit(SKIP)
+
+
+try:
+    import numpy as np
+    import vtk
+    from vtk.util.numpy_support import vtk_to_numpy
+    import meshio
+except ImportError as e:  # pragma: no cover
+    need(str(e), False)
+for tool in ("gmsh", "gpmetis", "mpmetis"):
+    need(tool, shutil.which(tool) is not None)
+
+WEAVER, WORK = sys.argv[1], sys.argv[2]
+ROOT = 1 << 20
+
+
+def run(*args, cwd=None):
+    r = subprocess.run(list(args), cwd=cwd, capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"failed: {' '.join(args)}\n{r.stdout}{r.stderr}")
+    return r.stdout
+
+
+def read_csv(path):
+    """Rows of a weaver csv file as a dict of numpy columns."""
+    with open(path) as f:
+        header = f.readline().strip().split(",")
+        rows = [line.rstrip("\n").split(",") for line in f]
+    cols = {}
+    for i, name in enumerate(header):
+        vals = [r[i] for r in rows]
+        if name == "kind":
+            cols[name] = np.array([{"anchored": 0, "edge": 1, "face": 2}[v] for v in vals])
+        else:
+            cols[name] = np.array([int(v) if v != "" else -1 for v in vals], dtype=np.int64)
+    return cols
+
+
+class Mesh:
+    """The csv export of a database: the truth the other formats must match."""
+
+    def __init__(self, db, d):
+        run(WEAVER, "export", db, "--format", "csv", "--out", d, "--quiet")
+        self.n = read_csv(d + "/nodes.csv")
+        self.e = read_csv(d + "/elements.csv")
+        self.corners = np.stack([self.e[f"n{k}"] for k in range(8)], axis=1)
+        self.lo = np.stack([self.e["x"], self.e["y"], self.e["z"]], axis=1)
+        self.edge = ROOT >> self.e["level"]
+        self.ticks = np.stack([self.n["x"], self.n["y"], self.n["z"]], axis=1)
+
+    def metres(self, raw_json):
+        return np.array(raw_json["origin_m"]) + raw_json["tick_m"] * self.ticks
+
+    def face_graph(self):
+        """Brute force: i and j share a face when their closed boxes touch on
+        one axis and overlap with positive length on the other two."""
+        lo, hi = self.lo, self.lo + self.edge[:, None]
+        adj = []
+        for i in range(len(lo)):
+            touch = (hi[i] == lo) | (lo[i] == hi)  # per axis
+            overlap = (np.maximum(lo[i], lo) < np.minimum(hi[i], hi))
+            face = ((touch.sum(1) == 1) & (overlap.sum(1) == 2))
+            face[i] = False
+            adj.append(np.nonzero(face)[0])
+        return adj
+
+
+VTK_ORDER = [0, 1, 3, 2, 4, 5, 7, 6]
+
+
+def hex_volumes(p):
+    """Signed volumes of axis-aligned hexahedra in VTK/Gmsh order, (E, 8, 3):
+    positive when point 1 is +x, point 3 is +y and point 4 is +z of point 0."""
+    a, b, c = p[:, 1] - p[:, 0], p[:, 3] - p[:, 0], p[:, 4] - p[:, 0]
+    return np.einsum("ij,ij->i", a, np.cross(b, c))
+
+
+def check_vtu(db, m, d, raw):
+    path = d + "/m.vtu"
+    run(WEAVER, "export", db, "--format", "vtu", "--out", path, "--quiet")
+    r = vtk.vtkXMLUnstructuredGridReader()
+    r.SetFileName(path)
+    r.Update()
+    g = r.GetOutput()
+    E, N = len(m.e["id"]), len(m.n["id"])
+    assert g.GetNumberOfCells() == E, (g.GetNumberOfCells(), E)
+    assert g.GetNumberOfPoints() == N
+    pts = vtk_to_numpy(g.GetPoints().GetData())
+    assert np.allclose(pts, m.metres(raw)), "points are not the nodes in metres"
+    types = vtk_to_numpy(g.GetCellTypesArray())
+    assert (types == vtk.VTK_HEXAHEDRON).all()
+    conn = vtk_to_numpy(g.GetCells().GetConnectivityArray()).reshape(E, 8)
+    assert (conn == m.corners[:, VTK_ORDER]).all(), "connectivity differs from elements.csv"
+    # VTK's own measure of each cell: positive and edge^3 (a wrong corner
+    # order gives zero, negative or twisted volumes).
+    q = vtk.vtkCellSizeFilter()
+    q.SetInputData(g)
+    q.ComputeVolumeOn()
+    q.Update()
+    vol = vtk_to_numpy(q.GetOutput().GetCellData().GetArray("Volume"))
+    edge_m = m.edge.astype(np.float64) * raw["tick_m"]
+    assert np.allclose(vol, edge_m ** 3, rtol=1e-9), "a cell's volume is not edge^3"
+    assert (hex_volumes(pts[conn]) > 0).all()
+    cd, pd = g.GetCellData(), g.GetPointData()
+    assert (vtk_to_numpy(cd.GetArray("element_id")) == np.arange(E)).all()
+    assert (vtk_to_numpy(cd.GetArray("level")) == m.e["level"]).all()
+    assert np.allclose(vtk_to_numpy(cd.GetArray("edge")), edge_m)
+    assert (vtk_to_numpy(pd.GetArray("node_id")) == np.arange(N)).all()
+    assert (vtk_to_numpy(pd.GetArray("kind")) == m.n["kind"]).all()
+    if "element_material" in raw["arrays"]:
+        mat = raw_array(d + "/m.raw", raw, "element_material")
+        for i, name in enumerate(("vp", "vs", "rho")):
+            assert np.array_equal(vtk_to_numpy(cd.GetArray(name)), mat[:, i]), name
+        assert (mat[:, 0] > mat[:, 1]).all() and (mat[:, 2] > 0).all()
+    else:
+        assert cd.GetArray("vp") is None
+    return "vtu ok"
+
+
+def check_msh(db, m, d, raw):
+    path = d + "/m.msh"
+    run(WEAVER, "export", db, "--format", "msh", "--out", path, "--quiet")
+    # gmsh itself parses the file and writes it back out (format 2.2, which
+    # meshio also reads), failing on anything it does not understand.
+    out = d + "/gmsh_again.msh"
+    log = run("gmsh", path, "-0", "-format", "msh22", "-o", out)
+    assert "Error" not in log, log
+    E = len(m.e["id"])
+    for f in (path, out):
+        mm = meshio.read(f)
+        hexes = [c.data for c in mm.cells if c.type == "hexahedron"]
+        assert len(hexes) == 1 and len(hexes[0]) == E, f
+        conn = hexes[0]
+        assert np.allclose(mm.points, m.metres(raw)), f
+        assert (conn == m.corners[:, VTK_ORDER]).all(), f
+        assert (hex_volumes(mm.points[conn]) > 0).all(), f
+    mm = meshio.read(path)
+    assert (mm.cell_data["level"][0] == m.e["level"]).all()
+    if "element_material" in raw["arrays"]:
+        mat = raw_array(d + "/m.raw", raw, "element_material")
+        assert np.allclose(mm.cell_data["vs"][0], mat[:, 1], rtol=1e-6)
+    return "msh ok (gmsh, meshio)"
+
+
+def check_metis(db, m, d):
+    path = d + "/m.graph"
+    run(WEAVER, "export", db, "--format", "metis", "--out", path, "--quiet")
+    with open(path) as f:
+        n, edges = map(int, f.readline().split()[:2])
+        lists = [np.array([int(t) - 1 for t in line.split()], dtype=np.int64) for line in f]
+    E = len(m.e["id"])
+    assert n == E and len(lists) == E
+    truth = m.face_graph()
+    for i in range(E):
+        assert np.array_equal(lists[i], truth[i]), f"element {i}: {lists[i]} != {truth[i]}"
+    assert edges * 2 == sum(len(a) for a in truth)
+    steps = sum(1 for i in range(E) for j in truth[i] if m.e["level"][j] > m.e["level"][i])
+    parts = 4
+    log = run("gpmetis", path, str(parts))
+    with open(f"{path}.part.{parts}") as f:
+        part = np.array([int(x) for x in f])
+    assert len(part) == E and set(part) == set(range(parts)), log
+    cut = sum(1 for i in range(E) for j in truth[i] if j > i and part[i] != part[j])
+    said = re.search(r"Edgecut:\s*(\d+)", log)
+    assert said and int(said.group(1)) == cut, log
+    return f"metis ok ({edges} edges, {steps} across 2:1 steps, gpmetis edge cut {cut})"
+
+
+def check_metis_mesh(db, m, d):
+    path = d + "/m.mesh"
+    run(WEAVER, "export", db, "--format", "metis-mesh", "--out", path, "--quiet")
+    log = run("mpmetis", path, "2")
+    with open(f"{path}.epart.2") as f:
+        assert sum(1 for _ in f) == len(m.e["id"]), log
+    return "metis-mesh ok (mpmetis)"
+
+
+def raw_array(d, header, name):
+    a = header["arrays"][name]
+    return np.memmap(d + "/" + header["data_file"], dtype=a["dtype"], mode="r",
+                     offset=a["offset"], shape=tuple(a["shape"]))
+
+
+def check_raw(db, m, d):
+    path = d + "/m.raw"
+    run(WEAVER, "export", db, "--format", "raw", "--out", path, "--quiet")
+    with open(path + "/mesh.json") as f:
+        h = json.load(f)
+    assert h["nodes"] == len(m.n["id"]) and h["elements"] == len(m.e["id"])
+    get = lambda name: raw_array(path, h, name)
+    assert np.allclose(get("node_coords"), m.metres(h))
+    assert (get("node_kind") == m.n["kind"]).all()
+    assert (get("element_nodes") == m.corners).all()
+    assert (get("element_level") == m.e["level"]).all()
+    dangling = np.nonzero(m.n["kind"] != 0)[0]
+    assert (get("dangling_nodes") == dangling).all()
+    anchors = np.stack([m.n[f"a{k}"] for k in range(4)], axis=1)[dangling]
+    assert (get("dangling_anchors") == anchors).all()
+    ticks = path + "_ticks"
+    run(WEAVER, "export", db, "--format", "raw", "--units", "ticks", "--out", ticks, "--quiet")
+    with open(ticks + "/mesh.json") as f:
+        ht = json.load(f)
+    assert (raw_array(ticks, ht, "node_coords") == m.ticks).all()
+    return h, f"raw ok ({len(dangling)} dangling nodes)"
+
+
+def weaver_mesh_from_octants(d, args, tick, origin):
+    run(WEAVER, "generate", d + "/o.txt", *args)
+    db = d + "/db"
+    run(WEAVER, "import", db, "--octants", d + "/o.txt", "--tick", tick, "--origin", origin,
+        "--quiet")
+    run(WEAVER, "balance", db, "--quiet")
+    run(WEAVER, "extract", db, "--quiet")
+    return db
+
+
+def main():
+    cases = {
+        # 2:1 steps around a sphere in a 2 x 2 x 1 domain of level-1 blocks
+        "sphere": lambda d: weaver_mesh_from_octants(
+            d, ["--kind", "sphere", "--level", "2", "--max-level", "4", "--blocks", "2,2,1",
+                "--block-level", "1"], "100", "1000,2000,-5000"),
+        # random refinement, balanced by weaver, in 3 x 2 x 2 level-2 blocks
+        "random": lambda d: weaver_mesh_from_octants(
+            d, ["--kind", "random", "--leaves", "600", "--max-level", "6", "--blocks", "3,2,2",
+                "--block-level", "2", "--seed", "7"], "0.5", "0,0,0"),
+    }
+    for name, make in cases.items():
+        d = os.path.join(WORK, name)
+        shutil.rmtree(d, ignore_errors=True)
+        os.makedirs(d)
+        db = make(d)
+        m = Mesh(db, d + "/csv")
+        raw, msg = check_raw(db, m, d)
+        print(f"{name}: {len(m.e['id'])} elements, {len(m.n['id'])} nodes: {msg}")
+        print(f"{name}: {check_vtu(db, m, d, raw)}")
+        print(f"{name}: {check_msh(db, m, d, raw)}")
+        print(f"{name}: {check_metis(db, m, d)}")
+        print(f"{name}: {check_metis_mesh(db, m, d)}")
+    # A mesh built from a velocity model carries vp, vs and rho.
+    d = os.path.join(WORK, "basin")
+    shutil.rmtree(d, ignore_errors=True)
+    os.makedirs(d)
+    db = d + "/db"
+    run(WEAVER, "mesh", db, "--model", "basin", "--freq", "0.03", "--quiet")
+    m = Mesh(db, d + "/csv")
+    raw, msg = check_raw(db, m, d)
+    assert "element_material" in raw["arrays"]
+    print(f"basin: {len(m.e['id'])} elements: {msg}")
+    print(f"basin: {check_vtu(db, m, d, raw)}")
+    print(f"basin: {check_msh(db, m, d, raw)}")
+
+
+if __name__ == "__main__":
+    main()
