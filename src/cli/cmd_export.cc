@@ -1,5 +1,7 @@
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <vector>
 
 #include "cli/cli.h"
 #include "export/export.h"
@@ -10,8 +12,8 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver export DB --format FORMAT --out PATH [--units m|ticks] [--memory BYTES]\n"
-    "                        [--quiet]\n"
+    "usage: weaver export DB --format FORMAT --out PATH [--units m|ticks]\n"
+    "                        [--box X0,Y0,Z0,X1,Y1,Z1] [--parts N] [--memory BYTES] [--quiet]\n"
     "       weaver export DB [--nodes FILE] [--elements FILE]     (csv, as --format csv)\n"
     "\n"
     "Writes the extracted mesh of DB for the tools of the field, streaming, in id\n"
@@ -20,6 +22,9 @@ constexpr char kUsage[] =
     "                       hexahedra in VTK's corner order; cell data element_id,\n"
     "                       level, edge, vp, vs, rho; point data node_id, kind\n"
     "                       (0 anchored, 1 edge-dangling, 2 face-dangling)\n"
+    "  --format pvtu        the vtu in --parts N pieces (consecutive element ids, equal\n"
+    "                       counts): PATH (name.pvtu, the index ParaView opens) and\n"
+    "                       the pieces in the directory name/ beside it\n"
     "  --format msh         Gmsh MSH 4.1 (ASCII): hexahedra, element data level\n"
     "                       (and vp, vs, rho); tags are ids + 1\n"
     "  --format metis       the element dual graph for gpmetis: elements sharing a\n"
@@ -35,8 +40,13 @@ constexpr char kUsage[] =
     "                       are node ids, ascending, empty where fewer than 4)\n"
     "  --elements FILE      id,x,y,z,level,n0,...,n7   (node ids of corners 0..7, x fastest)\n"
     "                       csv coordinates are in ticks\n"
-    "  --units m|ticks      coordinates of vtu, msh and raw (default m: origin + tick\n"
-    "                       size times ticks, as the octant table's metadata says)\n"
+    "  --units m|ticks      coordinates of vtu, msh, raw and --box (default m: origin +\n"
+    "                       tick size times ticks, as the octant table's metadata says)\n"
+    "  --box X0,Y0,Z0,X1,Y1,Z1  vtu, pvtu, msh, raw: only the elements sharing a point\n"
+    "                       with the box, and the nodes they use (raw: and their\n"
+    "                       anchors), renumbered compactly; node_id / element_id\n"
+    "                       (raw: node_global_id / element_global_id) keep global ids\n"
+    "  --parts N            pvtu: the number of pieces (default 1)\n"
     "  --memory BYTES       memory budget (default 256M): the node table's cache (half),\n"
     "                       the octant table's (an eighth, at most 16M) and the output\n"
     "                       buffers (an eighth, at most 12M)\n"
@@ -47,7 +57,8 @@ constexpr char kUsage[] =
 
 int cmd_export(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"nodes", "elements", "memory", "format", "out", "units"},
+  Status st = parse_args(argc, argv, 2,
+                         {"nodes", "elements", "memory", "format", "out", "units", "box", "parts"},
                          {"quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("export", st.message(), kUsage);
@@ -74,6 +85,22 @@ int cmd_export(int argc, char** argv) {
       return usage_error("export", "--units is m or ticks, not '" + u + "'", kUsage);
     }
     o.units = u == "m" ? ExportUnits::kMetres : ExportUnits::kTicks;
+  }
+  if (args.values.count("box")) {
+    std::vector<double> box;
+    st = parse_double_list(args.values["box"], "--box", 6, &box);
+    if (!st.ok()) return usage_error("export", st.message(), kUsage);
+    std::copy(box.begin(), box.end(), o.box);
+    o.has_box = true;
+  }
+  if (args.values.count("parts")) {
+    uint64_t parts = 0;
+    st = parse_count(args.values["parts"], "--parts", &parts);
+    if (st.ok() && (parts < 1 || parts > 100000)) {
+      st = Status::InvalidArgument("--parts must be 1 to 100000");
+    }
+    if (!st.ok()) return usage_error("export", st.message(), kUsage);
+    o.parts = uint32_t(parts);
   }
   st = memory_option(args, &o.memory);
   if (!st.ok()) return usage_error("export", st.message(), kUsage);

@@ -1,5 +1,7 @@
 #include "export/export.h"
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 
 #include "export/writers.h"
@@ -8,11 +10,9 @@ namespace weaver {
 
 bool export_format_from_name(const std::string& name, ExportFormat* out) {
   static const std::pair<const char*, ExportFormat> kNames[] = {
-      {"csv", ExportFormat::kCsv},
-      {"vtu", ExportFormat::kVtu},
-      {"msh", ExportFormat::kMsh},
-      {"metis", ExportFormat::kMetis},
-      {"metis-mesh", ExportFormat::kMetisMesh},
+      {"csv", ExportFormat::kCsv},     {"vtu", ExportFormat::kVtu},
+      {"pvtu", ExportFormat::kPvtu},   {"msh", ExportFormat::kMsh},
+      {"metis", ExportFormat::kMetis}, {"metis-mesh", ExportFormat::kMetisMesh},
       {"raw", ExportFormat::kRaw}};
   for (const auto& [n, f] : kNames) {
     if (name == n) return *out = f, true;
@@ -29,6 +29,52 @@ ExportMemory::ExportMemory(MemoryBudget budget) : plan(budget) {
   octant_pool = plan.take("octant table pool", 1, 8, 16ull << 20);
   // Up to 12 sections of a binary file, each buffering its array's writes.
   buffers = plan.take("output buffers", 1, 8, 12ull << 20);
+  // --box and pieces: the sort of their node ids and the tree they end in.
+  scratch = plan.take("selection's node set", 1, 8);
+}
+
+Status for_each_node(ExportJob& job, bool with_anchors,
+                     const std::function<Status(const MeshNode&)>& fn) {
+  if (job.sel.whole()) {  // one sequential scan
+    NodeScan scan;
+    WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, with_anchors));
+    for (; scan.valid(); scan.next()) {
+      WEAVER_RETURN_IF_ERROR(fn(scan.node()));
+      ++job.result->nodes;
+      job.tick();
+    }
+    return scan.status();
+  }
+  LocalNodes& local = *job.local;
+  MeshNode n;
+  WEAVER_RETURN_IF_ERROR(local.start());
+  while (local.valid()) {
+    WEAVER_RETURN_IF_ERROR(job.mesh.node(local.global(), with_anchors, &n));
+    WEAVER_RETURN_IF_ERROR(fn(n));
+    ++job.result->nodes;
+    job.tick();
+    WEAVER_RETURN_IF_ERROR(local.next());
+  }
+  return Status::Ok();
+}
+
+Status for_each_element(ExportJob& job, bool with_nodes,
+                        const std::function<Status(const MeshElement&)>& fn) {
+  ElementScan scan;
+  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, job.sel.first, false));
+  MeshElement e;
+  for (; scan.valid() && scan.element().id < job.sel.end; scan.next()) {
+    if (!job.sel.keeps(scan.element().octant)) continue;
+    e = scan.element();
+    if (with_nodes) {
+      WEAVER_RETURN_IF_ERROR(job.mesh.corner_ids(e.octant, &e.nodes));
+      for (uint64_t& id : e.nodes) WEAVER_RETURN_IF_ERROR(job.local->local_id(id, &id));
+    }
+    WEAVER_RETURN_IF_ERROR(fn(e));
+    ++job.result->elements;
+    job.tick();
+  }
+  return scan.status();
 }
 
 Status finish_text(ExportJob& job, Section& out, OutputFile& file) {
@@ -45,28 +91,51 @@ Status write_element_lines(ExportJob& job, const std::string& path, const std::s
   Section out(file, 0, job.section_buffer * 4);
   WEAVER_RETURN_IF_ERROR(out.text(head));
   LineBuffer line;
-  ElementScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, 0, with_nodes));
-  for (; scan.valid(); scan.next()) {
-    line_of(scan.element(), line);
+  WEAVER_RETURN_IF_ERROR(for_each_element(job, with_nodes, [&](const MeshElement& e) {
+    line_of(e, line);
     line.ch('\n');
-    WEAVER_RETURN_IF_ERROR(line.emit(out));
-    ++job.result->elements;
-    job.tick();
-  }
-  WEAVER_RETURN_IF_ERROR(scan.status());
+    return line.emit(out);
+  }));
   return finish_text(job, out, file);
+}
+
+Status ExportJob::box_selection(Selection* s) const {
+  const double* b = options.box;
+  uint32_t lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    double l = b[a], h = b[a + 3];
+    if (options.units == ExportUnits::kMetres) {
+      l = (l - mesh.units().origin_m[a]) / mesh.units().tick_m;
+      h = (h - mesh.units().origin_m[a]) / mesh.units().tick_m;
+    }
+    if (!(l <= h)) return Status::InvalidArgument("--box: x0,y0,z0 must not exceed x1,y1,z1");
+    lo[a] = uint32_t(std::clamp(std::floor(l), 0.0, double(kRootEdge)));
+    hi[a] = uint32_t(std::clamp(std::ceil(h), 0.0, double(kRootEdge)));
+  }
+  s->has_box = true;
+  s->lo = {lo[0], lo[1], lo[2]};
+  s->hi = {hi[0], hi[1], hi[2]};
+  return Status::Ok();
 }
 
 Status export_mesh(const std::string& db_dir, const ExportOptions& options, ExportResult* result) {
   *result = ExportResult{};
+  const ExportFormat f = options.format;
+  if (options.has_box &&
+      (f == ExportFormat::kCsv || f == ExportFormat::kMetis || f == ExportFormat::kMetisMesh)) {
+    return Status::InvalidArgument("--box works with vtu, pvtu, msh and raw");
+  }
+  if (options.parts < 1) return Status::InvalidArgument("--parts must be at least 1");
   const ExportMemory memory(options.memory);
   std::unique_ptr<Mesh> mesh;
   WEAVER_RETURN_IF_ERROR(Mesh::open(db_dir, memory.octant_pool, memory.node_pool, &mesh));
-  ExportJob job{*mesh, options, std::max<size_t>(memory.buffers / 12, 4096), result};
+  ExportJob job(*mesh, options, std::max<size_t>(memory.buffers / 12, 4096), memory.scratch,
+                result);
+  WEAVER_RETURN_IF_ERROR(job.select(Selection{}, false, ""));
   switch (options.format) {
     case ExportFormat::kCsv: return write_csv(job);
     case ExportFormat::kVtu: return write_vtu(job);
+    case ExportFormat::kPvtu: return write_pvtu(job);
     case ExportFormat::kMsh: return write_msh(job);
     case ExportFormat::kMetis: return write_metis_graph(job);
     case ExportFormat::kMetisMesh: return write_metis_mesh(job);

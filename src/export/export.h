@@ -4,6 +4,7 @@
 // when complete.
 //
 //   csv        nodes.csv and elements.csv of DESIGN.md (coordinates in ticks)
+//   pvtu       the vtu cut into --parts pieces, and the index ParaView opens
 //   vtu        VTK XML UnstructuredGrid, raw binary appended data, 64-bit
 //              headers and ids; VTK_HEXAHEDRON cells in VTK's corner order;
 //              cell data element_id, level, edge, vp, vs, rho; point data
@@ -27,7 +28,7 @@
 
 namespace weaver {
 
-enum class ExportFormat { kCsv, kVtu, kMsh, kMetis, kMetisMesh, kRaw };
+enum class ExportFormat { kCsv, kVtu, kPvtu, kMsh, kMetis, kMetisMesh, kRaw };
 // "csv", "vtu", ...; false for an unknown name.
 bool export_format_from_name(const std::string& name, ExportFormat* out);
 
@@ -38,8 +39,16 @@ struct ExportOptions {
   // csv: either of these (empty: skip), or out as a directory for both.
   std::string nodes_path, elements_path;
   std::string out;
-  // Coordinates of vtu, msh and raw (csv is always in ticks).
+  // Coordinates of vtu, msh and raw (csv is always in ticks), and of the box.
   ExportUnits units = ExportUnits::kMetres;
+  // vtu, pvtu, msh, raw: only the elements that share a point with the box
+  // x0,y0,z0,x1,y1,z1 (in the units), with just the nodes they use (and, for
+  // raw, the anchors of those that dangle), numbered compactly in global id
+  // order; node_id and element_id keep the global ids.
+  bool has_box = false;
+  double box[6] = {0, 0, 0, 0, 0, 0};
+  // pvtu: pieces of consecutive element ids, equal in count.
+  uint32_t parts = 1;
   MemoryBudget memory;
   // Items written (nodes, then elements) and their fraction of all of them.
   ProgressFn progress;
@@ -53,6 +62,7 @@ struct ExportMemory {
   uint64_t node_pool = 0;    // the node table: corners and anchors are found in it by key
   uint64_t octant_pool = 0;  // the octant table, read in order (and searched, for metis)
   uint64_t buffers = 0;      // the output's section buffers, all together
+  uint64_t scratch = 0;      // a selection's node set: its sort and its tree
 };
 
 struct ExportResult {

@@ -11,13 +11,10 @@ namespace {
 Status write_nodes(ExportJob& job, const std::string& path) {
   OutputFile file(path);
   WEAVER_RETURN_IF_ERROR(file.open());
-  Section out(file, 0, job.section_buffer);
+  Section out(file, 0, job.section_buffer * 4);
+  WEAVER_RETURN_IF_ERROR(out.text("id,x,y,z,kind,a0,a1,a2,a3\n"));
   LineBuffer line;
-  line.text("id,x,y,z,kind,a0,a1,a2,a3\n");
-  NodeScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, true));
-  for (; scan.valid(); scan.next()) {
-    const MeshNode& n = scan.node();
+  WEAVER_RETURN_IF_ERROR(for_each_node(job, true, [&](const MeshNode& n) {
     line.field(n.id), line.ch(','), line.field(uint64_t{n.c.x}), line.ch(',');
     line.field(uint64_t{n.c.y}), line.ch(','), line.field(uint64_t{n.c.z}), line.ch(',');
     line.text(node_kind_name(n.kind));
@@ -26,11 +23,8 @@ Status write_nodes(ExportJob& job, const std::string& path) {
       if (i < n.anchor_count) line.field(n.anchors[i]);
     }
     line.ch('\n');
-    WEAVER_RETURN_IF_ERROR(line.emit(out));
-    ++job.result->nodes;
-    job.tick();
-  }
-  WEAVER_RETURN_IF_ERROR(scan.status());
+    return line.emit(out);
+  }));
   return finish_text(job, out, file);
 }
 

@@ -31,11 +31,9 @@ Status write_metis_graph(ExportJob& job) {
   std::vector<FaceNeighbor> around;
   std::vector<uint64_t> ids;
   uint64_t degree_sum = 0;
-  ElementScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, 0, false));
-  for (; scan.valid(); scan.next()) {
+  WEAVER_RETURN_IF_ERROR(for_each_element(job, false, [&](const MeshElement& e) {
     around.clear();
-    WEAVER_RETURN_IF_ERROR(face_neighbors(job.mesh.octants(), scan.element().octant, &around));
+    WEAVER_RETURN_IF_ERROR(face_neighbors(job.mesh.octants(), e.octant, &around));
     ids.clear();
     for (const FaceNeighbor& n : around) ids.push_back(n.id);
     std::sort(ids.begin(), ids.end());
@@ -44,12 +42,9 @@ Status write_metis_graph(ExportJob& job) {
       line.field(ids[i] + 1);
     }
     line.ch('\n');
-    WEAVER_RETURN_IF_ERROR(line.emit(out));
     degree_sum += ids.size();
-    ++job.result->elements;
-    job.tick();
-  }
-  WEAVER_RETURN_IF_ERROR(scan.status());
+    return line.emit(out);
+  }));
   WEAVER_RETURN_IF_ERROR(out.flush());
   if (degree_sum % 2 != 0) {
     return Status::Corruption("the face graph is not symmetric (" + std::to_string(degree_sum) +

@@ -10,6 +10,9 @@
 //   element_material  (elements, 3)  <f4  vp, vs, rho (when the mesh has them)
 //   dangling_nodes    (dangling,)    <i8  the node ids of dangling nodes
 //   dangling_anchors  (dangling, 4)  <i8  their anchors' ids, -1 past 2 for edges
+//   node_global_id    (nodes,)       <i8  with --box: the node's id in the whole mesh
+//   element_global_id (elements,)    <i8  with --box: the element's id in the whole mesh
+// With --box, node ids in the arrays are local: positions in node_coords.
 // numpy: np.memmap(dir + "/mesh.bin", dtype, "r", offset, tuple(shape)).
 // The directory is built as OUT.tmp and renamed to OUT when complete; an
 // existing OUT is replaced only if it holds a mesh.json (an earlier export).
@@ -37,9 +40,23 @@ struct Array {
   uint64_t bytes() const { return rows * std::max(cols, 1) * item_bytes; }
 };
 
-enum : int { kCoords, kKind, kElementNodes, kLevel, kMaterial, kDangling, kAnchors, kArrays };
+enum : int {
+  kCoords,
+  kKind,
+  kElementNodes,
+  kLevel,
+  kMaterial,
+  kDangling,
+  kAnchors,
+  kNodeGlobal,
+  kElementGlobal,
+  kArrays
+};
 
-std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool material) {
+// Arrays with no rows (no material, the whole mesh's global ids) are left
+// out of mesh.json.
+std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool material,
+                          bool selected) {
   std::vector<Array> a = {
       {"node_coords", ticks ? "<u4" : "<f8", n, 3, ticks ? 4u : 8u, ticks ? "ticks" : "m"},
       {"node_kind", "|u1", n, 0, 1, ""},
@@ -47,7 +64,9 @@ std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool m
       {"element_level", "|u1", e, 0, 1, ""},
       {"element_material", "<f4", material ? e : 0, 3, 4, "m/s, m/s, kg/m^3"},
       {"dangling_nodes", "<i8", d, 0, 8, ""},
-      {"dangling_anchors", "<i8", d, 4, 8, ""}};
+      {"dangling_anchors", "<i8", d, 4, 8, ""},
+      {"node_global_id", "<i8", selected ? n : 0, 0, 8, ""},
+      {"element_global_id", "<i8", selected ? e : 0, 0, 8, ""}};
   uint64_t at = 0;
   for (Array& x : a) x.offset = at, at = (at + x.bytes() + 63) / 64 * 64;
   return a;
@@ -60,13 +79,12 @@ std::string number(double v) {
   return s;
 }
 
-std::string json(const std::vector<Array>& arrays, const ExportJob& job, uint64_t dangling,
-                 bool material) {
+std::string json(const std::vector<Array>& arrays, const ExportJob& job, uint64_t dangling) {
   const Units& u = job.mesh.units();
   std::string s = "{\n  \"format\": \"weaver-raw\",\n  \"version\": 1,\n";
   s += "  \"data_file\": \"mesh.bin\",\n  \"byte_order\": \"little\",\n";
-  s += "  \"nodes\": " + std::to_string(job.mesh.node_count()) + ",\n";
-  s += "  \"elements\": " + std::to_string(job.mesh.element_count()) + ",\n";
+  s += "  \"nodes\": " + std::to_string(job.node_count()) + ",\n";
+  s += "  \"elements\": " + std::to_string(job.element_count()) + ",\n";
   s += "  \"dangling\": " + std::to_string(dangling) + ",\n";
   s += std::string("  \"units\": \"") + job.unit_name() + "\",\n";
   s += "  \"tick_m\": " + number(u.tick_m) + ",\n  \"origin_m\": [" + number(u.origin_m[0]) + ", " +
@@ -75,8 +93,8 @@ std::string json(const std::vector<Array>& arrays, const ExportJob& job, uint64_
   s += "  \"node_kinds\": [\"anchored\", \"edge\", \"face\"],\n  \"arrays\": {";
   bool first = true;
   for (int i = 0; i < kArrays; ++i) {
-    if (i == kMaterial && !material) continue;
     const Array& a = arrays[i];
+    if (a.rows == 0 && i != kDangling && i != kAnchors) continue;
     s += first ? "\n" : ",\n";
     first = false;
     s += "    \"" + a.name + "\": {\"dtype\": \"" + a.dtype + "\", \"shape\": [" +
@@ -86,23 +104,25 @@ std::string json(const std::vector<Array>& arrays, const ExportJob& job, uint64_
   return s + "\n  }\n}\n";
 }
 
-Status count_dangling(Mesh& mesh, uint64_t* d) {
+// Dangling nodes of the selection: a pass that leaves the counts as they were.
+Status count_dangling(ExportJob& job, uint64_t* d) {
+  const ExportResult before = *job.result;
+  const uint64_t done = job.done;
   *d = 0;
-  NodeScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(mesh, false));
-  for (; scan.valid(); scan.next()) {
-    *d += scan.node().kind != NodeKind::kAnchored;
-  }
-  WEAVER_RETURN_IF_ERROR(scan.status());
-  return Status::Ok();
+  const Status st = for_each_node(job, false, [d](const MeshNode& n) {
+    *d += n.kind != NodeKind::kAnchored;
+    return Status::Ok();
+  });
+  *job.result = before;
+  job.done = done;
+  return st;
 }
 
 Status write_nodes(ExportJob& job, std::vector<Section>& out) {
   const bool ticks = job.options.units == ExportUnits::kTicks;
-  NodeScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, true));
-  for (; scan.valid(); scan.next()) {
-    const MeshNode& n = scan.node();
+  const bool selected = !job.sel.whole();
+  uint64_t local = 0;
+  return for_each_node(job, true, [&](const MeshNode& n) {
     if (ticks) {
       const uint32_t p[3] = {n.c.x, n.c.y, n.c.z};
       WEAVER_RETURN_IF_ERROR(out[kCoords].put(p, sizeof p));
@@ -111,37 +131,34 @@ Status write_nodes(ExportJob& job, std::vector<Section>& out) {
       WEAVER_RETURN_IF_ERROR(out[kCoords].put(p, sizeof p));
     }
     WEAVER_RETURN_IF_ERROR(out[kKind].value(uint8_t(n.kind)));
+    if (selected) WEAVER_RETURN_IF_ERROR(out[kNodeGlobal].value(int64_t(n.id)));
     if (n.kind != NodeKind::kAnchored) {
-      WEAVER_RETURN_IF_ERROR(out[kDangling].value(int64_t(n.id)));
+      WEAVER_RETURN_IF_ERROR(out[kDangling].value(int64_t(local)));
       int64_t a[4] = {-1, -1, -1, -1};
-      for (int i = 0; i < n.anchor_count; ++i) a[i] = int64_t(n.anchors[i]);
+      for (int i = 0; i < n.anchor_count; ++i) {
+        uint64_t id = 0;
+        WEAVER_RETURN_IF_ERROR(job.local->local_id(n.anchors[i], &id));
+        a[i] = int64_t(id);
+      }
       WEAVER_RETURN_IF_ERROR(out[kAnchors].put(a, sizeof a));
     }
-    ++job.result->nodes;
-    job.tick();
-  }
-  WEAVER_RETURN_IF_ERROR(scan.status());
-  return Status::Ok();
+    ++local;
+    return Status::Ok();
+  });
 }
 
 Status write_elements(ExportJob& job, std::vector<Section>& out, bool material) {
-  ElementScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh));
-  for (; scan.valid(); scan.next()) {
-    const MeshElement& e = scan.element();
+  const bool selected = !job.sel.whole();
+  return for_each_element(job, true, [&](const MeshElement& e) {
     int64_t ids[8];
     for (int k = 0; k < 8; ++k) ids[k] = int64_t(e.nodes[k]);
     WEAVER_RETURN_IF_ERROR(out[kElementNodes].put(ids, sizeof ids));
     WEAVER_RETURN_IF_ERROR(out[kLevel].value(uint8_t(e.octant.level)));
-    if (material) {
-      const float m[3] = {e.vp, e.vs, e.rho};
-      WEAVER_RETURN_IF_ERROR(out[kMaterial].put(m, sizeof m));
-    }
-    ++job.result->elements;
-    job.tick();
-  }
-  WEAVER_RETURN_IF_ERROR(scan.status());
-  return Status::Ok();
+    if (selected) WEAVER_RETURN_IF_ERROR(out[kElementGlobal].value(int64_t(e.id)));
+    if (!material) return Status::Ok();
+    const float m[3] = {e.vp, e.vs, e.rho};
+    return out[kMaterial].put(m, sizeof m);
+  });
 }
 
 Status write_text_file(const std::string& path, const std::string& text) {
@@ -185,12 +202,17 @@ Status install_dir(const std::string& tmp, const std::string& out) {
 
 Status write_raw_files(ExportJob& job, const std::string& dir) {
   const bool material = job.mesh.has_material();
+  if (job.options.has_box) {
+    Selection s;
+    WEAVER_RETURN_IF_ERROR(job.box_selection(&s));
+    WEAVER_RETURN_IF_ERROR(job.select(s, true, dir + "/scratch"));
+  }
   uint64_t dangling = 0;
-  WEAVER_RETURN_IF_ERROR(count_dangling(job.mesh, &dangling));
+  WEAVER_RETURN_IF_ERROR(count_dangling(job, &dangling));
   const std::vector<Array> arrays =
-      layout(job.mesh.node_count(), job.mesh.element_count(), dangling,
-             job.options.units == ExportUnits::kTicks, material);
-  job.plan(job.mesh.node_count() + job.mesh.element_count());
+      layout(job.node_count(), job.element_count(), dangling,
+             job.options.units == ExportUnits::kTicks, material, !job.sel.whole());
+  job.plan(job.node_count() + job.element_count());
   OutputFile bin(dir + "/mesh.bin");
   WEAVER_RETURN_IF_ERROR(bin.open());
   std::vector<Section> out;
@@ -201,7 +223,8 @@ Status write_raw_files(ExportJob& job, const std::string& dir) {
   for (const Array& a : arrays)
     job.result->bytes = std::max(job.result->bytes, a.offset + a.bytes());
   WEAVER_RETURN_IF_ERROR(bin.finish());
-  const std::string text = json(arrays, job, dangling, material);
+  const std::string text = json(arrays, job, dangling);
+  job.local.reset();  // its scratch files go before the directory is renamed
   job.result->bytes += text.size();
   return write_text_file(dir + "/mesh.json", text);
 }
@@ -217,7 +240,10 @@ Status write_raw(ExportJob& job) {
   }
   Status st = write_raw_files(job, tmp);
   if (st.ok()) st = install_dir(tmp, out);
-  if (!st.ok()) remove_export_dir(tmp);
+  if (!st.ok()) {
+    job.local.reset();
+    remove_export_dir(tmp);
+  }
   return st;
 }
 

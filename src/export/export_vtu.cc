@@ -5,12 +5,19 @@
 // and each array streams into its own section of the file: one pass over the
 // nodes, one over the elements.
 //
-//   PointData  node_id Int64, kind UInt8 (0 anchored, 1 edge, 2 face)
-//   CellData   element_id Int64, level UInt8, edge Float64 (in the units),
-//              vp vs rho Float32 (when the mesh has material)
+//   PointData  node_id Int64 (global ids), kind UInt8 (0 anchored, 1 edge, 2 face)
+//   CellData   element_id Int64 (global ids), level UInt8, edge Float64 (in
+//              the units), vp vs rho Float32 (when the mesh has material)
 //   Points     Float64 x 3 (metres by default, or ticks)
 //   Cells      connectivity Int64 (VTK's corner order), offsets Int64,
 //              types UInt8 (12, VTK_HEXAHEDRON)
+//
+// pvtu: the elements cut into --parts pieces of consecutive ids (equal
+// counts), each a vtu of the nodes it uses, in the directory STEM/ beside
+// STEM.pvtu, the index ParaView opens; written last, so an index is never
+// left pointing at missing pieces.
+#include <sys/stat.h>
+
 #include <vector>
 
 #include "export/writers.h"
@@ -45,73 +52,69 @@ enum : int {
   kArrays
 };
 
-std::vector<Array> layout(uint64_t n, uint64_t e) {
+// Without material, vp, vs and rho take no bytes and are not declared.
+std::vector<Array> layout(uint64_t n, uint64_t e, bool material) {
+  const uint64_t m = material ? 4 * e : 0;
   std::vector<Array> a = {{"node_id", "Int64", 1, 8 * n},    {"kind", "UInt8", 1, n},
                           {"element_id", "Int64", 1, 8 * e}, {"level", "UInt8", 1, e},
-                          {"edge", "Float64", 1, 8 * e},     {"vp", "Float32", 1, 4 * e},
-                          {"vs", "Float32", 1, 4 * e},       {"rho", "Float32", 1, 4 * e},
+                          {"edge", "Float64", 1, 8 * e},     {"vp", "Float32", 1, m},
+                          {"vs", "Float32", 1, m},           {"rho", "Float32", 1, m},
                           {"Points", "Float64", 3, 24 * n},  {"connectivity", "Int64", 1, 64 * e},
                           {"offsets", "Int64", 1, 8 * e},    {"types", "UInt8", 1, e}};
   uint64_t at = 0;
-  for (Array& x : a) x.offset = at, at += 8 + x.bytes;
+  for (int i = 0; i < kArrays; ++i) {
+    if (!material && i >= kVp && i <= kRho) continue;
+    a[i].offset = at, at += 8 + a[i].bytes;
+  }
   return a;
 }
 
-std::string data_array(const Array& a) {
-  std::string s = "        <DataArray type=\"" + std::string(a.type) + "\" Name=\"" + a.name + "\"";
+// A DataArray element; `p` for the PDataArray of a pvtu (no data).
+std::string data_array(const Array& a, bool p = false) {
+  std::string s = std::string(p ? "      <PDataArray" : "        <DataArray") + " type=\"" +
+                  a.type + "\" Name=\"" + a.name + "\"";
   if (a.components > 1) s += " NumberOfComponents=\"" + std::to_string(a.components) + "\"";
+  if (p) return s + "/>\n";
   return s + " format=\"appended\" offset=\"" + std::to_string(a.offset) + "\"/>\n";
 }
 
+// The point data, cell data and points declarations, as a vtu or pvtu has them.
+std::string declarations(const std::vector<Array>& a, bool material, bool p) {
+  const std::string in = p ? "    <P" : "      <", out = p ? "    </P" : "      </";
+  std::string s = in + "PointData>\n" + data_array(a[kNodeId], p) + data_array(a[kKind], p) + out +
+                  "PointData>\n";
+  s += in + "CellData>\n" + data_array(a[kElementId], p) + data_array(a[kLevel], p) +
+       data_array(a[kEdge], p);
+  if (material) s += data_array(a[kVp], p) + data_array(a[kVs], p) + data_array(a[kRho], p);
+  return s + out + "CellData>\n" + in + "Points>\n" + data_array(a[kPoints], p) + out + "Points>\n";
+}
+
+constexpr char kVtkFile[] = "<?xml version=\"1.0\"?>\n<VTKFile type=\"";
+constexpr char kVtkFileEnd[] =
+    "\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
+
 std::string header(const std::vector<Array>& a, uint64_t n, uint64_t e, bool material) {
-  std::string s =
-      "<?xml version=\"1.0\"?>\n"
-      "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
-      "header_type=\"UInt64\">\n"
-      "  <UnstructuredGrid>\n"
-      "    <Piece NumberOfPoints=\"" +
-      std::to_string(n) + "\" NumberOfCells=\"" + std::to_string(e) + "\">\n";
-  s += "      <PointData>\n" + data_array(a[kNodeId]) + data_array(a[kKind]) +
-       "      </PointData>\n";
-  s += "      <CellData>\n" + data_array(a[kElementId]) + data_array(a[kLevel]) +
-       data_array(a[kEdge]);
-  if (material) s += data_array(a[kVp]) + data_array(a[kVs]) + data_array(a[kRho]);
-  s += "      </CellData>\n      <Points>\n" + data_array(a[kPoints]) + "      </Points>\n";
+  std::string s = std::string(kVtkFile) + "UnstructuredGrid" + kVtkFileEnd +
+                  "  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"" + std::to_string(n) +
+                  "\" NumberOfCells=\"" + std::to_string(e) + "\">\n";
+  s += declarations(a, material, false);
   s += "      <Cells>\n" + data_array(a[kConn]) + data_array(a[kOffsets]) + data_array(a[kTypes]) +
        "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n_";
   return s;
 }
 
-// One section per array, starting at its byte count.
-struct Sections {
-  std::vector<Section> s;
-  Sections(OutputFile& f, const std::vector<Array>& a, uint64_t base, size_t buffer) {
-    for (const Array& x : a) s.emplace_back(f, base + x.offset, buffer);
-  }
-  Section& operator[](int i) { return s[i]; }
-};
-
-Status write_nodes(ExportJob& job, Sections& out) {
-  NodeScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, false));
-  for (; scan.valid(); scan.next()) {
-    const MeshNode& n = scan.node();
+Status write_points(ExportJob& job, std::vector<Section>& out) {
+  return for_each_node(job, false, [&](const MeshNode& n) {
     WEAVER_RETURN_IF_ERROR(out[kNodeId].value(int64_t(n.id)));
     WEAVER_RETURN_IF_ERROR(out[kKind].value(uint8_t(n.kind)));
     const double p[3] = {job.coord(0, n.c.x), job.coord(1, n.c.y), job.coord(2, n.c.z)};
-    WEAVER_RETURN_IF_ERROR(out[kPoints].put(p, sizeof p));
-    ++job.result->nodes;
-    job.tick();
-  }
-  WEAVER_RETURN_IF_ERROR(scan.status());
-  return Status::Ok();
+    return out[kPoints].put(p, sizeof p);
+  });
 }
 
-Status write_elements(ExportJob& job, Sections& out, bool material) {
-  ElementScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh));
-  for (; scan.valid(); scan.next()) {
-    const MeshElement& e = scan.element();
+Status write_cells(ExportJob& job, std::vector<Section>& out, bool material) {
+  int64_t cells = 0;
+  return for_each_element(job, true, [&](const MeshElement& e) {
     WEAVER_RETURN_IF_ERROR(out[kElementId].value(int64_t(e.id)));
     WEAVER_RETURN_IF_ERROR(out[kLevel].value(uint8_t(e.octant.level)));
     WEAVER_RETURN_IF_ERROR(out[kEdge].value(job.length(octant_edge(e.octant))));
@@ -123,45 +126,83 @@ Status write_elements(ExportJob& job, Sections& out, bool material) {
     int64_t conn[8];
     for (int i = 0; i < 8; ++i) conn[i] = int64_t(e.nodes[kVtkHexCorner[i]]);
     WEAVER_RETURN_IF_ERROR(out[kConn].put(conn, sizeof conn));
-    WEAVER_RETURN_IF_ERROR(out[kOffsets].value(int64_t(8 * (e.id + 1))));
-    WEAVER_RETURN_IF_ERROR(out[kTypes].value(kVtkHexahedron));
-    ++job.result->elements;
-    job.tick();
-  }
-  WEAVER_RETURN_IF_ERROR(scan.status());
-  return Status::Ok();
+    WEAVER_RETURN_IF_ERROR(out[kOffsets].value(int64_t(8 * ++cells)));
+    return out[kTypes].value(kVtkHexahedron);
+  });
 }
 
-}  // namespace
-
-Status write_vtu(ExportJob& job) {
-  const uint64_t n = job.mesh.node_count(), e = job.mesh.element_count();
+// One vtu of the job's selection.
+Status write_vtu_file(ExportJob& job, const std::string& path) {
+  const uint64_t n = job.node_count(), e = job.element_count();
   const bool material = job.mesh.has_material();
-  std::vector<Array> arrays = layout(n, e);
-  if (!material) {  // no vp, vs, rho: the later arrays move up
-    const uint64_t gap = arrays[kPoints].offset - arrays[kVp].offset;
-    for (int i = kVp; i <= kRho; ++i) arrays[i].bytes = 0;
-    for (int i = kPoints; i < kArrays; ++i) arrays[i].offset -= gap;
-  }
+  const std::vector<Array> arrays = layout(n, e, material);
   const std::string head = header(arrays, n, e, material);
-  OutputFile file(job.options.out);
+  OutputFile file(path);
   WEAVER_RETURN_IF_ERROR(file.open());
   WEAVER_RETURN_IF_ERROR(file.write_at(0, head.data(), head.size()));
   const uint64_t base = head.size();
-  Sections out(file, arrays, base, job.section_buffer);
+  std::vector<Section> out;
+  for (const Array& a : arrays) out.emplace_back(file, base + a.offset, job.section_buffer);
   for (int i = 0; i < kArrays; ++i) {
-    if (!material && i >= kVp && i <= kRho) continue;
-    WEAVER_RETURN_IF_ERROR(out[i].value(arrays[i].bytes));
+    if (material || i < kVp || i > kRho) WEAVER_RETURN_IF_ERROR(out[i].value(arrays[i].bytes));
   }
-  job.plan(n + e);
-  WEAVER_RETURN_IF_ERROR(write_nodes(job, out));
-  WEAVER_RETURN_IF_ERROR(write_elements(job, out, material));
-  for (Section& s : out.s) WEAVER_RETURN_IF_ERROR(s.flush());
+  WEAVER_RETURN_IF_ERROR(write_points(job, out));
+  WEAVER_RETURN_IF_ERROR(write_cells(job, out, material));
+  for (Section& s : out) WEAVER_RETURN_IF_ERROR(s.flush());
   const Array& last = arrays[kTypes];
   const std::string tail = "\n  </AppendedData>\n</VTKFile>\n";
   const uint64_t end = base + last.offset + 8 + last.bytes;
   WEAVER_RETURN_IF_ERROR(file.write_at(end, tail.data(), tail.size()));
   job.result->bytes += end + tail.size();
+  return file.finish();
+}
+
+std::string base_name(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+}  // namespace
+
+Status write_vtu(ExportJob& job) {
+  job.plan(job.node_count() + job.element_count());
+  if (job.options.has_box) {
+    Selection s;
+    WEAVER_RETURN_IF_ERROR(job.box_selection(&s));
+    WEAVER_RETURN_IF_ERROR(job.select(s, false, job.options.out + ".scratch"));
+  }
+  return write_vtu_file(job, job.options.out);
+}
+
+Status write_pvtu(ExportJob& job) {
+  const std::string& out = job.options.out;
+  const bool suffix = out.size() > 5 && out.compare(out.size() - 5, 5, ".pvtu") == 0;
+  const std::string stem = suffix ? out.substr(0, out.size() - 5) : out;
+  if (::mkdir(stem.c_str(), 0755) != 0 && errno != EEXIST) {
+    return Status::IOError("cannot create directory " + stem + ": " + std::strerror(errno));
+  }
+  const uint64_t elements = job.mesh.element_count(), parts = job.options.parts;
+  job.plan(job.mesh.node_count() + elements);
+  Selection s;
+  if (job.options.has_box) WEAVER_RETURN_IF_ERROR(job.box_selection(&s));
+  std::string pieces;
+  for (uint64_t p = 0; p < parts; ++p) {
+    s.first = elements * p / parts;
+    s.end = elements * (p + 1) / parts;
+    WEAVER_RETURN_IF_ERROR(job.select(s, false, out + ".scratch"));
+    const std::string name = base_name(stem) + "_" + std::to_string(p) + ".vtu";
+    WEAVER_RETURN_IF_ERROR(write_vtu_file(job, stem + "/" + name));
+    pieces += "    <Piece Source=\"" + base_name(stem) + "/" + name + "\"/>\n";
+  }
+  const bool material = job.mesh.has_material();
+  const std::string index = std::string(kVtkFile) + "PUnstructuredGrid" + kVtkFileEnd +
+                            "  <PUnstructuredGrid GhostLevel=\"0\">\n" +
+                            declarations(layout(0, 0, material), material, true) + pieces +
+                            "  </PUnstructuredGrid>\n</VTKFile>\n";
+  OutputFile file(out);
+  WEAVER_RETURN_IF_ERROR(file.open());
+  WEAVER_RETURN_IF_ERROR(file.write_at(0, index.data(), index.size()));
+  job.result->bytes += index.size();
   return file.finish();
 }
 

@@ -4,10 +4,12 @@
 
 #include <array>
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "export/export.h"
 #include "export/output_file.h"
+#include "export/selection.h"
 #include "mesh/mesh_reader.h"
 
 namespace weaver {
@@ -18,11 +20,30 @@ namespace weaver {
 inline constexpr std::array<int, 8> kVtkHexCorner = {0, 1, 3, 2, 4, 5, 7, 6};
 
 struct ExportJob {
+  ExportJob(Mesh& m, const ExportOptions& o, size_t buffer, uint64_t scratch, ExportResult* r)
+      : mesh(m), options(o), section_buffer(buffer), scratch_bytes(scratch), result(r) {}
+
   Mesh& mesh;
   const ExportOptions& options;
-  size_t section_buffer;  // bytes for each section of an output file
+  size_t section_buffer;   // bytes for each section of an output file
+  uint64_t scratch_bytes;  // for building a selection's node set
   ExportResult* result;
   uint64_t done = 0, total = 1;
+  // What is written: the whole mesh unless --box or a piece says otherwise.
+  // (select() must run before the writer: for the whole mesh it is cheap.)
+  Selection sel;
+  std::unique_ptr<LocalNodes> local;
+
+  // Builds `local` for s (with the anchors of dangling nodes, for raw).
+  Status select(const Selection& s, bool with_anchors, const std::string& scratch_dir) {
+    sel = s;
+    local = std::make_unique<LocalNodes>();
+    return local->build(mesh, sel, with_anchors, scratch_dir, scratch_bytes);
+  }
+  // The Selection of options.box (in ticks, the far bounds rounded up).
+  Status box_selection(Selection* s) const;
+  uint64_t node_count() const { return local->node_count(); }
+  uint64_t element_count() const { return local->element_count(); }
 
   // Before the passes: how many items (nodes and elements) they write.
   void plan(uint64_t items) { total = std::max<uint64_t>(items, 1); }
@@ -41,6 +62,15 @@ struct ExportJob {
   const char* unit_name() const { return options.units == ExportUnits::kTicks ? "ticks" : "m"; }
 };
 
+// Calls fn for each node of the selection in local id order (id and anchors
+// stay global ids: map them with job.local), anchors looked up if asked.
+Status for_each_node(ExportJob& job, bool with_anchors,
+                     const std::function<Status(const MeshNode&)>& fn);
+// Calls fn for each selected element in id order; with_nodes, its corners
+// are local node ids.  Counts elements in the result and ticks progress.
+Status for_each_element(ExportJob& job, bool with_nodes,
+                        const std::function<Status(const MeshElement&)>& fn);
+
 // Ends a text file written as one section: flushes, counts its bytes, and
 // renames it into place.
 Status finish_text(ExportJob& job, Section& out, OutputFile& file);
@@ -52,6 +82,7 @@ Status write_element_lines(ExportJob& job, const std::string& path, const std::s
 
 Status write_csv(ExportJob& job);
 Status write_vtu(ExportJob& job);
+Status write_pvtu(ExportJob& job);
 Status write_msh(ExportJob& job);
 Status write_metis_graph(ExportJob& job);
 Status write_metis_mesh(ExportJob& job);

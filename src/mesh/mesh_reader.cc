@@ -37,10 +37,32 @@ Status Mesh::node_id(Coord c, uint64_t* id) {
   return Status::Ok();
 }
 
-Status Mesh::fill_element(const std::byte* payload, bool with_nodes, MeshElement* e) {
-  for (int k = 0; with_nodes && k < 8; ++k) {
-    WEAVER_RETURN_IF_ERROR(node_id(octant_corner(e->octant, k), &e->nodes[k]));
+Status Mesh::corner_ids(const Octant& o, std::array<uint64_t, 8>* ids) {
+  for (int k = 0; k < 8; ++k) WEAVER_RETURN_IF_ERROR(node_id(octant_corner(o, k), &(*ids)[k]));
+  return Status::Ok();
+}
+
+Status Mesh::node(uint64_t id, bool with_anchors, MeshNode* out) {
+  if (id >= nodes_->size()) {
+    return Status::InvalidArgument("node " + std::to_string(id) + " does not exist (" +
+                                   std::to_string(nodes_->size()) + " nodes)");
   }
+  uint64_t key = 0;
+  std::byte kind{};
+  WEAVER_RETURN_IF_ERROR(nodes_->select(id, &key, &kind));
+  out->id = id;
+  out->c = morton_decode(key);
+  if (static_cast<uint8_t>(kind) > 2) {
+    return Status::Corruption(nodes_->file_name() + ": bad node kind " +
+                              std::to_string(static_cast<uint8_t>(kind)));
+  }
+  out->kind = static_cast<NodeKind>(kind);
+  out->anchor_count = 0;
+  return with_anchors ? fill_anchors(out) : Status::Ok();
+}
+
+Status Mesh::fill_element(const std::byte* payload, bool with_nodes, MeshElement* e) {
+  if (with_nodes) WEAVER_RETURN_IF_ERROR(corner_ids(e->octant, &e->nodes));
   if (vp_ != nullptr) {
     e->vp = float(RecordSchema::get_double(payload, *vp_));
     e->vs = float(RecordSchema::get_double(payload, *vs_));

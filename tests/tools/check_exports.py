@@ -4,6 +4,7 @@ against the mesh's csv files (which tests/export_test.cc checks against the
 reference mesh of tests/reference/):
 
   vtu         VTK's own vtkXMLUnstructuredGridReader
+  pvtu        VTK's vtkXMLPUnstructuredGridReader; --box in vtu, raw, msh
   msh         gmsh itself (gmsh FILE -0 re-writes it) and meshio
   metis       gpmetis partitions it; the graph equals a brute-force face
               adjacency computed here from elements.csv
@@ -151,6 +152,82 @@ def check_vtu(db, m, d, raw):
     return "vtu ok"
 
 
+def check_pvtu(db, m, d, raw, parts=3):
+    path = d + "/p.pvtu"
+    run(WEAVER, "export", db, "--format", "pvtu", "--parts", str(parts), "--out", path, "--quiet")
+    r = vtk.vtkXMLPUnstructuredGridReader()
+    r.SetFileName(path)
+    r.Update()
+    assert r.GetNumberOfPieces() == parts, r.GetNumberOfPieces()
+    g = r.GetOutput()
+    E = len(m.e["id"])
+    assert g.GetNumberOfCells() == E
+    # Each piece has only the nodes it uses; node_id maps them back.
+    ids = vtk_to_numpy(g.GetCellData().GetArray("element_id"))
+    assert (np.sort(ids) == np.arange(E)).all(), "pieces miss or repeat elements"
+    node_id = vtk_to_numpy(g.GetPointData().GetArray("node_id"))
+    conn = vtk_to_numpy(g.GetCells().GetConnectivityArray()).reshape(E, 8)
+    assert (node_id[conn] == m.corners[ids][:, VTK_ORDER]).all()
+    pts = vtk_to_numpy(g.GetPoints().GetData())
+    assert np.allclose(pts, m.metres(raw)[node_id])
+    sizes = []
+    for p in range(parts):
+        one = vtk.vtkXMLUnstructuredGridReader()
+        one.SetFileName(f"{d}/p/p_{p}.vtu")
+        one.Update()
+        sizes.append(one.GetOutput().GetNumberOfCells())
+        used = np.unique(vtk_to_numpy(one.GetOutput().GetCells().GetConnectivityArray()))
+        assert len(used) == one.GetOutput().GetNumberOfPoints(), "a piece has unused points"
+    assert max(sizes) - min(sizes) <= 1, sizes
+    return f"pvtu ok ({parts} pieces of {sizes} cells)"
+
+
+def box_of(m, raw):
+    """A box around the middle of the mesh, in metres, and the elements that
+    share a point with it (from elements.csv, in ticks)."""
+    lo_t, hi_t = m.lo.min(0), (m.lo + m.edge[:, None]).max(0)
+    blo = lo_t + (hi_t - lo_t) * 0.3
+    bhi = lo_t + (hi_t - lo_t) * 0.55
+    keep = ((m.lo <= bhi) & (m.lo + m.edge[:, None] >= blo)).all(1)
+    metres = np.concatenate([np.array(raw["origin_m"]) + raw["tick_m"] * blo,
+                             np.array(raw["origin_m"]) + raw["tick_m"] * bhi])
+    return ",".join(repr(float(v)) for v in metres), np.nonzero(keep)[0]
+
+
+def check_box(db, m, d, raw):
+    box, want = box_of(m, raw)
+    vtu, rawdir, msh = d + "/box.vtu", d + "/box.raw", d + "/box.msh"
+    for fmt, out in (("vtu", vtu), ("raw", rawdir), ("msh", msh)):
+        run(WEAVER, "export", db, "--format", fmt, "--box", box, "--out", out, "--quiet")
+    r = vtk.vtkXMLUnstructuredGridReader()
+    r.SetFileName(vtu)
+    r.Update()
+    g = r.GetOutput()
+    ids = vtk_to_numpy(g.GetCellData().GetArray("element_id"))
+    assert (ids == want).all(), f"box: {len(ids)} elements, want {len(want)}"
+    node_id = vtk_to_numpy(g.GetPointData().GetArray("node_id"))
+    conn = vtk_to_numpy(g.GetCells().GetConnectivityArray()).reshape(len(ids), 8)
+    assert (node_id[conn] == m.corners[want][:, VTK_ORDER]).all()
+    assert (np.unique(conn) == np.arange(g.GetNumberOfPoints())).all(), "unused or missing points"
+    assert (np.diff(node_id) > 0).all(), "local ids are not in global id order"
+    with open(rawdir + "/mesh.json") as f:
+        h = json.load(f)
+    get = lambda name: raw_array(rawdir, h, name)
+    gid = get("node_global_id")
+    assert (get("element_global_id") == want).all()
+    assert (gid[get("element_nodes")] == m.corners[want]).all()
+    # Every constraint of a node the box uses is there, anchors included.
+    dn, da = get("dangling_nodes"), get("dangling_anchors")
+    assert (m.n["kind"][gid[dn]] != 0).all()
+    assert ((m.n["kind"][gid] != 0).sum() == len(dn))
+    anchors = np.stack([m.n[f"a{k}"] for k in range(4)], axis=1)[gid[dn]]
+    assert (np.where(da >= 0, gid[np.maximum(da, 0)], -1) == anchors).all()
+    mm = meshio.read(msh)
+    assert len(mm.cells[0].data) == len(want)
+    assert np.allclose(mm.points[mm.cells[0].data], m.metres(raw)[m.corners[want][:, VTK_ORDER]])
+    return f"box ok ({len(want)} of {len(m.e['id'])} elements, {len(gid)} nodes, {len(dn)} dangling)"
+
+
 def check_msh(db, m, d, raw):
     path = d + "/m.msh"
     run(WEAVER, "export", db, "--format", "msh", "--out", path, "--quiet")
@@ -268,6 +345,8 @@ def main():
         raw, msg = check_raw(db, m, d)
         print(f"{name}: {len(m.e['id'])} elements, {len(m.n['id'])} nodes: {msg}")
         print(f"{name}: {check_vtu(db, m, d, raw)}")
+        print(f"{name}: {check_pvtu(db, m, d, raw)}")
+        print(f"{name}: {check_box(db, m, d, raw)}")
         print(f"{name}: {check_msh(db, m, d, raw)}")
         print(f"{name}: {check_metis(db, m, d)}")
         print(f"{name}: {check_metis_mesh(db, m, d)}")
@@ -282,6 +361,8 @@ def main():
     assert "element_material" in raw["arrays"]
     print(f"basin: {len(m.e['id'])} elements: {msg}")
     print(f"basin: {check_vtu(db, m, d, raw)}")
+    print(f"basin: {check_pvtu(db, m, d, raw, 4)}")
+    print(f"basin: {check_box(db, m, d, raw)}")
     print(f"basin: {check_msh(db, m, d, raw)}")
 
 

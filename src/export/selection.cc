@@ -1,0 +1,99 @@
+#include "export/selection.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
+
+#include "sort/external_sort.h"
+#include "storage/file.h"
+
+namespace weaver {
+
+Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
+                         const std::string& scratch_dir, uint64_t memory) {
+  identity_ = sel.whole();
+  if (identity_) {
+    nodes_ = mesh.node_count();
+    elements_ = mesh.element_count();
+    return Status::Ok();
+  }
+  ::mkdir(scratch_dir.c_str(), 0755);
+  ExternalSorter sorter(scratch_dir + "/sort", memory / 2);
+  ElementScan scan;
+  WEAVER_RETURN_IF_ERROR(scan.start(mesh, sel.first, false));
+  elements_ = 0;
+  MeshElement e;
+  for (; scan.valid() && scan.element().id < sel.end; scan.next()) {
+    if (!sel.keeps(scan.element().octant)) continue;
+    ++elements_;
+    e = scan.element();
+    WEAVER_RETURN_IF_ERROR(mesh.corner_ids(e.octant, &e.nodes));
+    for (uint64_t id : e.nodes) WEAVER_RETURN_IF_ERROR(sorter.add({id, 0}));
+    if (!with_anchors) continue;
+    for (int k = 0; k < 8; ++k) {
+      MeshNode n;
+      WEAVER_RETURN_IF_ERROR(mesh.node(e.nodes[k], true, &n));
+      for (int a = 0; a < n.anchor_count; ++a) {
+        WEAVER_RETURN_IF_ERROR(sorter.add({n.anchors[a], 0}));
+      }
+    }
+  }
+  WEAVER_RETURN_IF_ERROR(scan.status());
+  WEAVER_RETURN_IF_ERROR(sorter.finish());
+  scratch_dir_ = scratch_dir;
+  scratch_file_ = scratch_dir + "/local_nodes.bt";
+  std::unique_ptr<File> file;
+  WEAVER_RETURN_IF_ERROR(open_posix_file(scratch_file_, OpenMode::kCreateTruncate, &file));
+  TableOptions t;
+  t.key_kind = KeyKind::kNode;
+  t.packed = true;
+  WEAVER_RETURN_IF_ERROR(BTree::create(std::move(file), t, memory / 2, &tree_));
+  nodes_ = 0;
+  uint64_t last = 0;
+  for (;;) {
+    KeyTag kt;
+    bool done = false;
+    WEAVER_RETURN_IF_ERROR(sorter.next(&kt, &done));
+    if (done) break;
+    if (nodes_ > 0 && kt.key == last) continue;
+    WEAVER_RETURN_IF_ERROR(tree_->append(kt.key, nullptr));
+    last = kt.key;
+    ++nodes_;
+  }
+  return Status::Ok();
+}
+
+LocalNodes::~LocalNodes() {
+  if (tree_ == nullptr) return;
+  tree_.reset();
+  std::remove(scratch_file_.c_str());
+  ::rmdir(scratch_dir_.c_str());
+}
+
+Status LocalNodes::local_id(uint64_t global, uint64_t* local) {
+  if (identity_) return *local = global, Status::Ok();
+  bool present = false;
+  WEAVER_RETURN_IF_ERROR(tree_->rank_exact(global, local, &present));
+  if (!present) {
+    return Status::Internal("node " + std::to_string(global) + " is not in the selection");
+  }
+  return Status::Ok();
+}
+
+Status LocalNodes::start() {
+  at_ = 0;
+  if (identity_) return Status::Ok();
+  return tree_->seek_cursor(0, &cursor_);
+}
+
+bool LocalNodes::valid() const { return identity_ ? at_ < nodes_ : cursor_.valid(); }
+
+uint64_t LocalNodes::global() const { return identity_ ? at_ : cursor_.key(); }
+
+Status LocalNodes::next() {
+  if (identity_) return ++at_, Status::Ok();
+  return cursor_.next();
+}
+
+}  // namespace weaver

@@ -1,0 +1,63 @@
+// A part of a mesh to export: the elements of an id range (a piece of a
+// pvtu, a part of a partition) that meet a box, and the nodes they use,
+// numbered compactly in global id order.  The node set is built out of core:
+// the corner ids of the selected elements (and the anchors of dangling ones,
+// so that every constraint can be written) go through an external sort into
+// a scratch B+tree of global ids, where a node's local id is its rank.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "mesh/mesh_reader.h"
+#include "storage/btree.h"
+
+namespace weaver {
+
+struct Selection {
+  uint64_t first = 0, end = UINT64_MAX;  // element ids [first, end)
+  bool has_box = false;
+  Coord lo, hi;  // the box in ticks, bounds included
+
+  bool whole() const { return first == 0 && end == UINT64_MAX && !has_box; }
+  // Whether an element of the id range is selected: it shares a point with the box.
+  bool keeps(const Octant& o) const {
+    if (!has_box) return true;
+    const uint32_t s = octant_edge(o);
+    return o.x <= hi.x && o.x + s >= lo.x && o.y <= hi.y && o.y + s >= lo.y && o.z <= hi.z &&
+           o.z + s >= lo.z;
+  }
+};
+
+// The nodes of a selection, local id = rank in global id order.  For the
+// whole mesh local ids are the global ones and nothing is built.
+class LocalNodes {
+ public:
+  LocalNodes() = default;
+  ~LocalNodes();  // removes the scratch files
+  LocalNodes(const LocalNodes&) = delete;
+  LocalNodes& operator=(const LocalNodes&) = delete;
+
+  // with_anchors: also the anchors of every dangling node the elements use.
+  // Counts the selected elements too.  Scratch files go to scratch_dir.
+  Status build(Mesh& mesh, const Selection& sel, bool with_anchors, const std::string& scratch_dir,
+               uint64_t memory);
+  uint64_t node_count() const { return nodes_; }
+  uint64_t element_count() const { return elements_; }
+  Status local_id(uint64_t global, uint64_t* local);
+  // Global ids in order: start, then valid / global / next.
+  Status start();
+  bool valid() const;
+  uint64_t global() const;
+  Status next();
+
+ private:
+  bool identity_ = true;
+  uint64_t nodes_ = 0, elements_ = 0, at_ = 0;
+  std::unique_ptr<BTree> tree_;
+  BTreeCursor cursor_;
+  std::string scratch_dir_, scratch_file_;
+};
+
+}  // namespace weaver
