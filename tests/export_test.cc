@@ -18,6 +18,7 @@
 #include "mesh/mesh_reader.h"
 #include "query/mesh_query.h"
 #include "reference/reference_mesh.h"
+#include "test_mesh.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -43,16 +44,7 @@ const char* kind_name(NodeKind k) {
   return k == NodeKind::kAnchored ? "anchored" : k == NodeKind::kEdge ? "edge" : "face";
 }
 
-// Imports and extracts leaves into dir/db; returns the database path.
-std::string build_mesh(const std::vector<Octant>& leaves, const testing::TempDir& dir) {
-  const std::string db = dir.file("db"), text = dir.file("o.txt");
-  EXPECT_OK(write_octant_text(text, leaves, ""));
-  ImportResult ir;
-  EXPECT_OK(import_octants(db, text, ImportOptions{}, &ir));
-  ExtractResult er;
-  EXPECT_OK(extract_mesh(db, ExtractOptions{}, &er));
-  return db;
-}
+using testing::build_mesh;
 
 void check_export(const std::vector<Octant>& leaves, const testing::TempDir& dir) {
   const std::string db = build_mesh(leaves, dir);

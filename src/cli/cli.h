@@ -21,6 +21,7 @@ int cmd_construct(int argc, char** argv);
 int cmd_balance(int argc, char** argv);
 int cmd_extract(int argc, char** argv);
 int cmd_export(int argc, char** argv);
+int cmd_partition(int argc, char** argv);
 int cmd_stat(int argc, char** argv);
 int cmd_query(int argc, char** argv);
 int cmd_verify(int argc, char** argv);

@@ -20,7 +20,8 @@ constexpr char kUsage[] =
     "  balance DB        2:1 balance the octant table (minimal refinement)\n"
     "  import DB         load octant text into the octant table of database DB\n"
     "  extract DB        extract the mesh nodes of a balanced octree\n"
-    "  export DB         write the mesh as nodes.csv / elements.csv\n"
+    "  export DB         write the mesh for ParaView, Gmsh, METIS, numpy or as CSV\n"
+    "  partition DB      cut the elements into parts (space-filling curve or METIS)\n"
     "  stat DB           table sizes, per-level counts and storage overhead\n"
     "  query DB ...      locate a point, or list the leaves in a box\n"
     "  verify DB         check pages, keys and the mesh invariants\n"
@@ -85,6 +86,7 @@ int dispatch(int argc, char** argv) {
   if (cmd == "balance") return cmd_balance(argc, argv);
   if (cmd == "extract") return cmd_extract(argc, argv);
   if (cmd == "export") return cmd_export(argc, argv);
+  if (cmd == "partition") return cmd_partition(argc, argv);
   if (cmd == "stat") return cmd_stat(argc, argv);
   if (cmd == "query") return cmd_query(argc, argv);
   if (cmd == "verify") return cmd_verify(argc, argv);

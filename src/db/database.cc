@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "db/node_table.h"
+#include "db/partition_table.h"
 #include "db/octant_table.h"
 #include "storage/manifest_file.h"
 
@@ -49,7 +50,9 @@ std::string join(const std::vector<std::string>& names) {
 
 }  // namespace
 
-std::string table_source(const std::string& name) { return name == kNodeTable ? kOctantTable : ""; }
+std::string table_source(const std::string& name) {
+  return name == kNodeTable || name == kPartitionTable ? kOctantTable : "";
+}
 
 bool is_table_file_name(const std::string& file) {
   const size_t dash = file.rfind('-');

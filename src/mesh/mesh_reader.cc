@@ -1,6 +1,9 @@
 #include "mesh/mesh_reader.h"
 
+#include <cstdlib>
+
 #include "db/node_table.h"
+#include "db/partition_table.h"
 
 namespace weaver {
 
@@ -22,8 +25,33 @@ Status Mesh::open(const std::string& db_dir, uint64_t octant_pool, uint64_t node
   if (vp != nullptr && vs != nullptr && rho != nullptr) {
     m->vp_ = vp, m->vs_ = vs, m->rho_ = rho;
   }
+  if (m->db_->has_table(kPartitionTable)) {
+    WEAVER_RETURN_IF_ERROR(m->db_->open_table(kPartitionTable, 1 << 20, &m->partition_));
+    const std::string& meta = m->partition_->options().metadata;
+    m->partition_method_ = metadata_value(meta, "method");
+    m->partition_parts_ =
+        uint32_t(std::strtoul(metadata_value(meta, "parts").c_str(), nullptr, 10));
+    if (m->partition_parts_ == 0) {
+      return Status::Corruption(m->partition_->file_name() + ": no part count in its metadata");
+    }
+  }
   *out = std::move(m);
   return Status::Ok();
+}
+
+std::string metadata_value(const std::string& metadata, const std::string& key) {
+  size_t start = 0;
+  while (start <= metadata.size()) {
+    size_t end = metadata.find(';', start);
+    if (end == std::string::npos) end = metadata.size();
+    const std::string item = metadata.substr(start, end - start);
+    if (item.size() > key.size() && item.compare(0, key.size(), key) == 0 &&
+        item[key.size()] == '=') {
+      return item.substr(key.size() + 1);
+    }
+    start = end + 1;
+  }
+  return "";
 }
 
 Status Mesh::node_id(Coord c, uint64_t* id) {

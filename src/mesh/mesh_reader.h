@@ -11,6 +11,7 @@
 
 #include "db/database.h"
 #include "db/octant_table.h"
+#include "mesh/part_map.h"
 #include "schema/node.h"
 #include "schema/octant.h"
 #include "schema/record_schema.h"
@@ -48,6 +49,12 @@ class Mesh {
   const Units& units() const { return units_; }
   // Whether the octant table carries vp, vs and rho (a mesh built from a model).
   bool has_material() const { return vp_ != nullptr; }
+  // The stored partition (`weaver partition`), if any: its parts, method
+  // ("sfc" or "graph") and map.
+  bool has_partition() const { return partition_ != nullptr; }
+  uint32_t partition_parts() const { return partition_parts_; }
+  const std::string& partition_method() const { return partition_method_; }
+  Status partition(PartMap* out) { return PartMap::of_table(*partition_, partition_parts_, out); }
 
   // The id of the node at c; Corruption naming c when the node table lacks it.
   Status node_id(Coord c, uint64_t* id);
@@ -68,7 +75,13 @@ class Mesh {
   Units units_;
   RecordSchema schema_;
   const Field *vp_ = nullptr, *vs_ = nullptr, *rho_ = nullptr;
+  std::unique_ptr<BTree> partition_;
+  uint32_t partition_parts_ = 0;
+  std::string partition_method_;
 };
+
+// "key=value" of ';'-separated metadata text ("" if absent).
+std::string metadata_value(const std::string& metadata, const std::string& key);
 
 // Scans read as leveldb's iterators do:
 //   ElementScan scan;

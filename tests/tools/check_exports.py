@@ -277,6 +277,16 @@ def check_metis(db, m, d):
     return f"metis ok ({edges} edges, {steps} across 2:1 steps, gpmetis edge cut {cut})"
 
 
+def check_partition(db, m):
+    """weaver partition --method graph runs gpmetis: the edge cut weaver
+    counts on the stored parts is the one gpmetis reports for its own."""
+    out = run(WEAVER, "partition", db, "--parts", "4", "--method", "graph", "--compare", "--quiet")
+    theirs = int(re.search(r"gpmetis reported an edge cut of (\d+)", out).group(1))
+    ours = [int(x) for x in re.findall(r"edge cut (\d+) faces", out)]
+    assert ours[0] == theirs, out
+    return f"partition ok (graph edge cut {ours[0]} = gpmetis's, sfc {ours[1]})"
+
+
 def check_metis_mesh(db, m, d):
     path = d + "/m.mesh"
     run(WEAVER, "export", db, "--format", "metis-mesh", "--out", path, "--quiet")
@@ -350,6 +360,7 @@ def main():
         print(f"{name}: {check_msh(db, m, d, raw)}")
         print(f"{name}: {check_metis(db, m, d)}")
         print(f"{name}: {check_metis_mesh(db, m, d)}")
+        print(f"{name}: {check_partition(db, m)}")
     # A mesh built from a velocity model carries vp, vs and rho.
     d = os.path.join(WORK, "basin")
     shutil.rmtree(d, ignore_errors=True)
