@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 
 #include "export/writers.h"
@@ -64,7 +65,9 @@ Status for_each_element(ExportJob& job, bool with_nodes,
   WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, job.sel.first, false));
   MeshElement e;
   for (; scan.valid() && scan.element().id < job.sel.end; scan.next()) {
-    if (!job.sel.keeps(scan.element().octant)) continue;
+    bool keep = false;
+    WEAVER_RETURN_IF_ERROR(job.sel.keeps(scan.element().id, scan.element().octant, &keep));
+    if (!keep) continue;
     e = scan.element();
     if (with_nodes) {
       WEAVER_RETURN_IF_ERROR(job.mesh.corner_ids(e.octant, &e.nodes));
@@ -75,6 +78,42 @@ Status for_each_element(ExportJob& job, bool with_nodes,
     job.tick();
   }
   return scan.status();
+}
+
+Status export_parts(ExportJob& job, PartMap* map, std::vector<PartRun>* ranges,
+                    std::string* method) {
+  Mesh& mesh = job.mesh;
+  const uint32_t parts = job.options.parts;
+  ranges->clear();
+  if (mesh.has_partition() && mesh.partition_parts() == parts) {
+    *method = mesh.partition_method();
+    if (mesh.partition_table().size() != parts) return mesh.partition(map);
+    BTreeCursor c;  // one run a part: read them
+    WEAVER_RETURN_IF_ERROR(mesh.partition_table().seek_cursor(0, &c));
+    while (c.valid()) {
+      uint32_t part = 0;
+      std::memcpy(&part, c.payload(), 4);
+      ranges->push_back({c.key(), part});
+      WEAVER_RETURN_IF_ERROR(c.next());
+    }
+  } else {
+    *method = "sfc by count (no stored partition of " + std::to_string(parts) + " parts)";
+    for (uint32_t p = 0; p < parts; ++p) ranges->push_back({mesh.element_count() * p / parts, p});
+  }
+  *map = PartMap::of_runs(*ranges, parts);
+  return Status::Ok();
+}
+
+Selection part_selection(const ExportJob& job, const PartMap& map,
+                         const std::vector<PartRun>& ranges, uint32_t p) {
+  Selection s;
+  s.parts = &map;
+  s.part = p;
+  if (!ranges.empty()) {  // one range a part: read only it
+    s.first = ranges[p].first;
+    s.end = p + 1 < ranges.size() ? ranges[p + 1].first : job.mesh.element_count();
+  }
+  return s;
 }
 
 Status finish_text(ExportJob& job, Section& out, OutputFile& file) {
@@ -126,6 +165,12 @@ Status export_mesh(const std::string& db_dir, const ExportOptions& options, Expo
     return Status::InvalidArgument("--box works with vtu, pvtu, msh and raw");
   }
   if (options.parts < 1) return Status::InvalidArgument("--parts must be at least 1");
+  if (options.parts > 1 && f != ExportFormat::kPvtu && f != ExportFormat::kRaw) {
+    return Status::InvalidArgument("--parts works with pvtu and raw");
+  }
+  if (options.parts > 1 && options.has_box && f == ExportFormat::kRaw) {
+    return Status::InvalidArgument("raw takes --box or --parts, not both");
+  }
   const ExportMemory memory(options.memory);
   std::unique_ptr<Mesh> mesh;
   WEAVER_RETURN_IF_ERROR(Mesh::open(db_dir, memory.octant_pool, memory.node_pool, &mesh));

@@ -22,20 +22,25 @@
 #include <charconv>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
+#include "export/shared_nodes.h"
 #include "export/writers.h"
 
 namespace weaver {
 namespace {
+
+namespace fs = std::filesystem;
 
 struct Array {
   std::string name, dtype;
   uint64_t rows;
   int cols;  // 0: one-dimensional
   uint64_t item_bytes;
-  const char* units;  // "" for none
+  const char* units;    // "" for none
+  bool always = false;  // in mesh.json even with no rows
   uint64_t offset = 0;
   uint64_t bytes() const { return rows * std::max(cols, 1) * item_bytes; }
 };
@@ -50,13 +55,16 @@ enum : int {
   kAnchors,
   kNodeGlobal,
   kElementGlobal,
+  kSharedNodes,
+  kSharedParts,
   kArrays
 };
 
 // Arrays with no rows (no material, the whole mesh's global ids) are left
 // out of mesh.json.
+// shared: the part's (node, other part) pairs, or -1 outside a partition.
 std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool material,
-                          bool selected) {
+                          bool selected, int64_t shared) {
   std::vector<Array> a = {
       {"node_coords", ticks ? "<u4" : "<f8", n, 3, ticks ? 4u : 8u, ticks ? "ticks" : "m"},
       {"node_kind", "|u1", n, 0, 1, ""},
@@ -66,7 +74,11 @@ std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool m
       {"dangling_nodes", "<i8", d, 0, 8, ""},
       {"dangling_anchors", "<i8", d, 4, 8, ""},
       {"node_global_id", "<i8", selected ? n : 0, 0, 8, ""},
-      {"element_global_id", "<i8", selected ? e : 0, 0, 8, ""}};
+      {"element_global_id", "<i8", selected ? e : 0, 0, 8, ""},
+      {"shared_nodes", "<i8", uint64_t(std::max<int64_t>(shared, 0)), 0, 8, ""},
+      {"shared_parts", "<i4", uint64_t(std::max<int64_t>(shared, 0)), 0, 4, ""}};
+  a[kDangling].always = a[kAnchors].always = true;
+  a[kSharedNodes].always = a[kSharedParts].always = shared >= 0;
   uint64_t at = 0;
   for (Array& x : a) x.offset = at, at = (at + x.bytes() + 63) / 64 * 64;
   return a;
@@ -94,7 +106,7 @@ std::string json(const std::vector<Array>& arrays, const ExportJob& job, uint64_
   bool first = true;
   for (int i = 0; i < kArrays; ++i) {
     const Array& a = arrays[i];
-    if (a.rows == 0 && i != kDangling && i != kAnchors) continue;
+    if (a.rows == 0 && !a.always) continue;
     s += first ? "\n" : ",\n";
     first = false;
     s += "    \"" + a.name + "\": {\"dtype\": \"" + a.dtype + "\", \"shape\": [" +
@@ -168,27 +180,31 @@ Status write_text_file(const std::string& path, const std::string& text) {
   return f.finish();
 }
 
-bool is_dir(const std::string& p) {
-  struct stat st;
-  return ::stat(p.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
-}
-
-void remove_export_dir(const std::string& dir) {
-  for (const char* f : {"/mesh.bin", "/mesh.json", "/mesh.bin.tmp", "/mesh.json.tmp"}) {
-    std::remove((dir + f).c_str());
+// The part's shared pairs, in local node ids.
+Status write_shared(ExportJob& job, SharedNodes& shared, std::vector<Section>& out) {
+  const uint32_t p = job.sel.part;
+  for (uint64_t i = 0; i < shared.count(p); ++i) {
+    uint64_t node = 0, local = 0;
+    uint32_t other = 0;
+    WEAVER_RETURN_IF_ERROR(shared.next(p, &node, &other));
+    WEAVER_RETURN_IF_ERROR(job.local->local_id(node, &local));
+    WEAVER_RETURN_IF_ERROR(out[kSharedNodes].value(int64_t(local)));
+    WEAVER_RETURN_IF_ERROR(out[kSharedParts].value(int32_t(other)));
   }
-  ::rmdir(dir.c_str());
+  return Status::Ok();
 }
 
-// Moves the finished tmp directory to out, replacing an earlier export there.
+// Moves the finished tmp directory to out, replacing an earlier raw export
+// there (one with a mesh.json or parts.json), and nothing else.
 Status install_dir(const std::string& tmp, const std::string& out) {
-  struct stat st;
+  std::error_code ec;
   const std::string old = out + ".old";
-  if (::stat(out.c_str(), &st) == 0) {
-    if (!is_dir(out) || ::stat((out + "/mesh.json").c_str(), &st) != 0) {
+  if (fs::exists(out, ec)) {
+    if (!fs::is_directory(out, ec) ||
+        !(fs::exists(out + "/mesh.json", ec) || fs::exists(out + "/parts.json", ec))) {
       return Status::InvalidArgument(out + " exists and is not a raw export: not replacing it");
     }
-    remove_export_dir(old);
+    fs::remove_all(old, ec);
     if (std::rename(out.c_str(), old.c_str()) != 0) {
       return Status::IOError("cannot move " + out + " aside: " + std::strerror(errno));
     }
@@ -196,32 +212,31 @@ Status install_dir(const std::string& tmp, const std::string& out) {
   if (std::rename(tmp.c_str(), out.c_str()) != 0) {
     return Status::IOError("cannot rename " + tmp + " to " + out + ": " + std::strerror(errno));
   }
-  remove_export_dir(old);
+  fs::remove_all(old, ec);
   return Status::Ok();
 }
 
-Status write_raw_files(ExportJob& job, const std::string& dir) {
+}  // namespace
+
+Status write_raw_files(ExportJob& job, const std::string& dir, SharedNodes* shared) {
   const bool material = job.mesh.has_material();
-  if (job.options.has_box) {
-    Selection s;
-    WEAVER_RETURN_IF_ERROR(job.box_selection(&s));
-    WEAVER_RETURN_IF_ERROR(job.select(s, true, dir + "/scratch"));
-  }
   uint64_t dangling = 0;
   WEAVER_RETURN_IF_ERROR(count_dangling(job, &dangling));
+  const int64_t pairs = shared != nullptr ? int64_t(shared->count(job.sel.part)) : -1;
   const std::vector<Array> arrays =
       layout(job.node_count(), job.element_count(), dangling,
-             job.options.units == ExportUnits::kTicks, material, !job.sel.whole());
-  job.plan(job.node_count() + job.element_count());
+             job.options.units == ExportUnits::kTicks, material, !job.sel.whole(), pairs);
   OutputFile bin(dir + "/mesh.bin");
   WEAVER_RETURN_IF_ERROR(bin.open());
   std::vector<Section> out;
   for (const Array& a : arrays) out.emplace_back(bin, a.offset, job.section_buffer);
   WEAVER_RETURN_IF_ERROR(write_nodes(job, out));
   WEAVER_RETURN_IF_ERROR(write_elements(job, out, material));
+  if (shared != nullptr) WEAVER_RETURN_IF_ERROR(write_shared(job, *shared, out));
   for (Section& s : out) WEAVER_RETURN_IF_ERROR(s.flush());
-  for (const Array& a : arrays)
-    job.result->bytes = std::max(job.result->bytes, a.offset + a.bytes());
+  uint64_t bytes = 0;
+  for (const Array& a : arrays) bytes = std::max(bytes, a.offset + a.bytes());
+  job.result->bytes += bytes;
   WEAVER_RETURN_IF_ERROR(bin.finish());
   const std::string text = json(arrays, job, dangling);
   job.local.reset();  // its scratch files go before the directory is renamed
@@ -229,22 +244,40 @@ Status write_raw_files(ExportJob& job, const std::string& dir) {
   return write_text_file(dir + "/mesh.json", text);
 }
 
-}  // namespace
+Status start_export_dir(const std::string& out, std::string* tmp) {
+  *tmp = out + ".tmp";
+  std::error_code ec;
+  fs::remove_all(*tmp, ec);  // left by an interrupted export
+  if (::mkdir(tmp->c_str(), 0755) != 0) {
+    return Status::IOError("cannot create directory " + *tmp + ": " + std::strerror(errno));
+  }
+  return Status::Ok();
+}
+
+Status finish_export_dir(ExportJob& job, const std::string& tmp, const std::string& out,
+                         Status written) {
+  if (written.ok()) written = install_dir(tmp, out);
+  if (!written.ok()) {
+    job.local.reset();  // its scratch files first
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+  }
+  return written;
+}
 
 Status write_raw(ExportJob& job) {
-  const std::string& out = job.options.out;
-  const std::string tmp = out + ".tmp";
-  remove_export_dir(tmp);  // left by an interrupted export
-  if (::mkdir(tmp.c_str(), 0755) != 0) {
-    return Status::IOError("cannot create directory " + tmp + ": " + std::strerror(errno));
+  if (job.options.parts > 1) return write_raw_parts(job);
+  std::string tmp;
+  WEAVER_RETURN_IF_ERROR(start_export_dir(job.options.out, &tmp));
+  Status st;
+  if (job.options.has_box) {
+    Selection s;
+    st = job.box_selection(&s);
+    if (st.ok()) st = job.select(s, true, tmp + "/scratch");
   }
-  Status st = write_raw_files(job, tmp);
-  if (st.ok()) st = install_dir(tmp, out);
-  if (!st.ok()) {
-    job.local.reset();
-    remove_export_dir(tmp);
-  }
-  return st;
+  job.plan(job.node_count() + job.element_count());
+  if (st.ok()) st = write_raw_files(job, tmp, nullptr);
+  return finish_export_dir(job, tmp, job.options.out, st);
 }
 
 }  // namespace weaver

@@ -12,10 +12,10 @@
 //   Cells      connectivity Int64 (VTK's corner order), offsets Int64,
 //              types UInt8 (12, VTK_HEXAHEDRON)
 //
-// pvtu: the elements cut into --parts pieces of consecutive ids (equal
-// counts), each a vtu of the nodes it uses, in the directory STEM/ beside
-// STEM.pvtu, the index ParaView opens; written last, so an index is never
-// left pointing at missing pieces.
+// pvtu: the elements cut into --parts pieces (the parts of export_parts:
+// the stored partition, or consecutive ids in equal counts), each a vtu of the nodes it uses, in
+// the directory STEM/ beside STEM.pvtu, the index ParaView opens; written last, so an index is
+// never left pointing at missing pieces.
 #include <sys/stat.h>
 
 #include <vector>
@@ -181,14 +181,17 @@ Status write_pvtu(ExportJob& job) {
   if (::mkdir(stem.c_str(), 0755) != 0 && errno != EEXIST) {
     return Status::IOError("cannot create directory " + stem + ": " + std::strerror(errno));
   }
-  const uint64_t elements = job.mesh.element_count(), parts = job.options.parts;
-  job.plan(job.mesh.node_count() + elements);
-  Selection s;
-  if (job.options.has_box) WEAVER_RETURN_IF_ERROR(job.box_selection(&s));
+  job.plan(job.mesh.node_count() + job.mesh.element_count());
+  PartMap map;
+  std::vector<PartRun> ranges;
+  std::string method;
+  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
+  Selection box;
+  if (job.options.has_box) WEAVER_RETURN_IF_ERROR(job.box_selection(&box));
   std::string pieces;
-  for (uint64_t p = 0; p < parts; ++p) {
-    s.first = elements * p / parts;
-    s.end = elements * (p + 1) / parts;
+  for (uint32_t p = 0; p < job.options.parts; ++p) {
+    Selection s = part_selection(job, map, ranges, p);
+    s.has_box = box.has_box, s.lo = box.lo, s.hi = box.hi;
     WEAVER_RETURN_IF_ERROR(job.select(s, false, out + ".scratch"));
     const std::string name = base_name(stem) + "_" + std::to_string(p) + ".vtu";
     WEAVER_RETURN_IF_ERROR(write_vtu_file(job, stem + "/" + name));

@@ -25,7 +25,9 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
   elements_ = 0;
   MeshElement e;
   for (; scan.valid() && scan.element().id < sel.end; scan.next()) {
-    if (!sel.keeps(scan.element().octant)) continue;
+    bool keep = false;
+    WEAVER_RETURN_IF_ERROR(sel.keeps(scan.element().id, scan.element().octant, &keep));
+    if (!keep) continue;
     ++elements_;
     e = scan.element();
     WEAVER_RETURN_IF_ERROR(mesh.corner_ids(e.octant, &e.nodes));

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "mesh/mesh_reader.h"
+#include "mesh/part_map.h"
 #include "storage/btree.h"
 
 namespace weaver {
@@ -18,15 +19,25 @@ namespace weaver {
 struct Selection {
   uint64_t first = 0, end = UINT64_MAX;  // element ids [first, end)
   bool has_box = false;
-  Coord lo, hi;  // the box in ticks, bounds included
+  Coord lo, hi;                    // the box in ticks, bounds included
+  const PartMap* parts = nullptr;  // if set: only the elements of `part`
+  uint32_t part = 0;
 
-  bool whole() const { return first == 0 && end == UINT64_MAX && !has_box; }
-  // Whether an element of the id range is selected: it shares a point with the box.
-  bool keeps(const Octant& o) const {
-    if (!has_box) return true;
-    const uint32_t s = octant_edge(o);
-    return o.x <= hi.x && o.x + s >= lo.x && o.y <= hi.y && o.y + s >= lo.y && o.z <= hi.z &&
-           o.z + s >= lo.z;
+  bool whole() const { return first == 0 && end == UINT64_MAX && !has_box && parts == nullptr; }
+  // Whether element id (octant o) of the id range is selected: it shares a
+  // point with the box and lies in the part.
+  Status keeps(uint64_t id, const Octant& o, bool* keep) const {
+    *keep = true;
+    if (has_box) {
+      const uint32_t s = octant_edge(o);
+      *keep = o.x <= hi.x && o.x + s >= lo.x && o.y <= hi.y && o.y + s >= lo.y && o.z <= hi.z &&
+              o.z + s >= lo.z;
+    }
+    if (!*keep || parts == nullptr) return Status::Ok();
+    uint32_t p = 0;
+    WEAVER_RETURN_IF_ERROR(parts->part_of(id, &p));
+    *keep = p == part;
+    return Status::Ok();
   }
 };
 

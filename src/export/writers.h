@@ -6,6 +6,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "export/export.h"
 #include "export/output_file.h"
@@ -71,6 +72,16 @@ Status for_each_node(ExportJob& job, bool with_anchors,
 Status for_each_element(ExportJob& job, bool with_nodes,
                         const std::function<Status(const MeshElement&)>& fn);
 
+// The parts of --parts N: the stored partition (`weaver partition`) when it
+// has N parts, otherwise N ranges of consecutive element ids of equal count.
+// ranges holds each part's range where parts are ranges (else it is empty);
+// method says which.
+Status export_parts(ExportJob& job, PartMap* map, std::vector<PartRun>* ranges,
+                    std::string* method);
+// The selection of part p (and only its range, when parts are ranges).
+Selection part_selection(const ExportJob& job, const PartMap& map,
+                         const std::vector<PartRun>& ranges, uint32_t p);
+
 // Ends a text file written as one section: flushes, counts its bytes, and
 // renames it into place.
 Status finish_text(ExportJob& job, Section& out, OutputFile& file);
@@ -87,5 +98,15 @@ Status write_msh(ExportJob& job);
 Status write_metis_graph(ExportJob& job);
 Status write_metis_mesh(ExportJob& job);
 Status write_raw(ExportJob& job);
+
+// raw's pieces, for export_raw_parts.cc: the files of the job's selection in
+// dir (with each node's sharing parts when shared is set), and the directory
+// built as OUT.tmp and renamed to OUT when `written` is OK (else removed).
+class SharedNodes;
+Status write_raw_files(ExportJob& job, const std::string& dir, SharedNodes* shared);
+Status start_export_dir(const std::string& out, std::string* tmp);
+Status finish_export_dir(ExportJob& job, const std::string& tmp, const std::string& out,
+                         Status written);
+Status write_raw_parts(ExportJob& job);
 
 }  // namespace weaver

@@ -55,6 +55,7 @@ class Mesh {
   uint32_t partition_parts() const { return partition_parts_; }
   const std::string& partition_method() const { return partition_method_; }
   Status partition(PartMap* out) { return PartMap::of_table(*partition_, partition_parts_, out); }
+  BTree& partition_table() { return *partition_; }
 
   // The id of the node at c; Corruption naming c when the node table lacks it.
   Status node_id(Coord c, uint64_t* id);

@@ -287,6 +287,52 @@ def check_partition(db, m):
     return f"partition ok (graph edge cut {ours[0]} = gpmetis's, sfc {ours[1]})"
 
 
+def check_raw_parts(db, m, d, parts):
+    """Each part as an MPI rank reads it: its elements (all parts together:
+    every element once), their nodes, every constraint of its dangling nodes,
+    and exactly the nodes it shares, with the parts it shares them with."""
+    out = d + f"/parts{parts}"
+    run(WEAVER, "export", db, "--format", "raw", "--parts", str(parts), "--out", out, "--quiet")
+    with open(out + "/parts.json") as f:
+        index = json.load(f)
+    assert index["parts"] == parts
+    E = len(m.e["id"])
+    part_of = np.full(E, -1)
+    users = {}  # global node -> parts using it
+    loaded = []
+    for p, sub in enumerate(index["part_dirs"]):
+        with open(f"{out}/{sub}/mesh.json") as f:
+            h = json.load(f)
+        get = lambda name, h=h, sub=sub: raw_array(f"{out}/{sub}", h, name)
+        eg, ng = get("element_global_id"), get("node_global_id")
+        assert (part_of[eg] == -1).all(), "an element in two parts"
+        part_of[eg] = p
+        assert (ng[get("element_nodes")] == m.corners[eg]).all()
+        dn, da = get("dangling_nodes"), get("dangling_anchors")
+        anchors = np.stack([m.n[f"a{k}"] for k in range(4)], axis=1)[ng[dn]]
+        assert (np.where(da >= 0, ng[np.maximum(da, 0)], -1) == anchors).all()
+        assert (m.n["kind"][ng] != 0).sum() == len(dn)
+        for n in np.unique(m.corners[eg]):
+            users.setdefault(int(n), set()).add(p)
+        loaded.append((ng, get("shared_nodes"), get("shared_parts")))
+        if index["method"] == "graph":  # pvtu pieces follow the same stored parts
+            if p == 0:
+                run(WEAVER, "export", db, "--format", "pvtu", "--parts", str(parts), "--out",
+                    out + "_pv.pvtu", "--quiet")
+            r = vtk.vtkXMLUnstructuredGridReader()
+            r.SetFileName(f"{out}_pv/{os.path.basename(out)}_pv_{p}.vtu")
+            r.Update()
+            assert (vtk_to_numpy(r.GetOutput().GetCellData().GetArray("element_id")) == eg).all()
+    assert (part_of >= 0).all(), "an element in no part"
+    pairs = 0
+    for p, (ng, sn, sp) in enumerate(loaded):
+        got = sorted(zip(ng[sn].tolist(), sp.tolist()))
+        want = sorted((n, q) for n, us in users.items() if p in us for q in us if q != p)
+        assert got == want, f"part {p}: shared pairs differ"
+        pairs += len(got)
+    return f"raw --parts {parts} ok ({index['method']}; {pairs} shared pairs)"
+
+
 def check_metis_mesh(db, m, d):
     path = d + "/m.mesh"
     run(WEAVER, "export", db, "--format", "metis-mesh", "--out", path, "--quiet")
@@ -360,7 +406,9 @@ def main():
         print(f"{name}: {check_msh(db, m, d, raw)}")
         print(f"{name}: {check_metis(db, m, d)}")
         print(f"{name}: {check_metis_mesh(db, m, d)}")
+        print(f"{name}: {check_raw_parts(db, m, d, 3)}")
         print(f"{name}: {check_partition(db, m)}")
+        print(f"{name}: {check_raw_parts(db, m, d, 4)}")
     # A mesh built from a velocity model carries vp, vs and rho.
     d = os.path.join(WORK, "basin")
     shutil.rmtree(d, ignore_errors=True)
