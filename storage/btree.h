@@ -54,6 +54,11 @@ class BTree final : public Store {
   // rank() and get() in one descent: the key's position, and whether it is there.
   Status rank_exact(uint64_t key, uint64_t* rank, bool* present);
 
+  // The leaf where key is or would be: all its keys, decoded, and the rank of
+  // its first record.  For callers that rank many nearby keys at once
+  // (src/mesh/corner_batch.h): one descent and decode for a leaf's worth.
+  Status leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* first_rank);
+
   // A concrete cursor (no virtual calls on the scan path).
   Status seek_cursor(uint64_t key, BTreeCursor* cursor);
 

@@ -61,8 +61,11 @@ Status for_each_node(ExportJob& job, bool with_anchors,
 
 Status for_each_element(ExportJob& job, bool with_nodes,
                         const std::function<Status(const MeshElement&)>& fn) {
+  // Without a box or a part, every element of the range is kept: its
+  // corners are looked up a batch at a time by the scan.
+  const bool all = !job.sel.has_box && job.sel.parts == nullptr;
   ElementScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, job.sel.first, false));
+  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, job.sel.first, with_nodes && all));
   MeshElement e;
   for (; scan.valid() && scan.element().id < job.sel.end; scan.next()) {
     bool keep = false;
@@ -70,7 +73,7 @@ Status for_each_element(ExportJob& job, bool with_nodes,
     if (!keep) continue;
     e = scan.element();
     if (with_nodes) {
-      WEAVER_RETURN_IF_ERROR(job.mesh.corner_ids(e.octant, &e.nodes));
+      if (!all) WEAVER_RETURN_IF_ERROR(job.mesh.corner_ids(e.octant, &e.nodes));
       for (uint64_t& id : e.nodes) WEAVER_RETURN_IF_ERROR(job.local->local_id(id, &id));
     }
     WEAVER_RETURN_IF_ERROR(fn(e));

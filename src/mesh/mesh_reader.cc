@@ -111,8 +111,9 @@ Status Mesh::fill_anchors(MeshNode* n) {
 Status ElementScan::start(Mesh& mesh, uint64_t first, bool with_nodes) {
   mesh_ = &mesh;
   nodes_ = with_nodes;
-  e_ = MeshElement{};
-  e_.id = first;
+  batch_.clear();
+  at_ = 0;
+  batch_first_ = first;
   uint64_t key = 0;
   if (first > 0 && first < mesh.element_count()) {
     WEAVER_RETURN_IF_ERROR(mesh.octants().select(first, &key, nullptr));
@@ -120,20 +121,39 @@ Status ElementScan::start(Mesh& mesh, uint64_t first, bool with_nodes) {
     key = ~uint64_t{0};  // past the end
   }
   status_ = mesh.octants().seek_cursor(key, &cursor_);
-  if (status_.ok()) status_ = load();
+  if (status_.ok()) status_ = fill();
   return status_;
 }
 
-void ElementScan::next() {
-  ++e_.id;
-  status_ = cursor_.next();
-  if (status_.ok()) status_ = load();
+Status ElementScan::fill() {
+  batch_first_ += batch_.size();
+  batch_.clear();
+  material_.clear();
+  at_ = 0;
+  MeshElement e;
+  while (cursor_.valid() && batch_.size() < kBatch) {
+    e.octant = octant_from_key(cursor_.key());
+    WEAVER_RETURN_IF_ERROR(mesh_->fill_element(cursor_.payload(), false, &e));
+    batch_.push_back(e.octant);
+    material_.push_back({e.vp, e.vs, e.rho});
+    WEAVER_RETURN_IF_ERROR(cursor_.next());
+  }
+  if (nodes_) WEAVER_RETURN_IF_ERROR(corners_.resolve(mesh_->nodes(), batch_, &ids_));
+  load();
+  return Status::Ok();
 }
 
-Status ElementScan::load() {
-  if (!cursor_.valid()) return Status::Ok();
-  e_.octant = octant_from_key(cursor_.key());
-  return mesh_->fill_element(cursor_.payload(), nodes_, &e_);
+void ElementScan::next() {
+  if (++at_ < batch_.size()) return load();
+  status_ = fill();
+}
+
+void ElementScan::load() {
+  if (at_ >= batch_.size()) return;
+  e_.id = batch_first_ + at_;
+  e_.octant = batch_[at_];
+  e_.vp = material_[at_][0], e_.vs = material_[at_][1], e_.rho = material_[at_][2];
+  if (nodes_) e_.nodes = ids_[at_];
 }
 
 Status NodeScan::start(Mesh& mesh, bool with_anchors) {

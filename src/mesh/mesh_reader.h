@@ -8,9 +8,11 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "db/database.h"
 #include "db/octant_table.h"
+#include "mesh/corner_batch.h"
 #include "mesh/part_map.h"
 #include "schema/node.h"
 #include "schema/octant.h"
@@ -92,10 +94,11 @@ std::string metadata_value(const std::string& metadata, const std::string& key);
 
 // The elements from `first` on, in id order, with material and (unless
 // with_nodes is false, which saves 8 lookups an element) corner ids.
+// Corner ids are found a batch of elements at a time (mesh/corner_batch.h).
 class ElementScan {
  public:
   Status start(Mesh& mesh, uint64_t first = 0, bool with_nodes = true);
-  bool valid() const { return status_.ok() && cursor_.valid(); }
+  bool valid() const { return status_.ok() && at_ < batch_.size(); }
   const MeshElement& element() const { return e_; }  // REQUIRES: valid()
   // Moves on; an error ends the scan and stays in status().
   void next();
@@ -103,11 +106,21 @@ class ElementScan {
   const Status& status() const { return status_; }
 
  private:
+  static constexpr size_t kBatch = 4096;
+  // Reads the next batch of elements (with their corners) from the cursor.
+  Status fill();
+  void load();
+
   Status status_;
-  Status load();
   Mesh* mesh_ = nullptr;
   bool nodes_ = true;
   BTreeCursor cursor_;
+  uint64_t batch_first_ = 0;                    // the id of batch_[0]
+  std::vector<Octant> batch_;                   // the elements read ahead
+  std::vector<std::array<float, 3>> material_;  // their vp, vs, rho
+  std::vector<std::array<uint64_t, 8>> ids_;    // their corners' ids
+  size_t at_ = 0;                               // batch_[at_] is e_
+  CornerBatch corners_;
   MeshElement e_;
 };
 
