@@ -9,7 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <regex>
+#include <string>
 
 #include "cli/cli.h"
 #include "export/export.h"
@@ -72,8 +72,14 @@ Status run_gpmetis(const std::string& db, const std::string& dir, uint32_t parts
   if (WEXITSTATUS(status) != 0) {
     return Status::IOError("gpmetis failed: " + text.substr(0, text.find('\n', 200)));
   }
-  std::smatch m;
-  if (std::regex_search(text, m, std::regex("Edgecut: *([0-9]+)"))) *edge_cut = m[1];
+  // gpmetis prints " - Edgecut: 279, communication volume: ..."
+  const size_t at = text.find("Edgecut:");
+  if (at != std::string::npos) {
+    const size_t digits = text.find_first_of("0123456789", at);
+    if (digits != std::string::npos) {
+      *edge_cut = text.substr(digits, text.find_first_not_of("0123456789", digits) - digits);
+    }
+  }
   *part_file = eo.out + ".part." + std::to_string(parts);
   return Status::Ok();
 }
