@@ -29,11 +29,12 @@ Status write_metis_graph(ExportJob& job) {
   Section out(file, kHeaderWidth, job.section_buffer * 4);
   LineBuffer line;
   std::vector<FaceNeighbor> around;
+  FaceFinder faces(job.mesh.octants());
   std::vector<uint64_t> ids;
   uint64_t degree_sum = 0;
   WEAVER_RETURN_IF_ERROR(for_each_element(job, false, [&](const MeshElement& e) {
     around.clear();
-    WEAVER_RETURN_IF_ERROR(face_neighbors(job.mesh.octants(), e.octant, &around));
+    WEAVER_RETURN_IF_ERROR(faces.find(e.octant, &around));
     ids.clear();
     for (const FaceNeighbor& n : around) ids.push_back(n.id);
     std::sort(ids.begin(), ids.end());

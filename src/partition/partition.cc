@@ -124,6 +124,7 @@ Status report_of(Mesh& mesh, const PartMap& map, const PartitionMemory& memory,
   r->parts.assign(map.parts(), PartStats{});
   ExternalSorter sorter(scratch, memory.node_sort);
   std::vector<FaceNeighbor> around;
+  FaceFinder faces(mesh.octants());
   ElementScan scan;
   WEAVER_RETURN_IF_ERROR(scan.start(mesh, 0, true));
   const int coarsest = coarsest_level(mesh);
@@ -135,7 +136,7 @@ Status report_of(Mesh& mesh, const PartMap& map, const PartitionMemory& memory,
     ++s.elements;
     s.weight += uint64_t{1} << std::min(40, std::max(0, e.octant.level - coarsest));
     around.clear();
-    WEAVER_RETURN_IF_ERROR(face_neighbors(mesh.octants(), e.octant, &around));
+    WEAVER_RETURN_IF_ERROR(faces.find(e.octant, &around));
     for (const FaceNeighbor& n : around) {
       uint32_t q = 0;
       WEAVER_RETURN_IF_ERROR(map.part_of(n.id, &q));
