@@ -13,8 +13,8 @@
 #include <sstream>
 
 #include "db/node_table.h"
-#include "db/partition_table.h"
 #include "db/octant_table.h"
+#include "db/partition_table.h"
 #include "storage/manifest_file.h"
 
 namespace fs = std::filesystem;
