@@ -51,8 +51,9 @@ constexpr char kUsage[] =
     "                       of the stored partition ('weaver partition') when it has\n"
     "                       N parts, else N ranges of element ids of equal count\n"
     "  --memory BYTES       memory budget (default 256M): the node table's cache (half),\n"
-    "                       the octant table's (an eighth, at most 16M) and the output\n"
-    "                       buffers (an eighth, at most 12M)\n"
+    "                       the octant table's (an eighth, at most 16M), the output\n"
+    "                       buffers (an eighth, at most 12M) and, for --box and\n"
+    "                       --parts, the sort and tree of their node set (an eighth)\n"
     "  --quiet              no progress line on stderr (default: items written of all,\n"
     "                       updated on a terminal, every 10 s otherwise)\n";
 
@@ -104,6 +105,17 @@ int cmd_export(int argc, char** argv) {
     }
     if (!st.ok()) return usage_error("export", st.message(), kUsage);
     o.parts = uint32_t(parts);
+  }
+  const ExportFormat f = o.format;
+  if (o.has_box && f != ExportFormat::kVtu && f != ExportFormat::kPvtu &&
+      f != ExportFormat::kMsh && f != ExportFormat::kRaw) {
+    return usage_error("export", "--box works with vtu, pvtu, msh and raw", kUsage);
+  }
+  if (o.parts > 1 && f != ExportFormat::kPvtu && f != ExportFormat::kRaw) {
+    return usage_error("export", "--parts works with pvtu and raw", kUsage);
+  }
+  if (o.parts > 1 && o.has_box && f == ExportFormat::kRaw) {
+    return usage_error("export", "raw takes --box or --parts, not both", kUsage);
   }
   st = memory_option(args, &o.memory);
   if (!st.ok()) return usage_error("export", st.message(), kUsage);
