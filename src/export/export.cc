@@ -61,26 +61,15 @@ Status for_each_node(ExportJob& job, bool with_anchors,
 
 Status for_each_element(ExportJob& job, bool with_nodes,
                         const std::function<Status(const MeshElement&)>& fn) {
-  // Without a box or a part, every element of the range is kept: its
-  // corners are looked up a batch at a time by the scan.
-  const bool all = !job.sel.has_box && job.sel.parts == nullptr;
-  ElementScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, job.sel.first, with_nodes && all));
-  MeshElement e;
-  for (; scan.valid() && scan.element().id < job.sel.end; scan.next()) {
-    bool keep = false;
-    WEAVER_RETURN_IF_ERROR(job.sel.keeps(scan.element().id, scan.element().octant, &keep));
-    if (!keep) continue;
-    e = scan.element();
+  return scan_selected(job.mesh, job.sel, with_nodes, [&](MeshElement& e) {
     if (with_nodes) {
-      if (!all) WEAVER_RETURN_IF_ERROR(job.mesh.corner_ids(e.octant, &e.nodes));
       for (uint64_t& id : e.nodes) WEAVER_RETURN_IF_ERROR(job.local->local_id(id, &id));
     }
     WEAVER_RETURN_IF_ERROR(fn(e));
     ++job.result->elements;
     job.tick();
-  }
-  return scan.status();
+    return Status::Ok();
+  });
 }
 
 Status export_parts(ExportJob& job, PartMap* map, std::vector<PartRun>* ranges,
@@ -110,11 +99,12 @@ Status export_parts(ExportJob& job, PartMap* map, std::vector<PartRun>* ranges,
 Selection part_selection(const ExportJob& job, const PartMap& map,
                          const std::vector<PartRun>& ranges, uint32_t p) {
   Selection s;
-  s.parts = &map;
-  s.part = p;
-  if (!ranges.empty()) {  // one range a part: read only it
+  s.part = p;             // (named, for what is written of the part)
+  if (!ranges.empty()) {  // one range a part: read only it, and all of it
     s.first = ranges[p].first;
     s.end = p + 1 < ranges.size() ? ranges[p + 1].first : job.mesh.element_count();
+  } else {
+    s.parts = &map;
   }
   return s;
 }

@@ -3,12 +3,46 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <array>
 #include <cstdio>
+#include <vector>
 
 #include "sort/external_sort.h"
 #include "storage/file.h"
 
 namespace weaver {
+
+Status scan_selected(Mesh& mesh, const Selection& sel, bool with_nodes,
+                     const std::function<Status(MeshElement&)>& fn) {
+  ElementScan scan;
+  WEAVER_RETURN_IF_ERROR(scan.start(mesh, sel.first, false));
+  std::vector<MeshElement> kept;
+  std::vector<Octant> octants;
+  std::vector<std::array<uint64_t, 8>> ids;
+  CornerBatch corners;
+  auto flush = [&]() -> Status {
+    if (with_nodes) {
+      octants.clear();
+      for (const MeshElement& e : kept) octants.push_back(e.octant);
+      WEAVER_RETURN_IF_ERROR(corners.resolve(mesh.nodes(), octants, &ids));
+    }
+    for (size_t i = 0; i < kept.size(); ++i) {
+      if (with_nodes) kept[i].nodes = ids[i];
+      WEAVER_RETURN_IF_ERROR(fn(kept[i]));
+    }
+    kept.clear();
+    return Status::Ok();
+  };
+  for (; scan.valid() && scan.element().id < sel.end; scan.next()) {
+    bool keep = false;
+    WEAVER_RETURN_IF_ERROR(sel.keeps(scan.element().id, scan.element().octant, &keep));
+    if (!keep) continue;
+    kept.push_back(scan.element());
+    if (kept.size() == 4096) WEAVER_RETURN_IF_ERROR(flush());
+  }
+  WEAVER_RETURN_IF_ERROR(scan.status());
+  return flush();
+}
 
 Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
                          const std::string& scratch_dir, uint64_t memory) {
@@ -19,29 +53,31 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
     return Status::Ok();
   }
   ::mkdir(scratch_dir.c_str(), 0755);
-  ExternalSorter sorter(scratch_dir + "/sort", memory / 2);
-  ElementScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(mesh, sel.first, false));
+  // The corners of the selected elements, sorted; then, with the anchors
+  // of those that dangle (one lookup a distinct node), sorted again.
+  ExternalSorter corners(scratch_dir + "/corners", memory / 4);
   elements_ = 0;
-  MeshElement e;
-  for (; scan.valid() && scan.element().id < sel.end; scan.next()) {
-    bool keep = false;
-    WEAVER_RETURN_IF_ERROR(sel.keeps(scan.element().id, scan.element().octant, &keep));
-    if (!keep) continue;
+  WEAVER_RETURN_IF_ERROR(scan_selected(mesh, sel, true, [&](MeshElement& e) {
     ++elements_;
-    e = scan.element();
-    WEAVER_RETURN_IF_ERROR(mesh.corner_ids(e.octant, &e.nodes));
-    for (uint64_t id : e.nodes) WEAVER_RETURN_IF_ERROR(sorter.add({id, 0}));
+    for (uint64_t id : e.nodes) WEAVER_RETURN_IF_ERROR(corners.add({id, 0}));
+    return Status::Ok();
+  }));
+  WEAVER_RETURN_IF_ERROR(corners.finish());
+  ExternalSorter sorter(scratch_dir + "/sort", memory / 4);
+  uint64_t last = UINT64_MAX;
+  for (;;) {
+    KeyTag kt;
+    bool done = false;
+    WEAVER_RETURN_IF_ERROR(corners.next(&kt, &done));
+    if (done) break;
+    if (kt.key == last) continue;
+    last = kt.key;
+    WEAVER_RETURN_IF_ERROR(sorter.add({kt.key, 0}));
     if (!with_anchors) continue;
-    for (int k = 0; k < 8; ++k) {
-      MeshNode n;
-      WEAVER_RETURN_IF_ERROR(mesh.node(e.nodes[k], true, &n));
-      for (int a = 0; a < n.anchor_count; ++a) {
-        WEAVER_RETURN_IF_ERROR(sorter.add({n.anchors[a], 0}));
-      }
-    }
+    MeshNode n;
+    WEAVER_RETURN_IF_ERROR(mesh.node(kt.key, true, &n));
+    for (int a = 0; a < n.anchor_count; ++a) WEAVER_RETURN_IF_ERROR(sorter.add({n.anchors[a], 0}));
   }
-  WEAVER_RETURN_IF_ERROR(scan.status());
   WEAVER_RETURN_IF_ERROR(sorter.finish());
   scratch_dir_ = scratch_dir;
   scratch_file_ = scratch_dir + "/local_nodes.bt";
@@ -52,7 +88,7 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
   t.packed = true;
   WEAVER_RETURN_IF_ERROR(BTree::create(std::move(file), t, memory / 2, &tree_));
   nodes_ = 0;
-  uint64_t last = 0;
+  last = 0;
   for (;;) {
     KeyTag kt;
     bool done = false;

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -21,7 +22,7 @@ struct Selection {
   bool has_box = false;
   Coord lo, hi;                    // the box in ticks, bounds included
   const PartMap* parts = nullptr;  // if set: only the elements of `part`
-  uint32_t part = 0;
+  uint32_t part = 0;               // the part selected (by parts, or by the id range)
 
   bool whole() const { return first == 0 && end == UINT64_MAX && !has_box && parts == nullptr; }
   // Whether element id (octant o) of the id range is selected: it shares a
@@ -40,6 +41,11 @@ struct Selection {
     return Status::Ok();
   }
 };
+
+// Calls fn for each selected element in id order, with its corners' global
+// node ids when with_nodes (looked up a batch at a time).
+Status scan_selected(Mesh& mesh, const Selection& sel, bool with_nodes,
+                     const std::function<Status(MeshElement&)>& fn);
 
 // The nodes of a selection, local id = rank in global id order.  For the
 // whole mesh local ids are the global ones and nothing is built.
