@@ -107,8 +107,8 @@ int cmd_export(int argc, char** argv) {
     o.parts = uint32_t(parts);
   }
   const ExportFormat f = o.format;
-  if (o.has_box && f != ExportFormat::kVtu && f != ExportFormat::kPvtu &&
-      f != ExportFormat::kMsh && f != ExportFormat::kRaw) {
+  if (o.has_box && f != ExportFormat::kVtu && f != ExportFormat::kPvtu && f != ExportFormat::kMsh &&
+      f != ExportFormat::kRaw) {
     return usage_error("export", "--box works with vtu, pvtu, msh and raw", kUsage);
   }
   if (o.parts > 1 && f != ExportFormat::kPvtu && f != ExportFormat::kRaw) {
