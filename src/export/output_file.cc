@@ -64,11 +64,6 @@ void LineBuffer::field(uint64_t v) {
   s_.append(b, std::to_chars(b, b + sizeof b, v).ptr);
 }
 
-void LineBuffer::field(int64_t v) {
-  char b[24];
-  s_.append(b, std::to_chars(b, b + sizeof b, v).ptr);
-}
-
 void LineBuffer::field(double v) {
   char b[32];
   s_.append(b, std::to_chars(b, b + sizeof b, v).ptr);

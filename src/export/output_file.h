@@ -73,7 +73,6 @@ class Section {
 class LineBuffer {
  public:
   void field(uint64_t v);
-  void field(int64_t v);
   void field(double v);  // shortest text that reads back to v
   void text(std::string_view s) { s_.append(s); }
   void ch(char c) { s_ += c; }

@@ -65,11 +65,6 @@ Status Mesh::node_id(Coord c, uint64_t* id) {
   return Status::Ok();
 }
 
-Status Mesh::corner_ids(const Octant& o, std::array<uint64_t, 8>* ids) {
-  for (int k = 0; k < 8; ++k) WEAVER_RETURN_IF_ERROR(node_id(octant_corner(o, k), &(*ids)[k]));
-  return Status::Ok();
-}
-
 Status Mesh::node(uint64_t id, bool with_anchors, MeshNode* out) {
   if (id >= nodes_->size()) {
     return Status::InvalidArgument("node " + std::to_string(id) + " does not exist (" +
@@ -89,14 +84,11 @@ Status Mesh::node(uint64_t id, bool with_anchors, MeshNode* out) {
   return with_anchors ? fill_anchors(out) : Status::Ok();
 }
 
-Status Mesh::fill_element(const std::byte* payload, bool with_nodes, MeshElement* e) {
-  if (with_nodes) WEAVER_RETURN_IF_ERROR(corner_ids(e->octant, &e->nodes));
-  if (vp_ != nullptr) {
-    e->vp = float(RecordSchema::get_double(payload, *vp_));
-    e->vs = float(RecordSchema::get_double(payload, *vs_));
-    e->rho = float(RecordSchema::get_double(payload, *rho_));
-  }
-  return Status::Ok();
+void Mesh::fill_material(const std::byte* payload, MeshElement* e) const {
+  if (vp_ == nullptr) return;
+  e->vp = float(RecordSchema::get_double(payload, *vp_));
+  e->vs = float(RecordSchema::get_double(payload, *vs_));
+  e->rho = float(RecordSchema::get_double(payload, *rho_));
 }
 
 Status Mesh::fill_anchors(MeshNode* n) {
@@ -133,7 +125,7 @@ Status ElementScan::fill() {
   MeshElement e;
   while (cursor_.valid() && batch_.size() < kBatch) {
     e.octant = octant_from_key(cursor_.key());
-    WEAVER_RETURN_IF_ERROR(mesh_->fill_element(cursor_.payload(), false, &e));
+    mesh_->fill_material(cursor_.payload(), &e);
     batch_.push_back(e.octant);
     material_.push_back({e.vp, e.vs, e.rho});
     WEAVER_RETURN_IF_ERROR(cursor_.next());

@@ -61,13 +61,10 @@ class Mesh {
 
   // The id of the node at c; Corruption naming c when the node table lacks it.
   Status node_id(Coord c, uint64_t* id);
-  // The ids of the nodes at the 8 corners of o.
-  Status corner_ids(const Octant& o, std::array<uint64_t, 8>* ids);
   // The node with this id (InvalidArgument past the last), with its anchors' ids.
   Status node(uint64_t id, bool with_anchors, MeshNode* out);
-  // The element's material and (with_nodes) corner ids; its octant and id
-  // are the caller's.
-  Status fill_element(const std::byte* payload, bool with_nodes, MeshElement* e);
+  // The element's vp, vs and rho from its octant table payload (zeros without material).
+  void fill_material(const std::byte* payload, MeshElement* e) const;
   // A node's anchors, from its coordinate and kind.
   Status fill_anchors(MeshNode* n);
 
