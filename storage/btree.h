@@ -57,7 +57,9 @@ class BTree final : public Store {
   // The leaf where key is or would be: all its keys, decoded, and the rank of
   // its first record.  For callers that rank many nearby keys at once
   // (src/mesh/corner_batch.h): one descent and decode for a leaf's worth.
-  Status leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* first_rank);
+  // With payloads, also their payloads, packed row-wise.
+  Status leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* first_rank,
+                   std::vector<std::byte>* payloads = nullptr);
 
   // A concrete cursor (no virtual calls on the scan path).
   Status seek_cursor(uint64_t key, BTreeCursor* cursor);

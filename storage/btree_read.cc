@@ -196,15 +196,17 @@ Status BTree::rank_exact(uint64_t key, uint64_t* rank, bool* present) {
   return Status::Ok();
 }
 
-Status BTree::leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* first_rank) {
+Status BTree::leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* first_rank,
+                        std::vector<std::byte>* payloads) {
   keys->clear();
+  if (payloads != nullptr) payloads->clear();
   *first_rank = 0;
   seal_tail();
   if (height_ == 0) return Status::Ok();
   Path path;
   PageRef lf;
   WEAVER_RETURN_IF_ERROR(descend(key, &path, &lf, first_rank));
-  return leaf_entries(lf, keys, nullptr);
+  return leaf_entries(lf, keys, payloads);
 }
 
 Status BTree::select(uint64_t index, uint64_t* key_out, std::byte* payload_out) {

@@ -8,13 +8,14 @@
 namespace weaver {
 
 Status Mesh::open(const std::string& db_dir, uint64_t octant_pool, uint64_t node_pool,
-                  std::unique_ptr<Mesh>* out) {
+                  std::unique_ptr<Mesh>* out, bool octree_only_ok) {
   std::unique_ptr<Mesh> m(new Mesh());
   WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kRead, false, &m->db_));
-  if (!m->db_->has_table(kNodeTable)) {
+  if (m->db_->has_table(kNodeTable)) {
+    WEAVER_RETURN_IF_ERROR(m->db_->open_table(kNodeTable, node_pool, &m->nodes_));
+  } else if (!octree_only_ok) {
     return Status::NotFound(db_dir + ": no mesh yet (run 'weaver extract' first)");
   }
-  WEAVER_RETURN_IF_ERROR(m->db_->open_table(kNodeTable, node_pool, &m->nodes_));
   WEAVER_RETURN_IF_ERROR(m->db_->open_table(kOctantTable, octant_pool, &m->octants_));
   const TableOptions& t = m->octants_->options();
   units_from_metadata(t.metadata, &m->units_);

@@ -40,14 +40,16 @@ struct MeshNode {
 class Mesh {
  public:
   // Opens the mesh of db_dir read-only.  NotFound when there is no node table
-  // yet (the octree was never extracted).
+  // yet (the octree was never extracted), unless octree_only_ok: then the
+  // octree alone is open and has_nodes() is false.
   static Status open(const std::string& db_dir, uint64_t octant_pool, uint64_t node_pool,
-                     std::unique_ptr<Mesh>* out);
+                     std::unique_ptr<Mesh>* out, bool octree_only_ok = false);
 
   BTree& octants() { return *octants_; }
-  BTree& nodes() { return *nodes_; }
+  BTree& nodes() { return *nodes_; }  // REQUIRES: has_nodes()
+  bool has_nodes() const { return nodes_ != nullptr; }
   uint64_t element_count() const { return octants_->size(); }
-  uint64_t node_count() const { return nodes_->size(); }
+  uint64_t node_count() const { return nodes_ ? nodes_->size() : 0; }
   const Units& units() const { return units_; }
   // Whether the octant table carries vp, vs and rho (a mesh built from a model).
   bool has_material() const { return vp_ != nullptr; }

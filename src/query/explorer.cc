@@ -1,0 +1,112 @@
+#include "query/explorer.h"
+
+#include <algorithm>
+
+namespace weaver {
+
+Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
+                      std::unique_ptr<Explorer>* out) {
+  MemoryPlan plan(memory);
+  // The pools keep the paths and leaves of recent questions; a batch's
+  // points, sorted, and its answers take the rest.
+  const uint64_t octant_pool = plan.take("octant table pool", 3, 8);
+  const uint64_t node_pool = plan.take("node table pool", 3, 8);
+  const uint64_t batch = plan.take("point batch", 1, 4);
+  std::unique_ptr<Explorer> e(new Explorer());
+  WEAVER_RETURN_IF_ERROR(Mesh::open(db_dir, octant_pool, node_pool, &e->mesh_, true));
+  e->octant_window_ = std::make_unique<LeafWindow>(e->mesh_->octants(), true);
+  if (e->mesh_->has_nodes()) {
+    e->node_window_ = std::make_unique<LeafWindow>(e->mesh_->nodes(), true);
+  }
+  // A point costs its coordinate (12 bytes), its sort pair (16) and its
+  // answer (40): about 80 bytes with the caller's own buffers.
+  e->batch_points_ = size_t(std::clamp<uint64_t>(batch / 80, 4096, 1 << 22));
+  *out = std::move(e);
+  return Status::Ok();
+}
+
+Status Explorer::locate(Coord p, PointHit* out) { return locate_batch(&p, 1, out); }
+
+Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
+  order_.clear();
+  for (size_t i = 0; i < n; ++i) {
+    out[i] = PointHit{};
+    if (pixel_is_valid(p[i])) order_.push_back({pixel_key(p[i]), i});
+  }
+  std::sort(order_.begin(), order_.end());
+  LeafWindow::Floor f;
+  MeshElement m;
+  for (const auto& [key, i] : order_) {
+    WEAVER_RETURN_IF_ERROR(octant_window_->floor(key, &f));
+    if (!f.found) continue;
+    const Octant leaf = octant_from_key(f.key);
+    if (!octant_contains_point(leaf, p[i])) continue;  // in a hole of the domain
+    PointHit& h = out[i];
+    h.inside = true;
+    h.id = f.rank;
+    h.leaf = leaf;
+    mesh_->fill_material(f.payload, &m);
+    h.vp = m.vp, h.vs = m.vs, h.rho = m.rho;
+  }
+  return Status::Ok();
+}
+
+Status Explorer::node_at_batch(const Coord* p, size_t n, NodeHit* out) {
+  order_.clear();
+  for (size_t i = 0; i < n; ++i) {
+    out[i] = NodeHit{};
+    if (node_is_valid(p[i])) order_.push_back({node_key(p[i]), i});
+  }
+  std::sort(order_.begin(), order_.end());
+  LeafWindow::Floor f;
+  for (const auto& [key, i] : order_) {
+    WEAVER_RETURN_IF_ERROR(node_window_->floor(key, &f));
+    if (!f.found || f.key != key) continue;
+    const uint8_t kind = static_cast<uint8_t>(f.payload[0]);
+    if (kind > 2) return Status::Corruption(mesh_->nodes().file_name() + ": bad node kind");
+    out[i] = {true, f.rank, static_cast<NodeKind>(kind)};
+  }
+  return Status::Ok();
+}
+
+Status Explorer::find_node(Coord c, bool* found, uint64_t* id, NodeKind* kind) {
+  NodeHit h;
+  WEAVER_RETURN_IF_ERROR(node_at_batch(&c, 1, &h));
+  *found = h.found, *id = h.id, *kind = h.kind;
+  return Status::Ok();
+}
+
+Status Explorer::check_element(uint64_t id) const {
+  if (id < element_count()) return Status::Ok();
+  return Status::InvalidArgument("element " + std::to_string(id) + " does not exist (" +
+                                 std::to_string(element_count()) + " elements)");
+}
+
+Status Explorer::check_node(uint64_t id) const {
+  if (id < node_count()) return Status::Ok();
+  return Status::InvalidArgument("node " + std::to_string(id) + " does not exist (" +
+                                 std::to_string(node_count()) + " nodes)");
+}
+
+Status Explorer::element(uint64_t id, MeshElement* out) {
+  WEAVER_RETURN_IF_ERROR(check_element(id));
+  std::vector<std::byte> payload(mesh_->octants().payload_size() + 1);
+  uint64_t key = 0;
+  WEAVER_RETURN_IF_ERROR(mesh_->octants().select(id, &key, payload.data()));
+  *out = MeshElement{};
+  out->id = id;
+  out->octant = octant_from_key(key);
+  mesh_->fill_material(payload.data(), out);
+  if (!has_nodes()) return Status::Ok();
+  for (int k = 0; k < 8; ++k) {
+    WEAVER_RETURN_IF_ERROR(mesh_->node_id(octant_corner(out->octant, k), &out->nodes[k]));
+  }
+  return Status::Ok();
+}
+
+Status Explorer::node(uint64_t id, MeshNode* out) {
+  WEAVER_RETURN_IF_ERROR(check_node(id));
+  return mesh_->node(id, true, out);
+}
+
+}  // namespace weaver

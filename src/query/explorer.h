@@ -1,0 +1,114 @@
+// An open mesh database that answers questions: what is at a point (one, or
+// a batch of millions), an element or node by id, and the neighbourhood of
+// either.  Opened once (a read snapshot of the last commit) and asked many
+// times: by `weaver query`, by `weaver shell`, and by the library API.
+// The octree alone answers the point questions; ids of nodes need the
+// extracted mesh.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "mesh/mesh_reader.h"
+#include "query/leaf_window.h"
+#include "schema/octant.h"
+#include "schema/status.h"
+#include "util/memory_budget.h"
+
+namespace weaver {
+
+// The leaf that holds a point, with its material (zeros without one).
+struct PointHit {
+  bool inside = false;  // false: outside the domain (no leaf holds the point)
+  uint64_t id = 0;      // element id: the leaf's rank in key order
+  Octant leaf;
+  float vp = 0, vs = 0, rho = 0;
+};
+
+// The node at a point.
+struct NodeHit {
+  bool found = false;
+  uint64_t id = 0;
+  NodeKind kind = NodeKind::kAnchored;
+};
+
+// An element across a face, edge or corner of another.
+struct Neighbor {
+  Direction dir;  // from the element asked about
+  uint64_t id = 0;
+  Octant octant;
+};
+
+// An element whose closed box holds a node.
+struct NodeElement {
+  uint64_t id = 0;
+  Octant octant;
+  int corner = -1;  // which corner of it the node is; -1: it hangs on its edge or face
+};
+
+class Explorer {
+ public:
+  // Opens db_dir read-only within `memory` (the table caches).  The node
+  // table is optional: without it, only the octree's questions are answered.
+  static Status open(const std::string& db_dir, MemoryBudget memory,
+                     std::unique_ptr<Explorer>* out);
+
+  Mesh& mesh() { return *mesh_; }
+  bool has_nodes() const { return mesh_->has_nodes(); }
+  const Units& units() const { return mesh_->units(); }
+  uint64_t element_count() const { return mesh_->element_count(); }
+  uint64_t node_count() const { return mesh_->node_count(); }
+  // How many points a batch should hold to stay within the memory budget.
+  size_t batch_points() const { return batch_points_; }
+
+  // The leaf holding tick point p; any p (past the root is outside).
+  Status locate(Coord p, PointHit* out);
+  // The same for n points in any order: sorted by Morton code inside, then
+  // answered in one forward walk over the octant table.  out[i] answers p[i].
+  Status locate_batch(const Coord* p, size_t n, PointHit* out);
+  // The nodes at n points (any coordinates; past the far side is no node).
+  // REQUIRES: has_nodes().
+  Status node_at_batch(const Coord* p, size_t n, NodeHit* out);
+
+  // Element `id` with its material and (with the mesh) its corners' node ids.
+  // InvalidArgument past the last element.
+  Status element(uint64_t id, MeshElement* out);
+  // Node `id`, with its anchors' ids.  REQUIRES: has_nodes().
+  Status node(uint64_t id, MeshNode* out);
+
+  // The elements across each face (kinds bit 1), edge (bit 2) and corner
+  // (bit 3) of element id, direction by direction (kAllDirections' order),
+  // each direction's in key order: the one leaf of the element's size or
+  // larger that lies across, or the finer leaves that touch the face, edge
+  // or corner.  Works on any octree, balanced or not.
+  Status neighbors(uint64_t id, unsigned kinds, std::vector<Neighbor>* out);
+  // The elements whose closed boxes hold node `id` (up to 8 in a balanced
+  // mesh), in id order.  REQUIRES: has_nodes().
+  Status node_elements(uint64_t id, std::vector<NodeElement>* out);
+  // The dangling nodes that depend on node `id`, in id order (none unless it
+  // is an anchor of some).  REQUIRES: has_nodes().
+  Status depends(uint64_t id, std::vector<MeshNode>* out);
+
+ private:
+  Explorer() = default;
+  Status check_element(uint64_t id) const;
+  Status check_node(uint64_t id) const;
+  // The id of the node at c, if there is one.
+  Status find_node(Coord c, bool* found, uint64_t* id, NodeKind* kind);
+  // Visits region r (across direction d of element o): emits the leaf that
+  // covers it, or recurses into the children that touch o.
+  Status visit_across(const Octant& o, Direction d, const Octant& r, std::vector<Neighbor>* out);
+
+  std::unique_ptr<Mesh> mesh_;
+  std::unique_ptr<LeafWindow> octant_window_, node_window_;
+  size_t batch_points_ = 1 << 20;
+  // Sorting scratch for the batches: (key, input index).
+  std::vector<std::pair<uint64_t, uint64_t>> order_;
+};
+
+// "-x", "+y", "-x+z", "+x-y-z": the name of a direction in answers.
+std::string direction_name(Direction d);
+
+}  // namespace weaver

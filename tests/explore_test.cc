@@ -1,0 +1,213 @@
+// The Explorer (query/explorer.h) against brute force: neighbours across
+// faces, edges and corners, the elements around a node, the nodes that
+// depend on a node, and batches of points answered in input order.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "gen/octree_gen.h"
+#include "import/import.h"
+#include "import/octant_text.h"
+#include "query/explorer.h"
+#include "reference/reference_mesh.h"
+#include "test_mesh.h"
+#include "test_util.h"
+
+namespace weaver {
+namespace {
+
+// Random refinements of non-cube block domains: unbalanced (steps of several
+// levels) when `balanced` is false.
+std::vector<std::vector<Octant>> octrees(bool balanced, uint64_t leaves) {
+  std::vector<std::vector<Octant>> out;
+  for (uint64_t seed = 1; seed <= testing::scaled(4, 2); ++seed) {
+    GenOptions g;
+    g.seed = seed;
+    g.blocks[0] = 3, g.blocks[1] = 1 + seed % 3, g.blocks[2] = 2;
+    g.block_level = 2;
+    g.leaves = leaves;
+    g.max_level = 8;
+    std::vector<Octant> o;
+    EXPECT_OK(generate_octree(g, &o));
+    out.push_back(balanced ? reference::balance(o) : o);
+    std::sort(out.back().begin(), out.back().end(),
+              [](const Octant& a, const Octant& b) { return octant_key(a) < octant_key(b); });
+  }
+  return out;
+}
+
+std::string import_only(const std::vector<Octant>& leaves, const testing::TempDir& dir) {
+  ImportResult ir;
+  EXPECT_OK(write_octant_text(dir.file("o.txt"), leaves, ""));
+  EXPECT_OK(import_octants(dir.file("db"), dir.file("o.txt"), ImportOptions{}, &ir));
+  return dir.file("db");
+}
+
+std::unique_ptr<Explorer> open(const std::string& db) {
+  std::unique_ptr<Explorer> ex;
+  EXPECT_OK(Explorer::open(db, MemoryBudget(8 << 20), &ex));
+  return ex;
+}
+
+// Closed intervals of the boxes of a and b on each axis: how many axes they
+// overlap with positive length, and whether they meet at all.
+struct Meet {
+  bool touch = true;
+  int positive = 0;
+};
+Meet meet(const int64_t lo_a[3], int64_t ea, const int64_t lo_b[3], int64_t eb) {
+  Meet m;
+  for (int i = 0; i < 3; ++i) {
+    const int64_t lo = std::max(lo_a[i], lo_b[i]), hi = std::min(lo_a[i] + ea, lo_b[i] + eb);
+    if (hi < lo) m.touch = false;
+    if (hi > lo) ++m.positive;
+  }
+  return m;
+}
+
+// The leaves across direction d of o, by the definition: a leaf whose
+// interior meets the same-size box r across d, and whose closed box meets
+// o's closed box within r in a piece of dimension 3 - (crossed axes).
+std::vector<uint64_t> across(const std::vector<Octant>& leaves, const Octant& o, Direction d) {
+  const int64_t e = octant_edge(o);
+  const int64_t r[3] = {o.x + d.dx * e, o.y + d.dy * e, o.z + d.dz * e};
+  std::vector<uint64_t> ids;
+  for (size_t j = 0; j < leaves.size(); ++j) {
+    const Octant& l = leaves[j];
+    const int64_t lo[3] = {l.x, l.y, l.z}, el = octant_edge(l);
+    if (meet(lo, el, r, e).positive != 3) continue;  // interiors apart
+    // The piece of l's closed box inside r's and o's: the intersection of
+    // three boxes, axis by axis.
+    int dims = 0;
+    bool touch = true;
+    const int64_t olo[3] = {o.x, o.y, o.z};
+    for (int a = 0; a < 3; ++a) {
+      const int64_t lo3 = std::max({lo[a], r[a], olo[a]});
+      const int64_t hi3 = std::min({lo[a] + el, r[a] + e, olo[a] + e});
+      if (hi3 < lo3) touch = false;
+      if (hi3 > lo3) ++dims;
+    }
+    if (touch && dims == 3 - d.nonzero()) ids.push_back(j);
+  }
+  return ids;
+}
+
+TEST(Explore, NeighborsMatchTheDefinitionOnAnyOctree) {
+  for (bool balanced : {false, true}) {
+    for (const auto& leaves : octrees(balanced, testing::scaled(600, 200))) {
+      testing::TempDir dir;
+      auto ex = open(import_only(leaves, dir));
+      ASSERT_TRUE(ex);
+      for (uint64_t id = 0; id < leaves.size(); ++id) {
+        std::vector<Neighbor> got;
+        ASSERT_OK(ex->neighbors(id, (1u << 1) | (1u << 2) | (1u << 3), &got));
+        std::vector<std::pair<std::string, uint64_t>> g, w;
+        for (const Neighbor& n : got) {
+          g.push_back({direction_name(n.dir), n.id});
+          ASSERT_EQ(n.octant, leaves[n.id]);
+        }
+        for (const Direction& d : kAllDirections) {
+          for (uint64_t j : across(leaves, leaves[id], d)) w.push_back({direction_name(d), j});
+        }
+        ASSERT_EQ(g, w) << "element " << id << " balanced " << balanced;
+        // Asking for one kind gives that kind's part of the whole.
+        ASSERT_OK(ex->neighbors(id, 1u << 2, &got));
+        for (const Neighbor& n : got) ASSERT_EQ(n.dir.nonzero(), 2);
+      }
+      std::vector<Neighbor> none;
+      EXPECT_TRUE(ex->neighbors(leaves.size(), 2, &none).is_invalid_argument());
+    }
+  }
+}
+
+TEST(Explore, NodeElementsAndDependsMatchTheReferenceMesh) {
+  for (const auto& leaves : octrees(true, testing::scaled(400, 150))) {
+    testing::TempDir dir;
+    auto ex = open(testing::build_mesh(leaves, dir));
+    ASSERT_TRUE(ex);
+    const reference::Mesh ref = reference::extract(leaves);
+    ASSERT_EQ(ex->node_count(), ref.nodes.size());
+    for (uint64_t id = 0; id < ref.nodes.size(); ++id) {
+      const Coord c = ref.nodes[id].c;
+      std::vector<std::pair<uint64_t, int>> want;
+      for (uint64_t j = 0; j < leaves.size(); ++j) {
+        const Octant& l = leaves[j];
+        const int64_t e = octant_edge(l);
+        const bool holds = l.x <= c.x && c.x <= l.x + e && l.y <= c.y && c.y <= l.y + e &&
+                           l.z <= c.z && c.z <= l.z + e;
+        if (!holds) continue;
+        int corner = -1;
+        for (int k = 0; k < 8; ++k) corner = ref.corners[j][k] == id ? k : corner;
+        want.push_back({j, corner});
+      }
+      std::vector<NodeElement> got;
+      ASSERT_OK(ex->node_elements(id, &got));
+      std::vector<std::pair<uint64_t, int>> g;
+      for (const NodeElement& e : got) g.push_back({e.id, e.corner});
+      ASSERT_EQ(g, want) << "node " << id;
+
+      std::vector<uint64_t> dependents;
+      for (uint64_t m = 0; m < ref.nodes.size(); ++m) {
+        const auto& a = ref.nodes[m].anchors;
+        if (std::find(a.begin(), a.end(), id) != a.end()) dependents.push_back(m);
+      }
+      std::vector<MeshNode> deps;
+      ASSERT_OK(ex->depends(id, &deps));
+      std::vector<uint64_t> d;
+      for (const MeshNode& n : deps) d.push_back(n.id);
+      ASSERT_EQ(d, dependents) << "node " << id;
+    }
+    std::vector<NodeElement> none;
+    EXPECT_TRUE(ex->node_elements(ref.nodes.size(), &none).is_invalid_argument());
+  }
+}
+
+TEST(Explore, BatchesAnswerEveryPointInInputOrder) {
+  for (const auto& leaves : octrees(true, testing::scaled(3000, 800))) {
+    testing::TempDir dir;
+    auto ex = open(testing::build_mesh(leaves, dir));
+    ASSERT_TRUE(ex);
+    const reference::Mesh ref = reference::extract(leaves);
+    std::mt19937_64 rng(7);
+    std::vector<Coord> points;
+    // Inside the blocks, in the root beyond them (a hole), past the root, at
+    // nodes and near them, in no order.
+    for (int i = 0; i < 3000; ++i) {
+      const int what = int(rng() % 4);
+      if (what == 0) {
+        points.push_back({uint32_t(rng() % (kRootEdge + 9)), uint32_t(rng() % (kRootEdge / 2)),
+                          uint32_t(rng() % kRootEdge)});
+      } else {
+        Coord c = ref.nodes[rng() % ref.nodes.size()].c;
+        if (what == 2) c.x += uint32_t(rng() % 3);
+        points.push_back(c);
+      }
+    }
+    std::vector<PointHit> hits(points.size());
+    std::vector<NodeHit> nodes(points.size());
+    ASSERT_OK(ex->locate_batch(points.data(), points.size(), hits.data()));
+    ASSERT_OK(ex->node_at_batch(points.data(), points.size(), nodes.data()));
+    for (size_t i = 0; i < points.size(); ++i) {
+      const Coord p = points[i];
+      int64_t want = -1;
+      for (size_t j = 0; j < leaves.size() && pixel_is_valid(p); ++j) {
+        if (octant_contains_point(leaves[j], p)) want = int64_t(j);
+      }
+      ASSERT_EQ(hits[i].inside, want >= 0) << i;
+      if (want >= 0) {
+        ASSERT_EQ(hits[i].id, uint64_t(want));
+        ASSERT_EQ(hits[i].leaf, leaves[want]);
+      }
+      int64_t node = -1;
+      for (size_t m = 0; m < ref.nodes.size(); ++m) node = ref.nodes[m].c == p ? int64_t(m) : node;
+      ASSERT_EQ(nodes[i].found, node >= 0) << i;
+      if (node >= 0) {
+        ASSERT_EQ(nodes[i].id, uint64_t(node));
+        ASSERT_EQ(nodes[i].kind, ref.nodes[node].kind);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace weaver
