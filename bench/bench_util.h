@@ -127,7 +127,10 @@ inline std::string run_in_child(const std::function<bool(Json*)>& fn) {
 // stdout ("" on failure) and its peak RSS.  A fresh process, not a fork of
 // this one: a fork inherits this process's heap, and copy-on-write faults
 // then distort a multi-threaded child's timing.
-inline std::string run_program(const std::vector<std::string>& args, uint64_t* peak_rss) {
+// With out_path, the program's stdout goes to that file (as a user's shell
+// redirect would) and the result is "ok" on success.
+inline std::string run_program(const std::vector<std::string>& args, uint64_t* peak_rss,
+                               const std::string& out_path = "") {
   int fds[2];
   if (pipe(fds) != 0) return "";
   std::fflush(stdout);
@@ -137,7 +140,11 @@ inline std::string run_program(const std::vector<std::string>& args, uint64_t* p
   malloc_trim(0);
   const pid_t pid = fork();
   if (pid == 0) {
-    dup2(fds[1], STDOUT_FILENO);
+    const int out =
+        out_path.empty() ? fds[1] : ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (out < 0) _exit(126);
+    dup2(out, STDOUT_FILENO);
+    if (!out_path.empty()) ::write(fds[1], "ok", 2), close(out);
     close(fds[0]);
     close(fds[1]);
     std::vector<char*> argv;

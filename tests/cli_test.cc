@@ -21,7 +21,7 @@ TEST(Cli, EveryCommandHasHelp) {
   const CommandRun top = run("--help");
   EXPECT_EQ(top.code, 0);
   for (const char* cmd : {"generate", "import", "construct", "balance", "mesh", "extract", "export",
-                          "stat", "query", "verify", "recover"}) {
+                          "stat", "query", "shell", "partition", "verify", "recover"}) {
     EXPECT_NE(top.out.find(cmd), std::string::npos);
     const CommandRun r = run(std::string(cmd) + " --help");
     EXPECT_EQ(r.code, 0) << cmd;
@@ -60,7 +60,11 @@ TEST(Cli, ImportStatQueryRoundTrip) {
       << loc.out;
   const CommandRun range = run("query " + d.file("db") + " range 0 0 0 131072 0 0 --json --list");
   ASSERT_EQ(range.code, 0);
-  EXPECT_NE(range.out.find("\"count\": 2"), std::string::npos) << range.out;
+  // JSON Lines: one object per leaf.
+  EXPECT_EQ(lines(range.out), 2) << range.out;
+  EXPECT_NE(range.out.find("{\"element\": 1, \"x\": 131072, \"y\": 0, \"z\": 0, \"level\": 3"),
+            std::string::npos)
+      << range.out;
 }
 
 TEST(Cli, DataErrorsAreOneLineWithStatus1) {

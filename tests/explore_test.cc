@@ -209,5 +209,31 @@ TEST(Explore, BatchesAnswerEveryPointInInputOrder) {
   }
 }
 
+TEST(Explore, ElementsAndNodesByIdMatchTheReferenceMesh) {
+  testing::TempDir dir;
+  const std::vector<Octant> leaves = testing::small_sphere();
+  auto ex = open(testing::build_mesh(leaves, dir));
+  ASSERT_TRUE(ex);
+  const reference::Mesh ref = reference::extract(leaves);
+  for (uint64_t id = 0; id < ref.elements.size(); id += 7) {
+    MeshElement e;
+    ASSERT_OK(ex->element(id, &e));
+    ASSERT_EQ(e.octant, ref.elements[id]);
+    ASSERT_EQ(e.nodes, ref.corners[id]);
+  }
+  for (uint64_t id = 0; id < ref.nodes.size(); id += 5) {
+    MeshNode n;
+    ASSERT_OK(ex->node(id, &n));
+    ASSERT_EQ(n.c, ref.nodes[id].c);
+    ASSERT_EQ(n.kind, ref.nodes[id].kind);
+    ASSERT_EQ(std::vector<uint64_t>(n.anchors.begin(), n.anchors.begin() + n.anchor_count),
+              ref.nodes[id].anchors);
+  }
+  MeshElement e;
+  MeshNode n;
+  EXPECT_TRUE(ex->element(ref.elements.size(), &e).is_invalid_argument());
+  EXPECT_TRUE(ex->node(ref.nodes.size(), &n).is_invalid_argument());
+}
+
 }  // namespace
 }  // namespace weaver

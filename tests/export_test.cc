@@ -16,7 +16,6 @@
 #include "import/octant_text.h"
 #include "mesh/face_neighbors.h"
 #include "mesh/mesh_reader.h"
-#include "query/mesh_query.h"
 #include "reference/reference_mesh.h"
 #include "test_mesh.h"
 #include "test_util.h"
@@ -267,56 +266,6 @@ TEST(Export, NeedsAnExtractedMesh) {
   const Status st = export_mesh(dir.file("db"), eo, &r);
   EXPECT_TRUE(st.is_not_found()) << st.to_string();
   EXPECT_NE(st.message().find("weaver extract"), std::string::npos);
-}
-
-}  // namespace
-}  // namespace weaver
-
-namespace weaver {
-namespace {
-
-TEST(MeshQuery, ElementsAndNodesByIdAndCoordinateMatchReference) {
-  testing::TempDir dir;
-  GenOptions g;
-  g.kind = GenOptions::Kind::kSphere;
-  g.level = 2;
-  g.max_level = 5;
-  g.radius = 0.27;
-  std::vector<Octant> leaves;
-  ASSERT_OK(generate_octree(g, &leaves));
-  const std::string db = build_mesh(leaves, dir);
-  std::unique_ptr<Database> d;
-  std::unique_ptr<BTree> octants, nodes;
-  ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &d));
-  ASSERT_OK(d->open_table(kOctantTable, 1 << 20, &octants));
-  ASSERT_OK(d->open_table(kNodeTable, 1 << 20, &nodes));
-  const reference::Mesh ref = reference::extract(leaves);
-  for (uint64_t id = 0; id < ref.elements.size(); id += 7) {
-    ElementInfo e;
-    ASSERT_OK(element_by_id(*octants, nodes.get(), id, &e));
-    ASSERT_EQ(e.octant, ref.elements[id]);
-    ASSERT_EQ(e.nodes, ref.corners[id]);
-  }
-  for (uint64_t id = 0; id < ref.nodes.size(); id += 5) {
-    NodeInfo n;
-    ASSERT_OK(node_by_id(*nodes, id, &n));
-    ASSERT_EQ(n.c, ref.nodes[id].c);
-    ASSERT_EQ(n.kind, ref.nodes[id].kind);
-    ASSERT_EQ(std::vector<uint64_t>(n.anchors.begin(), n.anchors.begin() + n.anchor_count),
-              ref.nodes[id].anchors);
-    bool found = false;
-    NodeInfo at;
-    ASSERT_OK(node_at(*nodes, n.c, &at, &found));
-    ASSERT_TRUE(found);
-    ASSERT_EQ(at.id, id);
-  }
-  bool found = true;
-  NodeInfo at;
-  ASSERT_OK(node_at(*nodes, {1, 1, 1}, &at, &found));
-  EXPECT_FALSE(found);
-  EXPECT_TRUE(node_at(*nodes, {kRootEdge + 1, 0, 0}, &at, &found).is_invalid_argument());
-  ElementInfo e;
-  EXPECT_TRUE(element_by_id(*octants, nodes.get(), ref.elements.size(), &e).is_invalid_argument());
 }
 
 }  // namespace

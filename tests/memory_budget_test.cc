@@ -12,7 +12,7 @@
 #include "export/export.h"
 #include "extract/extract.h"
 #include "import/import.h"
-#include "query/mesh_query.h"
+#include "query/explorer.h"
 #include "verify/verify.h"
 
 namespace weaver {
@@ -96,7 +96,7 @@ TEST(MemoryBudgetTest, ConstructImportExportAndQuerySharesFitEveryBudget) {
     EXPECT_LE(2 * import.table_pool + ImportMemory::kMaxRuns * import.run_pool + import.memtable,
               bytes);
     expect_fits(ExportMemory(budget).plan);
-    expect_fits(QueryMemory(budget).plan);
+    expect_fits(ExplorerMemory(budget).plan);
   }
 }
 

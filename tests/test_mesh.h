@@ -2,10 +2,12 @@
 // for the tests of what reads a mesh: export, partition, query.
 #pragma once
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
 #include "extract/extract.h"
+#include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
 #include "test_util.h"
@@ -21,6 +23,21 @@ inline std::string build_mesh(const std::vector<Octant>& leaves, const TempDir& 
   ExtractResult er;
   EXPECT_OK(extract_mesh(db, ExtractOptions{}, &er));
   return db;
+}
+
+// A small graded octree (a sphere refined from level 2 to 5), sorted in key
+// order: the everyday mesh of the query and shell tests.
+inline std::vector<Octant> small_sphere() {
+  GenOptions g;
+  g.kind = GenOptions::Kind::kSphere;
+  g.level = 2;
+  g.max_level = 5;
+  g.radius = 0.27;
+  std::vector<Octant> leaves;
+  EXPECT_OK(generate_octree(g, &leaves));
+  std::sort(leaves.begin(), leaves.end(),
+            [](const Octant& a, const Octant& b) { return octant_key(a) < octant_key(b); });
+  return leaves;
 }
 
 }  // namespace weaver::testing

@@ -23,7 +23,9 @@ constexpr char kUsage[] =
     "  export DB         write the mesh for ParaView, Gmsh, METIS, numpy or as CSV\n"
     "  partition DB      cut the elements into parts (space-filling curve or METIS)\n"
     "  stat DB           table sizes, per-level counts and storage overhead\n"
-    "  query DB ...      locate a point, or list the leaves in a box\n"
+    "  query DB ...      what is at a point (or a file of them), an element, a node,\n"
+    "                    their neighbours, with material\n"
+    "  shell DB          an interactive prompt for queries over one open database\n"
     "  verify DB         check pages, keys and the mesh invariants\n"
     "  recover DB        rebuild a lost or damaged MANIFEST from the table files\n"
     "\n"
@@ -89,6 +91,7 @@ int dispatch(int argc, char** argv) {
   if (cmd == "partition") return cmd_partition(argc, argv);
   if (cmd == "stat") return cmd_stat(argc, argv);
   if (cmd == "query") return cmd_query(argc, argv);
+  if (cmd == "shell") return cmd_shell(argc, argv);
   if (cmd == "verify") return cmd_verify(argc, argv);
   if (cmd == "recover") return cmd_recover(argc, argv);
   std::fprintf(stderr, "weaver: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);

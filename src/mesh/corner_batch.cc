@@ -4,29 +4,9 @@
 #include <string>
 
 #include "schema/node.h"
+#include "util/radix_sort.h"
 
 namespace weaver {
-
-// LSD radix sort of the pairs on the key's 63 bits, 11 bits a pass, stable.
-void CornerBatch::sort_by_key() {
-  constexpr int kDigit = 11;
-  constexpr size_t kBuckets = size_t{1} << kDigit;
-  scratch_.resize(pairs_.size());
-  uint64_t all = 0;
-  for (const KeySlot& p : pairs_) all |= p.key;
-  for (int shift = 0; shift < 64 && (all >> shift) != 0; shift += kDigit) {
-    size_t count[kBuckets] = {};
-    for (const KeySlot& p : pairs_) ++count[(p.key >> shift) & (kBuckets - 1)];
-    size_t sum = 0;
-    for (size_t& c : count) {
-      const size_t n = c;
-      c = sum;
-      sum += n;
-    }
-    for (const KeySlot& p : pairs_) scratch_[count[(p.key >> shift) & (kBuckets - 1)]++] = p;
-    pairs_.swap(scratch_);
-  }
-}
 
 Status CornerBatch::resolve(BTree& nodes, const std::vector<Octant>& elements,
                             std::vector<std::array<uint64_t, 8>>* ids) {
@@ -35,7 +15,7 @@ Status CornerBatch::resolve(BTree& nodes, const std::vector<Octant>& elements,
     for (int k = 0; k < 8; ++k)
       pairs_.push_back({node_key(octant_corner(elements[i], k)), 8 * i + k});
   }
-  sort_by_key();
+  radix_sort_by(pairs_, scratch_, [](const KeySlot& p) { return p.key; });
   ids->resize(elements.size());
   leaf_.clear();
   auto pos = leaf_.begin();

@@ -28,8 +28,6 @@ class CornerBatch {
     uint64_t key;
     uint64_t slot;  // element * 8 + corner
   };
-  void sort_by_key();
-
   std::vector<KeySlot> pairs_, scratch_;
   std::vector<uint64_t> leaf_;  // the keys of the leaf last decoded
   uint64_t leaf_rank_ = 0;      // the rank of its first key

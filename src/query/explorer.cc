@@ -2,25 +2,23 @@
 
 #include <algorithm>
 
+#include "util/huge_pages.h"
+#include "util/radix_sort.h"
+
 namespace weaver {
 
 Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
                       std::unique_ptr<Explorer>* out) {
-  MemoryPlan plan(memory);
-  // The pools keep the paths and leaves of recent questions; a batch's
-  // points, sorted, and its answers take the rest.
-  const uint64_t octant_pool = plan.take("octant table pool", 3, 8);
-  const uint64_t node_pool = plan.take("node table pool", 3, 8);
-  const uint64_t batch = plan.take("point batch", 1, 4);
+  const ExplorerMemory shares(memory);
   std::unique_ptr<Explorer> e(new Explorer());
-  WEAVER_RETURN_IF_ERROR(Mesh::open(db_dir, octant_pool, node_pool, &e->mesh_, true));
+  WEAVER_RETURN_IF_ERROR(Mesh::open(db_dir, shares.octant_pool, shares.node_pool, &e->mesh_, true));
   e->octant_window_ = std::make_unique<LeafWindow>(e->mesh_->octants(), true);
   if (e->mesh_->has_nodes()) {
     e->node_window_ = std::make_unique<LeafWindow>(e->mesh_->nodes(), true);
   }
   // A point costs its coordinate (12 bytes), its sort pair (16) and its
   // answer (40): about 80 bytes with the caller's own buffers.
-  e->batch_points_ = size_t(std::clamp<uint64_t>(batch / 80, 4096, 1 << 22));
+  e->batch_points_ = size_t(std::clamp<uint64_t>(shares.batch / 80, 4096, 1 << 22));
   *out = std::move(e);
   return Status::Ok();
 }
@@ -29,22 +27,26 @@ Status Explorer::locate(Coord p, PointHit* out) { return locate_batch(&p, 1, out
 
 Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
   order_.clear();
+  reserve_huge(order_, n);
+  reserve_huge(scratch_, n);
   for (size_t i = 0; i < n; ++i) {
     out[i] = PointHit{};
     if (pixel_is_valid(p[i])) order_.push_back({pixel_key(p[i]), i});
   }
-  std::sort(order_.begin(), order_.end());
+  radix_sort_by(order_, scratch_, [](const std::pair<uint64_t, uint64_t>& p) { return p.first; });
   LeafWindow::Floor f;
   MeshElement m;
+  // The walk reads only the sorted pairs: the points themselves, in input
+  // order, would cost a cache miss each.
   for (const auto& [key, i] : order_) {
     WEAVER_RETURN_IF_ERROR(octant_window_->floor(key, &f));
-    if (!f.found) continue;
-    const Octant leaf = octant_from_key(f.key);
-    if (!octant_contains_point(leaf, p[i])) continue;  // in a hole of the domain
+    // The floor leaf holds the pixel if the pixel's key is in its subtree;
+    // if not, the pixel is in a hole of the domain.
+    if (!f.found || key >= octant_key_subtree_end(f.key)) continue;
     PointHit& h = out[i];
     h.inside = true;
     h.id = f.rank;
-    h.leaf = leaf;
+    h.leaf = octant_from_key(f.key);
     mesh_->fill_material(f.payload, &m);
     h.vp = m.vp, h.vs = m.vs, h.rho = m.rho;
   }
@@ -53,11 +55,13 @@ Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
 
 Status Explorer::node_at_batch(const Coord* p, size_t n, NodeHit* out) {
   order_.clear();
+  reserve_huge(order_, n);
+  reserve_huge(scratch_, n);
   for (size_t i = 0; i < n; ++i) {
     out[i] = NodeHit{};
     if (node_is_valid(p[i])) order_.push_back({node_key(p[i]), i});
   }
-  std::sort(order_.begin(), order_.end());
+  radix_sort_by(order_, scratch_, [](const std::pair<uint64_t, uint64_t>& p) { return p.first; });
   LeafWindow::Floor f;
   for (const auto& [key, i] : order_) {
     WEAVER_RETURN_IF_ERROR(node_window_->floor(key, &f));

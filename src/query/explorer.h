@@ -19,6 +19,19 @@
 
 namespace weaver {
 
+// Where an Explorer's memory goes: the shares of --memory.
+struct ExplorerMemory {
+  explicit ExplorerMemory(MemoryBudget budget) : plan(budget) {
+    // The pools keep the paths and leaves of recent questions; a batch of
+    // points, sorted, and its answers take the rest.
+    octant_pool = plan.take("octant table pool", 3, 8);
+    node_pool = plan.take("node table pool", 3, 8);
+    batch = plan.take("point batch", 1, 4);
+  }
+  MemoryPlan plan;
+  uint64_t octant_pool = 0, node_pool = 0, batch = 0;
+};
+
 // The leaf that holds a point, with its material (zeros without one).
 struct PointHit {
   bool inside = false;  // false: outside the domain (no leaf holds the point)
@@ -105,7 +118,7 @@ class Explorer {
   std::unique_ptr<LeafWindow> octant_window_, node_window_;
   size_t batch_points_ = 1 << 20;
   // Sorting scratch for the batches: (key, input index).
-  std::vector<std::pair<uint64_t, uint64_t>> order_;
+  std::vector<std::pair<uint64_t, uint64_t>> order_, scratch_;
 };
 
 // "-x", "+y", "-x+z", "+x-y-z": the name of a direction in answers.

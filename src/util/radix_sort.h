@@ -35,4 +35,28 @@ inline void radix_sort(std::vector<uint64_t>& values, int first, int bits,
   }
 }
 
+// Sorts records by a 64-bit key, stably: key(record) gives it.  Only the
+// digits up to the highest set bit of any key are passed over.  For pairs of
+// a key and a position (corner lookups, point batches).
+template <class T, class KeyOf>
+inline void radix_sort_by(std::vector<T>& items, std::vector<T>& scratch, KeyOf key) {
+  constexpr int kDigit = 11;
+  constexpr size_t kBuckets = size_t{1} << kDigit;
+  scratch.resize(items.size());
+  uint64_t all = 0;
+  for (const T& t : items) all |= key(t);
+  for (int shift = 0; shift < 64 && (all >> shift) != 0; shift += kDigit) {
+    std::array<size_t, kBuckets> count{};
+    for (const T& t : items) ++count[(key(t) >> shift) & (kBuckets - 1)];
+    size_t sum = 0;
+    for (size_t& c : count) {
+      const size_t n = c;
+      c = sum;
+      sum += n;
+    }
+    for (const T& t : items) scratch[count[(key(t) >> shift) & (kBuckets - 1)]++] = t;
+    items.swap(scratch);
+  }
+}
+
 }  // namespace weaver

@@ -1,0 +1,181 @@
+// Point queries as users ask them, on the basin model's 0.5 Hz mesh (0.2 Hz
+// with --small, or any database with --db): a million random points in the
+// domain's bounding box answered with material
+//   - through the C++ API (Explorer::locate_batch), points per second;
+//   - end to end by `weaver query DB locate --points FILE --format csv` in a
+//     fresh process (reading text, answering, writing text);
+//   - and by `weaver shell` one query at a time (warm), against one
+//     `weaver query` process per question: the median latency of each.
+// Prints one JSON object per measurement, then a table of medians.
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "basin_stages.h"
+#include "bench_util.h"
+#include "query/explorer.h"
+
+namespace weaver::bench {
+namespace {
+
+struct Box {
+  uint32_t lo[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}, hi[3] = {0, 0, 0};
+};
+
+// The bounding box of the leaves (a scan of the keys).
+bool bounding_box(const std::string& db, Box* b) {
+  std::unique_ptr<Explorer> ex;
+  if (!Explorer::open(db, MemoryBudget(64 << 20), &ex).ok()) return false;
+  BTreeCursor c;
+  if (!ex->mesh().octants().seek_cursor(0, &c).ok()) return false;
+  for (; c.valid(); c.next()) {
+    const Octant o = octant_from_key(c.key());
+    const uint32_t lo[3] = {o.x, o.y, o.z}, e = octant_edge(o);
+    for (int a = 0; a < 3; ++a) {
+      b->lo[a] = std::min(b->lo[a], lo[a]);
+      b->hi[a] = std::max(b->hi[a], lo[a] + e);
+    }
+  }
+  return true;
+}
+
+std::vector<Coord> random_points(const Box& b, size_t n, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<Coord> p(n);
+  for (Coord& c : p) {
+    c = {uint32_t(b.lo[0] + rng() % (b.hi[0] - b.lo[0])),
+         uint32_t(b.lo[1] + rng() % (b.hi[1] - b.lo[1])),
+         uint32_t(b.lo[2] + rng() % (b.hi[2] - b.lo[2]))};
+  }
+  return p;
+}
+
+Json row(const std::string& mesh, const std::string& job) {
+  Json j;
+  j.add("bench", "explore").add("mesh", mesh).add("job", job);
+  return j;
+}
+
+}  // namespace
+}  // namespace weaver::bench
+
+int main(int argc, char** argv) {
+  using namespace weaver;
+  using namespace weaver::bench;
+  std::string dir = "/tmp/weaver-explore-bench", db;
+  double freq = 0.5;
+  int repeat = 3;
+  size_t points = 1000000;
+  const uint64_t memory = 256ull << 20;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--small") {
+      freq = 0.2, points = 200000;
+    } else if (a == "--db" && i + 1 < argc) {
+      db = argv[++i];
+    } else if (a == "--repeat" && i + 1 < argc) {
+      repeat = std::stoi(argv[++i]);
+    } else {
+      std::printf("usage: explore_bench [--small] [--db DB (an existing mesh)] [--repeat N]\n");
+      return 2;
+    }
+  }
+  std::filesystem::create_directories(dir);
+  std::string mesh =
+      db.empty() ? "basin-" + fmt(freq) + "Hz" : std::filesystem::path(db).filename().string();
+  if (db.empty()) {
+    db = dir + "/" + mesh + ".db";
+    std::filesystem::remove_all(db);
+    uint64_t leaves = 0, input = 0, peak = 0;
+    if (!construct_basin(db, freq, 2, memory, &leaves) ||
+        !balance_db(db, memory, &input, &leaves) ||
+        run_program({WEAVER_BINARY, "extract", db, "--quiet"}, &peak).empty()) {
+      std::fprintf(stderr, "cannot build %s\n", mesh.c_str());
+      return 1;
+    }
+  }
+  Box box;
+  if (!bounding_box(db, &box)) return std::fprintf(stderr, "cannot open %s\n", db.c_str()), 1;
+  const std::vector<Coord> pts = random_points(box, points, 1);
+  const std::string file = dir + "/points.txt";
+  {
+    std::ofstream f(file);
+    for (const Coord& c : pts) f << c.x << ' ' << c.y << ' ' << c.z << '\n';
+  }
+  std::vector<std::map<std::string, std::string>> table;
+  auto report = [&](const std::string& job, const std::string& unit, std::vector<double> rates,
+                    double rss) {
+    std::map<std::string, std::string> r = {{"mesh", mesh},
+                                            {"job", job},
+                                            {"median", fmt(median(rates))},
+                                            {"unit", unit},
+                                            {"runs", std::to_string(rates.size())},
+                                            {"peak_rss_mb", fmt(rss / 1e6)}};
+    table.push_back(r);
+  };
+
+  // The C++ API: the batches a caller would make, timed inside one process.
+  std::vector<double> rates, cold;
+  double rss = 0;
+  for (int r = 0; r < repeat; ++r) {
+    const std::string line = run_in_child([&](Json* j) {
+      std::unique_ptr<Explorer> ex;
+      if (!Explorer::open(db, MemoryBudget(memory), &ex).ok()) return false;
+      std::vector<PointHit> hits(pts.size());
+      // The first pass reads the table into the pool; a program that keeps
+      // the database open asks at the second pass's rate.
+      double s = 0, first = 0;
+      for (int pass = 0; pass < 2; ++pass) {
+        const double t0 = now_seconds();
+        for (size_t at = 0; at < pts.size(); at += ex->batch_points()) {
+          const size_t n = std::min(ex->batch_points(), pts.size() - at);
+          if (!ex->locate_batch(pts.data() + at, n, hits.data() + at).ok()) return false;
+        }
+        (pass == 0 ? first : s) = now_seconds() - t0;
+      }
+      uint64_t inside = 0;
+      for (const PointHit& h : hits) inside += h.inside;
+      *j = row(mesh, "locate api");
+      j->add("points", uint64_t(pts.size())).add("inside", inside).add("seconds", s);
+      j->add("points_per_s", pts.size() / s).add("first_pass_points_per_s", pts.size() / first);
+      return true;
+    });
+    if (line.empty()) return 1;
+    std::printf("%s\n", line.c_str());
+    const auto f = parse_flat_json(line);
+    rates.push_back(std::stod(f.at("points_per_s")));
+    cold.push_back(std::stod(f.at("first_pass_points_per_s")));
+    rss = std::stod(f.at("peak_rss_bytes"));
+  }
+  report("locate, C++ API", "points/s", rates, rss);
+  report("locate, C++ API, first pass", "points/s", cold, rss);
+
+  // End to end: text in, text out, one process.
+  rates.clear();
+  for (int r = 0; r < repeat; ++r) {
+    uint64_t peak = 0;
+    const double t0 = now_seconds();
+    const std::string out = run_program({WEAVER_BINARY, "query", db, "locate", "--points", file,
+                                         "--format", "csv", "--memory", std::to_string(memory)},
+                                        &peak, dir + "/answers.csv");
+    const double s = now_seconds() - t0;
+    if (out.empty()) return 1;
+    Json j = row(mesh, "locate --points csv");
+    j.add("points", uint64_t(pts.size())).add("seconds", s).add("points_per_s", pts.size() / s);
+    j.add("output_bytes", uint64_t(std::filesystem::file_size(dir + "/answers.csv")));
+    j.add("peak_rss_bytes", peak);
+    std::printf("%s\n", j.str().c_str());
+    rates.push_back(pts.size() / s);
+    rss = double(peak);
+  }
+  report("locate --points, end to end", "points/s", rates, rss);
+  std::printf("\nmedians of %d runs, --memory %llu MB, %zu random points\n", repeat,
+              (unsigned long long)(memory >> 20), pts.size());
+  print_table(table, {"mesh", "job", "median", "unit", "runs", "peak_rss_mb"});
+  return 0;
+}

@@ -1,0 +1,231 @@
+// weaver shell DB: an interactive prompt over one open database, in the
+// manner of the sqlite3 shell.  Every `weaver query` works as a command;
+// dot commands set the output, time commands, read scripts and reload.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "cli/cli.h"
+#include "cli/line_editor.h"
+#include "cli/query_commands.h"
+
+namespace weaver::cli {
+namespace {
+
+constexpr char kUsage[] =
+    "usage: weaver shell DB [--memory BYTES]\n"
+    "\n"
+    "An interactive prompt over the mesh in DB, opened once, read-only. Type any\n"
+    "'weaver query' question without 'weaver query DB' (locate 1 2 3, neighbors 7\n"
+    "--all), or a dot command (.help). Lines from a pipe or file are run one by one,\n"
+    "so scripts can drive it: the exit status is 1 if any command failed.\n"
+    "  --memory BYTES  memory budget (default 256M)\n";
+
+constexpr char kDotHelp[] =
+    ".help                 this text\n"
+    ".mode [MODE]          output mode: text (default), table, json, csv or tsv\n"
+    ".timer on|off         print the wall time of each command\n"
+    ".units ticks|m        coordinates in and out in ticks (default) or metres\n"
+    ".read FILE            run the commands in FILE\n"
+    ".reload               reopen the database at its newest commit\n"
+    ".show                 the database, its counts and the settings\n"
+    ".quit                 leave (also .exit, or Ctrl-D)\n"
+    "Queries:\n";
+
+// Splits a line into words at blanks; "double" or 'single' quotes keep
+// blanks inside a word (a file name with spaces).
+std::vector<std::string> words_of(const std::string& line) {
+  std::vector<std::string> out;
+  std::string w;
+  bool in_word = false;
+  char quote = 0;
+  for (const char c : line) {
+    if (quote != 0) {
+      if (c == quote) {
+        quote = 0;
+      } else {
+        w += c;
+      }
+    } else if (c == '"' || c == '\'') {
+      quote = c, in_word = true;
+    } else if (c == ' ' || c == '\t' || c == '\r') {
+      if (in_word) out.push_back(w), w.clear(), in_word = false;
+    } else {
+      w += c, in_word = true;
+    }
+  }
+  if (in_word) out.push_back(w);
+  return out;
+}
+
+class Shell {
+ public:
+  Shell(std::string db, MemoryBudget memory) : db_(std::move(db)), memory_(memory) {}
+
+  Status open() { return Explorer::open(db_, memory_, &ex_); }
+  bool failed() const { return failed_; }
+
+  // Runs one line; false when it asks to leave.
+  bool line(const std::string& text) {
+    const std::vector<std::string> w = words_of(text);
+    if (w.empty() || w[0][0] == '#') return true;
+    const auto t0 = std::chrono::steady_clock::now();
+    bool go_on = true;
+    if (w[0][0] == '.') {
+      go_on = dot(w);
+    } else {
+      std::fflush(stdout);
+      failed_ |= run_query(*ex_, w, settings_, stdout, stderr, "error") != 0;
+    }
+    if (timer_) {
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::printf("Run Time: real %.6f\n", s);
+    }
+    std::fflush(stdout);
+    return go_on;
+  }
+
+  // Runs every line of in; false when one asks to leave.
+  bool lines(std::istream& in) {
+    for (std::string text; std::getline(in, text);) {
+      if (!line(text)) return false;
+    }
+    return true;
+  }
+
+  void banner() const {
+    std::printf("weaver shell: %s, %llu elements, %llu nodes (read-only)\n", db_.c_str(),
+                (unsigned long long)ex_->element_count(), (unsigned long long)ex_->node_count());
+    std::printf("Enter \".help\" for usage hints.\n");
+  }
+
+ private:
+  void error(const std::string& message) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "error: %s\n", message.c_str());
+    failed_ = true;
+  }
+
+  bool on_off(const std::vector<std::string>& w, bool* flag) {
+    if (w.size() == 2 && (w[1] == "on" || w[1] == "off")) return *flag = w[1] == "on", true;
+    error(w[0] + " takes on or off");
+    return true;
+  }
+
+  bool dot(const std::vector<std::string>& w) {
+    const std::string& c = w[0];
+    if (c == ".quit" || c == ".exit") return false;
+    if (c == ".help") return std::printf("%s%s", kDotHelp, kQueryHelp), true;
+    if (c == ".timer") return on_off(w, &timer_);
+    if (c == ".mode") return mode(w);
+    if (c == ".units") return units(w);
+    if (c == ".read") return read(w);
+    if (c == ".reload") return reload();
+    if (c == ".show") return show();
+    error("unknown command '" + c + "' (see .help)");
+    return true;
+  }
+
+  bool mode(const std::vector<std::string>& w) {
+    if (w.size() == 1) return std::printf("%s\n", output_mode_name(settings_.mode)), true;
+    const Status st = w.size() == 2 ? parse_output_mode(w[1], &settings_.mode)
+                                    : Status::InvalidArgument(".mode takes one mode");
+    if (!st.ok()) error(st.message());
+    return true;
+  }
+
+  bool units(const std::vector<std::string>& w) {
+    if (w.size() == 2 && (w[1] == "ticks" || w[1] == "m")) {
+      settings_.metres = w[1] == "m";
+    } else {
+      error(".units takes ticks or m");
+    }
+    return true;
+  }
+
+  bool read(const std::vector<std::string>& w) {
+    if (w.size() != 2) return error(".read takes a file"), true;
+    if (++depth_ > 16) return --depth_, error(".read nested too deeply"), true;
+    std::ifstream in(w[1]);
+    bool go_on = true;
+    if (!in) {
+      error("cannot open " + w[1] + ": " + std::strerror(errno));
+    } else {
+      go_on = lines(in);
+    }
+    --depth_;
+    return go_on;
+  }
+
+  bool reload() {
+    std::unique_ptr<Explorer> fresh;
+    const Status st = Explorer::open(db_, memory_, &fresh);
+    if (!st.ok()) return error(error_text(st) + " (still on the old snapshot)"), true;
+    ex_ = std::move(fresh);
+    std::printf("reloaded: %llu elements, %llu nodes\n", (unsigned long long)ex_->element_count(),
+                (unsigned long long)ex_->node_count());
+    return true;
+  }
+
+  bool show() const {
+    std::printf(
+        "database: %s\nelements: %llu\nnodes:    %llu\nmaterial: %s\nmode:     %s\n"
+        "units:    %s (1 tick = %g m)\ntimer:    %s\n",
+        db_.c_str(), (unsigned long long)ex_->element_count(),
+        (unsigned long long)ex_->node_count(), ex_->mesh().has_material() ? "yes" : "no",
+        output_mode_name(settings_.mode), settings_.metres ? "m" : "ticks", ex_->units().tick_m,
+        timer_ ? "on" : "off");
+    return true;
+  }
+
+  std::string db_;
+  MemoryBudget memory_;
+  std::unique_ptr<Explorer> ex_;
+  QuerySettings settings_;
+  bool timer_ = false;
+  bool failed_ = false;
+  int depth_ = 0;
+};
+
+std::string history_path() {
+  const char* home = std::getenv("HOME");
+  return home != nullptr && *home != '\0' ? std::string(home) + "/.weaver_history" : "";
+}
+
+}  // namespace
+
+int cmd_shell(int argc, char** argv) {
+  ParsedArgs args;
+  Status st = parse_args(argc, argv, 2, {"memory"}, {}, &args);
+  if (args.help) return std::fputs(kUsage, stdout), 0;
+  if (!st.ok()) return usage_error("shell", st.message(), kUsage);
+  if (args.positional.size() != 1) return usage_error("shell", "expected DB", kUsage);
+  MemoryBudget memory;
+  st = memory_option(args, &memory);
+  if (!st.ok()) return usage_error("shell", st.message(), kUsage);
+  Shell shell(args.positional[0], memory);
+  st = shell.open();
+  if (!st.ok()) return report("shell", st);
+  if (!isatty(STDIN_FILENO) || !isatty(STDOUT_FILENO)) {
+    shell.lines(std::cin);
+    return shell.failed() ? 1 : 0;
+  }
+  shell.banner();
+  LineEditor editor;
+  const std::string history = history_path();
+  if (!history.empty()) editor.load_history(history);
+  for (std::string line; editor.read("weaver> ", &line);) {
+    editor.remember(line);
+    if (!shell.line(line)) break;
+  }
+  if (!history.empty()) editor.save_history(history);
+  return 0;
+}
+
+}  // namespace weaver::cli

@@ -1,0 +1,295 @@
+#include "cli/point_batch.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "util/huge_pages.h"
+#include "util/printable.h"
+
+namespace weaver::cli {
+namespace {
+
+// A coordinate that lies outside every mesh: the answer is "outside".
+constexpr uint32_t kFar = UINT32_MAX;
+
+// Writes the rows of one mode into a buffer flushed to the output in large
+// writes: a million rows a second is too many for a printf each.
+class RowWriter {
+ public:
+  explicit RowWriter(OutputMode mode) : mode_(mode) {
+    sep_ = mode == OutputMode::kCsv ? ',' : mode == OutputMode::kTsv ? '\t' : ' ';
+  }
+  void header(const std::vector<const char*>& columns) {
+    columns_ = columns;
+    if (mode_ == OutputMode::kJson) return;
+    if (mode_ == OutputMode::kText || mode_ == OutputMode::kTable) buf_ += "# ";
+    for (size_t i = 0; i < columns.size(); ++i) (i ? buf_ += sep_ : buf_) += columns[i];
+    buf_ += '\n';
+  }
+  void begin() { field_ = 0; }
+  void number(uint64_t v) {
+    char b[24];
+    put(std::string_view(b, size_t(std::to_chars(b, b + sizeof b, v).ptr - b)), false);
+  }
+  void number(double v) {
+    char b[32];
+    put(std::string_view(b, size_t(std::to_chars(b, b + sizeof b, v).ptr - b)), false);
+  }
+  void number(float v) {
+    char b[32];
+    put(std::string_view(b, size_t(std::to_chars(b, b + sizeof b, v).ptr - b)), false);
+  }
+  void text(std::string_view s) { put(s, true); }
+  void null() {
+    put(mode_ == OutputMode::kJson ? "null" : mode_ == OutputMode::kText ? "-" : "", false);
+  }
+  void end() { buf_ += mode_ == OutputMode::kJson ? "}\n" : "\n"; }
+  // Writes the rows held to out and forgets them.
+  Status flush(std::FILE* out) {
+    if (!buf_.empty() && std::fwrite(buf_.data(), 1, buf_.size(), out) != buf_.size()) {
+      return Status::IOError(std::string("writing the answers: ") + std::strerror(errno));
+    }
+    buf_.clear();
+    return Status::Ok();
+  }
+
+ private:
+  void put(std::string_view v, bool quoted) {
+    if (mode_ == OutputMode::kJson) {
+      buf_ += field_ == 0 ? "{\"" : ", \"";
+      buf_ += columns_[field_];
+      buf_ += quoted ? "\": \"" : "\": ";
+      buf_ += v;
+      if (quoted) buf_ += '"';
+    } else {
+      if (field_ > 0) buf_ += sep_;
+      buf_ += v;
+    }
+    ++field_;
+  }
+
+  OutputMode mode_;
+  char sep_;
+  std::vector<const char*> columns_;
+  size_t field_ = 0;
+  std::string buf_;
+};
+
+class BatchRunner {
+ public:
+  BatchRunner(Explorer& ex, const PointBatchOptions& o, std::FILE* out)
+      : ex_(ex), o_(o), out_(out), w_(o.mode) {}
+
+  void header() {
+    std::vector<const char*> c = {"x", "y", "z", "status"};
+    if (o_.query == PointQuery::kNodeAt) {
+      c.insert(c.end(), {"node", "kind"});
+    } else if (o_.query == PointQuery::kMaterial) {
+      c.insert(c.end(), {"element", "vp", "vs", "rho"});
+    } else {
+      c.insert(c.end(), {"element", "level", "edge", "corner_x", "corner_y", "corner_z"});
+      if (ex_.mesh().has_material()) c.insert(c.end(), {"vp", "vs", "rho"});
+    }
+    w_.header(c);
+  }
+
+  // Parses one line: false when it is malformed (*why says how).
+  bool add(const char* s, size_t n, std::string* why) {
+    if (points_.empty()) reserve();
+    double v[3];
+    int count = 0;
+    size_t i = 0;
+    while (i < n) {
+      while (i < n && (s[i] == ' ' || s[i] == '\t' || s[i] == ',' || s[i] == '\r')) ++i;
+      if (i == n) break;
+      size_t j = i;
+      while (j < n && s[j] != ' ' && s[j] != '\t' && s[j] != ',' && s[j] != '\r') ++j;
+      if (count == 3) return *why = "more than 3 numbers", false;
+      if (!parse(s + i, s + j, &v[count])) {
+        *why = "'" + printable(std::string_view(s + i, j - i)) + "' is not " +
+               (o_.metres ? "a number" : "a whole number of ticks (0 to 4294967294)");
+        return false;
+      }
+      ++count, i = j;
+    }
+    if (count < 3) return *why = "expected 3 numbers: x y z", false;
+    Coord c;
+    uint32_t* axis[3] = {&c.x, &c.y, &c.z};
+    for (int a = 0; a < 3; ++a) *axis[a] = to_tick(v[a], a);
+    points_.push_back(c);
+    if (o_.metres) values_.push_back({v[0], v[1], v[2]});
+    bad_.push_back(false);
+    return true;
+  }
+  void reserve() {
+    const size_t n = ex_.batch_points();
+    reserve_huge(points_, n);
+    if (o_.metres) reserve_huge(values_, n);
+    reserve_huge(hits_, o_.query == PointQuery::kNodeAt ? 0 : n);
+    reserve_huge(nodes_, o_.query == PointQuery::kNodeAt ? n : 0);
+  }
+  void add_bad() {
+    if (points_.empty()) reserve();
+    points_.push_back({kFar, kFar, kFar});
+    if (o_.metres) values_.push_back({NAN, NAN, NAN});
+    bad_.push_back(true);
+  }
+  size_t size() const { return points_.size(); }
+
+  // Answers the points held and writes their rows.
+  Status answer(PointBatchResult* r) {
+    const size_t n = points_.size();
+    if (o_.query == PointQuery::kNodeAt) {
+      nodes_.resize(n);
+      WEAVER_RETURN_IF_ERROR(ex_.node_at_batch(points_.data(), n, nodes_.data()));
+    } else {
+      hits_.resize(n);
+      WEAVER_RETURN_IF_ERROR(ex_.locate_batch(points_.data(), n, hits_.data()));
+    }
+    constexpr size_t kSlice = 32768;  // rows formatted, then written
+    for (size_t lo = 0; lo < n; lo += kSlice) {
+      format_rows(w_, lo, std::min(n, lo + kSlice), &r->missed);
+      WEAVER_RETURN_IF_ERROR(w_.flush(out_));
+    }
+    r->points += n;
+    points_.clear(), values_.clear(), bad_.clear();
+    return Status::Ok();
+  }
+
+  Status finish() { return w_.flush(out_); }
+
+ private:
+  bool parse(const char* b, const char* e, double* v) const {
+    if (o_.metres) {
+      const auto r = std::from_chars(b, e, *v);
+      return r.ec == std::errc() && r.ptr == e && std::isfinite(*v);
+    }
+    // Ticks are whole and below 2^32 - 1 (a mesh lies within 0..2^20).
+    uint64_t t = 0;
+    const auto r = std::from_chars(b, e, t);
+    *v = double(t);
+    return r.ec == std::errc() && r.ptr == e && t < kFar;
+  }
+
+  uint32_t to_tick(double v, int axis) const {
+    const Units& u = ex_.units();
+    const double t = o_.metres ? std::floor((v - u.origin_m[axis]) / u.tick_m) : v;
+    return t >= 0 && t < 4294967295.0 ? uint32_t(t) : kFar;
+  }
+
+  double length(uint64_t ticks) const { return double(ticks) * ex_.units().tick_m; }
+  double position(uint32_t tick, int axis) const {
+    return ex_.units().origin_m[axis] + double(tick) * ex_.units().tick_m;
+  }
+
+  void format_rows(RowWriter& w, size_t lo, size_t hi, uint64_t* missed_out) const {
+    uint64_t missed = 0;
+    for (size_t i = lo; i < hi; ++i) {
+      w.begin();
+      for (int a = 0; a < 3; ++a) {
+        if (bad_[i]) {
+          w.null();
+        } else if (o_.metres) {
+          w.number(values_[i][a]);
+        } else {
+          const uint32_t c[3] = {points_[i].x, points_[i].y, points_[i].z};
+          w.number(uint64_t(c[a]));
+        }
+      }
+      const bool found = o_.query == PointQuery::kNodeAt ? nodes_[i].found : hits_[i].inside;
+      w.text(bad_[i]  ? "bad"
+             : !found ? (o_.query == PointQuery::kNodeAt ? "none" : "outside")
+                      : (o_.query == PointQuery::kNodeAt ? "node" : "inside"));
+      missed += !bad_[i] && !found;
+      write_answer(w, i, found);
+      w.end();
+    }
+    *missed_out += missed;
+  }
+
+  void write_answer(RowWriter& w_, size_t i, bool found) const {
+    const int nulls = o_.query == PointQuery::kNodeAt     ? 2
+                      : o_.query == PointQuery::kMaterial ? 4
+                      : ex_.mesh().has_material()         ? 9
+                                                          : 6;
+    if (!found) {
+      for (int k = 0; k < nulls; ++k) w_.null();
+      return;
+    }
+    if (o_.query == PointQuery::kNodeAt) {
+      w_.number(nodes_[i].id);
+      w_.text(node_kind_name(nodes_[i].kind));
+      return;
+    }
+    const PointHit& h = hits_[i];
+    w_.number(h.id);
+    if (o_.query == PointQuery::kLocate) {
+      w_.number(uint64_t(h.leaf.level));
+      const uint32_t c[3] = {h.leaf.x, h.leaf.y, h.leaf.z};
+      if (o_.metres) {
+        w_.number(length(octant_edge(h.leaf)));
+        for (int a = 0; a < 3; ++a) w_.number(position(c[a], a));
+      } else {
+        w_.number(uint64_t(octant_edge(h.leaf)));
+        for (int a = 0; a < 3; ++a) w_.number(uint64_t(c[a]));
+      }
+      if (!ex_.mesh().has_material()) return;
+    }
+    w_.number(h.vp), w_.number(h.vs), w_.number(h.rho);
+  }
+
+  Explorer& ex_;
+  const PointBatchOptions& o_;
+  std::FILE* out_;
+  RowWriter w_;
+  std::vector<Coord> points_;
+  std::vector<std::array<double, 3>> values_;
+  std::vector<bool> bad_;
+  std::vector<PointHit> hits_;
+  std::vector<NodeHit> nodes_;
+};
+
+}  // namespace
+
+Status run_point_batch(Explorer& ex, std::FILE* in, const std::string& name,
+                       const PointBatchOptions& o, std::FILE* out, std::FILE* err,
+                       PointBatchResult* result) {
+  *result = PointBatchResult{};
+  if (o.query == PointQuery::kNodeAt && !ex.has_nodes()) {
+    return Status::NotFound("no mesh yet (run 'weaver extract' first)");
+  }
+  if (o.query == PointQuery::kMaterial && !ex.mesh().has_material()) {
+    return Status::NotFound("this mesh has no material (it was not built from a model)");
+  }
+  BatchRunner batch(ex, o, out);
+  batch.header();
+  char* line = nullptr;
+  size_t cap = 0;
+  uint64_t line_no = 0;
+  Status st;
+  std::string why;
+  for (ssize_t n; st.ok() && (n = getline(&line, &cap, in)) >= 0;) {
+    ++line_no;
+    size_t len = size_t(n);
+    while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r')) --len;
+    size_t first = 0;
+    while (first < len && (line[first] == ' ' || line[first] == '\t')) ++first;
+    if (first == len || line[first] == '#') continue;
+    if (!batch.add(line + first, len - first, &why)) {
+      std::fprintf(err, "%s:%llu: %s\n", name.c_str(), (unsigned long long)line_no, why.c_str());
+      batch.add_bad();
+      ++result->bad_lines;
+    }
+    if (batch.size() >= ex.batch_points()) st = batch.answer(result);
+  }
+  const bool read_error = std::ferror(in);
+  std::free(line);
+  if (st.ok()) st = batch.answer(result);
+  if (st.ok()) st = batch.finish();
+  if (st.ok() && read_error) st = Status::IOError("reading " + name + ": " + std::strerror(errno));
+  return st;
+}
+
+}  // namespace weaver::cli

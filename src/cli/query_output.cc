@@ -1,0 +1,155 @@
+#include "cli/query_output.h"
+
+#include <algorithm>
+#include <charconv>
+
+namespace weaver::cli {
+
+Status parse_output_mode(const std::string& name, OutputMode* out) {
+  static const char* const kNames[] = {"text", "table", "json", "csv", "tsv"};
+  for (int i = 0; i < 5; ++i) {
+    if (name == kNames[i]) return *out = OutputMode(i), Status::Ok();
+  }
+  return Status::InvalidArgument("unknown output mode '" + name +
+                                 "' (text, table, json, csv or tsv)");
+}
+
+const char* output_mode_name(OutputMode m) {
+  static const char* const kNames[] = {"text", "table", "json", "csv", "tsv"};
+  return kNames[int(m)];
+}
+
+Cell Cell::number(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return {Kind::kNumber, std::string(buf, r.ptr), {}};
+}
+
+Cell Cell::number(float v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return {Kind::kNumber, std::string(buf, r.ptr), {}};
+}
+
+std::string plain_text(const Cell& c) {
+  switch (c.kind) {
+    case Cell::Kind::kNull: return "";
+    case Cell::Kind::kList: {
+      std::string s;
+      for (const std::string& i : c.items) s += (s.empty() ? "" : " ") + i;
+      return s;
+    }
+    default: return c.text;
+  }
+}
+
+namespace {
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (const char ch : s) {
+    const unsigned char c = static_cast<unsigned char>(ch);
+    if (c == '"' || c == '\\') {
+      out += '\\', out += ch;
+    } else if (c < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += ch;
+    }
+  }
+  return out + "\"";
+}
+
+void print_json(const Table& t, std::FILE* out) {
+  for (const auto& row : t.rows) {
+    std::string line = "{";
+    for (size_t i = 0; i < row.size(); ++i) {
+      line += (i ? ", " : "") + json_string(t.columns[i]) + ": " + json_text(row[i]);
+    }
+    std::fprintf(out, "%s}\n", line.c_str());
+  }
+}
+
+void print_separated(const Table& t, char sep, std::FILE* out) {
+  std::string line;
+  for (size_t i = 0; i < t.columns.size(); ++i) {
+    line += (i ? std::string(1, sep) : "") + csv_text(Cell::string(t.columns[i]), sep);
+  }
+  if (!t.columns.empty()) std::fprintf(out, "%s\n", line.c_str());
+  for (const auto& row : t.rows) {
+    line.clear();
+    for (size_t i = 0; i < row.size(); ++i)
+      line += (i ? std::string(1, sep) : "") + csv_text(row[i], sep);
+    std::fprintf(out, "%s\n", line.c_str());
+  }
+}
+
+// Numbers right-aligned, text left-aligned, as the sqlite3 shell's table mode.
+void print_aligned(const Table& t, std::FILE* out) {
+  std::vector<size_t> width(t.columns.size());
+  for (size_t i = 0; i < t.columns.size(); ++i) width[i] = t.columns[i].size();
+  for (const auto& row : t.rows) {
+    for (size_t i = 0; i < row.size(); ++i)
+      width[i] = std::max(width[i], plain_text(row[i]).size());
+  }
+  auto line = [&](const std::vector<std::string>& cells, const std::vector<bool>& right) {
+    std::string s;
+    for (size_t i = 0; i < cells.size(); ++i) {
+      const std::string pad(width[i] - cells[i].size(), ' ');
+      s += (i ? "  " : "") +
+           (right[i] ? pad + cells[i] : cells[i] + (i + 1 < cells.size() ? pad : ""));
+    }
+    std::fprintf(out, "%s\n", s.c_str());
+  };
+  line(t.columns, std::vector<bool>(t.columns.size(), false));
+  std::vector<std::string> rule;
+  for (size_t w : width) rule.push_back(std::string(w, '-'));
+  line(rule, std::vector<bool>(width.size(), false));
+  for (const auto& row : t.rows) {
+    std::vector<std::string> cells;
+    std::vector<bool> right;
+    for (const Cell& c : row) {
+      cells.push_back(plain_text(c));
+      right.push_back(c.kind == Cell::Kind::kNumber);
+    }
+    line(cells, right);
+  }
+}
+
+}  // namespace
+
+std::string json_text(const Cell& c) {
+  switch (c.kind) {
+    case Cell::Kind::kNull: return "null";
+    case Cell::Kind::kNumber: return c.text;
+    case Cell::Kind::kString: return json_string(c.text);
+    case Cell::Kind::kList: {
+      std::string s = "[";
+      for (size_t i = 0; i < c.items.size(); ++i) s += (i ? ", " : "") + c.items[i];
+      return s + "]";
+    }
+  }
+  return "null";
+}
+
+std::string csv_text(const Cell& c, char separator) {
+  const std::string s = plain_text(c);
+  if (s.find_first_of(std::string("\"\n\r") + separator) == std::string::npos) return s;
+  if (separator == '\t') return s;  // tsv has no quoting; fields hold no tabs here
+  std::string q = "\"";
+  for (char ch : s) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return q + "\"";
+}
+
+void print_table(const Table& t, OutputMode mode, std::FILE* out) {
+  switch (mode) {
+    case OutputMode::kJson: return print_json(t, out);
+    case OutputMode::kCsv: return print_separated(t, ',', out);
+    case OutputMode::kTsv: return print_separated(t, '\t', out);
+    default: return print_aligned(t, out);
+  }
+}
+
+}  // namespace weaver::cli
