@@ -55,6 +55,34 @@ std::vector<Coord> random_points(const Box& b, size_t n, uint64_t seed) {
   return p;
 }
 
+// Runs `weaver shell db` on a script through a pipe and returns what it
+// printed ("" if it failed).
+std::string run_shell(const std::string& db, const std::string& script, const std::string& dir) {
+  const std::string file = dir + "/script.txt";
+  {
+    std::ofstream f(file);
+    f << script;
+  }
+  uint64_t peak = 0;
+  const std::string out_file = dir + "/shell.out";
+  const std::string cmd =
+      std::string(WEAVER_BINARY) + " shell " + db + " < " + file + " > " + out_file;
+  if (std::system(cmd.c_str()) != 0) return "";
+  (void)peak;
+  std::ifstream in(out_file);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// The "Run Time: real S" values the shell's .timer printed.
+std::vector<double> run_times(const std::string& out) {
+  std::vector<double> v;
+  const std::string tag = "Run Time: real ";
+  for (size_t at = 0; (at = out.find(tag, at)) != std::string::npos; at += tag.size()) {
+    v.push_back(std::stod(out.substr(at + tag.size())));
+  }
+  return v;
+}
+
 Json row(const std::string& mesh, const std::string& job) {
   Json j;
   j.add("bench", "explore").add("mesh", mesh).add("job", job);
@@ -174,6 +202,50 @@ int main(int argc, char** argv) {
     rss = double(peak);
   }
   report("locate --points, end to end", "points/s", rates, rss);
+  // One question at a time: in the shell (warm: after a first thousand) and
+  // as one `weaver query` process each.
+  {
+    std::string script = ".timer on\n";
+    const size_t questions = 2000;
+    for (size_t i = 0; i < questions; ++i) {
+      const Coord& c = pts[i];
+      script += "locate " + std::to_string(c.x) + " " + std::to_string(c.y) + " " +
+                std::to_string(c.z) + "\n";
+    }
+    const std::vector<double> t = run_times(run_shell(db, script, dir));
+    if (t.size() < questions) return std::fprintf(stderr, "the shell failed\n"), 1;
+    const std::vector<double> warm(t.begin() + questions / 2, t.begin() + questions);
+    const double shell_s = median(warm);
+    std::vector<double> process;
+    for (size_t i = 0; i < 30; ++i) {
+      const Coord& c = pts[i];
+      uint64_t peak = 0;
+      const double t0 = now_seconds();
+      if (run_program({WEAVER_BINARY, "query", db, "locate", std::to_string(c.x),
+                       std::to_string(c.y), std::to_string(c.z)},
+                      &peak)
+              .empty())
+        return 1;
+      process.push_back(now_seconds() - t0);
+    }
+    const double process_s = median(process);
+    Json j = row(mesh, "single locate");
+    j.add("shell_median_us", shell_s * 1e6).add("process_median_us", process_s * 1e6);
+    j.add("ratio", process_s / shell_s);
+    std::printf("%s\n", j.str().c_str());
+    table.push_back({{"mesh", mesh},
+                     {"job", "one locate in the shell (warm)"},
+                     {"median", fmt(shell_s * 1e6)},
+                     {"unit", "us"},
+                     {"runs", std::to_string(warm.size())}});
+    table.push_back({{"mesh", mesh},
+                     {"job", "one locate, a process each"},
+                     {"median", fmt(process_s * 1e6)},
+                     {"unit", "us"},
+                     {"runs", std::to_string(process.size())}});
+    table.push_back(
+        {{"mesh", mesh}, {"job", "  ratio"}, {"median", fmt(process_s / shell_s)}, {"unit", "x"}});
+  }
   std::printf("\nmedians of %d runs, --memory %llu MB, %zu random points\n", repeat,
               (unsigned long long)(memory >> 20), pts.size());
   print_table(table, {"mesh", "job", "median", "unit", "runs", "peak_rss_mb"});

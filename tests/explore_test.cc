@@ -187,6 +187,21 @@ TEST(Explore, BatchesAnswerEveryPointInInputOrder) {
     std::vector<NodeHit> nodes(points.size());
     ASSERT_OK(ex->locate_batch(points.data(), points.size(), hits.data()));
     ASSERT_OK(ex->node_at_batch(points.data(), points.size(), nodes.data()));
+    // A few points at a time take the sparse path (a descent per key): the
+    // same answers.
+    for (size_t at = 0; at < points.size(); at += 7) {
+      const size_t n = std::min<size_t>(7, points.size() - at);
+      PointHit few[7];
+      NodeHit few_nodes[7];
+      ASSERT_OK(ex->locate_batch(points.data() + at, n, few));
+      ASSERT_OK(ex->node_at_batch(points.data() + at, n, few_nodes));
+      for (size_t k = 0; k < n; ++k) {
+        ASSERT_EQ(few[k].inside, hits[at + k].inside);
+        ASSERT_EQ(few[k].id, hits[at + k].id);
+        ASSERT_EQ(few_nodes[k].found, nodes[at + k].found);
+        ASSERT_EQ(few_nodes[k].id, nodes[at + k].id);
+      }
+    }
     for (size_t i = 0; i < points.size(); ++i) {
       const Coord p = points[i];
       int64_t want = -1;

@@ -6,6 +6,14 @@
 #include "util/radix_sort.h"
 
 namespace weaver {
+namespace {
+
+// Batches smaller than this ask the tables key by key (LeafWindow's sparse
+// mode): a few questions land in different leaves, and decoding a whole
+// leaf for each costs more than two descents.
+constexpr size_t kDenseBatch = 64;
+
+}  // namespace
 
 Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
                       std::unique_ptr<Explorer>* out) {
@@ -34,6 +42,7 @@ Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
     if (pixel_is_valid(p[i])) order_.push_back({pixel_key(p[i]), i});
   }
   radix_sort_by(order_, scratch_, [](const std::pair<uint64_t, uint64_t>& p) { return p.first; });
+  octant_window_->set_sparse(n < kDenseBatch);
   LeafWindow::Floor f;
   MeshElement m;
   // The walk reads only the sorted pairs: the points themselves, in input
@@ -62,6 +71,7 @@ Status Explorer::node_at_batch(const Coord* p, size_t n, NodeHit* out) {
     if (node_is_valid(p[i])) order_.push_back({node_key(p[i]), i});
   }
   radix_sort_by(order_, scratch_, [](const std::pair<uint64_t, uint64_t>& p) { return p.first; });
+  node_window_->set_sparse(n < kDenseBatch);
   LeafWindow::Floor f;
   for (const auto& [key, i] : order_) {
     WEAVER_RETURN_IF_ERROR(node_window_->floor(key, &f));

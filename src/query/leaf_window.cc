@@ -8,8 +8,18 @@ Status LeafWindow::load(uint64_t key) {
   return t_.leaf_keys(key, &keys_, &first_rank_, payloads_ ? &vals_ : nullptr);
 }
 
+Status LeafWindow::sparse_floor(uint64_t key, Floor* out) {
+  before_.resize(t_.payload_size() + 1);
+  WEAVER_RETURN_IF_ERROR(
+      t_.floor(key, &out->key, payloads_ ? before_.data() : nullptr, &out->found));
+  if (!out->found) return Status::Ok();
+  out->payload = payloads_ ? before_.data() : nullptr;
+  return t_.rank(out->key, &out->rank);
+}
+
 Status LeafWindow::floor(uint64_t key, Floor* out) {
   *out = Floor{};
+  if (sparse_) return sparse_floor(key, out);
   // The cached leaf answers keys within its first and last key; a key past
   // its last may still have its floor there, which a fresh descent tells.
   if (keys_.empty() || key < keys_.front() || key > keys_.back()) {

@@ -27,12 +27,18 @@ class LeafWindow {
   };
   // The largest key <= key.
   Status floor(uint64_t key, Floor* out);
+  // Sparse: answer each key by its own floor and rank descents, without
+  // decoding whole leaves.  For a few keys (one question) that is cheaper;
+  // for a batch that lands many keys in each leaf, the decoded leaf is.
+  void set_sparse(bool sparse) { sparse_ = sparse; }
 
  private:
+  Status sparse_floor(uint64_t key, Floor* out);
   Status load(uint64_t key);
 
   BTree& t_;
   bool payloads_;
+  bool sparse_ = false;
   std::vector<uint64_t> keys_;  // the decoded leaf
   std::vector<std::byte> vals_;
   uint64_t first_rank_ = 0;

@@ -6,6 +6,7 @@
 // unpredictable branches.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -40,6 +41,11 @@ inline void radix_sort(std::vector<uint64_t>& values, int first, int bits,
 // a key and a position (corner lookups, point batches).
 template <class T, class KeyOf>
 inline void radix_sort_by(std::vector<T>& items, std::vector<T>& scratch, KeyOf key) {
+  if (items.size() < 256) {  // a pass's counts cost more than sorting a few
+    std::stable_sort(items.begin(), items.end(),
+                     [&](const T& a, const T& b) { return key(a) < key(b); });
+    return;
+  }
   constexpr int kDigit = 11;
   constexpr size_t kBuckets = size_t{1} << kDigit;
   scratch.resize(items.size());
