@@ -1,0 +1,186 @@
+// The C++ library API (include/weaver/weaver.h) over the Explorer.
+#include <weaver/weaver.h>
+
+#include "query/explorer.h"
+
+namespace weaver::api {
+namespace {
+
+Point point_of(const Octant& o) { return {o.x, o.y, o.z}; }
+
+bool check(const Status& st, std::string* error) {
+  if (st.ok()) return true;
+  *error = st.is_corruption() ? "corrupt data: " + st.message()
+           : st.is_io_error() ? "I/O error: " + st.message()
+                              : st.message();
+  return false;
+}
+
+void copy_element(const MeshElement& e, Element* out) {
+  out->id = e.id;
+  out->corner = point_of(e.octant);
+  out->level = e.octant.level;
+  out->edge = octant_edge(e.octant);
+  out->nodes = e.nodes;
+  out->vp = e.vp, out->vs = e.vs, out->rho = e.rho;
+}
+
+void copy_node(const MeshNode& n, Node* out) {
+  out->id = n.id;
+  out->at = {n.c.x, n.c.y, n.c.z};
+  out->kind = static_cast<NodeKind>(n.kind);
+  out->anchor_count = n.anchor_count;
+  out->anchors = n.anchors;
+}
+
+// One step of a cursor over a scan: moves on (after the first item), then
+// hands out the item or records why the scan ended.
+template <class Scan, class Fill>
+bool step(Scan* scan, bool* started, bool* ok, std::string* error, Fill fill) {
+  if (!*ok || scan == nullptr) return false;
+  if (*started) scan->next();
+  *started = true;
+  if (!scan->valid()) return *ok = check(scan->status(), error), false;
+  fill(*scan);
+  return true;
+}
+
+}  // namespace
+
+ElementCursor::ElementCursor(std::unique_ptr<weaver::ElementScan> scan, std::string* error)
+    : scan_(std::move(scan)), error_(error) {}
+ElementCursor::ElementCursor(ElementCursor&&) noexcept = default;
+ElementCursor::~ElementCursor() = default;
+
+bool ElementCursor::next(Element* out) {
+  return step(scan_.get(), &started_, &ok_, error_,
+              [&](const weaver::ElementScan& s) { copy_element(s.element(), out); });
+}
+
+bool ElementCursor::ok() const { return ok_; }
+
+NodeCursor::NodeCursor(std::unique_ptr<weaver::NodeScan> scan, std::string* error)
+    : scan_(std::move(scan)), error_(error) {}
+NodeCursor::NodeCursor(NodeCursor&&) noexcept = default;
+NodeCursor::~NodeCursor() = default;
+
+bool NodeCursor::next(Node* out) {
+  return step(scan_.get(), &started_, &ok_, error_,
+              [&](const weaver::NodeScan& s) { copy_node(s.node(), out); });
+}
+
+bool NodeCursor::ok() const { return ok_; }
+
+std::unique_ptr<MeshDatabase> MeshDatabase::open(const std::string& path, std::string* error,
+                                                 uint64_t memory_bytes) {
+  std::unique_ptr<MeshDatabase> db(new MeshDatabase());
+  if (memory_bytes < MemoryBudget::kMinBytes) memory_bytes = MemoryBudget::kMinBytes;
+  if (!check(Explorer::open(path, MemoryBudget(memory_bytes), &db->ex_), error)) return nullptr;
+  return db;
+}
+
+MeshDatabase::~MeshDatabase() = default;
+
+uint64_t MeshDatabase::element_count() const { return ex_->element_count(); }
+uint64_t MeshDatabase::node_count() const { return ex_->node_count(); }
+bool MeshDatabase::has_mesh() const { return ex_->has_nodes(); }
+bool MeshDatabase::has_material() const { return ex_->mesh().has_material(); }
+
+Units MeshDatabase::units() const { return {ex_->units().tick_m, ex_->units().origin_m}; }
+
+bool MeshDatabase::locate(Point p, PointHit* out) { return locate(&p, 1, out); }
+
+bool MeshDatabase::locate(const Point* p, size_t n, PointHit* out) {
+  // Point and Coord are both three uint32_t; copied anyway, not aliased.
+  std::vector<Coord> c(n);
+  for (size_t i = 0; i < n; ++i) c[i] = {p[i].x, p[i].y, p[i].z};
+  std::vector<weaver::PointHit> h(n);
+  if (!check(ex_->locate_batch(c.data(), n, h.data()), &error_)) return false;
+  for (size_t i = 0; i < n; ++i) {
+    out[i] = PointHit{};
+    if (!h[i].inside) continue;
+    out[i] = {
+        true,    h[i].id, point_of(h[i].leaf), h[i].leaf.level, octant_edge(h[i].leaf), h[i].vp,
+        h[i].vs, h[i].rho};
+  }
+  return true;
+}
+
+bool MeshDatabase::element(uint64_t id, Element* out) {
+  MeshElement e;
+  if (!check(ex_->element(id, &e), &error_)) return false;
+  copy_element(e, out);
+  return true;
+}
+
+bool MeshDatabase::node(uint64_t id, Node* out) {
+  MeshNode n;
+  if (!has_mesh()) return error_ = "no mesh yet (run 'weaver extract' first)", false;
+  if (!check(ex_->node(id, &n), &error_)) return false;
+  copy_node(n, out);
+  return true;
+}
+
+bool MeshDatabase::node_at(Point p, bool* found, uint64_t* id) {
+  if (!has_mesh()) return error_ = "no mesh yet (run 'weaver extract' first)", false;
+  const Coord c{p.x, p.y, p.z};
+  NodeHit h;
+  if (!check(ex_->node_at_batch(&c, 1, &h), &error_)) return false;
+  *found = h.found, *id = h.id;
+  return true;
+}
+
+bool MeshDatabase::neighbors(uint64_t element, bool faces, bool edges, bool corners,
+                             std::vector<Neighbor>* out) {
+  const unsigned kinds = (faces ? 2u : 0u) | (edges ? 4u : 0u) | (corners ? 8u : 0u);
+  std::vector<weaver::Neighbor> got;
+  if (!check(ex_->neighbors(element, kinds, &got), &error_)) return false;
+  out->clear();
+  for (const weaver::Neighbor& n : got) out->push_back({n.dir.dx, n.dir.dy, n.dir.dz, n.id});
+  return true;
+}
+
+bool MeshDatabase::node_elements(uint64_t node, std::vector<uint64_t>* out) {
+  if (!has_mesh()) return error_ = "no mesh yet (run 'weaver extract' first)", false;
+  std::vector<NodeElement> got;
+  if (!check(ex_->node_elements(node, &got), &error_)) return false;
+  out->clear();
+  for (const NodeElement& e : got) out->push_back(e.id);
+  return true;
+}
+
+bool MeshDatabase::depends(uint64_t node, std::vector<uint64_t>* out) {
+  if (!has_mesh()) return error_ = "no mesh yet (run 'weaver extract' first)", false;
+  std::vector<MeshNode> got;
+  if (!check(ex_->depends(node, &got), &error_)) return false;
+  out->clear();
+  for (const MeshNode& n : got) out->push_back(n.id);
+  return true;
+}
+
+ElementCursor MeshDatabase::elements(uint64_t first) {
+  auto scan = std::make_unique<ElementScan>();
+  ElementCursor c(nullptr, &error_);
+  const Status st = scan->start(ex_->mesh(), first, has_mesh());
+  if (!check(st, &error_)) {
+    c.ok_ = false;
+    return c;
+  }
+  c.scan_ = std::move(scan);
+  return c;
+}
+
+NodeCursor MeshDatabase::nodes() {
+  auto scan = std::make_unique<NodeScan>();
+  NodeCursor c(nullptr, &error_);
+  const Status st = has_mesh() ? scan->start(ex_->mesh(), true)
+                               : Status::NotFound("no mesh yet (run 'weaver extract' first)");
+  if (!check(st, &error_)) {
+    c.ok_ = false;
+    return c;
+  }
+  c.scan_ = std::move(scan);
+  return c;
+}
+
+}  // namespace weaver::api
