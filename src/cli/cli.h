@@ -25,6 +25,7 @@ int cmd_partition(int argc, char** argv);
 int cmd_stat(int argc, char** argv);
 int cmd_query(int argc, char** argv);
 int cmd_shell(int argc, char** argv);
+int cmd_slice(int argc, char** argv);
 int cmd_verify(int argc, char** argv);
 int cmd_recover(int argc, char** argv);
 

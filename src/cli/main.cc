@@ -26,6 +26,7 @@ constexpr char kUsage[] =
     "  query DB ...      what is at a point (or a file of them), an element, a node,\n"
     "                    their neighbours, with material\n"
     "  shell DB          an interactive prompt for queries over one open database\n"
+    "  slice DB          a picture (PNG or SVG) of the mesh cut by a plane\n"
     "  verify DB         check pages, keys and the mesh invariants\n"
     "  recover DB        rebuild a lost or damaged MANIFEST from the table files\n"
     "\n"
@@ -92,6 +93,7 @@ int dispatch(int argc, char** argv) {
   if (cmd == "stat") return cmd_stat(argc, argv);
   if (cmd == "query") return cmd_query(argc, argv);
   if (cmd == "shell") return cmd_shell(argc, argv);
+  if (cmd == "slice") return cmd_slice(argc, argv);
   if (cmd == "verify") return cmd_verify(argc, argv);
   if (cmd == "recover") return cmd_recover(argc, argv);
   std::fprintf(stderr, "weaver: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);

@@ -1,0 +1,190 @@
+"""weaver slice checked as a person would look at it, by decoding the PNG
+with Python's zlib (not weaver's code): the pixel at the centre of every
+element the plane cuts (listed by `weaver query range`) has the colour of
+its value on the viridis scale, outlines are drawn where elements are large,
+the SVG is well-formed XML with one outlined rectangle per element, and bad
+requests fail with one line and no file.
+usage: check_slice.py WEAVER WORK_DIR"""
+import csv
+import io
+import os
+import shutil
+import struct
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+import zlib
+
+weaver_bin, work = sys.argv[1:3]
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+
+VIRIDIS = [(68, 1, 84), (72, 40, 120), (62, 74, 137), (49, 104, 142), (38, 130, 142),
+           (31, 158, 137), (53, 183, 121), (110, 206, 88), (181, 222, 43), (253, 231, 37)]
+
+
+def fail(message):
+    sys.exit("check_slice: " + message)
+
+
+def run(*args, ok=True):
+    r = subprocess.run([weaver_bin, *args], capture_output=True, text=True)
+    if ok and r.returncode != 0:
+        fail(f"weaver {' '.join(args)}: {r.stderr}")
+    return r
+
+
+def viridis(t):
+    t = min(max(t, 0.0), 1.0) * 9
+    i = min(8, int(t))
+    f = t - i
+    return tuple(int(round(a + (b - a) * f + 1e-9)) if (a + (b - a) * f) % 1 != 0.5 else
+                 int(a + (b - a) * f + 0.5) for a, b in zip(VIRIDIS[i], VIRIDIS[i + 1]))
+
+
+def close(c, d, tol=1):
+    return all(abs(a - b) <= tol for a, b in zip(c, d))
+
+
+def read_png(path):
+    data = open(path, "rb").read()
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        fail("not a PNG signature")
+    at, idat, text = 8, b"", {}
+    while at < len(data):
+        n, kind = struct.unpack(">I4s", data[at:at + 8])
+        body = data[at + 8:at + 8 + n]
+        (crc,) = struct.unpack(">I", data[at + 8 + n:at + 12 + n])
+        if zlib.crc32(kind + body) != crc:
+            fail(f"bad CRC in chunk {kind}")
+        if kind == b"IHDR":
+            w, h, depth, color = struct.unpack(">IIBB", body[:10])
+            if (depth, color) != (8, 2):
+                fail("not 8-bit RGB")
+        elif kind == b"IDAT":
+            idat += body
+        elif kind == b"tEXt":
+            k, v = body.split(b"\0", 1)
+            text[k.decode()] = v.decode()
+        at += 12 + n
+    raw = zlib.decompress(idat)
+    stride = 3 * w
+    rows, prev = [], bytearray(stride)
+    for y in range(h):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - 3] if i >= 3 else 0
+            b, c = prev[i], prev[i - 3] if i >= 3 else 0
+            if f == 1:
+                line[i] = (line[i] + a) & 255
+            elif f == 2:
+                line[i] = (line[i] + b) & 255
+            elif f == 3:
+                line[i] = (line[i] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+            elif f != 0:
+                fail(f"unknown filter {f}")
+        rows.append(bytes(line))
+        prev = line
+    return w, h, rows, text
+
+
+def pixel(rows, x, y):
+    return tuple(rows[y][3 * x:3 * x + 3])
+
+
+def check_png(db, axis, at, color, width, field_of):
+    out = os.path.join(work, f"{axis}{at}{color}.png")
+    run("slice", db, "--axis", axis, "--at", str(at), "--color", color, "--width", str(width),
+        "--out", out)
+    w, h, rows, text = read_png(out)
+    if w != width:
+        fail(f"width {w}, asked {width}")
+    px0, py0, px1, py1 = map(int, text["weaver.plot"].split())
+    u0, v0, u1, v1 = map(float, text["weaver.world"].split())
+    lo, hi = map(float, text["weaver.range"].split())
+    ua, va = text["weaver.axes"].split()
+    scale = (px1 - px0) / (u1 - u0)
+    down = va == "z"
+    # The elements the plane cuts, from the query layer.
+    box = {"x": [0, 1048575], "y": [0, 1048575], "z": [0, 1048575]}
+    box[axis] = [at, at]
+    listing = run("query", db, "range", str(box["x"][0]), str(box["y"][0]), str(box["z"][0]),
+                  str(box["x"][1]), str(box["y"][1]), str(box["z"][1]), "--list",
+                  "--format", "csv").stdout
+    cut = list(csv.DictReader(io.StringIO(listing)))
+    if not cut:
+        fail("the plane cuts nothing")
+    checked = outlined = 0
+    for e in cut:
+        edge = int(e["edge"])
+        u, v = int(e[ua]), int(e[va])
+        if edge * scale < 8:
+            continue
+        cx = px0 + (u + edge / 2 - u0) * scale
+        cy = py0 + ((v + edge / 2 - v0) if down else (v1 - v - edge / 2)) * scale
+        value = field_of(e)
+        want = viridis((value - lo) / (hi - lo) if hi > lo else 0)
+        got = pixel(rows, int(cx), int(cy))
+        if not close(got, want):
+            fail(f"element {e['element']} ({color} {value}) at pixel ({int(cx)}, {int(cy)}): "
+                 f"{got}, want {want}")
+        checked += 1
+        # Its left edge is outlined.
+        x_left = int(round(px0 + (u - u0) * scale))
+        if edge * scale >= 6 and pixel(rows, x_left, int(cy)) == (40, 40, 40):
+            outlined += 1
+    if checked < 10:
+        fail(f"only {checked} elements large enough to check in {out}")
+    if outlined < checked // 2:
+        fail(f"{outlined} of {checked} large elements outlined")
+    return len(cut), checked
+
+
+# A graded octree without material, coloured by level.
+run("generate", os.path.join(work, "o.txt"), "--kind", "sphere", "--level", "3",
+    "--max-level", "6", "--radius", "0.3")
+sphere = os.path.join(work, "sphere.db")
+run("import", sphere, "--octants", os.path.join(work, "o.txt"))
+run("extract", sphere, "--quiet")
+n1, c1 = check_png(sphere, "z", 524288, "level", 800, lambda e: float(e["level"]))
+n2, c2 = check_png(sphere, "x", 300000, "level", 600, lambda e: float(e["level"]))
+
+# The basin at a low frequency, coloured by vs: values from `weaver query element`.
+basin = os.path.join(work, "basin.db")
+run("mesh", basin, "--model", "basin", "--freq", "0.05", "--quiet")
+vs = {}
+
+
+def vs_of(e):
+    if e["element"] not in vs:
+        row = next(csv.DictReader(io.StringIO(run("query", basin, "element", e["element"],
+                                                  "--format", "csv").stdout)))
+        vs[e["element"]] = float(row["vs"])
+    return vs[e["element"]]
+
+
+n3, c3 = check_png(basin, "y", 400000, "vs", 700, vs_of)
+
+# SVG: well-formed, one outlined rectangle per element cut.
+svg = os.path.join(work, "s.svg")
+run("slice", sphere, "--axis", "z", "--at", "524288", "--out", svg, "--width", "800")
+rects = [r for r in ET.parse(svg).getroot().iter("{http://www.w3.org/2000/svg}rect")
+         if r.get("stroke")]
+if len(rects) != n1:
+    fail(f"{len(rects)} outlined rectangles in the SVG, {n1} elements cut")
+
+# Bad requests: one line, the right status, no file left.
+for args, status in [(["--at", "2000000"], 1), (["--at", "5", "--color", "vs"], 1),
+                     (["--at", "5", "--width", "50"], 2), (["--at", "5", "--axis", "w"], 2)]:
+    out = os.path.join(work, "bad.png")
+    r = run("slice", sphere, *args, "--out", out, ok=False)
+    if r.returncode != status or r.stderr.count("\n") != 1 or os.path.exists(out):
+        fail(f"slice {args}: status {r.returncode}, stderr {r.stderr!r}")
+r = run("slice", sphere, "--at", "5", "--out", os.path.join(work, "no-dir", "x.png"), ok=False)
+if r.returncode != 1 or r.stderr.count("\n") != 1:
+    fail(f"unwritable output: status {r.returncode}, {r.stderr!r}")
+print(f"check_slice: ok, {c1} + {c2} + {c3} elements' pixels checked")
