@@ -5,7 +5,8 @@
 //   - end to end by `weaver query DB locate --points FILE --format csv` in a
 //     fresh process (reading text, answering, writing text);
 //   - and by `weaver shell` one query at a time (warm), against one
-//     `weaver query` process per question: the median latency of each.
+//     `weaver query` process per question: the median latency of each;
+//   - and `weaver slice` of the plane z = 1 km, 2000 pixels wide.
 // Prints one JSON object per measurement, then a table of medians.
 #include <unistd.h>
 
@@ -245,6 +246,30 @@ int main(int argc, char** argv) {
                      {"runs", std::to_string(process.size())}});
     table.push_back(
         {{"mesh", mesh}, {"job", "  ratio"}, {"median", fmt(process_s / shell_s)}, {"unit", "x"}});
+  }
+  // A picture: the plane at z = 1 km, 2000 pixels wide.
+  {
+    std::vector<double> secs;
+    uint64_t peak = 0;
+    for (int r = 0; r < repeat; ++r) {
+      const double t0 = now_seconds();
+      if (run_program({WEAVER_BINARY, "slice", db, "--axis", "z", "--at", "1000", "--units", "m",
+                       "--color", "vs", "--width", "2000", "--out", dir + "/slice.png"},
+                      &peak)
+              .empty())
+        return 1;
+      secs.push_back(now_seconds() - t0);
+      Json j = row(mesh, "slice z=1km 2000px");
+      j.add("seconds", secs.back()).add("peak_rss_bytes", peak);
+      j.add("png_bytes", uint64_t(std::filesystem::file_size(dir + "/slice.png")));
+      std::printf("%s\n", j.str().c_str());
+    }
+    table.push_back({{"mesh", mesh},
+                     {"job", "slice z = 1 km, 2000 px (png)"},
+                     {"median", fmt(median(secs))},
+                     {"unit", "s"},
+                     {"runs", std::to_string(repeat)},
+                     {"peak_rss_mb", fmt(peak / 1e6)}});
   }
   std::printf("\nmedians of %d runs, --memory %llu MB, %zu random points\n", repeat,
               (unsigned long long)(memory >> 20), pts.size());

@@ -1,4 +1,6 @@
+#include <algorithm>
 #include <cstdio>
+#include <vector>
 
 #include "cli/cli.h"
 #include "slice/slice.h"
@@ -8,7 +10,8 @@ namespace {
 
 constexpr char kUsage[] =
     "usage: weaver slice DB --at COORD --out FILE.png|FILE.svg [--axis x|y|z] [--units ticks|m]\n"
-    "                    [--color level|vp|vs|rho] [--width PIXELS] [--danglings]\n"
+    "                    [--color level|vp|vs|rho] [--width PIXELS] [--region A0,B0,A1,B1]\n"
+    "                    [--danglings]\n"
     "\n"
     "A picture of the mesh cut by the plane AXIS = COORD: the elements the plane\n"
     "cuts, outlined and filled by a field on a colour scale (viridis), with a colour\n"
@@ -20,6 +23,8 @@ constexpr char kUsage[] =
     "  --color FIELD      level (default), or vp, vs, rho for a mesh built from a model\n"
     "  --width PIXELS     the picture's width (default 1600; 200 to 20000); the height\n"
     "                     follows the section's shape\n"
+    "  --region A0,B0,A1,B1  only this part of the plane, on its two axes in order\n"
+    "                     (x,y for --axis z; y,z for x; x,z for y), in --at's units\n"
     "  --danglings        mark the dangling nodes that lie on the plane (edge-dangling\n"
     "                     red, face-dangling white); only a plane on element faces has\n"
     "                     nodes on it\n"
@@ -32,7 +37,8 @@ constexpr char kUsage[] =
 
 int cmd_slice(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"axis", "at", "units", "out", "color", "width", "memory"},
+  Status st = parse_args(argc, argv, 2,
+                         {"axis", "at", "units", "out", "color", "width", "region", "memory"},
                          {"danglings", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("slice", st.message(), kUsage);
@@ -62,6 +68,11 @@ int cmd_slice(int argc, char** argv) {
                                          out.compare(out.size() - 4, 4, ".svg") == 0);
   if (st.ok() && !image) st = Status::InvalidArgument("--out must end in .png or .svg");
   o.danglings = args.flags.count("danglings") != 0;
+  if (st.ok() && args.values.count("region")) {
+    std::vector<double> r;
+    st = parse_double_list(args.values.at("region"), "--region", 4, &r);
+    if (st.ok()) std::copy(r.begin(), r.end(), o.region), o.has_region = true;
+  }
   if (st.ok()) st = memory_option(args, &o.memory);
   if (!st.ok()) return usage_error("slice", st.message(), kUsage);
   SliceResult r;

@@ -25,12 +25,19 @@ class Slicer {
   Slicer(Explorer& ex, const SliceOptions& o, uint32_t at)
       : ex_(ex), o_(o), at_(at), window_(ex.mesh().octants(), true) {}
 
+  // Limits the in-plane axes to lo[0]..hi[0] (u) and lo[1]..hi[1] (v), ticks.
+  void limit(const uint32_t lo[2], const uint32_t hi[2]) {
+    for (int i = 0; i < 2; ++i) lo_[i] = lo[i], hi_[i] = hi[i];
+  }
+
   // Calls fn for each element the plane cuts.
   Status each(const std::function<void(const Cut&)>& fn) {
     TickBox box{{0, 0, 0}, {kRootEdge - 1, kRootEdge - 1, kRootEdge - 1}};
     uint32_t* lo[3] = {&box.lo.x, &box.lo.y, &box.lo.z};
     uint32_t* hi[3] = {&box.hi.x, &box.hi.y, &box.hi.z};
     *lo[o_.axis] = *hi[o_.axis] = at_;
+    *lo[u()] = lo_[0], *hi[u()] = hi_[0];
+    *lo[v()] = lo_[1], *hi[v()] = hi_[1];
     Status failed;
     uint64_t count = 0;
     MeshElement m;
@@ -57,6 +64,7 @@ class Slicer {
   Explorer& ex_;
   const SliceOptions& o_;
   uint32_t at_;
+  uint32_t lo_[2] = {0, 0}, hi_[2] = {kRootEdge - 1, kRootEdge - 1};
   LeafWindow window_;
 };
 
@@ -185,6 +193,7 @@ Status mark_danglings(Explorer& ex, Slicer& s, Canvas& c, const Layout& l, int a
       if (!hits[i].found || hits[i].kind == NodeKind::kAnchored) continue;
       const uint32_t p[3] = {points[i].x, points[i].y, points[i].z};
       const double x = l.x(p[s.u()]), y = l.y(p[s.v()]);
+      if (x < l.left || x > l.left + l.plot_w || y < l.top || y > l.top + l.plot_h) continue;
       const double r = l.font;
       c.rect(x - r, y - r, x + r + 1, y + r + 1,
              hits[i].kind == NodeKind::kEdge ? Rgb{220, 30, 30} : Rgb{255, 255, 255}, true);
@@ -232,6 +241,22 @@ Status render_slice(const std::string& db, const SliceOptions& o, const std::str
   }
   WEAVER_RETURN_IF_ERROR(plane_tick(*ex, o, &r->at_ticks));
   Slicer s(*ex, o, r->at_ticks);
+  uint32_t lo[2] = {0, 0}, hi[2] = {kRootEdge - 1, kRootEdge - 1};
+  if (o.has_region) {
+    const int axes[2] = {s.u(), s.v()};
+    for (int i = 0; i < 2; ++i) {
+      auto tick = [&](double w) {
+        const double t =
+            o.at_is_ticks ? w : (w - ex->units().origin_m[axes[i]]) / ex->units().tick_m;
+        return uint32_t(std::clamp(std::floor(t), 0.0, double(kRootEdge - 1)));
+      };
+      lo[i] = tick(o.region[i]), hi[i] = tick(o.region[i + 2]);
+      if (hi[i] <= lo[i])
+        return Status::InvalidArgument("--region is empty on its " +
+                                       std::string(i ? "second" : "first") + " axis");
+    }
+    s.limit(lo, hi);
+  }
   // Pass 1: the extent and the field's range.
   Layout l;
   l.u0 = l.v0 = 1e18, l.u1 = l.v1 = -1;
@@ -243,6 +268,9 @@ Status render_slice(const std::string& db, const SliceOptions& o, const std::str
     r->min = std::min(r->min, c.value), r->max = std::max(r->max, c.value);
     ++r->elements;
   }));
+  // A region shows just itself, whatever the elements at its border reach.
+  l.u0 = std::max(l.u0, double(lo[0])), l.u1 = std::min(l.u1, double(hi[0]) + 1);
+  l.v0 = std::max(l.v0, double(lo[1])), l.v1 = std::min(l.v1, double(hi[1]) + 1);
   if (r->elements == 0) {
     return Status::InvalidArgument("the plane " + std::string(1, "xyz"[o.axis]) + " = " +
                                    number_text(o.at_m) + (o.at_is_ticks ? " ticks" : " m") +
@@ -261,8 +289,12 @@ Status render_slice(const std::string& db, const SliceOptions& o, const std::str
   WEAVER_RETURN_IF_ERROR(s.each([&](const Cut& cut) {
     const double e = octant_edge(cut.o), u = axis_of(cut.o, s.u()), v = axis_of(cut.o, s.v());
     const double ya = l.y(v), yb = l.y(v + e);
-    c->rect(l.x(u), std::min(ya, yb), l.x(u + e), std::max(ya, yb),
-            colormap((cut.value - r->min) / span), true);
+    // Clipped to the plot (elements at a region's border reach past it).
+    const double x0 = std::max(l.x(u), double(l.left));
+    const double x1 = std::min(l.x(u + e), double(l.left + l.plot_w));
+    const double y0 = std::max(std::min(ya, yb), double(l.top));
+    const double y1 = std::min(std::max(ya, yb), double(l.top + l.plot_h));
+    if (x1 > x0 && y1 > y0) c->rect(x0, y0, x1, y1, colormap((cut.value - r->min) / span), true);
   }));
   if (o.danglings) {
     WEAVER_RETURN_IF_ERROR(mark_danglings(*ex, s, *c, l, o.axis, r->at_ticks, &r->danglings));

@@ -21,6 +21,10 @@ struct SliceOptions {
   std::string color = "level";  // level, vp, vs, rho
   int width = 1600;             // pixels, margins and colour bar included
   bool danglings = false;       // mark the dangling nodes on the plane
+  // Only the part of the plane from (a0, b0) to (a1, b1), in the plane's two
+  // axes (x, y for a z plane; y, z for x; x, z for y) and --at's units.
+  bool has_region = false;
+  double region[4] = {0, 0, 0, 0};
   MemoryBudget memory;
 };
 

@@ -96,10 +96,10 @@ def pixel(rows, x, y):
     return tuple(rows[y][3 * x:3 * x + 3])
 
 
-def check_png(db, axis, at, color, width, field_of):
-    out = os.path.join(work, f"{axis}{at}{color}.png")
+def check_png(db, axis, at, color, width, field_of, extra=()):
+    out = os.path.join(work, f"{axis}{at}{color}{len(extra)}.png")
     run("slice", db, "--axis", axis, "--at", str(at), "--color", color, "--width", str(width),
-        "--out", out)
+        "--out", out, *extra)
     w, h, rows, text = read_png(out)
     if w != width:
         fail(f"width {w}, asked {width}")
@@ -112,6 +112,9 @@ def check_png(db, axis, at, color, width, field_of):
     # The elements the plane cuts, from the query layer.
     box = {"x": [0, 1048575], "y": [0, 1048575], "z": [0, 1048575]}
     box[axis] = [at, at]
+    if extra:
+        r = [int(x) for x in extra[1].split(",")]
+        box[ua], box[va] = [r[0], r[2]], [r[1], r[3]]
     listing = run("query", db, "range", str(box["x"][0]), str(box["y"][0]), str(box["z"][0]),
                   str(box["x"][1]), str(box["y"][1]), str(box["z"][1]), "--list",
                   "--format", "csv").stdout
@@ -126,6 +129,10 @@ def check_png(db, axis, at, color, width, field_of):
             continue
         cx = px0 + (u + edge / 2 - u0) * scale
         cy = py0 + ((v + edge / 2 - v0) if down else (v1 - v - edge / 2)) * scale
+        if not (px0 + 2 <= cx < px1 - 2 and py0 + 2 <= cy < py1 - 2):
+            continue  # beyond a --region
+        if extra and not (u0 <= u and u + edge <= u1 and v0 <= v and v + edge <= v1):
+            continue  # cut by the region's border: its centre may lie outside
         value = field_of(e)
         want = viridis((value - lo) / (hi - lo) if hi > lo else 0)
         got = pixel(rows, int(cx), int(cy))
@@ -152,6 +159,11 @@ run("import", sphere, "--octants", os.path.join(work, "o.txt"))
 run("extract", sphere, "--quiet")
 n1, c1 = check_png(sphere, "z", 524288, "level", 800, lambda e: float(e["level"]))
 n2, c2 = check_png(sphere, "x", 300000, "level", 600, lambda e: float(e["level"]))
+# A region of the plane (ticks): only its elements, the plot spans just it.
+n4, c4 = check_png(sphere, "z", 524288, "level", 700, lambda e: float(e["level"]),
+                   ("--region", "200000,300000,600000,700000"))
+if not n4 < n1:
+    fail("a region should cut fewer elements than the whole plane")
 
 # The basin at a low frequency, coloured by vs: values from `weaver query element`.
 basin = os.path.join(work, "basin.db")
@@ -187,4 +199,4 @@ for args, status in [(["--at", "2000000"], 1), (["--at", "5", "--color", "vs"], 
 r = run("slice", sphere, "--at", "5", "--out", os.path.join(work, "no-dir", "x.png"), ok=False)
 if r.returncode != 1 or r.stderr.count("\n") != 1:
     fail(f"unwritable output: status {r.returncode}, {r.stderr!r}")
-print(f"check_slice: ok, {c1} + {c2} + {c3} elements' pixels checked")
+print(f"check_slice: ok, {c1} + {c2} + {c3} + {c4} elements' pixels checked")
