@@ -1,5 +1,6 @@
 #include "cli/point_batch.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -15,66 +16,81 @@ namespace {
 constexpr uint32_t kFar = UINT32_MAX;
 
 // Writes the rows of one mode into a buffer flushed to the output in large
-// writes: a million rows a second is too many for a printf each.
+// writes: a million rows a second is too many for a printf each, and too
+// many for a std::string append per field.
 class RowWriter {
  public:
-  explicit RowWriter(OutputMode mode) : mode_(mode) {
+  explicit RowWriter(OutputMode mode) : mode_(mode), buf_(kCapacity) {
     sep_ = mode == OutputMode::kCsv ? ',' : mode == OutputMode::kTsv ? '\t' : ' ';
   }
   void header(const std::vector<const char*>& columns) {
     columns_ = columns;
     if (mode_ == OutputMode::kJson) return;
-    if (mode_ == OutputMode::kText || mode_ == OutputMode::kTable) buf_ += "# ";
-    for (size_t i = 0; i < columns.size(); ++i) (i ? buf_ += sep_ : buf_) += columns[i];
-    buf_ += '\n';
+    begin();
+    if (mode_ == OutputMode::kText || mode_ == OutputMode::kTable) raw("# ");
+    for (const char* c : columns) put(c, false);
+    end();
   }
-  void begin() { field_ = 0; }
-  void number(uint64_t v) {
-    char b[24];
-    put(std::string_view(b, size_t(std::to_chars(b, b + sizeof b, v).ptr - b)), false);
+  // A row starts: room for the longest row is made here, once.
+  void begin() {
+    field_ = 0;
+    if (len_ + kMaxRow > buf_.size()) buf_.resize(std::max(buf_.size() * 2, len_ + kMaxRow));
   }
-  void number(double v) {
-    char b[32];
-    put(std::string_view(b, size_t(std::to_chars(b, b + sizeof b, v).ptr - b)), false);
-  }
-  void number(float v) {
-    char b[32];
-    put(std::string_view(b, size_t(std::to_chars(b, b + sizeof b, v).ptr - b)), false);
+  template <typename T>
+  void number(T v) {
+    separate(false);
+    len_ = size_t(std::to_chars(&buf_[len_], &buf_[len_] + 40, v).ptr - buf_.data());
+    close(false);
   }
   void text(std::string_view s) { put(s, true); }
   void null() {
     put(mode_ == OutputMode::kJson ? "null" : mode_ == OutputMode::kText ? "-" : "", false);
   }
-  void end() { buf_ += mode_ == OutputMode::kJson ? "}\n" : "\n"; }
+  void end() { raw(mode_ == OutputMode::kJson ? "}\n" : "\n"); }
+  size_t size() const { return len_; }
   // Writes the rows held to out and forgets them.
   Status flush(std::FILE* out) {
-    if (!buf_.empty() && std::fwrite(buf_.data(), 1, buf_.size(), out) != buf_.size()) {
+    if (len_ > 0 && std::fwrite(buf_.data(), 1, len_, out) != len_) {
       return Status::IOError(std::string("writing the answers: ") + std::strerror(errno));
     }
-    buf_.clear();
+    len_ = 0;
     return Status::Ok();
   }
 
  private:
-  void put(std::string_view v, bool quoted) {
+  static constexpr size_t kCapacity = 1 << 20;
+  static constexpr size_t kMaxRow = 2048;  // 13 fields with their JSON names, and margin
+
+  void raw(std::string_view v) {
+    std::memcpy(&buf_[len_], v.data(), v.size());
+    len_ += v.size();
+  }
+  // What goes before a field: a separator, or in JSON its name.
+  void separate(bool quoted) {
     if (mode_ == OutputMode::kJson) {
-      buf_ += field_ == 0 ? "{\"" : ", \"";
-      buf_ += columns_[field_];
-      buf_ += quoted ? "\": \"" : "\": ";
-      buf_ += v;
-      if (quoted) buf_ += '"';
-    } else {
-      if (field_ > 0) buf_ += sep_;
-      buf_ += v;
+      raw(field_ == 0 ? "{\"" : ", \"");
+      raw(columns_[field_]);
+      raw(quoted ? "\": \"" : "\": ");
+    } else if (field_ > 0) {
+      buf_[len_++] = sep_;
     }
+  }
+  void close(bool quoted) {
+    if (quoted && mode_ == OutputMode::kJson) buf_[len_++] = '"';
     ++field_;
+  }
+  void put(std::string_view v, bool quoted) {
+    separate(quoted);
+    raw(v);
+    close(quoted);
   }
 
   OutputMode mode_;
   char sep_;
   std::vector<const char*> columns_;
   size_t field_ = 0;
-  std::string buf_;
+  std::vector<char> buf_;
+  size_t len_ = 0;
 };
 
 class BatchRunner {
