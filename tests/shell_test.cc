@@ -67,14 +67,24 @@ class ShellProcess {
     if (write_fd_ != read_fd_) close(write_fd_);
   }
   // Reads until `marker` shows up (or 10 s pass); everything read so far.
-  std::string read_until(const std::string& marker) {
-    for (int waited = 0; out_.find(marker) == std::string::npos && waited < 100; ++waited) {
+  std::string read_until(const std::string& marker, int rounds = 100) {
+    for (int waited = 0; out_.find(marker) == std::string::npos && waited < rounds; ++waited) {
       pollfd p{read_fd_, POLLIN, 0};
       if (poll(&p, 1, 100) <= 0) continue;
       char buf[4096];
       const ssize_t n = read(read_fd_, buf, sizeof buf);
       if (n <= 0) break;
       out_.append(buf, size_t(n));
+    }
+    return out_;
+  }
+  // Reads until the prompt has been shown n times: the shell waits for keys.
+  std::string prompts(size_t n) {
+    for (int waited = 0; waited < 100; ++waited) {
+      size_t count = 0;
+      for (size_t at = 0; (at = out_.find("weaver> ", at)) != std::string::npos; ++at) ++count;
+      if (count >= n) break;
+      read_until(std::string(1, '\0'), 1);  // one more poll round
     }
     return out_;
   }
@@ -172,18 +182,21 @@ TEST(Shell, LineEditingAndHistoryOnATerminal) {
   testing::TempDir dir;
   const std::string db = testing::build_mesh(testing::small_sphere(), dir);
   ShellProcess sh(db, true);
-  sh.read_until("weaver> ");
+  sh.prompts(1);
   // "elment 2", then Home, right twice, insert 'e': "element 2".
   sh.send("elment 2\x1b[H\x1b[C\x1b[Ce\r");
   sh.read_until("element 2: corner");
+  sh.prompts(2);
   // Up arrow recalls it; Backspace and '5' make it "element 5".
   sh.send(
       "\x1b[A\x7f"
       "5\r");
   sh.read_until("element 5: corner");
+  sh.prompts(3);
   // Ctrl-U drops a typed line; Ctrl-D on an empty line leaves.
   sh.send("garbage\x15.show\r");
   sh.read_until("timer:");
+  sh.prompts(4);
   sh.send("\x04");
   const std::string out = sh.read_until("\x04");
   EXPECT_EQ(sh.wait(), 0) << out;

@@ -23,10 +23,10 @@ class RawMode {
     raw.c_lflag &= ~(ECHO | ICANON | IEXTEN | ISIG);
     raw.c_cc[VMIN] = 1;
     raw.c_cc[VTIME] = 0;
-    ok_ = tcsetattr(fd, TCSAFLUSH, &raw) == 0;
+    ok_ = tcsetattr(fd, TCSANOW, &raw) == 0;  // TCSANOW: keep what was typed ahead
   }
   ~RawMode() {
-    if (ok_) tcsetattr(fd_, TCSAFLUSH, &saved_);
+    if (ok_) tcsetattr(fd_, TCSANOW, &saved_);
   }
   bool ok() const { return ok_; }
 
