@@ -46,8 +46,12 @@ Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
   LeafWindow::Floor f;
   MeshElement m;
   // The walk reads only the sorted pairs: the points themselves, in input
-  // order, would cost a cache miss each.
-  for (const auto& [key, i] : order_) {
+  // order, would cost a cache miss each.  The answers are written in input
+  // order, a cache miss each: asked for a few points ahead, they overlap.
+  constexpr size_t kAhead = 16;
+  for (size_t k = 0; k < order_.size(); ++k) {
+    const auto [key, i] = order_[k];
+    if (k + kAhead < order_.size()) __builtin_prefetch(&out[order_[k + kAhead].second], 1);
     WEAVER_RETURN_IF_ERROR(octant_window_->floor(key, &f));
     // The floor leaf holds the pixel if the pixel's key is in its subtree;
     // if not, the pixel is in a hole of the domain.
