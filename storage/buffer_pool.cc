@@ -29,9 +29,9 @@ void seal_page(std::byte* pg, uint32_t page_no, uint32_t page_size) {
 BufferPool::BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes)
     : file_(file), page_size_(page_size) {
   // The budget pays for the write staging buffer, then for frames with their
-  // bookkeeping (the Frame, and up to 4 table slots of 4 bytes).
+  // bookkeeping (the Frame, and up to 4 table slots of 8 bytes).
   const uint64_t staging = uint64_t{kMaxWriteRun} * page_size;
-  const uint64_t per_frame = page_size + sizeof(Frame) + 4 * sizeof(uint32_t);
+  const uint64_t per_frame = page_size + sizeof(Frame) + 4 * sizeof(uint64_t);
   const uint64_t n = std::max<uint64_t>(
       kMinFrames, budget_bytes > staging ? (budget_bytes - staging) / per_frame : 0);
   // 2 MiB alignment lets the kernel back the arena with huge pages: a large
@@ -54,7 +54,7 @@ BufferPool::BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes)
 BufferPool::~BufferPool() = default;
 
 uint64_t BufferPool::memory_bytes() const {
-  return frames_.size() * (page_size_ + sizeof(Frame)) + table_.size() * sizeof(uint32_t) +
+  return frames_.size() * (page_size_ + sizeof(Frame)) + table_.size() * sizeof(uint64_t) +
          size_t{kMaxWriteRun} * page_size_;
 }
 
@@ -62,26 +62,31 @@ size_t BufferPool::slot_of(uint32_t page_no) const { return (page_no * 0x9E3779B
 
 Frame* BufferPool::lookup(uint32_t page_no) const {
   for (size_t s = slot_of(page_no);; s = (s + 1) & table_mask_) {
-    const uint32_t v = table_[s];
+    const uint64_t v = table_[s];
     if (v == 0) return nullptr;
-    Frame* f = const_cast<Frame*>(&frames_[v - 1]);
-    if (f->page_no == page_no) return f;
+    if (uint32_t(v >> 32) != page_no) continue;
+    const size_t index = uint32_t(v) - 1;
+    // Ask for the page's first lines now: the caller reads its header and
+    // keys next, and the frame's own miss overlaps with them.
+    const std::byte* data = arena_.get() + index * page_size_;
+    for (uint32_t line = 0; line < kPrefetchLines; ++line) __builtin_prefetch(data + 64 * line);
+    return const_cast<Frame*>(&frames_[index]);
   }
 }
 
 void BufferPool::table_insert(uint32_t page_no, uint32_t frame_index) {
   size_t s = slot_of(page_no);
   while (table_[s] != 0) s = (s + 1) & table_mask_;
-  table_[s] = frame_index + 1;
+  table_[s] = (uint64_t{page_no} << 32) | (frame_index + 1);
 }
 
 // Backward-shift deletion keeps probe chains intact without tombstones.
 void BufferPool::table_erase(uint32_t page_no) {
   size_t s = slot_of(page_no);
-  while (frames_[table_[s] - 1].page_no != page_no) s = (s + 1) & table_mask_;
+  while (uint32_t(table_[s] >> 32) != page_no) s = (s + 1) & table_mask_;
   size_t hole = s;
   for (size_t j = (hole + 1) & table_mask_; table_[j] != 0; j = (j + 1) & table_mask_) {
-    const size_t home = slot_of(frames_[table_[j] - 1].page_no);
+    const size_t home = slot_of(uint32_t(table_[j] >> 32));
     // Move j into the hole if its home is not in the cyclic range (hole, j].
     const bool home_in_range = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
     if (!home_in_range) {
