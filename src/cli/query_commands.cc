@@ -172,12 +172,16 @@ int Query::run_points(PointQuery q) {
 }
 
 int Query::run_point_text(PointQuery q, Coord c) {
+  // The point as asked: in ticks, or in metres as typed.
+  const std::string asked =
+      s.metres ? args.positional[1] + " " + args.positional[2] + " " + args.positional[3] + " m"
+               : point_text(c);
   if (q == PointQuery::kNodeAt) {
     if (!ex.has_nodes()) return fail(Status::NotFound("no mesh yet (run 'weaver extract' first)"));
     NodeHit h;
     const Status st = ex.node_at_batch(&c, 1, &h);
     if (!st.ok()) return fail(st);
-    if (!h.found) return std::fprintf(out, "no node at (%s)\n", point_text(c).c_str()), 0;
+    if (!h.found) return std::fprintf(out, "no node at (%s)\n", asked.c_str()), 0;
     args.positional = {"node", std::to_string(h.id)};
     return run_node();
   }
@@ -189,15 +193,14 @@ int Query::run_point_text(PointQuery q, Coord c) {
   if (q == PointQuery::kMaterial && !ex.mesh().has_material()) {
     return fail(Status::NotFound("this mesh has no material (it was not built from a model)"));
   }
-  if (!h.inside)
-    return std::fprintf(out, "point (%s) is outside the domain\n", point_text(c).c_str()), 0;
+  if (!h.inside) return std::fprintf(out, "point (%s) is outside the domain\n", asked.c_str()), 0;
   if (q == PointQuery::kMaterial) {
     std::fprintf(out, "point (%s): vp %g m/s, vs %g m/s, rho %g kg/m^3 (element %llu)\n",
-                 point_text(c).c_str(), e.vp, e.vs, e.rho, (unsigned long long)e.id);
+                 asked.c_str(), e.vp, e.vs, e.rho, (unsigned long long)e.id);
     return 0;
   }
   std::fprintf(out, "point (%s) is in element %llu: leaf (%s %d), edge %u ticks = %.10g m\n",
-               point_text(c).c_str(), (unsigned long long)e.id,
+               asked.c_str(), (unsigned long long)e.id,
                point_text({e.octant.x, e.octant.y, e.octant.z}).c_str(), e.octant.level,
                octant_edge(e.octant), octant_edge(e.octant) * units().tick_m);
   if (ex.has_nodes()) std::fprintf(out, "  nodes %s\n", plain_text(ids(e.nodes.data(), 8)).c_str());
