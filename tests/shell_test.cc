@@ -28,6 +28,7 @@ class ShellProcess {
     if (terminal) {
       master_ = posix_openpt(O_RDWR | O_NOCTTY);
       EXPECT_GE(master_, 0);
+      fcntl(master_, F_SETFD, FD_CLOEXEC);  // the shell must not hold the master
       EXPECT_EQ(grantpt(master_), 0);
       EXPECT_EQ(unlockpt(master_), 0);
       slave = ptsname(master_);
@@ -66,8 +67,8 @@ class ShellProcess {
   void close_input() {
     if (write_fd_ != read_fd_) close(write_fd_);
   }
-  // Reads until `marker` shows up (or 10 s pass); everything read so far.
-  std::string read_until(const std::string& marker, int rounds = 100) {
+  // Reads until `marker` shows up (or 30 s pass); everything read so far.
+  std::string read_until(const std::string& marker, int rounds = 300) {
     for (int waited = 0; out_.find(marker) == std::string::npos && waited < rounds; ++waited) {
       pollfd p{read_fd_, POLLIN, 0};
       if (poll(&p, 1, 100) <= 0) continue;
@@ -80,7 +81,7 @@ class ShellProcess {
   }
   // Reads until the prompt has been shown n times: the shell waits for keys.
   std::string prompts(size_t n) {
-    for (int waited = 0; waited < 100; ++waited) {
+    for (int waited = 0; waited < 300; ++waited) {
       size_t count = 0;
       for (size_t at = 0; (at = out_.find("weaver> ", at)) != std::string::npos; ++at) ++count;
       if (count >= n) break;
@@ -88,11 +89,19 @@ class ShellProcess {
     }
     return out_;
   }
+  // The exit status, or -1 if the shell has not ended within 30 s (it is
+  // then killed: a test never hangs on it).
   int wait() {
     int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    for (int waited = 0; waited < 1500; ++waited) {
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      }
+      read_until(std::string(1, '\0'), 1);  // keep draining its output meanwhile
+      usleep(20000);
+    }
+    return -1;
   }
 
  private:
