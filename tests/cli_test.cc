@@ -21,7 +21,7 @@ TEST(Cli, EveryCommandHasHelp) {
   const CommandRun top = run("--help");
   EXPECT_EQ(top.code, 0);
   for (const char* cmd : {"generate", "import", "construct", "balance", "mesh", "extract", "export",
-                          "stat", "query", "shell", "partition", "verify", "recover"}) {
+                          "stat", "query", "shell", "slice", "partition", "verify", "recover"}) {
     EXPECT_NE(top.out.find(cmd), std::string::npos);
     const CommandRun r = run(std::string(cmd) + " --help");
     EXPECT_EQ(r.code, 0) << cmd;
