@@ -202,17 +202,29 @@ TEST(Shell, LineEditingAndHistoryOnATerminal) {
       "5\r");
   sh.read_until("element 5: corner");
   sh.prompts(3);
+  // Ctrl-C while a long points file is answered ends that question only.
+  {
+    std::ofstream points(dir.file("many.txt"));
+    for (int i = 0; i < 3000000; ++i) points << (i % 1000) * 1000 << " 5 5\n";
+  }
+  sh.send("locate --points " + dir.file("many.txt") + " --format csv\r");
+  sh.read_until("inside");
+  sh.send("\x03");
+  sh.read_until("interrupted at line");
+  sh.prompts(4);
   // Ctrl-U drops a typed line; Ctrl-D on an empty line leaves.
   sh.send("garbage\x15.show\r");
   sh.read_until("timer:");
-  sh.prompts(4);
+  sh.prompts(5);
   sh.send("\x04");
   const std::string out = sh.read_until("\x04");
   EXPECT_EQ(sh.wait(), 0) << out;
   EXPECT_NE(out.find("Enter \".help\""), std::string::npos) << out;
   EXPECT_NE(out.find("element 2: corner"), std::string::npos) << out;
   EXPECT_NE(out.find("element 5: corner"), std::string::npos) << out;
-  EXPECT_EQ(out.find("error"), std::string::npos) << out;
+  EXPECT_NE(out.find("error: interrupted at line"), std::string::npos) << out.substr(0, 2000);
+  EXPECT_EQ(out.find("error", out.find("interrupted") + 1), std::string::npos);
+  EXPECT_EQ(out.find("error"), out.find("error: interrupted"));
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "cli/cli.h"
 #include "cli/line_editor.h"
 #include "cli/query_commands.h"
+#include "util/interrupt.h"
 
 namespace weaver::cli {
 namespace {
@@ -217,11 +218,14 @@ int cmd_shell(int argc, char** argv) {
     return shell.failed() ? 1 : 0;
   }
   shell.banner();
+  // Ctrl-C ends the question being answered, not the shell.
+  InterruptScope ctrl_c;
   LineEditor editor;
   const std::string history = history_path();
   if (!history.empty()) editor.load_history(history);
   for (std::string line; editor.read("weaver> ", &line);) {
     editor.remember(line);
+    clear_interrupt();
     if (!shell.line(line)) break;
   }
   if (!history.empty()) editor.save_history(history);

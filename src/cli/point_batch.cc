@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "util/huge_pages.h"
+#include "util/interrupt.h"
 #include "util/printable.h"
 
 namespace weaver::cli {
@@ -326,6 +327,10 @@ Status run_point_batch(Explorer& ex, std::FILE* in, const std::string& name,
   Status st;
   std::string why;
   for (std::string_view text; st.ok() && lines.next(&text);) {
+    if (interrupted()) {
+      st = Status::Busy("interrupted at line " + std::to_string(line_no + 1) + " of " + name);
+      break;
+    }
     ++line_no;
     const char* line = text.data();
     size_t len = text.size();
