@@ -87,13 +87,6 @@ Status Explorer::node_at_batch(const Coord* p, size_t n, NodeHit* out) {
   return Status::Ok();
 }
 
-Status Explorer::find_node(Coord c, bool* found, uint64_t* id, NodeKind* kind) {
-  NodeHit h;
-  WEAVER_RETURN_IF_ERROR(node_at_batch(&c, 1, &h));
-  *found = h.found, *id = h.id, *kind = h.kind;
-  return Status::Ok();
-}
-
 Status Explorer::check_element(uint64_t id) const {
   if (id < element_count()) return Status::Ok();
   return Status::InvalidArgument("element " + std::to_string(id) + " does not exist (" +

@@ -108,8 +108,6 @@ class Explorer {
   Explorer() = default;
   Status check_element(uint64_t id) const;
   Status check_node(uint64_t id) const;
-  // The id of the node at c, if there is one.
-  Status find_node(Coord c, bool* found, uint64_t* id, NodeKind* kind);
   // Visits region r (across direction d of element o): emits the leaf that
   // covers it, or recurses into the children that touch o.
   Status visit_across(const Octant& o, Direction d, const Octant& r, std::vector<Neighbor>* out);
