@@ -79,12 +79,13 @@ class ShellProcess {
     }
     return out_;
   }
-  // Reads until the prompt has been shown n times: the shell waits for keys.
-  std::string prompts(size_t n) {
+  // Reads until a fresh prompt follows `marker` in the output: the shell has
+  // answered and waits for keys (the editor redraws its prompt on every key,
+  // so prompts cannot be counted).
+  std::string prompt_after(const std::string& marker) {
     for (int waited = 0; waited < 300; ++waited) {
-      size_t count = 0;
-      for (size_t at = 0; (at = out_.find("weaver> ", at)) != std::string::npos; ++at) ++count;
-      if (count >= n) break;
+      const size_t at = out_.find(marker);
+      if (at != std::string::npos && out_.find("weaver> ", at) != std::string::npos) break;
       read_until(std::string(1, '\0'), 1);  // one more poll round
     }
     return out_;
@@ -191,17 +192,15 @@ TEST(Shell, LineEditingAndHistoryOnATerminal) {
   testing::TempDir dir;
   const std::string db = testing::build_mesh(testing::small_sphere(), dir);
   ShellProcess sh(db, true);
-  sh.prompts(1);
+  sh.prompt_after("Enter \".help\"");
   // "elment 2", then Home, right twice, insert 'e': "element 2".
   sh.send("elment 2\x1b[H\x1b[C\x1b[Ce\r");
-  sh.read_until("element 2: corner");
-  sh.prompts(2);
+  sh.prompt_after("element 2: corner");
   // Up arrow recalls it; Backspace and '5' make it "element 5".
   sh.send(
       "\x1b[A\x7f"
       "5\r");
-  sh.read_until("element 5: corner");
-  sh.prompts(3);
+  sh.prompt_after("element 5: corner");
   // Ctrl-C while a long points file is answered ends that question only.
   {
     std::ofstream points(dir.file("many.txt"));
@@ -210,12 +209,10 @@ TEST(Shell, LineEditingAndHistoryOnATerminal) {
   sh.send("locate --points " + dir.file("many.txt") + " --format csv\r");
   sh.read_until("inside");
   sh.send("\x03");
-  sh.read_until("interrupted at line");
-  sh.prompts(4);
+  sh.prompt_after("interrupted at line");
   // Ctrl-U drops a typed line; Ctrl-D on an empty line leaves.
   sh.send("garbage\x15.show\r");
-  sh.read_until("timer:");
-  sh.prompts(5);
+  sh.prompt_after("timer:");
   sh.send("\x04");
   const std::string out = sh.read_until("\x04");
   EXPECT_EQ(sh.wait(), 0) << out;
