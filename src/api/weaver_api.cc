@@ -115,14 +115,12 @@ bool MeshDatabase::element(uint64_t id, Element* out) {
 
 bool MeshDatabase::node(uint64_t id, Node* out) {
   MeshNode n;
-  if (!has_mesh()) return error_ = "no mesh yet (run 'weaver extract' first)", false;
   if (!check(ex_->node(id, &n), &error_)) return false;
   copy_node(n, out);
   return true;
 }
 
 bool MeshDatabase::node_at(Point p, bool* found, uint64_t* id) {
-  if (!has_mesh()) return error_ = "no mesh yet (run 'weaver extract' first)", false;
   const Coord c{p.x, p.y, p.z};
   NodeHit h;
   if (!check(ex_->node_at_batch(&c, 1, &h), &error_)) return false;
@@ -141,7 +139,6 @@ bool MeshDatabase::neighbors(uint64_t element, bool faces, bool edges, bool corn
 }
 
 bool MeshDatabase::node_elements(uint64_t node, std::vector<uint64_t>* out) {
-  if (!has_mesh()) return error_ = "no mesh yet (run 'weaver extract' first)", false;
   std::vector<NodeElement> got;
   if (!check(ex_->node_elements(node, &got), &error_)) return false;
   out->clear();
@@ -150,7 +147,6 @@ bool MeshDatabase::node_elements(uint64_t node, std::vector<uint64_t>* out) {
 }
 
 bool MeshDatabase::depends(uint64_t node, std::vector<uint64_t>* out) {
-  if (!has_mesh()) return error_ = "no mesh yet (run 'weaver extract' first)", false;
   std::vector<MeshNode> got;
   if (!check(ex_->depends(node, &got), &error_)) return false;
   out->clear();
@@ -173,8 +169,8 @@ ElementCursor MeshDatabase::elements(uint64_t first) {
 NodeCursor MeshDatabase::nodes() {
   auto scan = std::make_unique<NodeScan>();
   NodeCursor c(nullptr, &error_);
-  const Status st = has_mesh() ? scan->start(ex_->mesh(), true)
-                               : Status::NotFound("no mesh yet (run 'weaver extract' first)");
+  Status st = ex_->require_nodes();
+  if (st.ok()) st = scan->start(ex_->mesh(), true);
   if (!check(st, &error_)) {
     c.ok_ = false;
     return c;

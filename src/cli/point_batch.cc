@@ -314,9 +314,7 @@ Status run_point_batch(Explorer& ex, std::FILE* in, const std::string& name,
                        const PointBatchOptions& o, std::FILE* out, std::FILE* err,
                        PointBatchResult* result) {
   *result = PointBatchResult{};
-  if (o.query == PointQuery::kNodeAt && !ex.has_nodes()) {
-    return Status::NotFound("no mesh yet (run 'weaver extract' first)");
-  }
+  if (o.query == PointQuery::kNodeAt) WEAVER_RETURN_IF_ERROR(ex.require_nodes());
   if (o.query == PointQuery::kMaterial && !ex.mesh().has_material()) {
     return Status::NotFound("this mesh has no material (it was not built from a model)");
   }

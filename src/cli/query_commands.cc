@@ -177,7 +177,6 @@ int Query::run_point_text(PointQuery q, Coord c) {
       s.metres ? args.positional[1] + " " + args.positional[2] + " " + args.positional[3] + " m"
                : point_text(c);
   if (q == PointQuery::kNodeAt) {
-    if (!ex.has_nodes()) return fail(Status::NotFound("no mesh yet (run 'weaver extract' first)"));
     NodeHit h;
     const Status st = ex.node_at_batch(&c, 1, &h);
     if (!st.ok()) return fail(st);
@@ -268,8 +267,7 @@ int Query::run_node() {
   MeshNode n;
   Status st = id_argument(&id);
   if (!st.ok()) return usage(st.message());
-  if (!ex.has_nodes()) st = Status::NotFound("no mesh yet (run 'weaver extract' first)");
-  if (st.ok()) st = ex.node(id, &n);
+  st = ex.node(id, &n);
   if (!st.ok()) return fail(st);
   if (text()) {
     const Units& u = units();
@@ -321,8 +319,7 @@ int Query::run_node_elements() {
   std::vector<NodeElement> got;
   Status st = id_argument(&id);
   if (!st.ok()) return usage(st.message());
-  if (!ex.has_nodes()) st = Status::NotFound("no mesh yet (run 'weaver extract' first)");
-  if (st.ok()) st = ex.node_elements(id, &got);
+  st = ex.node_elements(id, &got);
   if (!st.ok()) return fail(st);
   Table t;
   t.columns = {"element", "corner", "x", "y", "z", "level", "edge"};
@@ -340,8 +337,7 @@ int Query::run_depends() {
   std::vector<MeshNode> got;
   Status st = id_argument(&id);
   if (!st.ok()) return usage(st.message());
-  if (!ex.has_nodes()) st = Status::NotFound("no mesh yet (run 'weaver extract' first)");
-  if (st.ok()) st = ex.depends(id, &got);
+  st = ex.depends(id, &got);
   if (!st.ok()) return fail(st);
   Table t;
   t.columns = {"node", "kind", "x", "y", "z", "anchors"};

@@ -33,15 +33,20 @@ Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
 
 Status Explorer::locate(Coord p, PointHit* out) { return locate_batch(&p, 1, out); }
 
-Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
+template <typename Hit, typename Valid, typename KeyOf>
+void Explorer::sort_points(const Coord* p, size_t n, Hit* out, Valid valid, KeyOf key_of) {
   order_.clear();
   reserve_huge(order_, n);
   reserve_huge(scratch_, n);
   for (size_t i = 0; i < n; ++i) {
-    out[i] = PointHit{};
-    if (pixel_is_valid(p[i])) order_.push_back({pixel_key(p[i]), i});
+    out[i] = Hit{};
+    if (valid(p[i])) order_.push_back({key_of(p[i]), i});
   }
   radix_sort_by(order_, scratch_, [](const std::pair<uint64_t, uint64_t>& p) { return p.first; });
+}
+
+Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
+  sort_points(p, n, out, pixel_is_valid, pixel_key);
   octant_window_->set_sparse(n < kDenseBatch);
   LeafWindow::Floor f;
   MeshElement m;
@@ -66,15 +71,13 @@ Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
   return Status::Ok();
 }
 
+Status Explorer::require_nodes() const {
+  return has_nodes() ? Status::Ok() : Status::NotFound("no mesh yet (run 'weaver extract' first)");
+}
+
 Status Explorer::node_at_batch(const Coord* p, size_t n, NodeHit* out) {
-  order_.clear();
-  reserve_huge(order_, n);
-  reserve_huge(scratch_, n);
-  for (size_t i = 0; i < n; ++i) {
-    out[i] = NodeHit{};
-    if (node_is_valid(p[i])) order_.push_back({node_key(p[i]), i});
-  }
-  radix_sort_by(order_, scratch_, [](const std::pair<uint64_t, uint64_t>& p) { return p.first; });
+  WEAVER_RETURN_IF_ERROR(require_nodes());
+  sort_points(p, n, out, node_is_valid, node_key);
   node_window_->set_sparse(n < kDenseBatch);
   LeafWindow::Floor f;
   for (const auto& [key, i] : order_) {
@@ -94,6 +97,7 @@ Status Explorer::check_element(uint64_t id) const {
 }
 
 Status Explorer::check_node(uint64_t id) const {
+  WEAVER_RETURN_IF_ERROR(require_nodes());
   if (id < node_count()) return Status::Ok();
   return Status::InvalidArgument("node " + std::to_string(id) + " does not exist (" +
                                  std::to_string(node_count()) + " nodes)");

@@ -73,6 +73,9 @@ class Explorer {
   const Units& units() const { return mesh_->units(); }
   uint64_t element_count() const { return mesh_->element_count(); }
   uint64_t node_count() const { return mesh_->node_count(); }
+  // NotFound "no mesh yet" unless the node table exists: what every node
+  // question below returns without one.
+  Status require_nodes() const;
   // How many points a batch should hold to stay within the memory budget.
   size_t batch_points() const { return batch_points_; }
 
@@ -82,13 +85,12 @@ class Explorer {
   // answered in one forward walk over the octant table.  out[i] answers p[i].
   Status locate_batch(const Coord* p, size_t n, PointHit* out);
   // The nodes at n points (any coordinates; past the far side is no node).
-  // REQUIRES: has_nodes().
   Status node_at_batch(const Coord* p, size_t n, NodeHit* out);
 
   // Element `id` with its material and (with the mesh) its corners' node ids.
   // InvalidArgument past the last element.
   Status element(uint64_t id, MeshElement* out);
-  // Node `id`, with its anchors' ids.  REQUIRES: has_nodes().
+  // Node `id`, with its anchors' ids.
   Status node(uint64_t id, MeshNode* out);
 
   // The elements across each face (kinds bit 1), edge (bit 2) and corner
@@ -98,15 +100,21 @@ class Explorer {
   // or corner.  Works on any octree, balanced or not.
   Status neighbors(uint64_t id, unsigned kinds, std::vector<Neighbor>* out);
   // The elements whose closed boxes hold node `id` (up to 8 in a balanced
-  // mesh), in id order.  REQUIRES: has_nodes().
+  // mesh), in id order.
   Status node_elements(uint64_t id, std::vector<NodeElement>* out);
   // The dangling nodes that depend on node `id`, in id order (none unless it
-  // is an anchor of some).  REQUIRES: has_nodes().
+  // is an anchor of some).
   Status depends(uint64_t id, std::vector<MeshNode>* out);
 
  private:
   Explorer() = default;
+  // Clears out[0..n) and fills order_ with (key, i) of the valid points,
+  // sorted by key.
+  template <typename Hit, typename Valid, typename KeyOf>
+  void sort_points(const Coord* p, size_t n, Hit* out, Valid valid, KeyOf key_of);
   Status check_element(uint64_t id) const;
+  // node_elements() for a node already read.
+  Status elements_around(const MeshNode& n, std::vector<NodeElement>* out);
   Status check_node(uint64_t id) const;
   // Visits region r (across direction d of element o): emits the leaf that
   // covers it, or recurses into the children that touch o.

@@ -20,6 +20,14 @@ bool child_faces_back(int k, Direction d) {
   return true;
 }
 
+// Sorts items by id and drops repeats.
+template <typename T>
+void sort_unique_by_id(std::vector<T>* v) {
+  std::sort(v->begin(), v->end(), [](const T& a, const T& b) { return a.id < b.id; });
+  v->erase(std::unique(v->begin(), v->end(), [](const T& a, const T& b) { return a.id == b.id; }),
+           v->end());
+}
+
 }  // namespace
 
 std::string direction_name(Direction d) {
@@ -73,9 +81,13 @@ Status Explorer::neighbors(uint64_t id, unsigned kinds, std::vector<Neighbor>* o
 }
 
 Status Explorer::node_elements(uint64_t id, std::vector<NodeElement>* out) {
-  out->clear();
   MeshNode n;
   WEAVER_RETURN_IF_ERROR(node(id, &n));
+  return elements_around(n, out);
+}
+
+Status Explorer::elements_around(const MeshNode& n, std::vector<NodeElement>* out) {
+  out->clear();
   // The leaves whose closed boxes hold c are those holding one of the 8
   // pixels that have c as a corner.
   Coord pixels[8];
@@ -101,20 +113,16 @@ Status Explorer::node_elements(uint64_t id, std::vector<NodeElement>* out) {
     }
     out->push_back(e);
   }
-  std::sort(out->begin(), out->end(),
-            [](const NodeElement& a, const NodeElement& b) { return a.id < b.id; });
-  out->erase(std::unique(out->begin(), out->end(),
-                         [](const NodeElement& a, const NodeElement& b) { return a.id == b.id; }),
-             out->end());
+  sort_unique_by_id(out);
   return Status::Ok();
 }
 
 Status Explorer::depends(uint64_t id, std::vector<MeshNode>* out) {
   out->clear();
-  std::vector<NodeElement> around;
-  WEAVER_RETURN_IF_ERROR(node_elements(id, &around));
   MeshNode a;
   WEAVER_RETURN_IF_ERROR(node(id, &a));
+  std::vector<NodeElement> around;
+  WEAVER_RETURN_IF_ERROR(elements_around(a, &around));
   // A node dangling on id sits at the midpoint of an edge, or the centre of
   // a face, that has id at a corner: an edge or face of an element around id.
   std::vector<Coord> candidates;
@@ -132,8 +140,13 @@ Status Explorer::depends(uint64_t id, std::vector<MeshNode>* out) {
   }
   std::vector<NodeHit> hits(candidates.size());
   WEAVER_RETURN_IF_ERROR(node_at_batch(candidates.data(), candidates.size(), hits.data()));
+  // Elements around id share edges and faces: each dangling node once.
+  hits.erase(
+      std::remove_if(hits.begin(), hits.end(),
+                     [](const NodeHit& h) { return !h.found || h.kind == NodeKind::kAnchored; }),
+      hits.end());
+  sort_unique_by_id(&hits);
   for (const NodeHit& h : hits) {
-    if (!h.found || h.kind == NodeKind::kAnchored) continue;
     MeshNode d;
     WEAVER_RETURN_IF_ERROR(node(h.id, &d));
     if (std::find(d.anchors.begin(), d.anchors.begin() + d.anchor_count, id) !=
@@ -141,11 +154,6 @@ Status Explorer::depends(uint64_t id, std::vector<MeshNode>* out) {
       out->push_back(d);
     }
   }
-  std::sort(out->begin(), out->end(),
-            [](const MeshNode& x, const MeshNode& y) { return x.id < y.id; });
-  out->erase(std::unique(out->begin(), out->end(),
-                         [](const MeshNode& x, const MeshNode& y) { return x.id == y.id; }),
-             out->end());
   return Status::Ok();
 }
 

@@ -236,9 +236,7 @@ Status render_slice(const std::string& db, const SliceOptions& o, const std::str
   if (o.color != "level" && !ex->mesh().has_material()) {
     return Status::InvalidArgument("this mesh has no material: --color level");
   }
-  if (o.danglings && !ex->has_nodes()) {
-    return Status::NotFound("no mesh yet (run 'weaver extract' first) for --danglings");
-  }
+  if (o.danglings) WEAVER_RETURN_IF_ERROR(ex->require_nodes());
   WEAVER_RETURN_IF_ERROR(plane_tick(*ex, o, &r->at_ticks));
   Slicer s(*ex, o, r->at_ticks);
   uint32_t lo[2] = {0, 0}, hi[2] = {kRootEdge - 1, kRootEdge - 1};
