@@ -60,6 +60,15 @@ constexpr uint64_t morton_step(uint64_t code, int axis, int bit) {
   return moved | (code & ~axis_bits);
 }
 
+// The same, moved by -2^bit: the axis's bits alone (the others zero) lose
+// one dilated unit, the borrow running across the zeros.
+// REQUIRES: the moved coordinate is at least 2^bit.
+constexpr uint64_t morton_step_back(uint64_t code, int axis, int bit) {
+  const uint64_t axis_bits = 0x1249249249249249ULL << axis;
+  const uint64_t moved = ((code & axis_bits) - (uint64_t{1} << (3 * bit + axis))) & axis_bits;
+  return moved | (code & ~axis_bits);
+}
+
 // REQUIRES: code < 2^63.
 constexpr Coord morton_decode(uint64_t code) {
   return Coord{morton_detail::compact3(code), morton_detail::compact3(code >> 1),

@@ -225,6 +225,29 @@ constexpr Octant octant_from_key(uint64_t key) {
   return {c.x, c.y, c.z, level};
 }
 
+// The key of the same-size neighbour in direction d of the octant with key
+// `key`, without decoding (octant_neighbour's answer, for the hot loops of
+// balance); false when it lies outside the root.
+// REQUIRES: octant_key_is_valid(key), its level below kMaxLevel, d.is_valid().
+constexpr bool octant_key_neighbour(uint64_t key, Direction d, uint64_t* out) {
+  assert(octant_key_is_valid(key) && (key & 127) < kMaxLevel && d.is_valid());
+  const int level = static_cast<int>(key & 127), bit = kMaxLevel - level;
+  uint64_t m = (key >> 7) << 3;
+  const int delta[3] = {d.dx, d.dy, d.dz};
+  for (int axis = 0; axis < 3; ++axis) {
+    const uint64_t axis_bits = 0x1249249249249249ULL << axis;
+    if (delta[axis] < 0) {
+      if ((m & axis_bits) == 0) return false;  // at the root's near side
+      m = morton_step_back(m, axis, bit);
+    } else if (delta[axis] > 0) {
+      m = morton_step(m, axis, bit);
+      if (m >> (3 * kMaxLevel + axis) & 1) return false;  // past the far side
+    }
+  }
+  *out = ((m >> 3) << 7) | static_cast<uint64_t>(level);
+  return true;
+}
+
 // The Morton code of the octant's corner, straight from its key (no decode).
 // REQUIRES: octant_key_is_valid(key).
 constexpr uint64_t octant_key_morton(uint64_t key) {

@@ -5,13 +5,16 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <random>
 
+#include "construct/construct.h"
 #include "db/database.h"
 #include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
 #include "reference/reference_mesh.h"
+#include "test_mesh.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -69,6 +72,10 @@ TEST_F(BalanceTest, MatchesReferenceOnRandomUnbalancedOctrees) {
     ASSERT_EQ(cr.balanced, want == leaves) << cr.violation;
     BalanceOptions o;
     o.memory = MemoryBudget((t % 3 == 0) ? (64 << 10) : (64 << 20));  // tiny: sorts spill
+    if (t % 2 == 1) {  // every chunk of parents shared among threads
+      o.threads = 2 + t % 3;
+      o.parallel_chunk = 1;
+    }
     BalanceResult r;
     ASSERT_OK(balance_octree(db, o, &r));
     ASSERT_EQ(table(db), want);
@@ -79,6 +86,63 @@ TEST_F(BalanceTest, MatchesReferenceOnRandomUnbalancedOctrees) {
     EXPECT_TRUE(after.balanced) << after.violation;
   }
   EXPECT_GT(unbalanced, cases / 2);  // the cases exercise real refinement
+}
+
+// The basin's octree and a random one, balanced on 1 to 3 threads, with
+// chunks shared among them from the default size down to a handful of
+// parents, and budgets that spill the sorters or not: the same table, byte
+// for byte, and balanced.
+TEST(BalanceThreads, AnyThreadCountWritesTheSameTable) {
+  testing::TempDir dir;
+  ConstructOptions co;
+  co.model = "basin";
+  co.freq = 0.2;
+  ConstructPlan plan;
+  ConstructResult cr;
+  ASSERT_OK(construct_octree(dir.file("basin"), co, &plan, &cr));
+  GenOptions g;
+  g.seed = 3;
+  g.leaves = testing::scaled(200000, 40000);
+  g.max_level = 9;
+  std::vector<Octant> leaves;
+  ASSERT_OK(generate_octree(g, &leaves));
+  ASSERT_OK(write_octant_text(dir.file("random.txt"), leaves, ""));
+  ImportResult ir;
+  ASSERT_OK(import_octants(dir.file("random"), dir.file("random.txt"), ImportOptions{}, &ir));
+  struct Run {
+    int threads;
+    size_t chunk;
+    uint64_t budget;
+  };
+  const std::vector<Run> runs = {{1, size_t{1} << 15, 64 << 20},
+                                 {2, size_t{1} << 15, 64 << 20},
+                                 {3, 1000, 64 << 20},
+                                 {2, 64, 256 << 10},
+                                 {1, 64, 256 << 10}};
+  for (const char* name : {"basin", "random"}) {
+    std::string first;
+    for (const Run& run : runs) {
+      SCOPED_TRACE(std::string(name) + ", " + std::to_string(run.threads) + " threads, chunk " +
+                   std::to_string(run.chunk) + ", budget " + std::to_string(run.budget));
+      const std::string db = dir.file(std::string(name) + "-" + std::to_string(&run - &runs[0]));
+      std::filesystem::copy(dir.file(name), db);
+      BalanceOptions o;
+      o.threads = run.threads;
+      o.parallel_chunk = run.chunk;
+      o.memory = MemoryBudget(run.budget);
+      BalanceResult r;
+      ASSERT_OK(balance_octree(db, o, &r));
+      EXPECT_GT(r.split, 0u);
+      const std::string bytes = testing::table_bytes(db);
+      if (first.empty()) first = bytes;
+      ASSERT_EQ(bytes, first);
+      BalanceOptions check = o;
+      check.check_only = true;
+      BalanceResult after;
+      ASSERT_OK(balance_octree(db, check, &after));
+      EXPECT_TRUE(after.balanced) << after.violation;
+    }
+  }
 }
 
 TEST_F(BalanceTest, CheckNamesTwoOctantsThatReallyViolate) {

@@ -13,6 +13,7 @@
 #include "model/grid_model.h"
 #include "model/velocity_model.h"
 #include "schema/octant.h"
+#include "test_mesh.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -188,13 +189,6 @@ TEST(Construct, EveryLeafMeetsTheRuleAndNoneIsFinerThanNeeded) {
   }
 }
 
-std::string table_bytes(const std::string& db_dir) {
-  std::unique_ptr<Database> db;
-  EXPECT_OK(Database::open(db_dir, Database::Mode::kRead, false, &db));
-  std::ifstream in(db->table_path(kOctantTable), std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
 // Subtrees on 1 to 4 threads, with budgets from the smallest (subtrees past
 // a small cap are visited again as their children) to the default: the
 // same table byte for byte, and the same figures.
@@ -220,7 +214,7 @@ TEST(Construct, AnyThreadCountAndBudgetWritesTheSameTable) {
         ConstructPlan plan;
         ConstructResult r;
         ASSERT_OK(construct_octree(dir.file("db"), o, &plan, &r));
-        const std::string bytes = table_bytes(dir.file("db"));
+        const std::string bytes = testing::table_bytes(dir.file("db"));
         if (first.empty()) {
           first = bytes;
           first_r = r;

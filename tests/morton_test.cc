@@ -40,22 +40,30 @@ TEST(Morton, EncodesTheFarSideOfTheRoot) {
   EXPECT_EQ(morton_encode(0, 0, far), uint64_t{1} << 62);
 }
 
-TEST(Morton, StepMovesOneAxisByAPowerOfTwo) {
+// morton_step and morton_step_back against decoding, moving and encoding.
+TEST(Morton, StepsMoveOneAxisByAPowerOfTwoEitherWay) {
   std::mt19937_64 rng(2);
   const uint64_t n = testing::scaled(1'000'000, 100'000);
   for (uint64_t i = 0; i < n; ++i) {
     const int axis = static_cast<int>(rng() % 3), bit = static_cast<int>(rng() % 21);
+    const bool back = rng() % 2;
     uint32_t c[3] = {static_cast<uint32_t>(rng() & kMortonAxisMask),
                      static_cast<uint32_t>(rng() & kMortonAxisMask),
                      static_cast<uint32_t>(rng() & kMortonAxisMask)};
     if (rng() % 2) c[axis] &= ~((1u << bit) - 1);  // aligned, as octant corners are
-    if (uint64_t{c[axis]} + (1u << bit) > kMortonAxisMask) continue;
+    if (back ? c[axis] < (1u << bit) : uint64_t{c[axis]} + (1u << bit) > kMortonAxisMask) continue;
     const uint64_t code = reference::morton_encode(c[0], c[1], c[2]);
-    c[axis] += 1u << bit;
-    ASSERT_EQ(morton_step(code, axis, bit), reference::morton_encode(c[0], c[1], c[2]));
+    if (back) {
+      c[axis] -= 1u << bit;
+      ASSERT_EQ(morton_step_back(code, axis, bit), reference::morton_encode(c[0], c[1], c[2]));
+    } else {
+      c[axis] += 1u << bit;
+      ASSERT_EQ(morton_step(code, axis, bit), reference::morton_encode(c[0], c[1], c[2]));
+    }
   }
   const uint32_t far = 1u << 20;
   EXPECT_EQ(morton_step(morton_encode(far - 1, 0, 0), 0, 0), morton_encode(far, 0, 0));
+  EXPECT_EQ(morton_step_back(morton_encode(far, 0, 0), 0, 0), morton_encode(far - 1, 0, 0));
 }
 
 }  // namespace

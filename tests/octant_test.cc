@@ -57,6 +57,13 @@ void check_one(const Octant& o) {
     if (in_fast) {
       ASSERT_EQ(fast, slow);
     }
+    if (o.level < kMaxLevel) {
+      uint64_t by_key = 0;
+      ASSERT_EQ(octant_key_neighbour(key, d, &by_key), in_fast);
+      if (in_fast) {
+        ASSERT_EQ(by_key, octant_key(slow));
+      }
+    }
   }
   for (int k = 0; k < 8; ++k) {
     const Coord c = octant_corner(o, k);

@@ -34,6 +34,26 @@ TEST(RadixSort, SortsByTheChosenBitsStably) {
   }
 }
 
+// radix_sort_by skips the digits every key shares: keys that differ only
+// in a few middle bits, or only in the top ones, or not at all.
+TEST(RadixSort, ByKeyIsStableWhateverBitsTheKeysShare) {
+  std::mt19937_64 rng(5);
+  std::vector<std::pair<uint64_t, uint32_t>> scratch;
+  for (int t = 0; t < 300; ++t) {
+    const int low = static_cast<int>(rng() % 64);
+    const int span = static_cast<int>(rng() % (65 - low));
+    const uint64_t fixed = rng();
+    const uint64_t mask = span == 64 ? ~uint64_t{0} : ((uint64_t{1} << span) - 1) << low;
+    std::vector<std::pair<uint64_t, uint32_t>> items(rng() % 4000);
+    for (uint32_t i = 0; i < items.size(); ++i) items[i] = {(fixed & ~mask) | (rng() & mask), i};
+    auto want = items;
+    std::stable_sort(want.begin(), want.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    radix_sort_by(items, scratch, [](const auto& p) { return p.first; });
+    ASSERT_EQ(items, want) << "low " << low << " span " << span;
+  }
+}
+
 TEST(SortRecords, MatchesStdSortForNarrowAndWideKeySpans) {
   std::mt19937_64 rng(4);
   std::vector<uint64_t> packed, scratch;

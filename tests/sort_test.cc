@@ -71,6 +71,49 @@ TEST(ExternalSorter, MergesInPassesWhenRunsOutnumberTheFanIn) {
   }
 }
 
+TEST(ExternalSorter, SortsKeyTagsLikeStdSortOverNarrowAndWideKeys) {
+  std::mt19937_64 rng(7);
+  std::vector<KeyTag> scratch;
+  for (int t = 0; t < 100; ++t) {
+    // Keys that share low and high bits, as octant keys of one level do.
+    const int low = static_cast<int>(rng() % 30), span = 1 + static_cast<int>(rng() % 34);
+    const uint64_t high = rng() << (low + span);
+    std::vector<KeyTag> items(rng() % 20000);
+    for (KeyTag& k : items) k = {high | (rng() % (uint64_t{1} << span)) << low | 5, rng() % 4};
+    std::vector<KeyTag> want = items;
+    std::sort(want.begin(), want.end());
+    sort_key_tags(items, scratch);
+    ASSERT_TRUE(same(items, want)) << "low " << low << " span " << span;
+  }
+}
+
+// A sorter that keeps only the first of each key per run: once repeated
+// keys are skipped, the same stream as a sort of everything.
+TEST(ExternalSorter, FirstOnlyRunsGiveTheSameFirstOfEachKey) {
+  for (uint64_t budget : {uint64_t{64} << 10, uint64_t{64} << 20}) {
+    testing::TempDir dir;
+    auto items = random_items(testing::scaled(200000, 50000), 30000, 11);
+    ExternalSorter s(dir.file("scratch"), budget, ExternalSorter::Repeats::kFirstOnly);
+    for (const auto& i : items) ASSERT_OK(s.add(i));
+    ASSERT_OK(s.finish());
+    std::sort(items.begin(), items.end());
+    auto first_of_each = [](std::vector<KeyTag> v) {
+      v.erase(std::unique(v.begin(), v.end(),
+                          [](const KeyTag& a, const KeyTag& b) { return a.key == b.key; }),
+              v.end());
+      return v;
+    };
+    const std::vector<KeyTag> got = drain(s);
+    EXPECT_TRUE(std::is_sorted(got.begin(), got.end())) << budget;
+    EXPECT_TRUE(same(first_of_each(got), first_of_each(items))) << budget;
+    if (s.runs_spilled() == 0) {
+      EXPECT_EQ(got.size(), first_of_each(items).size()) << "repeats kept in memory";
+    } else {
+      EXPECT_LT(got.size(), items.size()) << "no repeats dropped from runs";
+    }
+  }
+}
+
 TEST(SortedSpool, KeepsTheFirstOfRepeatedKeysInMemoryAndWhenSpilled) {
   for (size_t buffer : {size_t{1} << 20, size_t{4096}}) {
     testing::TempDir dir;

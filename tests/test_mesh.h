@@ -3,9 +3,13 @@
 #pragma once
 
 #include <algorithm>
+#include <fstream>
+#include <iterator>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "db/database.h"
 #include "extract/extract.h"
 #include "gen/octree_gen.h"
 #include "import/import.h"
@@ -13,6 +17,15 @@
 #include "test_util.h"
 
 namespace weaver::testing {
+
+// The bytes of the octant table of the database in db_dir, to compare the
+// tables that different thread counts or budgets write.
+inline std::string table_bytes(const std::string& db_dir) {
+  std::unique_ptr<Database> db;
+  EXPECT_OK(Database::open(db_dir, Database::Mode::kRead, false, &db));
+  std::ifstream in(db->table_path(kOctantTable), std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
 
 // Imports and extracts leaves into dir/db; returns the database path.
 inline std::string build_mesh(const std::vector<Octant>& leaves, const TempDir& dir) {

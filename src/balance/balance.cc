@@ -102,7 +102,7 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
     levels_from_metadata(leaves->options().metadata, &levels);
     progress = std::make_unique<BalanceProgress>(o.progress, leaves->size(), levels);
   }
-  Closure closure(*leaves, memory, scratch.path, progress.get(), r);
+  Closure closure(*leaves, memory, scratch.path, o, progress.get(), r);
   WEAVER_RETURN_IF_ERROR(closure.build(finest_level_bound(*leaves), true));
   const TableOptions topt = leaves->options();
   std::unique_ptr<BTree> out;

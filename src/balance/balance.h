@@ -26,6 +26,12 @@ class BTree;
 struct BalanceOptions {
   MemoryBudget memory;
   bool check_only = false;  // verify only; name the first violation
+  // The closure's neighbour generation and sorts share the work among this
+  // many threads; the table is the same for any count.
+  int threads = 1;
+  // Chunks of parents at least this large are shared among the threads
+  // (smaller ones cost more to hand out than they take); tests lower it.
+  size_t parallel_chunk = size_t{1} << 15;
   // Leaves read by the current pass and the fraction done
   // (balance_progress.h); not called by a check.
   ProgressFn progress;

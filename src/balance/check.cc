@@ -60,7 +60,7 @@ Status check_balance(BTree& leaves, const BalanceOptions& o, const std::string& 
   *r = BalanceResult{};
   const BalanceMemory memory(o.memory);
   ScratchDir scratch{scratch_parent + "/weaver-balance-check-" + std::to_string(::getpid())};
-  Closure closure(leaves, memory, scratch.path, nullptr, r);
+  Closure closure(leaves, memory, scratch.path, o, nullptr, r);
   WEAVER_RETURN_IF_ERROR(closure.build(finest_level_bound(leaves), false));
   return find_violation(leaves, closure.required(), r);
 }

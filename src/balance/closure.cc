@@ -1,11 +1,13 @@
 #include "balance/closure.h"
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 
 #include "schema/octant.h"
 #include "sort/external_sort.h"
 #include "util/key_set.h"
+#include "util/parallel.h"
 
 namespace weaver {
 namespace {
@@ -76,8 +78,14 @@ Status next_unique(KeyTagSource& s, uint64_t* prev, bool* has_prev, KeyTag* out,
 }  // namespace
 
 Closure::Closure(BTree& leaves, const BalanceMemory& memory, const std::string& scratch_dir,
-                 BalanceProgress* progress, BalanceResult* result)
-    : leaves_(leaves), memory_(memory), scratch_(scratch_dir), progress_(progress), r_(result) {}
+                 const BalanceOptions& options, BalanceProgress* progress, BalanceResult* result)
+    : leaves_(leaves),
+      memory_(memory),
+      scratch_(scratch_dir),
+      threads_(std::max(1, options.threads)),
+      parallel_chunk_(options.parallel_chunk),
+      progress_(progress),
+      r_(result) {}
 
 Closure::~Closure() = default;
 
@@ -124,14 +132,16 @@ std::unique_ptr<SortedSpool> Closure::spool(const char* name, int level) const {
                                        memory_.spool_buffer);
 }
 
-// The face and edge neighbours of the level's parents, into candidates.
-// Parents pass through memory in chunks of what fits in the chunk share
-// (16 bytes each in the list, and a key set of twice as many slots); a
+// The face and edge neighbours of the level's parents, into the candidate
+// sorters.  Parents pass through memory in chunks of what fits in the chunk
+// share (16 bytes each in the list, and a key set of twice as many slots); a
 // neighbour that is a parent of the same chunk is skipped (see
 // expand_level).  Any subset may be skipped, and Z-order keeps most
-// neighbours in one chunk.
+// neighbours in one chunk.  A large chunk is cut into one share per sorter,
+// each on its own thread; which sorter gets a candidate does not change
+// the merged stream.
 Status Closure::emit_candidates(int l, KeyTagSource& parents, uint64_t parent_count,
-                                ExternalSorter& candidates, uint64_t* added) {
+                                Sorters& sorters, uint64_t* added) {
   size_t fits = 1024;
   while (2 * fits * sizeof(KeyTag) + KeySet::slots_for(2 * fits) * 8 <= memory_.parent_chunk) {
     fits *= 2;
@@ -139,21 +149,33 @@ Status Closure::emit_candidates(int l, KeyTagSource& parents, uint64_t parent_co
   std::vector<KeyTag> chunk;
   chunk.reserve(fits);
   KeySet chunk_keys;
-  auto flush_chunk = [&]() -> Status {
-    chunk_keys.reset(chunk.size());
-    for (const KeyTag& q : chunk) chunk_keys.add(q.key);
-    for (const KeyTag& q : chunk) {
-      const Octant po = octant_from_key(q.key);
+  std::vector<uint64_t> share_added(sorters.size());
+  // Candidates of chunk[begin, end) into `into`.
+  auto emit_range = [&](size_t begin, size_t end, ExternalSorter& into, uint64_t* count) {
+    for (size_t p = begin; p < end; ++p) {
+      const KeyTag& q = chunk[p];
+      std::array<uint64_t, kFaceAndEdgeDirections.size()> near;
+      size_t n = 0;
       for (const Direction& d : kFaceAndEdgeDirections) {
-        Octant n;
-        if (!octant_neighbour(po, d, &n)) continue;
-        const uint64_t nk = octant_key(n);
-        if (!chunk_keys.contains(nk)) {
-          WEAVER_RETURN_IF_ERROR(candidates.add({nk, q.tag}));
-          ++*added;
+        if (octant_key_neighbour(q.key, d, &near[n])) chunk_keys.prefetch(near[n++]);
+      }
+      for (size_t i = 0; i < n; ++i) {
+        if (!chunk_keys.contains(near[i])) {
+          WEAVER_RETURN_IF_ERROR(into.add({near[i], q.tag}));
+          ++*count;
         }
       }
     }
+    return Status::Ok();
+  };
+  auto flush_chunk = [&]() -> Status {
+    chunk_keys.reset(chunk.size());
+    for (const KeyTag& q : chunk) chunk_keys.add(q.key);
+    const size_t shares = chunk.size() >= parallel_chunk_ ? sorters.size() : 1;
+    WEAVER_RETURN_IF_ERROR(run_shares(static_cast<int>(shares), [&](int i) {
+      return emit_range(chunk.size() * i / shares, chunk.size() * (i + 1) / shares, *sorters[i],
+                        &share_added[i]);
+    }));
     chunk.clear();
     return Status::Ok();
   };
@@ -169,7 +191,9 @@ Status Closure::emit_candidates(int l, KeyTagSource& parents, uint64_t parent_co
     chunk.push_back(p);
     if (chunk.size() == fits) WEAVER_RETURN_IF_ERROR(flush_chunk());
   }
-  return flush_chunk();
+  WEAVER_RETURN_IF_ERROR(flush_chunk());
+  for (uint64_t a : share_added) *added += a;
+  return Status::Ok();
 }
 
 // Neighbours of the level-l parents, kept where they meet the domain.  A
@@ -177,10 +201,18 @@ Status Closure::emit_candidates(int l, KeyTagSource& parents, uint64_t parent_co
 // already, and its own parent enters the next level through its siblings,
 // so it is skipped: inside refined regions almost every candidate goes.
 Status Closure::expand_level(int l, KeyTagSource& parents, uint64_t parent_count, bool propagate) {
-  ExternalSorter candidates(scratch_ + "/c" + std::to_string(l), memory_.candidate_sort);
+  Sorters sorters;
+  std::vector<KeyTagSource*> sources;
+  for (int i = 0; i < threads_; ++i) {
+    sorters.push_back(std::make_unique<ExternalSorter>(
+        scratch_ + "/c" + std::to_string(l) + "-" + std::to_string(i),
+        memory_.candidate_sort / threads_, ExternalSorter::Repeats::kFirstOnly));
+    sources.push_back(sorters.back().get());
+  }
   uint64_t added = 0, probed = 0;
-  WEAVER_RETURN_IF_ERROR(emit_candidates(l, parents, parent_count, candidates, &added));
-  WEAVER_RETURN_IF_ERROR(candidates.finish());
+  WEAVER_RETURN_IF_ERROR(emit_candidates(l, parents, parent_count, sorters, &added));
+  WEAVER_RETURN_IF_ERROR(run_shares(threads_, [&](int i) { return sorters[i]->finish(); }));
+  KeyTagMerge candidates(std::move(sources));
   DomainProbe probe;
   WEAVER_RETURN_IF_ERROR(probe.open(leaves_));
   bool done = false, has_prev = false;

@@ -35,8 +35,9 @@ class Closure {
  public:
   // leaves: the input octant table, open.  Spools and sorter runs go in scratch_dir.
   // progress may be null.
+  // The level passes' neighbour generation and sorts run on options.threads.
   Closure(BTree& leaves, const BalanceMemory& memory, const std::string& scratch_dir,
-          BalanceProgress* progress, BalanceResult* result);
+          const BalanceOptions& options, BalanceProgress* progress, BalanceResult* result);
   ~Closure();
 
   // Builds the required octants of levels 0..max_level-1.  Without
@@ -49,9 +50,11 @@ class Closure {
   KeyTagSource& required() { return *required_merge_; }
 
  private:
+  using Sorters = std::vector<std::unique_ptr<ExternalSorter>>;
+
   std::unique_ptr<SortedSpool> spool(const char* name, int level) const;
-  Status emit_candidates(int l, KeyTagSource& parents, uint64_t parent_count,
-                         ExternalSorter& candidates, uint64_t* added);
+  Status emit_candidates(int l, KeyTagSource& parents, uint64_t parent_count, Sorters& sorters,
+                         uint64_t* added);
   Status expand_level(int l, KeyTagSource& parents, uint64_t parent_count, bool propagate);
   // Part way through level l's pass (half emitting, half probing).
   void report(int l, uint64_t step, double f) const {
@@ -61,6 +64,8 @@ class Closure {
   BTree& leaves_;
   const BalanceMemory& memory_;
   std::string scratch_;
+  int threads_;
+  size_t parallel_chunk_;
   BalanceProgress* progress_;
   BalanceResult* r_;
   // By level: parents of leaves, parents of required octants, the required.

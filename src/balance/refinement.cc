@@ -25,6 +25,16 @@ class Completion {
     size_t pos = 0;
     return split(t, false, parent_payload, inside, &pos, r);
   }
+  // A leaf with nothing required inside it (nearly all of them): copied
+  // from its key and payload as they are, without decoding the octant.
+  Status copy(uint64_t key, const std::byte* payload, BalanceResult* r) {
+    batch_.keys.push_back(key);
+    batch_.payloads.insert(batch_.payloads.end(), payload, payload + payload_);
+    ++r->levels[octant_key_level(key)];
+    ++r->output_leaves;
+    if (batch_.keys.size() == kBatch) return flush();
+    return Status::Ok();
+  }
   Status flush() { return out_.append(&batch_); }
   Status finish() {
     WEAVER_RETURN_IF_ERROR(flush());
@@ -75,8 +85,9 @@ Status write_refinement(BTree& leaves, KeyTagSource& required, const FillPayload
   std::vector<std::byte> payload(leaves.payload_size());
   WEAVER_RETURN_IF_ERROR(for_each_leaf(
       leaves, required, [&](const BTreeCursor& c, const std::vector<KeyTag>& inside, bool*) {
-        if (!inside.empty()) ++r->split;
         if (progress != nullptr) progress->refined(++read);
+        if (inside.empty()) return completion.copy(c.key(), c.payload(), r);
+        ++r->split;
         if (!payload.empty()) std::memcpy(payload.data(), c.payload(), payload.size());
         return completion.write(octant_from_key(c.key()), payload.data(), inside, r);
       }));

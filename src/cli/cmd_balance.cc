@@ -9,7 +9,7 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver balance DB [--memory BYTES] [--check] [--quiet]\n"
+    "usage: weaver balance DB [--memory BYTES] [--threads N] [--check] [--quiet]\n"
     "\n"
     "Replaces the octant table of DB by its minimal face+edge 2:1 balanced\n"
     "refinement: every leaf is kept or split, and nothing is split unless the\n"
@@ -20,6 +20,9 @@ constexpr char kUsage[] =
     "                   the octree is not balanced)\n"
     "  --memory BYTES   memory budget (default 256M): the table caches, the\n"
     "                   buffers and sorter of the out-of-core closure\n"
+    "  --threads N      threads for the closure's neighbour generation and sorts\n"
+    "                   (default: the number of cores); the table is the same\n"
+    "                   for every N\n"
     "  --quiet          no progress line on stderr (default: one that updates\n"
     "                   itself on a terminal, a line every 10 s otherwise; its\n"
     "                   percent weighs the first pass over the leaves 10%, the\n"
@@ -30,13 +33,14 @@ constexpr char kUsage[] =
 
 int cmd_balance(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory"}, {"check", "quiet"}, &args);
+  Status st = parse_args(argc, argv, 2, {"memory", "threads"}, {"check", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("balance", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("balance", "expected one DB", kUsage);
   BalanceOptions o;
   o.check_only = args.flags.count("check") != 0;
   st = memory_option(args, &o.memory);
+  if (st.ok()) st = threads_option(args, default_threads(), &o.threads);
   if (!st.ok()) return usage_error("balance", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "balance", "leaves");

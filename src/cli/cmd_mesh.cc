@@ -110,6 +110,7 @@ int cmd_mesh(int argc, char** argv) {
   Stage s2;
   BalanceOptions bo;
   bo.memory = co.memory;
+  bo.threads = eo.threads;
   ProgressLine balance_line(style, "balance", "leaves");
   bo.progress = balance_line.fn();
   BalanceResult br;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "util/radix_sort.h"
+
 namespace weaver {
 namespace {
 
@@ -14,8 +16,18 @@ constexpr size_t kWriteItems = 4 * kMinReadItems;
 
 }  // namespace
 
-ExternalSorter::ExternalSorter(std::string scratch_dir, uint64_t memory_bytes)
-    : scratch_dir_(std::move(scratch_dir)), memory_bytes_(memory_bytes) {
+void sort_key_tags(std::vector<KeyTag>& items, std::vector<KeyTag>& scratch) {
+  radix_sort_by(items, scratch, [](const KeyTag& t) { return t.key; });
+  for (size_t i = 0; i < items.size();) {
+    size_t j = i + 1;
+    while (j < items.size() && items[j].key == items[i].key) ++j;
+    if (j - i > 1) std::sort(items.begin() + i, items.begin() + j);
+    i = j;
+  }
+}
+
+ExternalSorter::ExternalSorter(std::string scratch_dir, uint64_t memory_bytes, Repeats repeats)
+    : scratch_dir_(std::move(scratch_dir)), memory_bytes_(memory_bytes), repeats_(repeats) {
   // Half of the budget buffers input; the other half feeds the merge.
   capacity_ = std::max<size_t>(kMinReadItems, memory_bytes / 2 / sizeof(KeyTag));
   max_fan_in_ = std::max<size_t>(2, memory_bytes / 2 / sizeof(KeyTag) / kMinReadItems);
@@ -45,8 +57,18 @@ Status ExternalSorter::open_run(Run* run) {
   return Status::Ok();
 }
 
+void ExternalSorter::sort_buffer() {
+  std::vector<KeyTag> scratch;
+  sort_key_tags(buffer_, scratch);
+  if (repeats_ == Repeats::kFirstOnly) {
+    buffer_.erase(std::unique(buffer_.begin(), buffer_.end(),
+                              [](const KeyTag& a, const KeyTag& b) { return a.key == b.key; }),
+                  buffer_.end());
+  }
+}
+
 Status ExternalSorter::spill() {
-  std::sort(buffer_.begin(), buffer_.end());
+  sort_buffer();
   Run run;
   WEAVER_RETURN_IF_ERROR(open_run(&run));
   WEAVER_RETURN_IF_ERROR(
@@ -139,7 +161,7 @@ Status ExternalSorter::merge_prefix(size_t count) {
 
 Status ExternalSorter::finish() {
   finished_ = true;
-  std::sort(buffer_.begin(), buffer_.end());
+  sort_buffer();
   if (runs_.empty()) return Status::Ok();
   // Each pass merges just enough runs that the rest fit the fan-in.
   while (runs_.size() > max_fan_in_) {

@@ -17,11 +17,21 @@
 
 namespace weaver {
 
+// Sorts items by (key, tag): a radix sort on the key, then each run of equal
+// keys by tag.  scratch is the radix sort's other buffer.
+void sort_key_tags(std::vector<KeyTag>& items, std::vector<KeyTag>& scratch);
+
 class ExternalSorter : public KeyTagSource {
  public:
+  // What a run keeps of items with equal keys: all of them, or only the
+  // first in (key, tag) order, for readers that skip repeated keys anyway
+  // (the merge still yields repeats from different runs).
+  enum class Repeats { kKeep, kFirstOnly };
+
   // Scratch files go to scratch_dir (created on the first spill, removed by
-  // the destructor).  memory_bytes bounds the buffer and the merge buffers.
-  ExternalSorter(std::string scratch_dir, uint64_t memory_bytes);
+  // the destructor).  memory_bytes bounds the buffer and the merge buffers;
+  // the sort of a run borrows the merge half, which is idle until finish().
+  ExternalSorter(std::string scratch_dir, uint64_t memory_bytes, Repeats repeats = Repeats::kKeep);
   ~ExternalSorter();
 
   Status add(const KeyTag& item);
@@ -42,6 +52,8 @@ class ExternalSorter : public KeyTagSource {
     size_t pos = 0;
   };
   Status spill();
+  // Sorts buffer_ (and drops repeats if asked), then frees the scratch.
+  void sort_buffer();
   Status open_run(Run* run);
   Status refill(Run& run);
   void heap_push(size_t source);
@@ -51,6 +63,7 @@ class ExternalSorter : public KeyTagSource {
 
   std::string scratch_dir_;
   uint64_t memory_bytes_;
+  Repeats repeats_;
   size_t capacity_;
   std::vector<KeyTag> buffer_;
   size_t buffer_pos_ = 0;  // next unread item of buffer_ during the merge

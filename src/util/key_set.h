@@ -32,6 +32,12 @@ class KeySet {
   // Keys must not be all ones (the empty mark); octant keys never are.
   void add(uint64_t key) { slots_[find_slot(key)] = key; }
   bool contains(uint64_t key) const { return slots_[find_slot(key)] == key; }
+  // Starts loading the cache line where a lookup of `key` begins: a caller
+  // with many lookups to make prefetches them all first, so their misses
+  // overlap instead of following one another.
+  void prefetch(uint64_t key) const {
+    __builtin_prefetch(&slots_[(key * 0x9E3779B97F4A7C15ULL) >> shift_]);
+  }
 
  private:
   static constexpr uint64_t kEmpty = ~uint64_t{0};

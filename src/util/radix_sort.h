@@ -36,9 +36,11 @@ inline void radix_sort(std::vector<uint64_t>& values, int first, int bits,
   }
 }
 
-// Sorts records by a 64-bit key, stably: key(record) gives it.  Only the
-// digits up to the highest set bit of any key are passed over.  For pairs of
-// a key and a position (corner lookups, point batches).
+// Sorts records by a 64-bit key, stably: key(record) gives it.  Digits that
+// are the same in every key are not passed over (octant keys of one level
+// share their low bits, and keys of one region their high ones).  For pairs
+// of a key and a position (corner lookups, point batches) and the sorter's
+// runs.
 template <class T, class KeyOf>
 inline void radix_sort_by(std::vector<T>& items, std::vector<T>& scratch, KeyOf key) {
   if (items.size() < 256) {  // a pass's counts cost more than sorting a few
@@ -49,9 +51,14 @@ inline void radix_sort_by(std::vector<T>& items, std::vector<T>& scratch, KeyOf 
   constexpr int kDigit = 11;
   constexpr size_t kBuckets = size_t{1} << kDigit;
   scratch.resize(items.size());
-  uint64_t all = 0;
-  for (const T& t : items) all |= key(t);
-  for (int shift = 0; shift < 64 && (all >> shift) != 0; shift += kDigit) {
+  uint64_t any = 0, every = ~uint64_t{0};
+  for (const T& t : items) {
+    any |= key(t);
+    every &= key(t);
+  }
+  const uint64_t varying = any & ~every;
+  for (int shift = 0; shift < 64 && (varying >> shift) != 0; shift += kDigit) {
+    if (((varying >> shift) & (kBuckets - 1)) == 0) continue;
     std::array<size_t, kBuckets> count{};
     for (const T& t : items) ++count[(key(t) >> shift) & (kBuckets - 1)];
     size_t sum = 0;
