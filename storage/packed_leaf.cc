@@ -46,15 +46,37 @@ inline uint64_t read_bits(const std::byte* base, uint64_t pos, uint32_t w) {
   return w >= 64 ? v : v & ((uint64_t{1} << w) - 1);
 }
 
-// ORs the low w bits of v in at bit pos (the stream is zeroed beforehand).
-inline void write_bits(std::byte* base, uint64_t pos, uint32_t w, uint64_t v) {
-  if (w == 0) return;
-  if (w < 64) v &= (uint64_t{1} << w) - 1;
-  std::byte* p = base + (pos >> 3);
-  const uint32_t s = pos & 7;
-  store64(p, load64(p) | (v << s));
-  if (s + w > 64) p[8] |= static_cast<std::byte>(v >> (64 - s));
-}
+// Writes values of given widths one after another from a byte boundary,
+// through a 64-bit accumulator: one store per 64 bits instead of a load and
+// a store per value.  finish() stores the last word whole: up to 7 bytes of
+// zeros past the bits, which the next region overwrites or the page's
+// slack absorbs.
+class BitWriter {
+ public:
+  explicit BitWriter(std::byte* at) : p_(at) {}
+  void put(uint64_t v, uint32_t w) {
+    if (w == 0) return;
+    if (w < 64) v &= (uint64_t{1} << w) - 1;
+    acc_ |= v << used_;
+    const uint32_t total = used_ + w;
+    if (total < 64) {
+      used_ = total;
+      return;
+    }
+    store64(p_, acc_);
+    p_ += 8;
+    used_ = total - 64;
+    acc_ = used_ == 0 ? 0 : v >> (w - used_);
+  }
+  void finish() {
+    if (used_ > 0) store64(p_, acc_);
+  }
+
+ private:
+  std::byte* p_;
+  uint64_t acc_ = 0;
+  uint32_t used_ = 0;
+};
 
 // Decodes n values of a column (frame `min`, `w` bits each) into the field
 // of n rows `stride` bytes apart.  T is the field's width; a fixed-size
@@ -173,9 +195,49 @@ bool PackedLeafBuilder::add(uint64_t key, const std::byte* payload) {
   return true;
 }
 
+// A page's size only grows as entries are added (widths only widen), so if
+// a group fits, so does each of its prefixes: checking once per group ends
+// the page where adding one at a time would.
+bool PackedLeafBuilder::add_group(const uint64_t* keys, const std::byte* vals, uint32_t count) {
+  const size_t n = keys_.size() + count;
+  if (n > kPackedMaxEntries) return false;
+  const size_t closed_before = closed_.size();
+  uint64_t closed_bytes = key_bytes_closed_;
+  OpenBlock open = open_;
+  scratch_cols_ = cols_;
+  for (uint32_t i = 0; i < count; ++i) {
+    if (open.count == kPackedBlock) {
+      closed_.push_back(choose(open, shape_.key_kind));
+      closed_bytes += block_bytes(open.count, closed_.back().width);
+      open = OpenBlock{};
+    }
+    extend(open, keys[i], shape_.key_kind);
+    const std::byte* field = vals + size_t{i} * shape_.payload;
+    for (size_t f = 0; f < cols_.size(); ++f) {
+      const uint64_t v = load_field(field, shape_.field_sizes[f]);
+      scratch_cols_[f] = {std::min(scratch_cols_[f].min, v), std::max(scratch_cols_[f].max, v)};
+      field += shape_.field_sizes[f];
+    }
+  }
+  if (bytes_for(n, closed_bytes, open, scratch_cols_) > shape_.page_size) {
+    closed_.resize(closed_before);
+    return false;
+  }
+  key_bytes_closed_ = closed_bytes;
+  open_ = open;
+  cols_.swap(scratch_cols_);
+  keys_.insert(keys_.end(), keys, keys + count);
+  vals_.insert(vals_.end(), vals, vals + size_t{count} * shape_.payload);
+  return true;
+}
+
 uint32_t PackedLeafBuilder::add_range(const uint64_t* keys, const std::byte* vals, uint32_t from,
                                       uint32_t to) {
+  constexpr uint32_t kGroup = 16;
   uint32_t i = from;
+  while (to - i >= kGroup && add_group(keys + i, vals + size_t{i} * shape_.payload, kGroup)) {
+    i += kGroup;
+  }
   while (i < to && add(keys[i], vals + size_t{i} * shape_.payload)) ++i;
   return i;
 }
@@ -201,12 +263,14 @@ void PackedLeafBuilder::encode(std::byte* pg) const {
     blocks[4 * size_t{j} + 2] = static_cast<std::byte>(code.width);
     blocks[4 * size_t{j} + 3] = static_cast<std::byte>(code.mode);
     const int shift = code.mode & kShiftMask;
+    BitWriter bits(key_bits + off);
     for (uint32_t i = 1; i < cnt; ++i) {
       const uint64_t prev = keys_[first + i - 1], k = keys_[first + i];
       const uint64_t r =
           (code.mode & kModeSuccessor) ? k - successor(prev) : ((k - prev) >> shift) - 1;
-      write_bits(key_bits + off, uint64_t{i - 1} * code.width, code.width, r);
+      bits.put(r, code.width);
     }
+    bits.finish();
     off += block_bytes(cnt, code.width);
   }
   std::byte* col = key_bits + off;
@@ -216,10 +280,11 @@ void PackedLeafBuilder::encode(std::byte* pg) const {
     const auto w = static_cast<uint32_t>(std::bit_width(c.max - c.min));
     store64(pg + kFieldsStart + kFieldBytes * f, c.min);
     pg[kFieldsStart + kFieldBytes * f + 8] = static_cast<std::byte>(w);
+    BitWriter bits(col);
     for (uint32_t i = 0; i < n; ++i) {
-      const uint64_t v = load_field(payload(i) + field_off, shape_.field_sizes[f]);
-      write_bits(col, uint64_t{i} * w, w, v - c.min);
+      bits.put(load_field(payload(i) + field_off, shape_.field_sizes[f]) - c.min, w);
     }
+    bits.finish();
     col += bits_to_bytes(uint64_t{n} * w);
     field_off += shape_.field_sizes[f];
   }

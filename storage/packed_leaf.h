@@ -96,6 +96,8 @@ class PackedLeafBuilder {
     uint8_t width, mode;
   };
 
+  // Adds all `count` entries if they fit together, else none.
+  bool add_group(const uint64_t* keys, const std::byte* vals, uint32_t count);
   static void extend(OpenBlock& b, uint64_t key, KeyKind kind);
   static BlockCode choose(const OpenBlock& b, KeyKind kind);
   uint64_t bytes_for(size_t n, uint64_t key_bytes_closed, const OpenBlock& open,

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -74,6 +75,26 @@ TEST(Models, BasinLatticeMinimumMatchesSampling) {
               m->VelocityModel::min_vs_on_lattice(px, py, pz, ph))
         << px << " " << py << " " << pz << " " << ph;
   }
+  // Small lattices at and around inclusions (the cached cell of the fast
+  // path), across 600 m cell borders too.
+  std::vector<std::array<double, 3>> soft;
+  for (double pz = 0; pz < 2400; pz += 20)
+    for (double py = 90000; py < 92400; py += 20)
+      for (double px = 90000; px < 92400; px += 20)
+        if (m->at(px, py, pz).vs == 100) soft.push_back({px, py, pz});
+  ASSERT_GT(soft.size(), 20u);
+  std::uniform_real_distribution<double> jitter(-60, 60), small(0.5, 40);
+  int softened = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const auto& c = soft[rng() % soft.size()];
+    const double px = c[0] + jitter(rng), py = c[1] + jitter(rng), pz = c[2] + jitter(rng);
+    const double ph = small(rng);
+    const double fast = m->min_vs_on_lattice(px, py, pz, ph);
+    ASSERT_EQ(fast, m->VelocityModel::min_vs_on_lattice(px, py, pz, ph))
+        << px << " " << py << " " << pz << " " << ph;
+    softened += fast == 100;
+  }
+  EXPECT_GT(softened, 2000);  // the lattices do meet inclusions
 }
 
 TEST(GridModel, InterpolatesAndClamps) {

@@ -97,6 +97,16 @@ size_t pack_and_check(const PackedShape& shape, const Entries& e, std::mt19937_6
     std::fill(page.begin(), page.end(), std::byte{0xa5});  // stale bytes must not matter
     b.encode(page.data());
     ++pages;
+    // add_range checks sizes a group at a time: the same page as one by one.
+    PackedLeafBuilder single(shape);
+    size_t end = from;
+    while (end < e.keys.size() && single.add(e.keys[end], e.vals.data() + end * shape.payload)) {
+      ++end;
+    }
+    EXPECT_EQ(end, to);
+    std::vector<std::byte> single_page(shape.page_size, std::byte{0xa5});
+    single.encode(single_page.data());
+    EXPECT_TRUE(single_page == page);
     PackedLeaf leaf;
     EXPECT_TRUE(leaf.open(page.data(), shape));
     const auto n = static_cast<uint32_t>(to - from);

@@ -56,16 +56,21 @@ class Basin final : public VelocityModel {
     const double rho = 1700 + 0.29 * vs;
     return {static_cast<float>(vp), static_cast<float>(vs), static_cast<float>(rho)};
   }
-  // The bowl depth once per column of the lattice, and Vs only.
+  // The bowl depth once per column of the lattice, an inclusion cell's hash
+  // once per run of points in the same cell (a small octant's 27 points
+  // share one), and Vs only.
   double min_vs_on_lattice(double x, double y, double z, double h) const override {
     double vs = 1e300;
+    InclusionCell cell;
     for (int j = 0; j < 3; ++j) {
       for (int i = 0; i < 3; ++i) {
         const double cx = x + i * h, cy = y + j * h, depth = sediment_depth(cx, cy);
         for (int k = 0; k < 3; ++k) {
           const double cz = z + k * h;
+          const bool sediment = cz < depth;
+          const bool inclusion = !sediment && cell.holds(cx, cy, cz);
           // Rounded as at() rounds, so both paths build the same octree.
-          vs = std::min<double>(vs, static_cast<float>(vs_at(cx, cy, cz, cz < depth)));
+          vs = std::min<double>(vs, static_cast<float>(vs_of(cz, sediment, inclusion)));
         }
       }
     }
@@ -96,9 +101,12 @@ class Basin final : public VelocityModel {
   static constexpr double kInclusionCell = 600, kInclusionShare = 0.25, kInclusionDepth = 5000;
 
   static double vs_at(double x, double y, double z, bool sediment) {
+    return vs_of(z, sediment, !sediment && InclusionCell().holds(x, y, z));
+  }
+  static double vs_of(double z, bool sediment, bool inclusion) {
+    if (inclusion) return kInclusionVs;
     const double vs =
         sediment ? kSedimentVs0 + kSedimentGradient * z : kRockVs0 + kRockGradient * z;
-    if (!sediment && in_inclusion(x, y, z)) return kInclusionVs;
     return std::min(vs, kRockVsMax);
   }
 
@@ -123,21 +131,47 @@ class Basin final : public VelocityModel {
 
   // Each cell of a 600 m lattice holds an inclusion with probability
   // kInclusionShare, centred at a hashed point far enough inside the cell
-  // that only the cell containing a point needs checking.
-  static bool in_inclusion(double x, double y, double z) {
-    if (z >= kInclusionDepth || x < 0 || y < 0 || z < 0) return false;
-    const auto i = static_cast<uint64_t>(x / kInclusionCell);
-    const auto j = static_cast<uint64_t>(y / kInclusionCell);
-    const auto k = static_cast<uint64_t>(z / kInclusionCell);
-    const uint64_t h = mix(i * 0x100000001b3ull ^ mix(j * 0x2545f491ull ^ mix(k)));
-    if ((h & 0xffff) >= kInclusionShare * 65536) return false;
-    const double span = (kInclusionCell - 2 * kInclusionRadius) / 65536;
-    const double cx = i * kInclusionCell + kInclusionRadius + span * ((h >> 16) & 0xffff);
-    const double cy = j * kInclusionCell + kInclusionRadius + span * ((h >> 32) & 0xffff);
-    const double cz = k * kInclusionCell + kInclusionRadius + span * ((h >> 48) & 0xffff);
-    const double dx = x - cx, dy = y - cy, dz = z - cz;
-    return dx * dx + dy * dy + dz * dz < kInclusionRadius * kInclusionRadius;
-  }
+  // that only the cell containing a point needs checking.  The last cell
+  // asked about is remembered: its hash is most of the cost.
+  class InclusionCell {
+   public:
+    bool holds(double x, double y, double z) {
+      if (z >= kInclusionDepth || x < 0 || y < 0 || z < 0) return false;
+      const uint64_t i = axis_.cell(0, x), j = axis_.cell(1, y), k = axis_.cell(2, z);
+      if (!known_ || i != i_ || j != j_ || k != k_) locate(i, j, k);
+      if (!has_) return false;
+      const double dx = x - cx_, dy = y - cy_, dz = z - cz_;
+      return dx * dx + dy * dy + dz * dz < kInclusionRadius * kInclusionRadius;
+    }
+
+   private:
+    void locate(uint64_t i, uint64_t j, uint64_t k) {
+      known_ = true;
+      i_ = i, j_ = j, k_ = k;
+      const uint64_t h = mix(i * 0x100000001b3ull ^ mix(j * 0x2545f491ull ^ mix(k)));
+      has_ = (h & 0xffff) < kInclusionShare * 65536;
+      const double span = (kInclusionCell - 2 * kInclusionRadius) / 65536;
+      cx_ = i * kInclusionCell + kInclusionRadius + span * ((h >> 16) & 0xffff);
+      cy_ = j * kInclusionCell + kInclusionRadius + span * ((h >> 32) & 0xffff);
+      cz_ = k * kInclusionCell + kInclusionRadius + span * ((h >> 48) & 0xffff);
+    }
+
+    // The cell index along each axis of the last coordinate seen there (a
+    // lattice repeats its coordinates).
+    struct Axes {
+      uint64_t cell(int a, double v) {
+        if (v != at[a]) at[a] = v, index[a] = static_cast<uint64_t>(v / kInclusionCell);
+        return index[a];
+      }
+      double at[3] = {-1, -1, -1};
+      uint64_t index[3] = {};
+    };
+
+    Axes axis_;
+    bool known_ = false, has_ = false;
+    uint64_t i_ = 0, j_ = 0, k_ = 0;
+    double cx_ = 0, cy_ = 0, cz_ = 0;
+  };
 };
 
 }  // namespace
