@@ -68,9 +68,10 @@ class NodeChecker {
   // Checks the node with this key, stored kind and id.
   Status check(uint64_t key, uint8_t stored, uint64_t id) {
     const Coord p = morton_decode(key);
-    const std::string name = "node " + std::to_string(id) + " at " + describe_point(p);
-    if (!node_is_valid(p)) return problem(name + ": outside the address space");
-    if (stored > 2) return problem(name + ": unknown kind " + std::to_string(stored));
+    // Made only for a problem: a string per node would cost more than the check.
+    const auto name = [&] { return "node " + std::to_string(id) + " at " + describe_point(p); };
+    if (!node_is_valid(p)) return problem(name() + ": outside the address space");
+    if (stored > 2) return problem(name() + ": unknown kind " + std::to_string(stored));
     int corners = 0;
     bool edge = false, face = false;
     for (int d = 0; d < 8; ++d) {
@@ -88,16 +89,16 @@ class NodeChecker {
         case Place::kEdgeMidpoint: edge = true; break;
         case Place::kFaceCentre: face = true; break;
         case Place::kElsewhere:
-          return problem(name + " lies on element " + describe_octant(leaf) +
+          return problem(name() + " lies on element " + describe_octant(leaf) +
                          " away from its corners and midpoints (unbalanced mesh?)");
       }
     }
     report_->corners += corners;
-    if (corners == 0) return problem(name + " is not a corner of any element");
+    if (corners == 0) return problem(name() + " is not a corner of any element");
     const NodeKind expected = edge ? NodeKind::kEdge : face ? NodeKind::kFace : NodeKind::kAnchored;
     const auto kind = static_cast<NodeKind>(stored);
     if (kind != expected) {
-      return problem(name + " is stored as " + node_kind_name(kind) +
+      return problem(name() + " is stored as " + node_kind_name(kind) +
                      ", the leaves around it make it " + node_kind_name(expected));
     }
     if (kind != NodeKind::kAnchored) ++report_->dangling;
@@ -105,7 +106,8 @@ class NodeChecker {
   }
 
  private:
-  Status check_anchors(Coord p, NodeKind kind, const std::string& name) {
+  template <class Name>
+  Status check_anchors(Coord p, NodeKind kind, const Name& name) {
     Coord anchors[4];
     const int n = node_anchors(p, kind, anchors);
     for (int i = 0; i < n; ++i) {
@@ -113,9 +115,9 @@ class NodeChecker {
       bool found = false;
       WEAVER_RETURN_IF_ERROR(nodes_.get(node_key(anchors[i]), &k, &found));
       if (!found)
-        return problem(name + ": its anchor " + describe_point(anchors[i]) + " is not a node");
+        return problem(name() + ": its anchor " + describe_point(anchors[i]) + " is not a node");
       if (static_cast<NodeKind>(k) != NodeKind::kAnchored) {
-        return problem(name + ": its anchor " + describe_point(anchors[i]) + " is not anchored");
+        return problem(name() + ": its anchor " + describe_point(anchors[i]) + " is not anchored");
       }
     }
     return Status::Ok();
