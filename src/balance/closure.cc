@@ -134,8 +134,8 @@ std::unique_ptr<SortedSpool> Closure::spool(const char* name, int level) const {
 
 // The face and edge neighbours of the level's parents, into the candidate
 // sorters.  Parents pass through memory in chunks of what fits in the chunk
-// share (16 bytes each in the list, and a key set of twice as many slots); a
-// neighbour that is a parent of the same chunk is skipped (see
+// share (16 bytes each in the list, and a key set of four times as many
+// slots); a neighbour that is a parent of the same chunk is skipped (see
 // expand_level).  Any subset may be skipped, and Z-order keeps most
 // neighbours in one chunk.  A large chunk is cut into one share per sorter,
 // each on its own thread; which sorter gets a candidate does not change
