@@ -96,7 +96,7 @@ TEST(BalanceThreads, AnyThreadCountWritesTheSameTable) {
   testing::TempDir dir;
   ConstructOptions co;
   co.model = "basin";
-  co.freq = 0.2;
+  co.freq = testing::small_scale() ? 0.1 : 0.2;
   ConstructPlan plan;
   ConstructResult cr;
   ASSERT_OK(construct_octree(dir.file("basin"), co, &plan, &cr));
