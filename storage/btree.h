@@ -63,6 +63,9 @@ class BTree final : public Store {
 
   // A concrete cursor (no virtual calls on the scan path).
   Status seek_cursor(uint64_t key, BTreeCursor* cursor);
+  // The same for a reader of keys alone: packed leaves are decoded without
+  // their payload columns.  The cursor's payload() must not be called.
+  Status seek_keys(uint64_t key, BTreeCursor* cursor);
 
   // Walks the whole tree and checks every invariant of page_format.h.
   Status check_invariants();
@@ -125,6 +128,8 @@ class BTree final : public Store {
   // REQUIRES: height_ > 0.  With rank_before, also counts the records in the
   // subtrees left of the path.
   Status descend(uint64_t key, Path* path, PageRef* leaf, uint64_t* rank_before = nullptr);
+  // seek_cursor and seek_keys: the cursor at the first key >= key.
+  Status position(uint64_t key, bool keys_only, BTreeCursor* cursor);
   Status find(uint64_t key, LeafSlot* slot, uint64_t* rank_before = nullptr);
   Status descend_edge(uint32_t page_no, int level, bool rightmost, Path* path, PageRef* leaf);
   Status add_to_path_counts(const Path& path, int upto, int64_t delta);

@@ -57,6 +57,7 @@ class BTreeCursor final : public Cursor {
   std::vector<uint64_t> key_buf_;  // a packed leaf, decoded
   std::vector<std::byte> val_buf_;
   bool valid_ = false;
+  bool keys_only_ = false;  // see BTree::seek_keys
 };
 
 }  // namespace weaver

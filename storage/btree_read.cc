@@ -237,8 +237,13 @@ Status BTree::select(uint64_t index, uint64_t* key_out, std::byte* payload_out) 
   return Status::Ok();
 }
 
-Status BTree::seek_cursor(uint64_t key, BTreeCursor* c) {
+Status BTree::seek_keys(uint64_t key, BTreeCursor* c) { return position(key, true, c); }
+
+Status BTree::seek_cursor(uint64_t key, BTreeCursor* c) { return position(key, false, c); }
+
+Status BTree::position(uint64_t key, bool keys_only, BTreeCursor* c) {
   seal_tail();
+  c->keys_only_ = keys_only;
   c->tree_ = this;
   c->valid_ = false;
   c->leaf_.reset();
@@ -261,14 +266,14 @@ Status BTreeCursor::load_leaf() {
     return Status::Ok();
   }
   key_buf_.resize(n_);
-  val_buf_.resize(size_t{n_} * payload_);
+  if (!keys_only_) val_buf_.resize(size_t{n_} * payload_);
   page::PackedLeaf reader;
   WEAVER_RETURN_IF_ERROR(t.open_packed(leaf_, &reader));
-  if (!reader.decode(key_buf_.data(), val_buf_.data())) {
+  if (!reader.decode(key_buf_.data(), keys_only_ ? nullptr : val_buf_.data())) {
     return Status::Corruption(t.where(leaf_.page_no()) + ": packed key block out of bounds");
   }
   keys_ = key_buf_.data();
-  vals_ = val_buf_.data();
+  vals_ = keys_only_ ? nullptr : val_buf_.data();
   return Status::Ok();
 }
 

@@ -77,16 +77,21 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
     }
   }
 
+  // A cursor, and a keys-only cursor beside it.
   void check_scan(uint64_t from, int steps) {
-    BTreeCursor c;
+    BTreeCursor c, keys;
     ASSERT_OK(tree_->seek_cursor(from, &c));
+    ASSERT_OK(tree_->seek_keys(from, &keys));
     auto it = model_.lower_bound(from);
     for (int s = 0; s < steps; ++s) {
       ASSERT_EQ(c.valid(), it != model_.end());
+      ASSERT_EQ(keys.valid(), it != model_.end());
       if (!c.valid()) return;
       ASSERT_EQ(c.key(), it->first);
+      ASSERT_EQ(keys.key(), it->first);
       ASSERT_TRUE(std::equal(it->second.begin(), it->second.end(), c.payload()));
       ASSERT_OK(c.next());
+      ASSERT_OK(keys.next());
       ++it;
     }
   }

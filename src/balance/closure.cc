@@ -21,7 +21,7 @@ class DomainProbe {
  public:
   Status open(BTree& leaves) {
     leaves_ = &leaves;
-    return leaves.seek_cursor(0, &cursor_);
+    return leaves.seek_keys(0, &cursor_);
   }
   Status overlaps(uint64_t key, bool* yes) {
     for (int steps = 0; cursor_.valid() && cursor_.key() <= key; ++steps) {
@@ -53,7 +53,7 @@ class DomainProbe {
       last_ = floor;
       has_last_ = true;
     }
-    return leaves_->seek_cursor(key + 1, &cursor_);
+    return leaves_->seek_keys(key + 1, &cursor_);
   }
 
   BTree* leaves_ = nullptr;
@@ -96,7 +96,7 @@ Status Closure::build(int max_level, bool propagate) {
     required_.push_back(spool("r", l));
   }
   BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(leaves_.seek_cursor(0, &c));
+  WEAVER_RETURN_IF_ERROR(leaves_.seek_keys(0, &c));
   while (c.valid()) {
     const Octant q = octant_from_key(c.key());
     ++r_->input_leaves;

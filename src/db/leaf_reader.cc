@@ -6,7 +6,7 @@ namespace weaver {
 
 Status LeafReader::open(BTree& octants) {
   file_ = octants.file_name();
-  WEAVER_RETURN_IF_ERROR(octants.seek_cursor(0, &cursor_));
+  WEAVER_RETURN_IF_ERROR(octants.seek_keys(0, &cursor_));
   return cursor_.valid() ? check_current() : Status::Ok();
 }
 
