@@ -201,17 +201,19 @@ Status Closure::emit_candidates(int l, KeyTagSource& parents, uint64_t parent_co
 // already, and its own parent enters the next level through its siblings,
 // so it is skipped: inside refined regions almost every candidate goes.
 Status Closure::expand_level(int l, KeyTagSource& parents, uint64_t parent_count, bool propagate) {
+  // A level too small for any chunk to be shared has one sorter.
+  const int shares = parent_count >= parallel_chunk_ ? threads_ : 1;
   Sorters sorters;
   std::vector<KeyTagSource*> sources;
-  for (int i = 0; i < threads_; ++i) {
+  for (int i = 0; i < shares; ++i) {
     sorters.push_back(std::make_unique<ExternalSorter>(
         scratch_ + "/c" + std::to_string(l) + "-" + std::to_string(i),
-        memory_.candidate_sort / threads_, ExternalSorter::Repeats::kFirstOnly));
+        memory_.candidate_sort / shares, ExternalSorter::Repeats::kFirstOnly));
     sources.push_back(sorters.back().get());
   }
   uint64_t added = 0, probed = 0;
   WEAVER_RETURN_IF_ERROR(emit_candidates(l, parents, parent_count, sorters, &added));
-  WEAVER_RETURN_IF_ERROR(run_shares(threads_, [&](int i) { return sorters[i]->finish(); }));
+  WEAVER_RETURN_IF_ERROR(run_shares(shares, [&](int i) { return sorters[i]->finish(); }));
   KeyTagMerge candidates(std::move(sources));
   DomainProbe probe;
   WEAVER_RETURN_IF_ERROR(probe.open(leaves_));
