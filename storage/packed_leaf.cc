@@ -171,28 +171,7 @@ uint64_t PackedLeafBuilder::bytes_for(size_t n, uint64_t key_bytes_closed, const
 }
 
 bool PackedLeafBuilder::add(uint64_t key, const std::byte* payload) {
-  const size_t n = keys_.size() + 1;
-  if (n > kPackedMaxEntries) return false;
-  const bool closes = open_.count == kPackedBlock;
-  const uint64_t closed_bytes =
-      key_bytes_closed_ +
-      (closes ? block_bytes(open_.count, choose(open_, shape_.key_kind).width) : 0);
-  OpenBlock open = closes ? OpenBlock{} : open_;
-  extend(open, key, shape_.key_kind);
-  const std::byte* field = payload;
-  for (size_t f = 0; f < cols_.size(); ++f) {
-    const uint64_t v = load_field(field, shape_.field_sizes[f]);
-    scratch_cols_[f] = {std::min(cols_[f].min, v), std::max(cols_[f].max, v)};
-    field += shape_.field_sizes[f];
-  }
-  if (bytes_for(n, closed_bytes, open, scratch_cols_) > shape_.page_size) return false;
-  if (closes) closed_.push_back(choose(open_, shape_.key_kind));
-  key_bytes_closed_ = closed_bytes;
-  open_ = open;
-  cols_.swap(scratch_cols_);
-  keys_.push_back(key);
-  vals_.insert(vals_.end(), payload, payload + shape_.payload);
-  return true;
+  return add_group(&key, payload, 1);
 }
 
 // A page's size only grows as entries are added (widths only widen), so if

@@ -28,12 +28,8 @@ class Completion {
   // A leaf with nothing required inside it (nearly all of them): copied
   // from its key and payload as they are, without decoding the octant.
   Status copy(uint64_t key, const std::byte* payload, BalanceResult* r) {
-    batch_.keys.push_back(key);
-    batch_.payloads.insert(batch_.payloads.end(), payload, payload + payload_);
-    ++r->levels[octant_key_level(key)];
-    ++r->output_leaves;
-    if (batch_.keys.size() == kBatch) return flush();
-    return Status::Ok();
+    add_entry(key, octant_key_level(key), payload, r);
+    return flush_if_full();
   }
   Status flush() { return out_.append(&batch_); }
   Status finish() {
@@ -57,18 +53,22 @@ class Completion {
   }
 
   Status emit(const Octant& o, bool is_new, const std::byte* parent_payload, BalanceResult* r) {
-    batch_.keys.push_back(octant_key(o));
-    const size_t at = batch_.payloads.size();
-    batch_.payloads.resize(at + payload_);
-    if (payload_ > 0) {
-      std::memcpy(batch_.payloads.data() + at, parent_payload, payload_);
-      if (is_new && fill_) fill_(o, batch_.payloads.data() + at);
-    }
-    ++r->levels[o.level];
-    ++r->output_leaves;
-    if (batch_.keys.size() == kBatch) return flush();
-    return Status::Ok();
+    std::byte* payload = add_entry(octant_key(o), o.level, parent_payload, r);
+    if (payload_ > 0 && is_new && fill_) fill_(o, payload);
+    return flush_if_full();
   }
+
+  // Adds a leaf to the batch with a copy of `payload`; returns where the
+  // copy is, valid until the batch is flushed.
+  std::byte* add_entry(uint64_t key, int level, const std::byte* payload, BalanceResult* r) {
+    batch_.keys.push_back(key);
+    const size_t at = batch_.payloads.size();
+    batch_.payloads.insert(batch_.payloads.end(), payload, payload + payload_);
+    ++r->levels[level];
+    ++r->output_leaves;
+    return batch_.payloads.data() + at;
+  }
+  Status flush_if_full() { return batch_.keys.size() == kBatch ? flush() : Status::Ok(); }
 
   AsyncAppender out_;
   const FillPayload& fill_;
