@@ -12,6 +12,8 @@
 // domain is their union) with a 16-byte payload.  Every workload runs in its
 // own child process, so its peak RSS is its own.  Prints one JSON object per
 // run, then a table of medians.
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
@@ -261,12 +263,55 @@ bool lookups(const Backend& b, const std::string& path, uint64_t n, uint64_t poo
   return true;
 }
 
+// The machine's floor for a lookup that misses the CPU caches: one
+// dependent random read over a buffer as large as the tree (huge pages
+// advised, as the pool's frames are), in reads per second.  A lookup chains
+// at least one such miss (its leaf), so no single-stream lookup rate beats it.
+bool memory_latency(uint64_t bytes, Json* j) {
+  constexpr size_t kHuge = size_t{2} << 20;
+  const size_t n = (bytes + kHuge - 1) / kHuge * kHuge / 8;
+  std::unique_ptr<uint64_t[], decltype(&std::free)> buf(
+      static_cast<uint64_t*>(std::aligned_alloc(kHuge, n * 8)), &std::free);
+  if (!buf) return false;
+#ifdef MADV_HUGEPAGE
+  ::madvise(buf.get(), n * 8, MADV_HUGEPAGE);
+#endif
+  uint64_t seed = 7;
+  for (size_t i = 0; i < n; ++i) buf[i] = splitmix(&seed);
+  const uint64_t reads = 2'000'000;
+  uint64_t x = 0;
+  const double t0 = now_seconds();
+  for (uint64_t r = 0; r < reads; ++r) x = buf[(x ^ splitmix(&seed)) % n];
+  const double secs = now_seconds() - t0;
+  j->add("bench", "store").add("backend", "memory").add("workload", "dependent_read");
+  j->add("n", uint64_t{n}).add("queries_per_s", reads / secs);
+  j->add("ns_per_read", 1e9 * secs / reads).add("checksum", x & 0xff);
+  return true;
+}
+
 std::string median_of(std::vector<std::map<std::string, std::string>>& runs, const char* key) {
   std::vector<double> v;
   for (auto& r : runs) {
     if (r.count(key)) v.push_back(std::stod(r[key]));
   }
   return v.empty() ? "" : fmt(median(v));
+}
+
+void add_latency_row(uint64_t bytes, int repeat,
+                     std::vector<std::map<std::string, std::string>>* table) {
+  std::vector<std::map<std::string, std::string>> runs;
+  for (int r = 0; r < repeat; ++r) {
+    const std::string line = run_in_child([&](Json* j) { return memory_latency(bytes, j); });
+    if (line.empty()) continue;
+    std::printf("%s\n", line.c_str());
+    runs.push_back(parse_flat_json(line));
+  }
+  if (runs.empty()) return;
+  auto row = runs[0];
+  row["queries_per_s"] = median_of(runs, "queries_per_s");
+  row["peak_rss_bytes"] = median_of(runs, "peak_rss_bytes");
+  row["runs"] = std::to_string(runs.size());
+  table->push_back(row);
 }
 
 uint64_t parse_size(const std::string& s) {
@@ -305,7 +350,9 @@ int usage() {
       "fillrandom]\n"
       "                   [--pool 20M] [--large-pool 512M] [--queries 2M] [--repeat 3]\n"
       "                   [--backends btree,lsm] [--dir /tmp/weaver-bench]\n"
-      "Lookups run twice: with the small pool and with the large one (which holds the tree).\n");
+      "Lookups run twice: with the small pool and with the large one (which holds the tree).\n"
+      "With lookups, a 'memory dependent_read' row gives the machine's floor: dependent\n"
+      "random reads per second over a buffer the size of the tree file.\n");
   return 2;
 }
 
@@ -378,6 +425,11 @@ int main(int argc, char** argv) {
           row["runs"] = std::to_string(runs.size());
           table.push_back(row);
         }
+      }
+      if (backend == "btree" && std::filesystem::exists(seq_path) &&
+          (std::count(c.workloads.begin(), c.workloads.end(), "getrandom") > 0 ||
+           std::count(c.workloads.begin(), c.workloads.end(), "floorrandom") > 0)) {
+        add_latency_row(std::filesystem::file_size(seq_path), c.repeat, &table);
       }
       if (!std::getenv("WEAVER_BENCH_KEEP")) std::filesystem::remove_all(seq_path);
       std::filesystem::remove_all(rnd_path);

@@ -137,19 +137,20 @@ Status BTree::commit() {
   return file_->sync();
 }
 
-Status BTree::fetch(uint32_t page_no, PageRef* ref) {
+Status BTree::fetch(uint32_t page_no, PageRef* ref, uint32_t prefetch_bytes) {
   if (page_no == 0 || page_no > page_count_) {
     return Status::Corruption(where(page_no) + ": page number out of range (file has " +
                               std::to_string(page_count_) + " pages)");
   }
   Frame* f = nullptr;
-  WEAVER_RETURN_IF_ERROR(pool_->fetch(page_no, &f));
+  WEAVER_RETURN_IF_ERROR(pool_->fetch(page_no, &f, prefetch_bytes));
   *ref = PageRef(pool_.get(), f);
   return Status::Ok();
 }
 
-Status BTree::fetch_typed(uint32_t page_no, page::PageType type, PageRef* ref) {
-  WEAVER_RETURN_IF_ERROR(fetch(page_no, ref));
+Status BTree::fetch_typed(uint32_t page_no, page::PageType type, PageRef* ref,
+                          uint32_t prefetch_bytes) {
+  WEAVER_RETURN_IF_ERROR(fetch(page_no, ref, prefetch_bytes));
   if (page::type(ref->data()) != type) {
     const int found = static_cast<int>(page::type(ref->data()));
     ref->reset();

@@ -95,8 +95,11 @@ class BTree final : public Store {
   Status write_header();
   std::string where(uint32_t page_no) const;
 
-  Status fetch(uint32_t page_no, PageRef* ref);
-  Status fetch_typed(uint32_t page_no, page::PageType type, PageRef* ref);
+  // prefetch_bytes: how much of the page to prefetch on a pool hit.
+  Status fetch(uint32_t page_no, PageRef* ref,
+               uint32_t prefetch_bytes = BufferPool::kPrefetchBytes);
+  Status fetch_typed(uint32_t page_no, page::PageType type, PageRef* ref,
+                     uint32_t prefetch_bytes = BufferPool::kPrefetchBytes);
   Status new_page(page::PageType type, bool at_end, PageRef* ref);
   Status free_page(uint32_t page_no);
   page::LeafView leaf(const PageRef& r) const { return {r.data(), leaf_cap_, payload_}; }

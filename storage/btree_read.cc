@@ -26,11 +26,7 @@ Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref, uint64_t* ran
     path->e[path->depth++] = {pg, idx};
     pg = v.child(idx);
   }
-  WEAVER_RETURN_IF_ERROR(fetch_typed(pg, leaf_type(), leaf_ref));
-  if (!options_.packed) {
-    page::prefetch_keys(leaf_ref->data() + page::kPageHeaderBytes, page::count(leaf_ref->data()));
-  }
-  return Status::Ok();
+  return fetch_typed(pg, leaf_type(), leaf_ref, options_.page_size);
 }
 
 Status BTree::find(uint64_t key, LeafSlot* s, uint64_t* rank_before) {

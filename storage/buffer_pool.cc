@@ -29,9 +29,11 @@ void seal_page(std::byte* pg, uint32_t page_no, uint32_t page_size) {
 BufferPool::BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes)
     : file_(file), page_size_(page_size) {
   // The budget pays for the write staging buffer, then for frames with their
-  // bookkeeping (the Frame, and up to 4 table slots of 8 bytes).
+  // bookkeeping (the Frame, up to 4 hash slots of 8 bytes, 4 direct-map
+  // entries of 4).
   const uint64_t staging = uint64_t{kMaxWriteRun} * page_size;
-  const uint64_t per_frame = page_size + sizeof(Frame) + 4 * sizeof(uint64_t);
+  const uint64_t per_frame =
+      page_size + sizeof(Frame) + 4 * sizeof(uint64_t) + kDirectPagesPerFrame * sizeof(uint32_t);
   const uint64_t n = std::max<uint64_t>(
       kMinFrames, budget_bytes > staging ? (budget_bytes - staging) / per_frame : 0);
   // 2 MiB alignment lets the kernel back the arena with huge pages: a large
@@ -49,32 +51,39 @@ BufferPool::BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes)
   for (uint64_t i = 0; i < n; ++i) frames_[i].data = arena_.get() + i * page_size;
   table_.assign(next_pow2(2 * n), 0);
   table_mask_ = table_.size() - 1;
+  direct_.assign(kDirectPagesPerFrame * n, 0);
 }
 
 BufferPool::~BufferPool() = default;
 
 uint64_t BufferPool::memory_bytes() const {
   return frames_.size() * (page_size_ + sizeof(Frame)) + table_.size() * sizeof(uint64_t) +
-         size_t{kMaxWriteRun} * page_size_;
+         direct_.size() * sizeof(uint32_t) + size_t{kMaxWriteRun} * page_size_;
 }
 
 size_t BufferPool::slot_of(uint32_t page_no) const { return (page_no * 0x9E3779B1u) & table_mask_; }
 
 Frame* BufferPool::lookup(uint32_t page_no) const {
-  for (size_t s = slot_of(page_no);; s = (s + 1) & table_mask_) {
-    const uint64_t v = table_[s];
-    if (v == 0) return nullptr;
-    if (uint32_t(v >> 32) != page_no) continue;
-    const size_t index = uint32_t(v) - 1;
-    // Ask for the page's first lines now: the caller reads its header and
-    // keys next, and the frame's own miss overlaps with them.
-    const std::byte* data = arena_.get() + index * page_size_;
-    for (uint32_t line = 0; line < kPrefetchLines; ++line) __builtin_prefetch(data + 64 * line);
-    return const_cast<Frame*>(&frames_[index]);
+  uint32_t entry = 0;  // frame index + 1
+  if (page_no < direct_.size()) {
+    entry = direct_[page_no];
+  } else {
+    for (size_t s = slot_of(page_no); table_[s] != 0; s = (s + 1) & table_mask_) {
+      if (uint32_t(table_[s] >> 32) == page_no) {
+        entry = uint32_t(table_[s]);
+        break;
+      }
+    }
   }
+  if (entry == 0) return nullptr;
+  return const_cast<Frame*>(&frames_[entry - 1]);
 }
 
 void BufferPool::table_insert(uint32_t page_no, uint32_t frame_index) {
+  if (page_no < direct_.size()) {
+    direct_[page_no] = frame_index + 1;
+    return;
+  }
   size_t s = slot_of(page_no);
   while (table_[s] != 0) s = (s + 1) & table_mask_;
   table_[s] = (uint64_t{page_no} << 32) | (frame_index + 1);
@@ -82,6 +91,10 @@ void BufferPool::table_insert(uint32_t page_no, uint32_t frame_index) {
 
 // Backward-shift deletion keeps probe chains intact without tombstones.
 void BufferPool::table_erase(uint32_t page_no) {
+  if (page_no < direct_.size()) {
+    direct_[page_no] = 0;
+    return;
+  }
   size_t s = slot_of(page_no);
   while (uint32_t(table_[s] >> 32) != page_no) s = (s + 1) & table_mask_;
   size_t hole = s;
@@ -181,8 +194,13 @@ Status BufferPool::read_page(uint32_t page_no, Frame* f) {
   return Status::Ok();
 }
 
-Status BufferPool::fetch(uint32_t page_no, Frame** out) {
+Status BufferPool::fetch(uint32_t page_no, Frame** out, uint32_t prefetch_bytes) {
   if (Frame* f = lookup(page_no)) {
+    // Ask for the lines the caller reads next now, all at once, from the
+    // page's address alone: they, and the frame's own miss, overlap instead
+    // of following one another.
+    const std::byte* data = arena_.get() + size_t(f - frames_.data()) * page_size_;
+    for (uint32_t off = 0; off < prefetch_bytes; off += 64) __builtin_prefetch(data + off);
     ++stats_.hits;
     ++f->pins;
     f->referenced = true;

@@ -48,14 +48,20 @@ class BufferPool {
   static constexpr uint32_t kMinFrames = 64;
   // Longest run of consecutive dirty pages coalesced into one write.
   static constexpr uint32_t kMaxWriteRun = 64;
+  // Bytes of a page prefetched on a hit unless the caller says otherwise:
+  // the header line, which every caller reads first.
+  static constexpr uint32_t kPrefetchBytes = 64;
 
   BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes);
   ~BufferPool();
   BufferPool(const BufferPool&) = delete;
   BufferPool& operator=(const BufferPool&) = delete;
 
-  // Pins page_no (>= 1), reading and verifying it on a miss.
-  Status fetch(uint32_t page_no, Frame** out);
+  // Pins page_no (>= 1), reading and verifying it on a miss.  On a hit the
+  // first prefetch_bytes of the page are prefetched (a caller that will
+  // search the page asks for its key column, one that reads it whole for
+  // all of it).
+  Status fetch(uint32_t page_no, Frame** out, uint32_t prefetch_bytes = kPrefetchBytes);
   // Pins a frame for a page that has no valid content on disk yet (a new or
   // reused page): zero-filled and dirty.  REQUIRES: page_no not pinned.
   Status create(uint32_t page_no, Frame** out);
@@ -68,6 +74,13 @@ class BufferPool {
   // Writes every dirty page back (does not sync the file).
   Status flush();
 
+  // A frame's page bytes, computed from its place in the arena: unlike
+  // f->data, reading it needs no load from the frame (a cache miss on a
+  // random lookup in a large pool).
+  std::byte* data_of(const Frame* f) const {
+    return arena_.get() + size_t(f - frames_.data()) * page_size_;
+  }
+
   uint32_t page_size() const { return page_size_; }
   uint64_t frame_count() const { return frames_.size(); }
   uint64_t memory_bytes() const;
@@ -78,9 +91,8 @@ class BufferPool {
   Status find_victim(Frame** out);
   Status write_run_from(Frame* first);
   Status read_page(uint32_t page_no, Frame* f);
-  // Lines of a page prefetched when a lookup finds it: the header, which the
-  // caller reads first (measured: 1 line beats 0, 2 and 4 on random gets).
-  static constexpr uint32_t kPrefetchLines = 1;
+  // Pages covered by the direct map, per frame (see direct_).
+  static constexpr uint32_t kDirectPagesPerFrame = 4;
   Frame* lookup(uint32_t page_no) const;
   void table_insert(uint32_t page_no, uint32_t frame_index);
   void table_erase(uint32_t page_no);
@@ -92,6 +104,12 @@ class BufferPool {
   AlignedBytes staging_{nullptr, AlignedArrayDelete{64}};  // kMaxWriteRun pages, coalesced writes
   std::vector<Frame> frames_;
   std::vector<uint32_t> recycle_;  // frame indices offered by unpin_recycle
+  // Where a cached page's frame is: pages below direct_.size() in a direct
+  // map (frame index + 1, 0 = not cached), the rest in a hash table.  The
+  // map covers 4 pages per frame, so any file the pool holds a quarter of is
+  // found without hashing, and the map's live part (4 bytes per file page)
+  // stays in the CPU cache while a hash slot per frame would miss it.
+  std::vector<uint32_t> direct_;
   // Open addressing: page_no << 32 | (frame index + 1), 0 = empty.  The page
   // number in the slot lets a lookup skip the frame (a cache miss) on a probe.
   std::vector<uint64_t> table_;
@@ -125,7 +143,7 @@ class PageRef {
     if (f_ != nullptr) pool_->unpin_recycle(f_);
     f_ = nullptr;
   }
-  std::byte* data() const { return f_->data; }
+  std::byte* data() const { return pool_->data_of(f_); }
   uint32_t page_no() const { return f_->page_no; }
   void mark_dirty() const { f_->dirty = true; }
   explicit operator bool() const { return f_ != nullptr; }

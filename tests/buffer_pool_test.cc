@@ -76,6 +76,57 @@ TEST(BufferPoolTest, EvictedDirtyPagesAreWrittenBackAndReadAgain) {
   EXPECT_EQ(fresh.stats().pages_read, pages);
 }
 
+// Cached pages are found by a direct map for low page numbers and by a hash
+// table above it (4 pages per frame): both must find what they hold, forget
+// what they evict, and meet at the boundary.
+TEST(BufferPoolTest, PagesAreFoundOnBothSidesOfTheDirectMap) {
+  testing::TempDir dir;
+  auto file = new_file(dir);
+  BufferPool pool(file.get(), kPage, 0);
+  const uint32_t mapped = 4 * static_cast<uint32_t>(pool.frame_count());
+  std::vector<uint32_t> pages;
+  for (uint32_t p = 1; p <= 20; ++p) pages.push_back(p);
+  for (uint32_t p = mapped - 10; p <= mapped + 10; ++p) pages.push_back(p);
+  for (uint32_t p = 7 * mapped; p < 7 * mapped + 20; ++p) pages.push_back(p);
+  ASSERT_LT(pages.size(), pool.frame_count());
+  for (uint32_t p : pages) {
+    Frame* f = nullptr;
+    ASSERT_OK(pool.create(p, &f));
+    page::store64(f->data + page::kPageHeaderBytes, stamp(p, 5));
+    pool.unpin(f);
+  }
+  for (uint32_t p : pages) {  // all cached: hits, each in its own frame
+    Frame* f = nullptr;
+    ASSERT_OK(pool.fetch(p, &f));
+    EXPECT_EQ(f->page_no, p);
+    EXPECT_EQ(page::load64(f->data + page::kPageHeaderBytes), stamp(p, 5)) << "page " << p;
+    pool.unpin(f);
+  }
+  EXPECT_EQ(pool.stats().misses, 0u);
+  // Churn: a random walk over pages on both sides evicts and refetches; every
+  // page read back holds its own stamp, whichever structure found it.
+  uint64_t seed = 12345;
+  std::vector<bool> written(8 * mapped, false);
+  for (uint32_t p : pages) written[p] = true;
+  for (int step = 0; step < 20000; ++step) {
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    const uint32_t p = 1 + static_cast<uint32_t>((seed >> 33) % (8 * mapped - 1));
+    Frame* f = nullptr;
+    if (!written[p]) {
+      ASSERT_OK(pool.create(p, &f));
+      page::store64(f->data + page::kPageHeaderBytes, stamp(p, 5));
+      written[p] = true;
+    } else {
+      ASSERT_OK(pool.fetch(p, &f));
+      ASSERT_EQ(page::load64(f->data + page::kPageHeaderBytes), stamp(p, 5)) << "page " << p;
+    }
+    ASSERT_EQ(f->page_no, p);
+    pool.unpin(f);
+  }
+  EXPECT_GT(pool.stats().hits, 0u);
+  EXPECT_GT(pool.stats().misses, 0u);
+}
+
 TEST(BufferPoolTest, PinnedPagesAreNeverEvicted) {
   testing::TempDir dir;
   auto file = new_file(dir);
