@@ -25,36 +25,65 @@ void SubtreeLeaves::add_to(ConstructResult* r) const {
   r->elements += elements;
 }
 
+// Point i of an n-point lattice axis (n = 3 or 5) over an octant starting
+// at tick a with edge e sits at a + i e / (n - 1) ticks: a whole number of
+// quarter ticks, so every octant that shares the point computes the same
+// coordinate, rounded once.
+void Descent::lattice(const Octant& o, int n, float* out) const {
+  const double quarter = p_.tick_m / 4;
+  const uint64_t step = 4 * uint64_t{octant_edge(o)} / (n - 1);
+  double axes[3][5];
+  const uint32_t start[3] = {o.x, o.y, o.z};
+  for (int a = 0; a < 3; ++a)
+    for (int i = 0; i < n; ++i) axes[a][i] = double(4 * uint64_t{start[a]} + i * step) * quarter;
+  model_.vs_on_lattice(axes[0], axes[1], axes[2], n, out);
+}
+
 // The least Vs over the 27 sample points, floored by --vs-min.
-double Descent::vs_min_of(const Octant& o) const {
-  const double t = p_.tick_m, h = octant_edge(o) * t / 2;
-  return std::max(model_.min_vs_on_lattice(o.x * t, o.y * t, o.z * t, h), o_.vs_min);
+double Descent::vs_min_of(const float* samples) const {
+  return std::max<double>(*std::min_element(samples, samples + 27), o_.vs_min);
+}
+
+bool Descent::splits(const Octant& o, double vs) const {
+  const double edge_m = octant_edge(o) * p_.tick_m;
+  const bool too_big = edge_m > vs * inv_rate_;
+  return o.level < o_.min_level || (too_big && o.level < o_.max_level);
 }
 
 bool Descent::splits(const Octant& o) const {
-  const double edge_m = octant_edge(o) * p_.tick_m;
-  const bool too_big = edge_m > vs_min_of(o) * inv_rate_;
-  return o.level < o_.min_level || (too_big && o.level < o_.max_level);
+  float samples[27];
+  lattice(o, 3, samples);
+  return splits(o, vs_min_of(samples));
 }
 
 void Descent::visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const {
   out->clear();
-  out->overflow = !visit(o, cap, out);
+  float samples[27];
+  lattice(o, 3, samples);
+  out->overflow = !visit(o, samples, cap, out);
 }
 
-// False once the subtree has more than cap leaves.
-bool Descent::visit(const Octant& o, size_t cap, SubtreeLeaves* out) const {
-  const double edge_m = octant_edge(o) * p_.tick_m;
-  const double vs = vs_min_of(o);
-  const bool too_big = edge_m > vs * inv_rate_;
-  if (o.level < o_.min_level || (too_big && o.level < o_.max_level)) {
+// o's 27 samples are given (its parent's lattice held them).  A split
+// evaluates its 5 x 5 x 5 lattice once, 125 samples for the 216 of the
+// children's own lattices, and hands each child its 27.  False once the
+// subtree has more than cap leaves.
+bool Descent::visit(const Octant& o, const float* samples, size_t cap, SubtreeLeaves* out) const {
+  const double vs = vs_min_of(samples);
+  if (splits(o, vs)) {
+    float fine[125], child[27];
+    lattice(o, 5, fine);
     for (int c = 0; c < 8; ++c) {
-      if (!visit(octant_child(o, c), cap, out)) return false;
+      const int cx = 2 * (c & 1), cy = (c & 2), cz = (c & 4) / 2;
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 3; ++j)
+          for (int i = 0; i < 3; ++i)
+            child[(k * 3 + j) * 3 + i] = fine[((cz + k) * 5 + cy + j) * 5 + cx + i];
+      if (!visit(octant_child(o, c), child, cap, out)) return false;
     }
     return true;
   }
   if (out->elements == cap) return false;
-  emit(o, edge_m, vs, out);
+  emit(o, octant_edge(o) * p_.tick_m, vs, out);
   return true;
 }
 

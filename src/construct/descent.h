@@ -2,9 +2,11 @@
 // into tasks for worker threads.
 //
 // A subtree is visited depth first in Z-order: an octant whose least Vs over
-// its 27 sample points asks for a finer edge (or that lies above
-// --min-level) is split, any other is a leaf, written with the material at
-// its centre.  Subtrees are independent, so workers may visit them in any
+// its 27 sample points (the corners, edge midpoints, face centres and centre)
+// asks for a finer edge (or that lies above --min-level) is split, any other
+// is a leaf, written with the material at its centre.  A split octant's
+// 5 x 5 x 5 lattice holds its children's sample points, so each is
+// evaluated once.  Subtrees are independent, so workers may visit them in any
 // order; their leaves are written in Z-order (construct.cc), and the table
 // is the same for any number of threads.
 #pragma once
@@ -46,8 +48,11 @@ class Descent {
   void visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const;
 
  private:
-  double vs_min_of(const Octant& o) const;
-  bool visit(const Octant& o, size_t cap, SubtreeLeaves* out) const;
+  // Vs at o's n x n x n lattice (n = 3: its 27 sample points).
+  void lattice(const Octant& o, int n, float* out) const;
+  double vs_min_of(const float* samples) const;
+  bool splits(const Octant& o, double vs) const;
+  bool visit(const Octant& o, const float* samples, size_t cap, SubtreeLeaves* out) const;
   void emit(const Octant& o, double edge_m, double vs, SubtreeLeaves* out) const;
 
   const ConstructOptions& o_;

@@ -57,24 +57,21 @@ class Basin final : public VelocityModel {
     return {static_cast<float>(vp), static_cast<float>(vs), static_cast<float>(rho)};
   }
   // The bowl depth once per column of the lattice, an inclusion cell's hash
-  // once per run of points in the same cell (a small octant's 27 points
-  // share one), and Vs only.
-  double min_vs_on_lattice(double x, double y, double z, double h) const override {
-    double vs = 1e300;
+  // once per run of points in the same cell (a small octant's points share
+  // one), and Vs only.
+  void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                     float* out) const override {
     InclusionCell cell;
-    for (int j = 0; j < 3; ++j) {
-      for (int i = 0; i < 3; ++i) {
-        const double cx = x + i * h, cy = y + j * h, depth = sediment_depth(cx, cy);
-        for (int k = 0; k < 3; ++k) {
-          const double cz = z + k * h;
-          const bool sediment = cz < depth;
-          const bool inclusion = !sediment && cell.holds(cx, cy, cz);
-          // Rounded as at() rounds, so both paths build the same octree.
-          vs = std::min<double>(vs, static_cast<float>(vs_of(cz, sediment, inclusion)));
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double depth = sediment_depth(xs[i], ys[j]);
+        for (int k = 0; k < n; ++k) {
+          const bool sediment = zs[k] < depth;
+          const bool inclusion = !sediment && cell.holds(xs[i], ys[j], zs[k]);
+          out[(k * n + j) * n + i] = static_cast<float>(vs_of(zs[k], sediment, inclusion));
         }
       }
     }
-    return vs;
   }
 
   std::string describe() const override {

@@ -19,16 +19,15 @@ class VelocityModel {
  public:
   virtual ~VelocityModel() = default;
   virtual Material at(double x, double y, double z) const = 0;
-  // The least Vs over the 3 x 3 x 3 lattice (x + i h, y + j h, z + k h),
-  // i, j, k in 0..2: what construct asks of every octant it visits.  Models
-  // override it when they can share work between the samples.
-  virtual double min_vs_on_lattice(double x, double y, double z, double h) const {
-    double vs = 1e300;
-    for (int k = 0; k < 3; ++k)
-      for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 3; ++i)
-          vs = std::min<double>(vs, at(x + i * h, y + j * h, z + k * h).vs);
-    return vs;
+  // Vs, rounded as at() rounds it, at every point (xs[i], ys[j], zs[k]) of
+  // an n x n x n lattice, into out[(k * n + j) * n + i]: what construct asks
+  // of every octant it splits (n = 5: the 3 x 3 x 3 sample points of all
+  // eight children).  Models override it when the points can share work.
+  virtual void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                             float* out) const {
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) out[(k * n + j) * n + i] = at(xs[i], ys[j], zs[k]).vs;
   }
   // A one-line description with the parameters, for logs and metadata.
   virtual std::string describe() const = 0;
