@@ -12,6 +12,7 @@
 #include "db/octant_table.h"
 #include "extract/extract_search.h"
 #include "extract/extract_sort.h"
+#include "extract/node_classifier.h"
 #include "schema/node.h"
 #include "schema/octant.h"
 
@@ -19,8 +20,9 @@ namespace weaver {
 namespace {
 
 // Bytes of memory per finest-level leaf in the active bucket: its key, about
-// one node in a half-full hash table (9 bytes / 0.5), and the sort vector.
-constexpr uint64_t kBytesPerLeaf = 8 + 24 + 16;
+// one node in a half-full hash table (9 bytes / 0.5), the sort vector, and
+// the classifier's index of the bucket's leaves.
+constexpr uint64_t kBytesPerLeaf = 8 + 24 + 16 + NodeClassifier::kIndexBytesPerLeaf;
 // No bucket holds more than 8^kMaxBucketDepth finest leaves (kLevel) or
 // kMaxBucketLeaves leaves (kLeaves) whatever the budget: its hash table then
 // stays in the CPU caches.  Larger buckets only save spills, which cost far

@@ -1,6 +1,7 @@
 #include "extract/node_classifier.h"
 
 #include <algorithm>
+#include <bit>
 
 namespace weaver {
 namespace {
@@ -26,10 +27,10 @@ bool direction_pixel(Coord n, int d, Coord* p) {
 // The last key <= k in sorted `keys`, or null.  Branch-free halving: the
 // bucket's leaves are searched for millions of nodes, and a mispredicted
 // branch at every step of std::upper_bound costs more than the compares.
-const uint64_t* last_at_most(const std::vector<uint64_t>& keys, uint64_t k) {
-  if (keys.empty() || keys[0] > k) return nullptr;
-  const uint64_t* base = keys.data();
-  size_t n = keys.size();
+// The last of keys[0, n) that is <= k, or null.
+const uint64_t* last_at_most(const uint64_t* keys, size_t n, uint64_t k) {
+  if (n == 0 || keys[0] > k) return nullptr;
+  const uint64_t* base = keys;
   while (n > 1) {
     const size_t half = n / 2;
     base = base[half] <= k ? base + half : base;
@@ -39,6 +40,37 @@ const uint64_t* last_at_most(const std::vector<uint64_t>& keys, uint64_t k) {
 }
 
 }  // namespace
+
+void NodeClassifier::set_local(const std::vector<uint64_t>* leaf_keys, uint64_t start,
+                               uint64_t end) {
+  leaf_keys_ = leaf_keys;
+  local_start_ = start;
+  local_end_ = end;
+  const size_t n = leaf_keys->size();
+  // The last bucket ends at UINT64_MAX; pixels' codes end at 2^60.
+  const uint64_t top = std::min(end, uint64_t{1} << (3 * kMaxLevel));
+  const int span_bits = top > start ? static_cast<int>(std::bit_width(top - start - 1)) : 0;
+  slot_shift_ = std::max(0, span_bits - static_cast<int>(std::bit_width(n / 2)));
+  const size_t slots = top > start ? ((top - start - 1) >> slot_shift_) + 1 : 0;
+  slot_first_.resize(slots + 1);
+  size_t i = 0;
+  for (size_t s = 0; s < slots; ++s) {
+    const uint64_t from = start + (uint64_t{s} << slot_shift_);
+    while (i < n && octant_key_morton((*leaf_keys)[i]) < from) ++i;
+    slot_first_[s] = static_cast<uint32_t>(i);
+  }
+  slot_first_[slots] = static_cast<uint32_t>(n);
+}
+
+// Leaves before pm's slot start before it, so their keys are <= pk; leaves
+// after it start after pm, so theirs are > pk.
+const uint64_t* NodeClassifier::local_floor(uint64_t pm, uint64_t pk) const {
+  const size_t s = (pm - local_start_) >> slot_shift_;
+  const uint32_t lo = slot_first_[s], hi = slot_first_[s + 1];
+  const uint64_t* keys = leaf_keys_->data();
+  if (const uint64_t* f = last_at_most(keys + lo, hi - lo, pk)) return f;
+  return lo > 0 ? keys + lo - 1 : nullptr;
+}
 
 // The leaf holding pixel p, if any: the active bucket's leaves if p is in
 // its range (no other leaf can hold it), else the octant table.  Works on
@@ -52,7 +84,7 @@ Status NodeClassifier::leaf_at(Coord p, Octant* leaf, bool* found) {
   };
   *found = false;
   if (leaf_keys_ != nullptr && pm >= local_start_ && pm < local_end_) {
-    const uint64_t* floor = last_at_most(*leaf_keys_, pk);
+    const uint64_t* floor = local_floor(pm, pk);
     if (floor != nullptr && holds_p(*floor)) {
       *leaf = octant_from_key(*floor);
       *found = true;

@@ -34,23 +34,30 @@ class NodeClassifier {
 
   // Leaves of the active bucket (sorted keys), searched instead of the
   // octant table for pixels whose Morton code is in [start, end): no other
-  // leaf can hold those (bucket_worker.h).
-  void set_local(const std::vector<uint64_t>* leaf_keys, uint64_t start, uint64_t end) {
-    leaf_keys_ = leaf_keys;
-    local_start_ = start;
-    local_end_ = end;
-  }
+  // leaf can hold those (bucket_worker.h).  Indexes them (slot_first_).
+  void set_local(const std::vector<uint64_t>* leaf_keys, uint64_t start, uint64_t end);
+  // Bytes of the index per local leaf, at most.
+  static constexpr uint64_t kIndexBytesPerLeaf = 4;
 
   Status classify(uint64_t key, uint8_t mask, NodeKind* kind);
 
  private:
   Status leaf_at(Coord p, Octant* leaf, bool* found);
+  // The last local leaf key <= pk, pm's pixel key, or null.
+  const uint64_t* local_floor(uint64_t pm, uint64_t pk) const;
   Status kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind, uint8_t* covered);
   Status unbalanced(Coord n, const Octant& coarse, uint8_t mask);
 
   BTree& octants_;
   const std::vector<uint64_t>* leaf_keys_ = nullptr;
   uint64_t local_start_ = 0, local_end_ = 0;
+  // The local range cut into equal slots of 2^slot_shift_ Morton codes, one for
+  // every one or two leaves: slot_first_[s] is the first leaf whose anchor is in
+  // slot s or later.  A pixel's floor is then found among the few leaves of
+  // its slot, not by a binary search over the whole bucket (a cache miss a
+  // step on a graded mesh's large buckets).
+  std::vector<uint32_t> slot_first_;
+  int slot_shift_ = 0;
 };
 
 inline void count_kind(NodeKind k, ExtractResult* r) {
