@@ -289,6 +289,28 @@ bool memory_latency(uint64_t bytes, Json* j) {
   return true;
 }
 
+// The floor with a small pool: one 4 KiB pread of a random page of the tree
+// file (in the page cache, as the lookups left it), in reads per second.
+// A lookup that misses the pool makes at least one.
+bool pread_floor(const std::string& path, Json* j) {
+  std::unique_ptr<File> f;
+  if (!report(open_posix_file(path, OpenMode::kReadOnly, &f))) return false;
+  uint64_t size = 0;
+  if (!report(f->size(&size))) return false;
+  const uint64_t pages = size / 4096, reads = 200'000;
+  std::vector<std::byte> page(4096);
+  uint64_t seed = 11, sum = 0;
+  const double t0 = now_seconds();
+  for (uint64_t r = 0; r < reads; ++r) {
+    if (!report(read_fully(*f, (splitmix(&seed) % pages) * 4096, page.data(), 4096))) return false;
+    sum += static_cast<uint64_t>(page[100]);
+  }
+  const double secs = now_seconds() - t0;
+  j->add("bench", "store").add("backend", "file").add("workload", "pread_4k");
+  j->add("n", pages).add("queries_per_s", reads / secs).add("checksum", sum & 0xff);
+  return true;
+}
+
 std::string median_of(std::vector<std::map<std::string, std::string>>& runs, const char* key) {
   std::vector<double> v;
   for (auto& r : runs) {
@@ -297,11 +319,12 @@ std::string median_of(std::vector<std::map<std::string, std::string>>& runs, con
   return v.empty() ? "" : fmt(median(v));
 }
 
-void add_latency_row(uint64_t bytes, int repeat,
-                     std::vector<std::map<std::string, std::string>>* table) {
+// Runs one of the floors `repeat` times and adds its median row.
+void add_floor_row(const std::function<bool(Json*)>& floor, int repeat,
+                   std::vector<std::map<std::string, std::string>>* table) {
   std::vector<std::map<std::string, std::string>> runs;
   for (int r = 0; r < repeat; ++r) {
-    const std::string line = run_in_child([&](Json* j) { return memory_latency(bytes, j); });
+    const std::string line = run_in_child(floor);
     if (line.empty()) continue;
     std::printf("%s\n", line.c_str());
     runs.push_back(parse_flat_json(line));
@@ -351,8 +374,10 @@ int usage() {
       "                   [--pool 20M] [--large-pool 512M] [--queries 2M] [--repeat 3]\n"
       "                   [--backends btree,lsm] [--dir /tmp/weaver-bench]\n"
       "Lookups run twice: with the small pool and with the large one (which holds the tree).\n"
-      "With lookups, a 'memory dependent_read' row gives the machine's floor: dependent\n"
-      "random reads per second over a buffer the size of the tree file.\n");
+      "With lookups, two rows give the machine's floors: 'memory dependent_read', dependent\n"
+      "random reads per second over a buffer the size of the tree file (a lookup in the\n"
+      "pool chains at least one), and 'file pread_4k', random 4 KiB preads of the cached\n"
+      "tree file (a lookup that misses the pool makes at least one).\n");
   return 2;
 }
 
@@ -429,7 +454,9 @@ int main(int argc, char** argv) {
       if (backend == "btree" && std::filesystem::exists(seq_path) &&
           (std::count(c.workloads.begin(), c.workloads.end(), "getrandom") > 0 ||
            std::count(c.workloads.begin(), c.workloads.end(), "floorrandom") > 0)) {
-        add_latency_row(std::filesystem::file_size(seq_path), c.repeat, &table);
+        const uint64_t bytes = std::filesystem::file_size(seq_path);
+        add_floor_row([&](Json* j) { return memory_latency(bytes, j); }, c.repeat, &table);
+        add_floor_row([&](Json* j) { return pread_floor(seq_path, j); }, c.repeat, &table);
       }
       if (!std::getenv("WEAVER_BENCH_KEEP")) std::filesystem::remove_all(seq_path);
       std::filesystem::remove_all(rnd_path);
