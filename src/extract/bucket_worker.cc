@@ -186,7 +186,9 @@ Status BucketWorker::run(BucketTask& t) {
   t.counts = ExtractResult{};
   t.counts.elements = t.leaf_keys.size();
   classifier_.set_local(&t.leaf_keys, t.start, t.end);
-  hash_.reset(t.leaf_keys.size() + t.incoming.size() + 64);
+  // Up to about 1.5 nodes a leaf (a randomly refined octree's dangling
+  // nodes); sized for them, the table never grows mid-bucket.
+  hash_.reset(t.leaf_keys.size() * 3 / 2 + t.incoming.size() + 64);
   uint64_t corners[8];
   const std::vector<uint64_t>& leaves = t.leaf_keys;
   for (size_t i = 0; i < leaves.size();) {

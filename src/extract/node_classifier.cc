@@ -72,32 +72,39 @@ const uint64_t* NodeClassifier::local_floor(uint64_t pm, uint64_t pk) const {
   return lo > 0 ? keys + lo - 1 : nullptr;
 }
 
-// The leaf holding pixel p, if any: the active bucket's leaves if p is in
-// its range (no other leaf can hold it), else the octant table.  Works on
-// Morton codes: a leaf holds p iff p's code is in its subtree's code range.
-Status NodeClassifier::leaf_at(Coord p, Octant* leaf, bool* found) {
+// The leaf holding pixel p, if any: one of the last found in each direction
+// if it holds p (the nodes come in Z-order, and the nodes along a coarse
+// leaf's face or edge all ask for it in the same direction), else the active bucket's leaves if p
+// is in its range (no other leaf can hold it), else the octant table.  Works on Morton codes: a
+// leaf holds p iff p's code is in its subtree's code range.
+Status NodeClassifier::leaf_at(Coord p, int direction, Octant* leaf, bool* found) {
   const uint64_t pm = morton_encode(p);
+  for (const RecentLeaf& r : recent_) {
+    if (((r.morton ^ pm) >> r.span_bits) == 0) {
+      *leaf = r.leaf;
+      *found = true;
+      return Status::Ok();
+    }
+  }
   const uint64_t pk = pixel_key_of_morton(pm);
   auto holds_p = [pm](uint64_t key) {
     const int bits = 3 * (kMaxLevel - octant_key_level(key));
     return ((octant_key_morton(key) ^ pm) >> bits) == 0;
   };
   *found = false;
+  uint64_t key = 0;
   if (leaf_keys_ != nullptr && pm >= local_start_ && pm < local_end_) {
     const uint64_t* floor = local_floor(pm, pk);
-    if (floor != nullptr && holds_p(*floor)) {
-      *leaf = octant_from_key(*floor);
-      *found = true;
-    }
-    return Status::Ok();
+    if (floor == nullptr || !holds_p(*floor)) return Status::Ok();
+    key = *floor;
+  } else {
+    bool hit = false;
+    WEAVER_RETURN_IF_ERROR(octants_.floor(pk, &key, nullptr, &hit));
+    if (!hit || !holds_p(key)) return Status::Ok();
   }
-  uint64_t key = 0;
-  bool hit = false;
-  WEAVER_RETURN_IF_ERROR(octants_.floor(pk, &key, nullptr, &hit));
-  if (hit && holds_p(key)) {
-    *leaf = octant_from_key(key);
-    *found = true;
-  }
+  *leaf = octant_from_key(key);
+  *found = true;
+  recent_[direction] = {octant_key_morton(key), 3 * (kMaxLevel - octant_key_level(key)), *leaf};
   return Status::Ok();
 }
 
@@ -111,7 +118,7 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
     Coord p;
     Octant leaf;
     bool found = false;
-    if (direction_pixel(n, d, &p)) WEAVER_RETURN_IF_ERROR(leaf_at(p, &leaf, &found));
+    if (direction_pixel(n, d, &p)) WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
     if (!found) {  // outside the root or the domain
       settled |= static_cast<uint8_t>(1u << d);
       continue;
@@ -162,7 +169,7 @@ Status NodeClassifier::unbalanced(Coord n, const Octant& coarse, uint8_t mask) {
     Octant leaf;
     bool found = false;
     if (!((mask >> d) & 1) || !direction_pixel(n, d, &p)) continue;
-    WEAVER_RETURN_IF_ERROR(leaf_at(p, &leaf, &found));
+    WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
     if (found) {
       fine = describe_octant(leaf);
       break;

@@ -42,7 +42,8 @@ class NodeClassifier {
   Status classify(uint64_t key, uint8_t mask, NodeKind* kind);
 
  private:
-  Status leaf_at(Coord p, Octant* leaf, bool* found);
+  // p is the pixel in `direction` (0..7) of a node.
+  Status leaf_at(Coord p, int direction, Octant* leaf, bool* found);
   // The last local leaf key <= pk, pm's pixel key, or null.
   const uint64_t* local_floor(uint64_t pm, uint64_t pk) const;
   Status kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind, uint8_t* covered);
@@ -58,6 +59,15 @@ class NodeClassifier {
   // step on a graded mesh's large buckets).
   std::vector<uint32_t> slot_first_;
   int slot_shift_ = 0;
+  // The leaf leaf_at found last in each direction (the octree does not
+  // change, so they stay valid across buckets).  An empty entry's code is
+  // past every pixel's.
+  struct RecentLeaf {
+    uint64_t morton = UINT64_MAX;
+    int span_bits = 0;  // the leaf holds the pixels that share its code above these bits
+    Octant leaf{};
+  };
+  RecentLeaf recent_[8];
 };
 
 inline void count_kind(NodeKind k, ExtractResult* r) {
