@@ -19,10 +19,10 @@
 namespace weaver {
 namespace {
 
-// Bytes of memory per finest-level leaf in the active bucket: its key, about
-// one node in a half-full hash table (9 bytes / 0.5), the sort vector, and
-// the classifier's index of the bucket's leaves.
-constexpr uint64_t kBytesPerLeaf = 8 + 24 + 16 + NodeClassifier::kIndexBytesPerLeaf;
+// Bytes of memory per finest-level leaf in the active bucket: its key, room
+// for 1.5 nodes in a half-full hash table (1.5 x 9 bytes / 0.5), the sort
+// vector, and the classifier's index of the bucket's leaves.
+constexpr uint64_t kBytesPerLeaf = 8 + 27 + 16 + NodeClassifier::kIndexBytesPerLeaf;
 // No bucket holds more than 8^kMaxBucketDepth finest leaves (kLevel) or
 // kMaxBucketLeaves leaves (kLeaves) whatever the budget: its hash table then
 // stays in the CPU caches.  Larger buckets only save spills, which cost far
