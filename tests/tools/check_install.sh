@@ -17,6 +17,15 @@ db=$work/basin.db
 "$weaver" mesh "$db" --model basin --freq 0.05 --quiet > /dev/null
 
 fail() { echo "check_install: $*" >&2; exit 1; }
+
+# The installed library exports its API and nothing else: C functions named
+# weaver_* and C++ symbols of weaver::api (and their typeinfo and vtables).
+lib=$(ls "$prefix"/lib*/libweaver.so | head -1)
+exports=$(nm -D --defined-only -C "$lib" | cut -d' ' -f3-)
+[ -n "$(echo "$exports" | grep '^weaver_open')" ] || fail "weaver_open is not exported"
+[ -n "$(echo "$exports" | grep '^weaver::api::MeshDatabase')" ] || fail "weaver::api is not exported"
+strays=$(echo "$exports" | grep -v -E '^(weaver_|weaver::api::|(typeinfo|typeinfo name|vtable) for weaver::api::)' || true)
+[ -z "$strays" ] || fail "exports more than its API: $(echo "$strays" | head -3 | tr '\n' ';')"
 summary=$("$work/examples/mesh_summary" "$db")
 stat=$("$weaver" stat "$db")
 count() { echo "$stat" | awk -v t="$1" -v f="$2" '$1 == "table" && $2 == t {on = 1} on && $1 == f {print $2; exit}'; }
