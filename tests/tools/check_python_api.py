@@ -2,11 +2,13 @@
 line: it iterates the mesh and answers a batch of locates; every answer is
 compared with `weaver query ... --format csv` and `weaver stat`.
 usage: check_python_api.py MODULE_DIR WEAVER DB WORK_DIR"""
+import array
 import csv
 import io
 import random
 import subprocess
 import sys
+import warnings
 
 module_dir, weaver_bin, db_path, work = sys.argv[1:5]
 sys.path.insert(0, module_dir)
@@ -61,6 +63,37 @@ with weaver.Database(db_path) as db:
             fail(f"inside differs: {hit} {row}")
         if hit.inside and (hit.element != int(row["element"]) or hit.level != int(row["level"])):
             fail(f"locate differs: {hit} {row}")
+    # The same batch through a buffer, with no Python object per point: an
+    # array.array, a read-only view of it, and numpy's arrays when numpy is
+    # there (a structured view of the answers, zero-copy both ways).
+    flat = array.array("I", [c for p in points for c in p])
+    for buf in (flat, memoryview(flat).toreadonly()):
+        raw = db.locate_buffer(buf)
+        if [(bool(h.inside), h.element, h.level) for h in raw] != \
+                [(h.inside, h.element, h.level) for h in hits]:
+            fail("locate_buffer differs from locate")
+    try:
+        db.locate_buffer(array.array("d", [1.0, 2.0, 3.0]))
+        fail("locate_buffer took float64 points")
+    except TypeError:
+        pass
+    try:
+        import numpy
+    except ImportError:
+        numpy = None
+    if numpy is not None:
+        xyz = numpy.array(points, dtype=numpy.uint32)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # numpy must read the records' layout, not guess it
+            got = numpy.ctypeslib.as_array(db.locate_buffer(xyz))
+        if got.shape != (len(points),) or \
+                list(got["element"][got["inside"] != 0]) != [h.element for h in hits if h.inside]:
+            fail("locate_buffer through numpy differs from locate")
+        try:
+            db.locate_buffer(xyz[:, :2].copy())
+            fail("locate_buffer took pairs")
+        except ValueError:
+            pass
     outside = sum(not h.inside for h in hits)
     if outside == 0 or outside == len(hits):
         fail("the points should be partly outside")

@@ -9,6 +9,7 @@ where the WEAVER_LIBRARY environment variable points.
         print(db.element_count, db.node_count)
         for hit in db.locate([(440000, 576000, 1000), (0, 0, 0)]):
             print(hit.inside, hit.element, hit.level, hit.vs)
+        hits = numpy.ctypeslib.as_array(db.locate_buffer(xyz))  # xyz: (n, 3) uint32
         for e in db.elements():
             ...
 
@@ -31,7 +32,8 @@ class _Hit(ctypes.Structure):
     _fields_ = [("inside", ctypes.c_int32), ("level", ctypes.c_int32),
                 ("element", ctypes.c_uint64), ("corner", ctypes.c_uint32 * 3),
                 ("edge", ctypes.c_uint32), ("vp", ctypes.c_float), ("vs", ctypes.c_float),
-                ("rho", ctypes.c_float)]
+                ("rho", ctypes.c_float),
+                ("pad_", ctypes.c_int32)]  # weaver_hit's tail padding, named for numpy's view
 
 
 class _Element(ctypes.Structure):
@@ -185,6 +187,25 @@ class Database:
         self._check(self._lib.weaver_locate(self._db, xyz, n, out))
         return [Hit(bool(h.inside), h.element, tuple(h.corner), h.level, h.edge, h.vp, h.vs,
                     h.rho) for h in out]
+
+    def locate_buffer(self, points):
+        """The batch without Python objects: points is any C-contiguous buffer
+        of uint32 x, y, z triples (a numpy array of shape (n, 3) and dtype
+        uint32, an array.array("I"), ...), read in place when it is writable.
+        Returns a ctypes array of n hit records, which
+        numpy.ctypeslib.as_array() views as a structured array (fields inside,
+        level, element, corner, edge, vp, vs, rho) without copying."""
+        view = memoryview(points)
+        if view.itemsize != 4 or view.format.lstrip("@=<") not in ("I", "L"):
+            raise TypeError(f"points must hold uint32 values, not format {view.format!r}")
+        if not view.c_contiguous or view.nbytes % 12 != 0:
+            raise ValueError("points must be C-contiguous x, y, z triples")
+        n = view.nbytes // 12
+        xyz_type = ctypes.c_uint32 * (3 * n)
+        xyz = xyz_type.from_buffer_copy(view) if view.readonly else xyz_type.from_buffer(view)
+        out = (_Hit * n)()
+        self._check(self._lib.weaver_locate(self._db, xyz, n, out))
+        return out
 
     def element(self, element_id):
         e = _Element()
