@@ -165,6 +165,32 @@ TEST(Shell, ScriptThroughAPipeRunsQueriesAndDotCommands) {
   EXPECT_EQ(snapshot(db), files) << "the shell wrote to the database";
 }
 
+// `--points -` in a script takes the lines after it, up to ".", and the
+// script goes on after them: the same rows as a points file.
+TEST(Shell, PointsFromTheLinesThatFollowAQuery) {
+  testing::TempDir dir;
+  const std::string db = testing::build_mesh(testing::small_sphere(), dir);
+  const std::string points = "0 0 0\n3,4,5\nnot a point\n# a comment\n7 1 2\n";
+  std::ofstream(dir.file("points.txt")) << points;
+  const std::string same =
+      testing::run("query " + db + " locate --points " + dir.file("points.txt") + " --format csv")
+          .out;
+  ASSERT_NE(same.find("bad"), std::string::npos) << same;
+  ShellProcess sh(db, false);
+  sh.send("locate --points - --format csv\n" + points + ".\nelement 0 --format csv\n" +
+          "node-at --points - --format csv\n0 0 0\n");  // the input's end ends these points
+  sh.close_input();
+  const std::string out = sh.read_until("\x04");
+  EXPECT_EQ(sh.wait(), 1) << out;  // a bad line
+  const size_t rows = out.find(same);
+  EXPECT_NE(rows, std::string::npos) << "the rows of the points file:\n" << out;
+  EXPECT_NE(out.find("stdin:3: 'not' is not a whole number"), std::string::npos) << out;
+  const size_t element = out.find("element,x,y,z,level,edge,nodes\n0,0,0,0,", rows);
+  EXPECT_NE(element, std::string::npos) << "the script goes on after '.':\n" << out;
+  EXPECT_NE(out.find("x,y,z,status,node,kind\n0,0,0,node,0,anchored\n", element), std::string::npos)
+      << out;
+}
+
 TEST(Shell, ReloadSeesTheNewestCommit) {
   testing::TempDir dir;
   const std::string db = testing::build_mesh(testing::small_sphere(), dir);

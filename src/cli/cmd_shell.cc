@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <sstream>
 
@@ -37,6 +38,8 @@ constexpr char kDotHelp[] =
     ".reload               reopen the database at its newest commit\n"
     ".show                 the database, its counts and the settings\n"
     ".quit                 leave (also .exit, or Ctrl-D)\n"
+    "A query with --points - reads its points from the lines that follow it, up to a\n"
+    "line holding only \".\" (or the end of the input).\n"
     "Queries:\n";
 
 // Splits a line into words at blanks; "double" or 'single' quotes keep
@@ -72,14 +75,20 @@ class Shell {
   Status open() { return Explorer::open(db_, memory_, &ex_); }
   bool failed() const { return failed_; }
 
-  // Runs one line; false when it asks to leave.
-  bool line(const std::string& text) {
+  // Gives the next line of the input the current line came from; false at its end.
+  using NextLine = std::function<bool(std::string*)>;
+
+  // Runs one line; false when it asks to leave.  A query reading
+  // `--points -` takes the lines after it from next, up to ".".
+  bool line(const std::string& text, const NextLine& next) {
     const std::vector<std::string> w = words_of(text);
     if (w.empty() || w[0][0] == '#') return true;
     const auto t0 = std::chrono::steady_clock::now();
     bool go_on = true;
     if (w[0][0] == '.') {
       go_on = dot(w);
+    } else if (reads_points_from_input(w)) {
+      query_with_inline_points(w, next);
     } else {
       std::fflush(stdout);
       failed_ |= run_query(*ex_, w, settings_, stdout, stderr, "error") != 0;
@@ -94,8 +103,9 @@ class Shell {
 
   // Runs every line of in; false when one asks to leave.
   bool lines(std::istream& in) {
+    const NextLine next = [&in](std::string* l) { return bool(std::getline(in, *l)); };
     for (std::string text; std::getline(in, text);) {
-      if (!line(text)) return false;
+      if (!line(text, next)) return false;
     }
     return true;
   }
@@ -111,6 +121,28 @@ class Shell {
     std::fflush(stdout);
     std::fprintf(stderr, "error: %s\n", message.c_str());
     failed_ = true;
+  }
+
+  static bool reads_points_from_input(const std::vector<std::string>& w) {
+    for (size_t i = 1; i + 1 < w.size(); ++i) {
+      if (w[i] == "--points" && w[i + 1] == "-") return true;
+    }
+    return false;
+  }
+
+  // The points are gathered in memory and read from there as the query's
+  // stdin: the shell's own input goes on after the ".".
+  void query_with_inline_points(const std::vector<std::string>& w, const NextLine& next) {
+    std::string points;
+    for (std::string l; next(&l) && l != ".";) points += l + "\n";
+    if (points.empty()) points = "\n";  // fmemopen needs a byte; a blank line is no point
+    std::FILE* in = fmemopen(points.data(), points.size(), "r");
+    if (in == nullptr) return error(std::string("cannot read the points: ") + std::strerror(errno));
+    QuerySettings with_points = settings_;
+    with_points.points_stdin = in;
+    std::fflush(stdout);
+    failed_ |= run_query(*ex_, w, with_points, stdout, stderr, "error") != 0;
+    std::fclose(in);
   }
 
   bool on_off(const std::vector<std::string>& w, bool* flag) {
@@ -223,10 +255,11 @@ int cmd_shell(int argc, char** argv) {
   LineEditor editor;
   const std::string history = history_path();
   if (!history.empty()) editor.load_history(history);
+  const Shell::NextLine more = [&editor](std::string* l) { return editor.read("   ...> ", l); };
   for (std::string line; editor.read("weaver> ", &line);) {
     editor.remember(line);
     clear_interrupt();
-    if (!shell.line(line)) break;
+    if (!shell.line(line, more)) break;
   }
   if (!history.empty()) editor.save_history(history);
   return 0;

@@ -160,10 +160,11 @@ int Query::run_points(PointQuery q) {
     return st.ok() ? 0 : fail(st);
   }
   const std::string& path = args.values.at("points");
-  std::FILE* in = path == "-" ? stdin : std::fopen(path.c_str(), "r");
+  std::FILE* const from_stdin = s.points_stdin != nullptr ? s.points_stdin : stdin;
+  std::FILE* in = path == "-" ? from_stdin : std::fopen(path.c_str(), "r");
   if (in == nullptr) return fail(Status::IOError(path + ": " + std::strerror(errno)));
   const Status st = run_point_batch(ex, in, path == "-" ? "stdin" : path, o, out, err, &r);
-  if (in != stdin) std::fclose(in);
+  if (in != from_stdin) std::fclose(in);
   if (!st.ok()) return fail(st);
   if (r.bad_lines == 0) return 0;
   std::fprintf(err, "%s: %llu of %llu lines were not points (rows with status 'bad')\n",

@@ -17,6 +17,9 @@ namespace weaver::cli {
 struct QuerySettings {
   OutputMode mode = OutputMode::kText;
   bool metres = false;
+  // Where `--points -` reads: the process's stdin unless set (the shell
+  // hands it the lines that follow the command).
+  std::FILE* points_stdin = nullptr;
 };
 
 // Runs one query: words[0] is its name ("locate", "neighbors", ...), the
