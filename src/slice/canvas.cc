@@ -28,7 +28,7 @@ double aligned_x(double x, const std::string& s, int scale, Canvas::Align a) {
 
 class PngCanvas : public Canvas {
  public:
-  PngCanvas(int w, int h) : image_(w, h, {255, 255, 255}) {}
+  PngCanvas(int w, int h, OutputFile* file) : image_(w, h, {255, 255, 255}), file_(file) {}
   void rect(double x0, double y0, double x1, double y1, Rgb fill, bool border) override {
     const int a = int(std::lround(x0)), b = int(std::lround(y0));
     const int c = std::max(a + 1, int(std::lround(x1))), d = std::max(b + 1, int(std::lround(y1)));
@@ -40,12 +40,14 @@ class PngCanvas : public Canvas {
   void text(double x, double y, const std::string& s, int scale, Rgb c, Align a) override {
     image_.text(int(std::lround(aligned_x(x, s, scale, a))), int(std::lround(y)), s, scale, c);
   }
-  std::string finish(const std::vector<std::pair<std::string, std::string>>& notes) override {
-    return encode_png(image_, notes);
+  Status finish(const std::vector<std::pair<std::string, std::string>>& notes) override {
+    const std::string png = encode_png(image_, notes);
+    return file_->write_at(0, png.data(), png.size());
   }
 
  private:
   Image image_;
+  OutputFile* file_;
 };
 
 std::string hex(Rgb c) {
@@ -62,41 +64,48 @@ std::string num(double v) {
 
 class SvgCanvas : public Canvas {
  public:
-  SvgCanvas(int w, int h) {
-    doc_ =
-        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" "
+  SvgCanvas(int w, int h, OutputFile* file) : out_(*file, 0) {
+    put("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" "
         "width=\"" +
         std::to_string(w) + "\" height=\"" + std::to_string(h) + "\" viewBox=\"0 0 " +
         std::to_string(w) + " " + std::to_string(h) + "\">\n" +
-        "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n";
+        "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>\n");
   }
   void rect(double x0, double y0, double x1, double y1, Rgb fill, bool border) override {
-    doc_ += "<rect x=\"" + num(x0) + "\" y=\"" + num(y0) + "\" width=\"" + num(x1 - x0) +
-            "\" height=\"" + num(y1 - y0) + "\" fill=\"" + hex(fill) + "\"";
-    doc_ += border ? " stroke=\"" + hex(kOutline) + "\" stroke-width=\"0.5\"/>\n" : "/>\n";
+    put("<rect x=\"" + num(x0) + "\" y=\"" + num(y0) + "\" width=\"" + num(x1 - x0) +
+        "\" height=\"" + num(y1 - y0) + "\" fill=\"" + hex(fill) + "\"" +
+        (border ? " stroke=\"" + hex(kOutline) + "\" stroke-width=\"0.5\"/>\n" : "/>\n"));
   }
   void text(double x, double y, const std::string& s, int scale, Rgb c, Align a) override {
     static const char* const kAnchor[] = {"start", "middle", "end"};
-    doc_ += "<text x=\"" + num(x) + "\" y=\"" + num(y + kGlyphHeight * scale) +
-            "\" font-family=\"monospace\" font-size=\"" + std::to_string(9 * scale) +
-            "\" text-anchor=\"" + kAnchor[int(a)] + "\" fill=\"" + hex(c) + "\">" + s + "</text>\n";
+    put("<text x=\"" + num(x) + "\" y=\"" + num(y + kGlyphHeight * scale) +
+        "\" font-family=\"monospace\" font-size=\"" + std::to_string(9 * scale) +
+        "\" text-anchor=\"" + kAnchor[int(a)] + "\" fill=\"" + hex(c) + "\">" + s + "</text>\n");
   }
-  std::string finish(const std::vector<std::pair<std::string, std::string>>& notes) override {
-    for (const auto& [k, v] : notes) doc_ += "<desc id=\"" + k + "\">" + v + "</desc>\n";
-    return doc_ + "</svg>\n";
+  Status finish(const std::vector<std::pair<std::string, std::string>>& notes) override {
+    for (const auto& [k, v] : notes) put("<desc id=\"" + k + "\">" + v + "</desc>\n");
+    put("</svg>\n");
+    if (status_.ok()) status_ = out_.flush();
+    return status_;
   }
 
  private:
-  std::string doc_;
+  // Drawing calls cannot fail; the first write error is kept for finish().
+  void put(const std::string& s) {
+    if (status_.ok()) status_ = out_.put(s.data(), s.size());
+  }
+
+  Section out_;
+  Status status_ = Status::Ok();
 };
 
 }  // namespace
 
-std::unique_ptr<Canvas> png_canvas(int width, int height) {
-  return std::make_unique<PngCanvas>(width, height);
+std::unique_ptr<Canvas> png_canvas(int width, int height, OutputFile* file) {
+  return std::make_unique<PngCanvas>(width, height, file);
 }
-std::unique_ptr<Canvas> svg_canvas(int width, int height) {
-  return std::make_unique<SvgCanvas>(width, height);
+std::unique_ptr<Canvas> svg_canvas(int width, int height, OutputFile* file) {
+  return std::make_unique<SvgCanvas>(width, height, file);
 }
 
 }  // namespace weaver

@@ -1,5 +1,6 @@
 // Where `weaver slice` draws: a PNG picture (an Image, encoded at the end)
-// or an SVG document (written as it is drawn).  Coordinates are pixels from
+// or an SVG document (streamed to its file as it is drawn, so its size in
+// memory does not grow with the elements drawn).  Coordinates are pixels from
 // the top-left corner; text is the 5 x 7 font's, `scale` pixels a dot.
 #pragma once
 
@@ -9,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "export/output_file.h"
+#include "schema/status.h"
 #include "slice/png.h"
 
 namespace weaver {
@@ -24,12 +27,14 @@ class Canvas {
   // `border` (the mesh's element outlines).
   virtual void rect(double x0, double y0, double x1, double y1, Rgb fill, bool border) = 0;
   virtual void text(double x, double y, const std::string& s, int scale, Rgb c, Align a) = 0;
-  // The finished document.
-  virtual std::string finish(const std::vector<std::pair<std::string, std::string>>& notes) = 0;
+  // Writes the rest of the document, with the notes (key, text), to the file
+  // given at creation: the first error of the whole drawing, if any.
+  virtual Status finish(const std::vector<std::pair<std::string, std::string>>& notes) = 0;
 };
 
-std::unique_ptr<Canvas> png_canvas(int width, int height);
-std::unique_ptr<Canvas> svg_canvas(int width, int height);
+// Both write into `file`, which must be open and outlive them.
+std::unique_ptr<Canvas> png_canvas(int width, int height, OutputFile* file);
+std::unique_ptr<Canvas> svg_canvas(int width, int height, OutputFile* file);
 
 inline constexpr Rgb kOutline{40, 40, 40};
 

@@ -281,7 +281,10 @@ Status render_slice(const std::string& db, const SliceOptions& o, const std::str
   l.scale = l.plot_w / (l.u1 - l.u0);
   l.plot_h = std::clamp(int(std::lround((l.v1 - l.v0) * l.scale)), 1, 20000);
   l.width = o.width, l.height = l.top + l.plot_h + 30 * l.font;
-  std::unique_ptr<Canvas> c = svg ? svg_canvas(l.width, l.height) : png_canvas(l.width, l.height);
+  OutputFile file(out);  // removed again unless finished
+  WEAVER_RETURN_IF_ERROR(file.open());
+  std::unique_ptr<Canvas> c =
+      svg ? svg_canvas(l.width, l.height, &file) : png_canvas(l.width, l.height, &file);
   // Pass 2: the elements.
   const double span = r->max > r->min ? r->max - r->min : 1;
   WEAVER_RETURN_IF_ERROR(s.each([&](const Cut& cut) {
@@ -312,16 +315,13 @@ Status render_slice(const std::string& db, const SliceOptions& o, const std::str
                 l.top + l.plot_h);
   std::snprintf(world, sizeof world, "%.0f %.0f %.0f %.0f", l.u0, l.v0, l.u1, l.v1);
   std::snprintf(range, sizeof range, "%.9g %.9g", r->min, r->max);
-  const std::string doc =
+  WEAVER_RETURN_IF_ERROR(
       c->finish({{"weaver.field", o.color},
                  {"weaver.axes", std::string(1, "xyz"[s.u()]) + " " + "xyz"[s.v()]},
                  {"weaver.plane", std::to_string(r->at_ticks)},
                  {"weaver.plot", plot},
                  {"weaver.world", world},
-                 {"weaver.range", range}});
-  OutputFile file(out);
-  WEAVER_RETURN_IF_ERROR(file.open());
-  WEAVER_RETURN_IF_ERROR(file.write_at(0, doc.data(), doc.size()));
+                 {"weaver.range", range}}));
   return file.finish();
 }
 
