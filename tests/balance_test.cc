@@ -88,6 +88,34 @@ TEST_F(BalanceTest, MatchesReferenceOnRandomUnbalancedOctrees) {
   EXPECT_GT(unbalanced, cases / 2);  // the cases exercise real refinement
 }
 
+// Domains whose boundary is finer than the domain map's cells (blocks of
+// levels 5 and 6; the tiny budget makes the map level 4): the candidates
+// in cells the leaves cover in part are asked of the table.
+TEST_F(BalanceTest, MatchesReferenceOnDomainsFinerThanTheDomainMap) {
+  std::mt19937_64 rng(11);
+  const int cases = static_cast<int>(testing::scaled(60, 15));
+  for (int t = 0; t < cases; ++t) {
+    GenOptions g;
+    g.seed = rng();
+    g.block_level = 5 + static_cast<int>(rng() % 2);
+    for (int a = 0; a < 3; ++a) g.blocks[a] = 1 + rng() % 5;
+    g.leaves = 150 + rng() % 200;
+    g.max_level = g.block_level + 2 + static_cast<int>(rng() % 4);
+    std::vector<Octant> leaves;
+    ASSERT_OK(generate_octree(g, &leaves));
+    const std::vector<Octant> want = reference::balance(leaves);
+    const std::string db = import(leaves);
+    SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) + " leaves");
+    BalanceOptions o;
+    o.memory = MemoryBudget(64 << 10);
+    o.threads = 1 + t % 2;
+    o.parallel_chunk = 1;
+    BalanceResult r;
+    ASSERT_OK(balance_octree(db, o, &r));
+    ASSERT_EQ(table(db), want);
+  }
+}
+
 // The basin's octree and a random one, balanced on 1 to 3 threads, with
 // chunks shared among them from the default size down to a handful of
 // parents, and budgets that spill the sorters or not: the same table, byte

@@ -47,6 +47,7 @@ struct BalanceMemory {
   uint64_t spool_buffer = 0;    // each of the closure's spools (3 per level)
   uint64_t parent_chunk = 0;    // a chunk of parents and its key set
   uint64_t candidate_sort = 0;  // the sorter of a level's candidates
+  uint64_t domain_map = 0;      // which coarse cells the leaves cover (domain_map.h)
 };
 
 struct BalanceResult {

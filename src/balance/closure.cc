@@ -17,13 +17,27 @@ namespace {
 // the stream is sparse (coarse levels have few candidates) it jumps ahead
 // by a search instead of reading every leaf between: a level's pass then
 // costs its candidates, not the whole table.
+//
+// The domain map answers first; the table is asked only about octants in
+// the map's cells that the leaves cover in part.
 class DomainProbe {
  public:
-  Status open(BTree& leaves) {
+  Status open(BTree& leaves, const DomainMap& map) {
     leaves_ = &leaves;
+    map_ = &map;
     return leaves.seek_keys(0, &cursor_);
   }
   Status overlaps(uint64_t key, bool* yes) {
+    const DomainMap::Answer a = map_->overlaps(key);
+    if (a != DomainMap::Answer::kAskTheLeaves) {
+      *yes = a == DomainMap::Answer::kYes;
+      return Status::Ok();
+    }
+    return ask_the_leaves(key, yes);
+  }
+
+ private:
+  Status ask_the_leaves(uint64_t key, bool* yes) {
     for (int steps = 0; cursor_.valid() && cursor_.key() <= key; ++steps) {
       if (steps == kWalk) {
         WEAVER_RETURN_IF_ERROR(jump_to(key));
@@ -39,7 +53,6 @@ class DomainProbe {
     return Status::Ok();
   }
 
- private:
   // Leaves read one by one before jumping: about a packed page's worth,
   // which a jump (two searches through cached inner pages) costs anyway.
   static constexpr int kWalk = 64;
@@ -57,6 +70,7 @@ class DomainProbe {
   }
 
   BTree* leaves_ = nullptr;
+  const DomainMap* map_ = nullptr;
   BTreeCursor cursor_;
   uint64_t last_ = 0;
   bool has_last_ = false;
@@ -95,9 +109,11 @@ Status Closure::build(int max_level, bool propagate) {
     required_parents_.push_back(spool("rp", l));
     required_.push_back(spool("r", l));
   }
+  domain_ = std::make_unique<DomainMap>(DomainMap::level_for(memory_.domain_map, max_level));
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(leaves_.seek_keys(0, &c));
   while (c.valid()) {
+    domain_->add_leaf(c.key());
     const Octant q = octant_from_key(c.key());
     ++r_->input_leaves;
     if (progress_ != nullptr) progress_->scanned(r_->input_leaves);
@@ -108,6 +124,7 @@ Status Closure::build(int max_level, bool propagate) {
     }
     WEAVER_RETURN_IF_ERROR(c.next());
   }
+  domain_->finish();
   for (int l = max_level - 1; l >= 0; --l) {
     WEAVER_RETURN_IF_ERROR(leaf_parents_[l]->finish());
     WEAVER_RETURN_IF_ERROR(required_parents_[l]->finish());
@@ -216,7 +233,7 @@ Status Closure::expand_level(int l, KeyTagSource& parents, uint64_t parent_count
   WEAVER_RETURN_IF_ERROR(run_shares(shares, [&](int i) { return sorters[i]->finish(); }));
   KeyTagMerge candidates(std::move(sources));
   DomainProbe probe;
-  WEAVER_RETURN_IF_ERROR(probe.open(leaves_));
+  WEAVER_RETURN_IF_ERROR(probe.open(leaves_, *domain_));
   bool done = false, has_prev = false;
   uint64_t prev = 0;
   KeyTag n;

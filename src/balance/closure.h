@@ -18,6 +18,7 @@
 
 #include "balance/balance.h"
 #include "balance/balance_progress.h"
+#include "balance/domain_map.h"
 #include "schema/status.h"
 #include "sort/key_tag.h"
 #include "sort/sorted_spool.h"
@@ -71,6 +72,7 @@ class Closure {
   // By level: parents of leaves, parents of required octants, the required.
   std::vector<std::unique_ptr<SortedSpool>> leaf_parents_, required_parents_, required_;
   std::unique_ptr<KeyTagMerge> required_merge_;
+  std::unique_ptr<DomainMap> domain_;  // built by the first scan
 };
 
 // Calls visit(leaf cursor, required octants strictly inside the leaf) for
