@@ -262,6 +262,15 @@ constexpr int octant_key_level(uint64_t key) {
   return slot >= kKeyLevel20Slot ? kMaxLevel : static_cast<int>(slot);
 }
 
+// The key of the octant's parent, without decoding (octant_parent's answer,
+// for balance's scan of every leaf).
+// REQUIRES: octant_key_is_valid(key), its level above 0.
+constexpr uint64_t octant_key_parent(uint64_t key) {
+  const int level = octant_key_level(key) - 1;
+  const uint64_t m = octant_key_morton(key) & ~((uint64_t{1} << (3 * (kMaxLevel - level))) - 1);
+  return ((m >> 3) << 7) | static_cast<uint64_t>(level);
+}
+
 // The key of the level-20 octant whose Morton code is m (a pixel's code).
 // REQUIRES: m < 2^60.
 constexpr uint64_t pixel_key_of_morton(uint64_t m) {

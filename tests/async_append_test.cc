@@ -62,6 +62,40 @@ TEST(AsyncAppend, ThreadedBatchesBuildTheFileAPlainAppendBuilds) {
   EXPECT_EQ(bytes_of(dir.file("threaded")), bytes_of(dir.file("plain")));
 }
 
+// Payloads left to the appender (every third entry) are finished on its
+// thread before their batch is appended; the others keep their bytes.
+TEST(AsyncAppend, EntriesLeftToCompleteAreFinishedBeforeTheyAreAppended) {
+  testing::TempDir dir;
+  std::vector<uint64_t> keys(30000);
+  for (size_t i = 0; i < keys.size(); ++i) keys[i] = 7 * i + 3;
+  std::vector<std::byte> payloads(keys.size() * 8, std::byte{0x5a});
+  auto mark = [](uint64_t key, std::byte* p) {
+    for (int b = 0; b < 8; ++b) p[b] = static_cast<std::byte>(key >> (8 * b));
+  };
+  std::vector<std::byte> want = payloads;
+  for (size_t i = 0; i < keys.size(); i += 3) mark(keys[i], want.data() + 8 * i);
+  auto plain = new_table(dir.file("plain"));
+  ASSERT_OK(plain->append_batch(keys.data(), want.data(), keys.size()));
+  ASSERT_OK(plain->commit());
+  auto threaded = new_table(dir.file("threaded"));
+  {
+    AsyncAppender appender(*threaded, mark);
+    AsyncAppender::Batch batch;
+    for (size_t i = 0; i < keys.size(); i += 1000) {
+      batch.keys.assign(keys.begin() + i, keys.begin() + i + 1000);
+      batch.payloads.assign(payloads.begin() + 8 * i, payloads.begin() + 8 * (i + 1000));
+      for (size_t j = 0; j < 1000; ++j) {
+        if ((i + j) % 3 == 0) batch.to_complete.push_back(static_cast<uint32_t>(j));
+      }
+      ASSERT_OK(appender.append(&batch));
+      EXPECT_TRUE(batch.to_complete.empty());
+    }
+    ASSERT_OK(appender.finish());
+  }
+  ASSERT_OK(threaded->commit());
+  EXPECT_EQ(bytes_of(dir.file("threaded")), bytes_of(dir.file("plain")));
+}
+
 TEST(AsyncAppend, AnAppendErrorComesBackToTheThreadThatHandsBatches) {
   testing::TempDir dir;
   auto t = new_table(dir.file("t"));

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <map>
 #include <random>
 
 #include "construct/construct.h"
@@ -13,6 +14,7 @@
 #include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
+#include "model/velocity_model.h"
 #include "reference/reference_mesh.h"
 #include "test_mesh.h"
 #include "test_util.h"
@@ -175,6 +177,62 @@ TEST(BalanceThreads, AnyThreadCountWritesTheSameTable) {
       EXPECT_TRUE(after.balanced) << after.violation;
     }
   }
+}
+
+// A leaf made by a split takes the model's vp, vs and rho at its centre
+// (the refinement leaves this to its appender's thread); every other field,
+// and every leaf that was not split, keeps its bytes.
+TEST_F(BalanceTest, NewLeavesTakeTheModelsMaterialAtTheirCentre) {
+  ConstructOptions co;
+  co.model = "basin";
+  co.freq = 0.1;
+  ConstructPlan plan;
+  ConstructResult cr;
+  const std::string db = dir_.file("basin");
+  ASSERT_OK(construct_octree(db, co, &plan, &cr));
+  auto read_all = [&](std::map<uint64_t, std::vector<std::byte>>* out, TableOptions* opt) {
+    std::unique_ptr<Database> d;
+    std::unique_ptr<BTree> t;
+    ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &d));
+    ASSERT_OK(d->open_table(kOctantTable, 1 << 20, &t));
+    *opt = t->options();
+    BTreeCursor c;
+    ASSERT_OK(t->seek_cursor(0, &c));
+    while (c.valid()) {
+      (*out)[c.key()].assign(c.payload(), c.payload() + t->payload_size());
+      ASSERT_OK(c.next());
+    }
+  };
+  std::map<uint64_t, std::vector<std::byte>> before, after;
+  TableOptions opt;
+  read_all(&before, &opt);
+  BalanceResult r;
+  ASSERT_OK(balance_octree(db, BalanceOptions{}, &r));
+  ASSERT_GT(r.split, 0u);
+  read_all(&after, &opt);
+  std::unique_ptr<VelocityModel> model;
+  ASSERT_OK(make_model("basin", "", &model));
+  Units u;
+  units_from_metadata(opt.metadata, &u);
+  const Field *vp = opt.schema.find("vp"), *vs = opt.schema.find("vs"),
+              *rho = opt.schema.find("rho");
+  ASSERT_TRUE(vp != nullptr && vs != nullptr && rho != nullptr);
+  uint64_t made = 0;
+  for (const auto& [key, payload] : after) {
+    const auto old = before.find(key);
+    if (old != before.end()) {
+      ASSERT_EQ(payload, old->second);
+      continue;
+    }
+    ++made;
+    const Octant o = octant_from_key(key);
+    const double h = octant_edge(o) * u.tick_m / 2;
+    const Material m = model->at(o.x * u.tick_m + h, o.y * u.tick_m + h, o.z * u.tick_m + h);
+    ASSERT_EQ(RecordSchema::get_double(payload.data(), *vp), m.vp);
+    ASSERT_EQ(RecordSchema::get_double(payload.data(), *vs), m.vs);
+    ASSERT_EQ(RecordSchema::get_double(payload.data(), *rho), m.rho);
+  }
+  EXPECT_EQ(made + before.size() - r.split, after.size());
 }
 
 TEST_F(BalanceTest, CheckNamesTwoOctantsThatReallyViolate) {

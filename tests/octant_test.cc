@@ -39,6 +39,7 @@ void check_one(const Octant& o) {
   ASSERT_EQ(octant_morton(o), reference::morton_encode(o.x, o.y, o.z));
   if (o.level > 0) {
     ASSERT_EQ(octant_parent(o), reference::parent(o));
+    ASSERT_EQ(octant_key_parent(key), octant_key(reference::parent(o)));
     ASSERT_EQ(octant_child_id(o), reference::child_id(o));
   }
   if (o.level < kMaxLevel) {

@@ -113,14 +113,14 @@ Status Closure::build(int max_level, bool propagate) {
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(leaves_.seek_keys(0, &c));
   while (c.valid()) {
-    domain_->add_leaf(c.key());
-    const Octant q = octant_from_key(c.key());
+    const uint64_t key = c.key();
+    domain_->add_leaf(key);
     ++r_->input_leaves;
     if (progress_ != nullptr) progress_->scanned(r_->input_leaves);
     // Tag: the leaf that asks, for naming violations.
-    if (q.level > 0) {
-      WEAVER_RETURN_IF_ERROR(
-          leaf_parents_[q.level - 1]->add({octant_key(octant_parent(q)), c.key()}));
+    const int level = octant_key_level(key);
+    if (level > 0) {
+      WEAVER_RETURN_IF_ERROR(leaf_parents_[level - 1]->add({octant_key_parent(key), key}));
     }
     WEAVER_RETURN_IF_ERROR(c.next());
   }

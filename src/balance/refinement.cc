@@ -17,8 +17,10 @@ constexpr size_t kBatch = 4096;
 // reading and splitting.
 class Completion {
  public:
+  // New leaves' payloads are filled on the appender's thread, which has
+  // time to spare beside this one.
   Completion(BTree& out, const FillPayload& fill, uint32_t payload)
-      : out_(out), fill_(fill), payload_(payload) {}
+      : out_(out, fill_on_append(fill)), fill_(payload > 0 && fill), payload_(payload) {}
 
   Status write(const Octant& t, const std::byte* parent_payload, const std::vector<KeyTag>& inside,
                BalanceResult* r) {
@@ -53,25 +55,27 @@ class Completion {
   }
 
   Status emit(const Octant& o, bool is_new, const std::byte* parent_payload, BalanceResult* r) {
-    std::byte* payload = add_entry(octant_key(o), o.level, parent_payload, r);
-    if (payload_ > 0 && is_new && fill_) fill_(o, payload);
+    if (is_new && fill_) batch_.to_complete.push_back(static_cast<uint32_t>(batch_.keys.size()));
+    add_entry(octant_key(o), o.level, parent_payload, r);
     return flush_if_full();
   }
 
-  // Adds a leaf to the batch with a copy of `payload`; returns where the
-  // copy is, valid until the batch is flushed.
-  std::byte* add_entry(uint64_t key, int level, const std::byte* payload, BalanceResult* r) {
+  static AsyncAppender::Complete fill_on_append(const FillPayload& fill) {
+    if (!fill) return nullptr;
+    return [fill](uint64_t key, std::byte* payload) { fill(octant_from_key(key), payload); };
+  }
+
+  // Adds a leaf to the batch with a copy of `payload`.
+  void add_entry(uint64_t key, int level, const std::byte* payload, BalanceResult* r) {
     batch_.keys.push_back(key);
-    const size_t at = batch_.payloads.size();
     batch_.payloads.insert(batch_.payloads.end(), payload, payload + payload_);
     ++r->levels[level];
     ++r->output_leaves;
-    return batch_.payloads.data() + at;
   }
   Status flush_if_full() { return batch_.keys.size() == kBatch ? flush() : Status::Ok(); }
 
   AsyncAppender out_;
-  const FillPayload& fill_;
+  bool fill_;  // new leaves get their own payload
   uint32_t payload_;
   AsyncAppender::Batch batch_;
 };

@@ -7,7 +7,8 @@ namespace {
 constexpr size_t kMaxWaiting = 2;
 }  // namespace
 
-AsyncAppender::AsyncAppender(BTree& out) : out_(out), thread_([this] { run(); }) {}
+AsyncAppender::AsyncAppender(BTree& out, Complete complete)
+    : out_(out), complete_(std::move(complete)), thread_([this] { run(); }) {}
 
 AsyncAppender::~AsyncAppender() { (void)finish(); }
 
@@ -24,6 +25,7 @@ Status AsyncAppender::append(Batch* batch) {
   }
   batch->keys.clear();
   batch->payloads.clear();
+  batch->to_complete.clear();
   changed_.notify_all();
   return Status::Ok();
 }
@@ -47,13 +49,18 @@ void AsyncAppender::run() {
     Batch b = std::move(waiting_.front());
     waiting_.pop_front();
     lock.unlock();
-    Status st = status_.ok() ? out_.append_batch(b.keys.data(), b.payloads.data(), b.keys.size())
-                             : Status::Ok();
+    Status st = status_.ok() ? append_now(b) : Status::Ok();
     lock.lock();
     if (!st.ok() && status_.ok()) status_ = std::move(st);
     spare_.push_back(std::move(b));
     changed_.notify_all();
   }
+}
+
+Status AsyncAppender::append_now(Batch& b) {
+  const size_t size = out_.payload_size();
+  for (uint32_t i : b.to_complete) complete_(b.keys[i], b.payloads.data() + i * size);
+  return out_.append_batch(b.keys.data(), b.payloads.data(), b.keys.size());
 }
 
 }  // namespace weaver

@@ -1,6 +1,7 @@
 // Appends batches of records to a table on a thread of its own, so that
 // encoding and writing pages overlaps with the work that makes the records
-// (balance's refinement: reading, merging and splitting leaves).  Batches
+// (balance's refinement: reading, merging and splitting leaves), and so
+// can the finishing of payloads the producer leaves to it.  Batches
 // are appended in the order given: the table is the one a plain sorted
 // append builds.  At most two batches wait, so memory stays two batches.
 #pragma once
@@ -9,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -23,10 +25,14 @@ class AsyncAppender {
   struct Batch {
     std::vector<uint64_t> keys;
     std::vector<std::byte> payloads;  // payload_size bytes a key
+    // Entries whose payload `complete` finishes on the appender's thread
+    // (work taken off the thread that makes the records).
+    std::vector<uint32_t> to_complete;
   };
+  using Complete = std::function<void(uint64_t key, std::byte* payload)>;
 
   // `out` is used only by the appender's thread until finish() returns.
-  explicit AsyncAppender(BTree& out);
+  explicit AsyncAppender(BTree& out, Complete complete = nullptr);
   ~AsyncAppender();  // finishes if finish() was not called
   AsyncAppender(const AsyncAppender&) = delete;
   AsyncAppender& operator=(const AsyncAppender&) = delete;
@@ -39,8 +45,10 @@ class AsyncAppender {
 
  private:
   void run();
+  Status append_now(Batch& b);
 
   BTree& out_;
+  Complete complete_;
   std::mutex mu_;
   std::condition_variable changed_;
   std::deque<Batch> waiting_;
