@@ -67,27 +67,26 @@ class ShellProcess {
   void close_input() {
     if (write_fd_ != read_fd_) close(write_fd_);
   }
-  // Reads until `marker` shows up (or 30 s pass); everything read so far.
-  std::string read_until(const std::string& marker, int rounds = 300) {
-    for (int waited = 0; out_.find(marker) == std::string::npos && waited < rounds; ++waited) {
-      pollfd p{read_fd_, POLLIN, 0};
-      if (poll(&p, 1, 100) <= 0) continue;
-      char buf[4096];
-      const ssize_t n = read(read_fd_, buf, sizeof buf);
-      if (n <= 0) break;
-      out_.append(buf, size_t(n));
+  // Reads until `marker` shows up, or the shell has been silent for
+  // `idle_rounds` polls of 100 ms; everything read so far.  Only silence
+  // counts: an interrupted points file writes megabytes first.
+  std::string read_until(const std::string& marker, int idle_rounds = 300) {
+    for (int idle = 0; out_.find(marker) == std::string::npos && idle < idle_rounds;) {
+      if (!read_some()) ++idle;
     }
     return out_;
   }
   // Reads until a fresh prompt follows `marker` in the output: the shell has
   // answered and waits for keys (the editor redraws its prompt on every key,
-  // so prompts cannot be counted).
+  // so prompts cannot be counted).  Sending keys before that would type
+  // them ahead into the terminal's line discipline instead of the editor.
   std::string prompt_after(const std::string& marker) {
-    for (int waited = 0; waited < 300; ++waited) {
+    for (int idle = 0; idle < 300;) {
       const size_t at = out_.find(marker);
-      if (at != std::string::npos && out_.find("weaver> ", at) != std::string::npos) break;
-      read_until(std::string(1, '\0'), 1);  // one more poll round
+      if (at != std::string::npos && out_.find("weaver> ", at) != std::string::npos) return out_;
+      if (!read_some()) ++idle;
     }
+    ADD_FAILURE() << "no prompt after \"" << marker << "\" in 30 s of silence";
     return out_;
   }
   // The exit status, or -1 if the shell has not ended within 30 s (it is
@@ -99,13 +98,24 @@ class ShellProcess {
         pid_ = -1;
         return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
       }
-      read_until(std::string(1, '\0'), 1);  // keep draining its output meanwhile
+      read_some();  // keep draining its output meanwhile
       usleep(20000);
     }
     return -1;
   }
 
  private:
+  // One poll of up to 100 ms and what it brings; false if nothing came.
+  bool read_some() {
+    pollfd p{read_fd_, POLLIN, 0};
+    if (poll(&p, 1, 100) <= 0) return false;
+    char buf[1 << 16];
+    const ssize_t n = read(read_fd_, buf, sizeof buf);
+    if (n <= 0) return false;
+    out_.append(buf, size_t(n));
+    return true;
+  }
+
   pid_t pid_ = -1;
   int master_ = -1, write_fd_ = -1, read_fd_ = -1;
   std::string out_;

@@ -1,5 +1,6 @@
 #include "cli/line_editor.h"
 
+#include <errno.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -42,6 +43,7 @@ void LineEditor::put(const std::string& s) const {
   size_t done = 0;
   while (done < s.size()) {
     const ssize_t n = ::write(out_, s.data() + done, s.size() - done);
+    if (n < 0 && errno == EINTR) continue;  // Ctrl-C (the shell's handler) mid-write
     if (n <= 0) return;
     done += size_t(n);
   }
