@@ -1,10 +1,11 @@
 // Balance's progress: the fraction done of its three parts.  The first pass
-// reads the leaves (counted 11%), the level passes expand the closure from
-// fine to coarse (55%, shared among levels by the leaves one level finer,
+// reads the leaves (counted 13%), the level passes expand the closure from
+// fine to coarse (46%, shared among levels by the leaves one level finer,
 // whose parents each pass expands), the final pass writes the refinement
-// (34%, by leaves read).  The weights are the parts' shares of the time of
-// the 1 Hz basin on 2 threads (3.3, 16.9 and 10.2 s of 30.4 s, read off this
-// progress line); the count shown is the leaves read by the current pass.
+// (41%, by leaves read).  The weights are the parts' shares of the time of
+// the 1 Hz basin on 2 threads (1.0-1.3, 3.9-4.0 and 3.6 s of 8.5-8.9 s,
+// timed with the domain map; the 0.5 Hz basin gives 17/46/37); the count
+// shown is the leaves read by the current pass.
 #pragma once
 
 #include <algorithm>
@@ -19,7 +20,7 @@ namespace weaver {
 
 class BalanceProgress {
  public:
-  static constexpr double kScan = 0.11, kLevels = 0.55;
+  static constexpr double kScan = 0.13, kLevels = 0.46;
   static constexpr uint64_t kEvery = 1 << 16;  // leaves between reports
 
   BalanceProgress(ProgressFn fn, uint64_t leaves, const LevelCounts& levels)

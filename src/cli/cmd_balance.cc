@@ -13,9 +13,11 @@ constexpr char kUsage[] =
     "\n"
     "Replaces the octant table of DB by its minimal face+edge 2:1 balanced\n"
     "refinement: every leaf is kept or split, and nothing is split unless the\n"
-    "2:1 condition forces it.  Out of core; split children take their material\n"
-    "from the model that built the table, or from their parent.  The new table\n"
-    "keeps the old one's leaf page format (packed or plain).\n"
+    "2:1 condition forces it (next to holes in the domain finer than a leaf's\n"
+    "parent it may split more; the result is balanced).  Out of core; split\n"
+    "children take their material from the model that built the table, or\n"
+    "from their parent.  The new table keeps the old one's leaf page format\n"
+    "(packed or plain).\n"
     "  --check          only verify; name the first violation (exit status 1 if\n"
     "                   the octree is not balanced)\n"
     "  --memory BYTES   memory budget (default 256M): the table caches, the\n"
@@ -25,9 +27,9 @@ constexpr char kUsage[] =
     "                   for every N\n"
     "  --quiet          no progress line on stderr (default: one that updates\n"
     "                   itself on a terminal, a line every 10 s otherwise; its\n"
-    "                   percent weighs the first pass over the leaves 10%, the\n"
-    "                   level passes 45% (by the leaves one level finer) and\n"
-    "                   the final pass 45%)\n";
+    "                   percent weighs the first pass over the leaves 13%, the\n"
+    "                   level passes 46% (by the leaves one level finer) and\n"
+    "                   the final pass 41%)\n";
 
 }  // namespace
 
