@@ -75,7 +75,11 @@ Status BucketReader::gather_counted(BucketTask* task) {
 // store, as one run sorted by key with duplicates merged.
 Status BucketReader::spill_far_corners(const BucketTask& task) {
   if (task.end == UINT64_MAX) return Status::Ok();
-  std::vector<SpillRecord> run;
+  // Every far corner goes in the scratch, which is reused; the run keeps
+  // them with duplicates merged, in a buffer of just their size (the spill
+  // store holds thousands of runs).
+  std::vector<SpillRecord>& run = far_corners_;
+  run.clear();
   uint64_t corners[8];
   for (uint64_t key : task.leaf_keys) {
     const int bit = kMaxLevel - octant_key_level(key);
@@ -96,8 +100,7 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
       run[kept++] = run[i];
     }
   }
-  run.resize(kept);
-  return spills_.add_run(std::move(run));
+  return spills_.add_run(std::vector<SpillRecord>(run.begin(), run.begin() + kept));
 }
 
 namespace {

@@ -66,7 +66,8 @@ class BucketReader {
   LeafReader& cursor_;
   BucketPolicy policy_;
   SpillStore& spills_;
-  std::vector<uint64_t> carry_;  // leaves read past the last cut
+  std::vector<uint64_t> carry_;           // leaves read past the last cut
+  std::vector<SpillRecord> far_corners_;  // spill_far_corners' scratch
   uint64_t next_start_ = 0;
   bool finished_ = false;
   std::vector<uint64_t> packed_, scratch_;  // sort_records' buffers

@@ -18,10 +18,15 @@ SpillStore::~SpillStore() {
   if (records_written_ > 0) std::filesystem::remove_all(dir_, ec);
 }
 
+namespace {
+// What a run's records hold of the heap: their buffer, used or not.
+uint64_t held(const std::vector<SpillRecord>& v) { return v.capacity() * sizeof(SpillRecord); }
+}  // namespace
+
 Status SpillStore::add_run(std::vector<SpillRecord> run) {
   if (run.empty()) return Status::Ok();
   records_added_ += run.size();
-  memory_bytes_ += run.size() * sizeof(SpillRecord);
+  memory_bytes_ += held(run);
   auto r = std::make_unique<Run>();
   r->head = std::move(run);
   heap_.push_back(std::move(r));
@@ -64,15 +69,21 @@ Status SpillStore::take_from(Run& run, uint64_t end, std::vector<SpillRecord>* o
 // Replaces the run's (consumed) head by its next records from the log, up
 // to `records`.
 Status SpillStore::refill(Run& run, size_t records) {
-  memory_bytes_ -= run.head.size() * sizeof(SpillRecord);
+  memory_bytes_ -= held(run.head);
   const size_t n = static_cast<size_t>(std::min<uint64_t>(run.in_log, records));
-  run.head.resize(n);
+  // A new buffer of n: resizing would keep the old one, which for a run
+  // just moved to the log is the whole run.
+  if (run.head.capacity() == n) {
+    run.head.resize(n);
+  } else {
+    std::vector<SpillRecord>(n).swap(run.head);
+  }
   run.pos = 0;
   WEAVER_RETURN_IF_ERROR(
       read_fully(*log_, run.log_offset, run.head.data(), n * sizeof(SpillRecord)));
   run.log_offset += n * sizeof(SpillRecord);
   run.in_log -= n;
-  memory_bytes_ += n * sizeof(SpillRecord);
+  memory_bytes_ += held(run.head);
   return Status::Ok();
 }
 
@@ -80,15 +91,16 @@ Status SpillStore::refill(Run& run, size_t records) {
 // (so that each record is moved at most once more on average).
 void SpillStore::release_consumed(Run& run) {
   if (run.pos == run.head.size()) {
-    memory_bytes_ -= run.head.size() * sizeof(SpillRecord);
+    memory_bytes_ -= held(run.head);
     std::vector<SpillRecord>().swap(run.head);
     run.pos = 0;
     return;
   }
   if (run.pos * 2 < run.head.size() || run.head.size() < block_records_) return;
-  memory_bytes_ -= run.pos * sizeof(SpillRecord);
+  memory_bytes_ -= held(run.head);
   std::vector<SpillRecord>(run.head.begin() + static_cast<ptrdiff_t>(run.pos), run.head.end())
       .swap(run.head);
+  memory_bytes_ += held(run.head);
   run.pos = 0;
 }
 
