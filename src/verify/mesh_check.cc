@@ -6,6 +6,7 @@
 
 #include "schema/node.h"
 #include "schema/octant.h"
+#include "verify/leaf_window.h"
 
 namespace weaver {
 namespace {
@@ -15,32 +16,39 @@ std::string describe_point(Coord p) {
 }
 
 // The leaf holding a pixel: one aggregate hit, after a look at the few
-// leaves found last (neighbouring nodes share most of their leaves).
+// leaves found last (neighbouring nodes share most of their leaves), each
+// kept with its key range so that the look compares pixel keys.
 class LeafFinder {
  public:
-  explicit LeafFinder(BTree& octants) : octants_(octants) {}
+  explicit LeafFinder(BTree& octants) : octants_(octants, false) {}
 
-  Status find(Coord pixel, Octant* leaf, bool* found) {
-    for (size_t i = 0; i < filled_; ++i) {
-      if (octant_contains_point(recent_[i], pixel))
-        return *leaf = recent_[i], *found = true, Status::Ok();
+  // *leaf: the leaf, valid until the next call; null if no leaf holds it.
+  Status find(Coord pixel, const Octant** leaf) {
+    const uint64_t pk = pixel_key(pixel);
+    for (const Recent& r : recent_) {
+      if (r.key <= pk && pk < r.end) return *leaf = &r.leaf, Status::Ok();
     }
+    *leaf = nullptr;
     uint64_t key = 0;
-    WEAVER_RETURN_IF_ERROR(octants_.floor(pixel_key(pixel), &key, nullptr, found));
-    if (!*found) return Status::Ok();
-    *leaf = octant_from_key(key);
-    *found = octant_contains_point(*leaf, pixel);
-    if (*found) {
-      recent_[next_++ % recent_.size()] = *leaf;
-      filled_ = std::min(filled_ + 1, recent_.size());
-    }
+    bool found = false;
+    WEAVER_RETURN_IF_ERROR(octants_.floor(pk, &key, &found));
+    if (!found || pk >= octant_key_subtree_end(key)) return Status::Ok();
+    Recent& r = recent_[next_++ % recent_.size()];
+    r.key = key;
+    r.end = octant_key_subtree_end(key);
+    r.leaf = octant_from_key(key);
+    *leaf = &r.leaf;
     return Status::Ok();
   }
 
  private:
-  BTree& octants_;
-  std::array<Octant, 16> recent_{};
-  size_t next_ = 0, filled_ = 0;
+  struct Recent {
+    uint64_t key = 1, end = 0;  // [key, end): the keys of the leaf's pixels; empty at first
+    Octant leaf{};
+  };
+  LeafWindow octants_;
+  std::array<Recent, 16> recent_{};
+  size_t next_ = 0;
 };
 
 // Where node p sits on a leaf whose closure holds it.
@@ -63,7 +71,7 @@ Place place_on(Coord p, const Octant& leaf) {
 class NodeChecker {
  public:
   NodeChecker(BTree& octants, BTree& nodes, Problems& problems, VerifyReport* report)
-      : finder_(octants), nodes_(nodes), problems_(problems), report_(report) {}
+      : finder_(octants), nodes_(nodes, true), problems_(problems), report_(report) {}
 
   // Checks the node with this key, stored kind and id.
   Status check(uint64_t key, uint8_t stored, uint64_t id) {
@@ -80,16 +88,15 @@ class NodeChecker {
       if ((dx && p.x == 0) || (dy && p.y == 0) || (dz && p.z == 0)) continue;
       const Coord cell{p.x - dx, p.y - dy, p.z - dz};
       if (!pixel_is_valid(cell)) continue;
-      Octant leaf;
-      bool found = false;
-      WEAVER_RETURN_IF_ERROR(finder_.find(cell, &leaf, &found));
-      if (!found) continue;
-      switch (place_on(p, leaf)) {
+      const Octant* leaf = nullptr;
+      WEAVER_RETURN_IF_ERROR(finder_.find(cell, &leaf));
+      if (leaf == nullptr) continue;
+      switch (place_on(p, *leaf)) {
         case Place::kCorner: ++corners; break;
         case Place::kEdgeMidpoint: edge = true; break;
         case Place::kFaceCentre: face = true; break;
         case Place::kElsewhere:
-          return problem(name() + " lies on element " + describe_octant(leaf) +
+          return problem(name() + " lies on element " + describe_octant(*leaf) +
                          " away from its corners and midpoints (unbalanced mesh?)");
       }
     }
@@ -111,12 +118,12 @@ class NodeChecker {
     Coord anchors[4];
     const int n = node_anchors(p, kind, anchors);
     for (int i = 0; i < n; ++i) {
-      std::byte k{};
+      const std::byte* k = nullptr;
       bool found = false;
       WEAVER_RETURN_IF_ERROR(nodes_.get(node_key(anchors[i]), &k, &found));
       if (!found)
         return problem(name() + ": its anchor " + describe_point(anchors[i]) + " is not a node");
-      if (static_cast<NodeKind>(k) != NodeKind::kAnchored) {
+      if (static_cast<NodeKind>(*k) != NodeKind::kAnchored) {
         return problem(name() + ": its anchor " + describe_point(anchors[i]) + " is not anchored");
       }
     }
@@ -129,7 +136,7 @@ class NodeChecker {
   }
 
   LeafFinder finder_;
-  BTree& nodes_;
+  LeafWindow nodes_;
   Problems& problems_;
   VerifyReport* report_;
 };
