@@ -61,16 +61,18 @@ class VerifyTest : public ::testing::Test {
     ASSERT_OK(db->publish(kNodeTable, file, t, built));
   }
 
-  VerifyReport verify() {
+  VerifyReport verify(int threads = 1) {
     VerifyReport r;
     VerifyOptions o;
     o.memory = MemoryBudget(8 << 20);
+    o.threads = threads;
     EXPECT_OK(verify_database(db_, o, &r));
     return r;
   }
 
   void expect_problem(const std::string& needle) {
     const VerifyReport r = verify();
+    EXPECT_EQ(verify(3).problems, r.problems);  // the same report on 3 threads
     ASSERT_FALSE(r.ok()) << "expected a problem mentioning '" << needle << "'";
     bool seen = false;
     for (const std::string& p : r.problems) seen = seen || p.find(needle) != std::string::npos;
@@ -106,7 +108,7 @@ TEST_F(VerifyTest, ReferenceMeshesPassWithTheirCounts) {
     const int block_level = 2;
     ASSERT_NO_FATAL_FAILURE(build(random_balanced(i, bx, by, bz, block_level, 300 + rng() % 3000,
                                                   block_level + 2 + rng() % 4)));
-    const VerifyReport r = verify();
+    const VerifyReport r = verify(1 + i % 3);
     ASSERT_TRUE(r.ok()) << "case " << i << ": " << r.problems[0];
     ASSERT_TRUE(r.mesh_checked);
     EXPECT_EQ(r.nodes, nodes_.size());
@@ -129,6 +131,26 @@ TEST_F(VerifyTest, NamesAWrongKind) {
     write_nodes(bad);
     expect_problem("node " + std::to_string(i) + " at ");
   }
+}
+
+// Problems all over the node table, more than the cap: every thread count
+// names the same first 20, those of the lowest node ids.
+TEST_F(VerifyTest, NamesTheSameFirstProblemsOnAnyThreadCount) {
+  ASSERT_NO_FATAL_FAILURE(build(random_balanced(4, 2, 2, 1, 1, 3000, 6)));
+  Nodes bad = nodes_;
+  std::vector<size_t> changed;
+  for (size_t i = 0; i < bad.size(); ++i) {
+    if (bad[i].second == NodeKind::kAnchored || i % 7 != 0) continue;
+    bad[i].second = NodeKind::kAnchored;
+    changed.push_back(i);
+  }
+  ASSERT_GT(changed.size(), 40u);
+  write_nodes(bad);
+  const VerifyReport one = verify(1);
+  ASSERT_EQ(one.problems.size(), 20u);
+  EXPECT_NE(one.problems[0].find("node " + std::to_string(changed[0]) + " at "), std::string::npos)
+      << one.problems[0];
+  for (int threads : {2, 3, 5}) EXPECT_EQ(verify(threads).problems, one.problems) << threads;
 }
 
 TEST_F(VerifyTest, NamesAMissingNodeAndAnExtraOne) {

@@ -9,7 +9,7 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver verify DB [--storage-only] [--memory BYTES] [--quiet]\n"
+    "usage: weaver verify DB [--storage-only] [--memory BYTES] [--threads N] [--quiet]\n"
     "\n"
     "Checks database DB and reports every problem it finds (up to 20), naming\n"
     "the table, page, key, element or node.  Exit status 0 only when all hold.\n"
@@ -23,6 +23,9 @@ constexpr char kUsage[] =
     "  --storage-only   skip the mesh checks\n"
     "  --memory BYTES   memory budget (default 256M): the table caches and the\n"
     "                   balance check's out-of-core sort (half)\n"
+    "  --threads N      threads for the node check, each with its share of the\n"
+    "                   nodes (default: the number of cores); the same report\n"
+    "                   for every N\n"
     "  --quiet          no progress line on stderr for the mesh check (default: nodes\n"
     "                   checked of the node table, updated on a terminal, every 10 s\n"
     "                   otherwise); the line per finished check is always printed\n";
@@ -31,13 +34,14 @@ constexpr char kUsage[] =
 
 int cmd_verify(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory"}, {"storage-only", "quiet"}, &args);
+  Status st = parse_args(argc, argv, 2, {"memory", "threads"}, {"storage-only", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("verify", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("verify", "expected one DB", kUsage);
   VerifyOptions o;
   o.mesh = args.flags.count("storage-only") == 0;
   st = memory_option(args, &o.memory);
+  if (st.ok()) st = threads_option(args, default_threads(), &o.threads);
   if (!st.ok()) return usage_error("verify", st.message(), kUsage);
   o.progress = [](const std::string& line) {
     std::printf("%s\n", line.c_str()), std::fflush(stdout);

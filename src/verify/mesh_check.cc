@@ -164,22 +164,28 @@ Status find_missing_corner(BTree& octants, BTree& nodes, Problems& problems) {
 
 }  // namespace
 
-Status check_mesh_nodes(BTree& octants, BTree& nodes, const ProgressFn& progress,
-                        Problems& problems, VerifyReport* report) {
+Status check_node_range(BTree& octants, BTree& nodes, uint64_t first, uint64_t end,
+                        const std::function<void(uint64_t)>& checked, Problems& problems,
+                        VerifyReport* report) {
   NodeChecker checker(octants, nodes, problems, report);
+  if (first >= end) return Status::Ok();
+  uint64_t first_key = 0;
+  WEAVER_RETURN_IF_ERROR(nodes.select(first, &first_key, nullptr));
   BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(nodes.seek_cursor(0, &c));
-  report->elements = octants.size();
-  uint64_t id = 0;
-  for (; c.valid() && !problems.full(); ++id) {
-    if (progress && id % (1 << 16) == 0) {
-      progress(id, double(id) / std::max<uint64_t>(1, nodes.size()));
-    }
+  WEAVER_RETURN_IF_ERROR(nodes.seek_cursor(first_key, &c));
+  uint64_t id = first;
+  for (; id < end && c.valid() && !problems.full(); ++id) {
+    if ((id - first) % (1 << 16) == 0 && id > first) checked(1 << 16);
     WEAVER_RETURN_IF_ERROR(checker.check(c.key(), static_cast<uint8_t>(c.payload()[0]), id));
     WEAVER_RETURN_IF_ERROR(c.next());
   }
-  report->nodes = id;
-  if (problems.full() || id != nodes.size()) return Status::Ok();
+  report->nodes = id - first;
+  return Status::Ok();
+}
+
+Status check_corner_total(BTree& octants, BTree& nodes, Problems& problems, VerifyReport* report) {
+  report->elements = octants.size();
+  if (problems.full() || report->nodes != nodes.size()) return Status::Ok();
   if (report->corners != 8 * octants.size()) {
     const size_t before = report->problems.size();
     WEAVER_RETURN_IF_ERROR(find_missing_corner(octants, nodes, problems));

@@ -1,5 +1,6 @@
 #include "verify/verify.h"
 
+#include <atomic>
 #include <filesystem>
 #include <memory>
 
@@ -9,6 +10,7 @@
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "storage/btree.h"
+#include "util/parallel.h"
 #include "verify/mesh_check.h"
 
 namespace weaver {
@@ -86,23 +88,64 @@ Status check_table(const Database& db, const std::string& name, uint64_t pool_by
   return Status::Ok();
 }
 
-Status check_mesh(const Database& db, const VerifyMemory& memory, const ProgressFn& progress,
-                  Problems& problems, VerifyReport* r) {
+// One thread's share of the node check: table handles of its own (a B+tree
+// serves one thread), its counts and its problems.
+struct NodeShare {
   std::unique_ptr<BTree> octants, nodes;
-  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &octants));
-  WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, memory.node_pool, &nodes));
-  BalanceOptions bo;
-  bo.memory = memory.balance_check;
-  bo.check_only = true;
+  VerifyReport report;
+};
+
+// The node check, its id range cut into one share a thread.  The shares'
+// problems are kept in share order, so the first ones named are those of
+// the lowest node ids, whatever the thread count.
+Status check_nodes(const Database& db, const VerifyMemory& memory, const VerifyOptions& o,
+                   Problems& problems, VerifyReport* r) {
+  const int n = std::max(1, o.threads);
+  std::vector<NodeShare> shares(static_cast<size_t>(n));
+  for (NodeShare& s : shares) {
+    WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool / n, &s.octants));
+    WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, memory.node_pool / n, &s.nodes));
+  }
+  const uint64_t total = shares[0].nodes->size();
+  std::atomic<uint64_t> checked{0};
+  WEAVER_RETURN_IF_ERROR(run_shares(n, [&](int i) {
+    NodeShare& s = shares[static_cast<size_t>(i)];
+    Problems mine(o, &s.report);
+    const auto count = [&](uint64_t k) {
+      const uint64_t now = checked.fetch_add(k) + k;
+      if (i == 0 && o.nodes_progress) o.nodes_progress(now, double(now) / double(total));
+    };
+    return check_node_range(*s.octants, *s.nodes, total * i / n, total * (i + 1) / n, count, mine,
+                            &s.report);
+  }));
+  for (NodeShare& s : shares) {
+    for (std::string& p : s.report.problems) problems.add(std::move(p));
+    r->nodes += s.report.nodes;
+    r->dangling += s.report.dangling;
+    r->corners += s.report.corners;
+  }
+  return check_corner_total(*shares[0].octants, *shares[0].nodes, problems, r);
+}
+
+Status check_mesh(const Database& db, const VerifyMemory& memory, const VerifyOptions& o,
+                  Problems& problems, VerifyReport* r) {
   BalanceResult br;
-  WEAVER_RETURN_IF_ERROR(
-      check_balance(*octants, bo, std::filesystem::temp_directory_path().string(), &br));
+  {
+    std::unique_ptr<BTree> octants;  // closed before the node check opens its own
+    WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &octants));
+    BalanceOptions bo;
+    bo.memory = memory.balance_check;
+    bo.check_only = true;
+    bo.threads = o.threads;
+    WEAVER_RETURN_IF_ERROR(
+        check_balance(*octants, bo, std::filesystem::temp_directory_path().string(), &br));
+  }
   if (!br.balanced) problems.add("mesh: not 2:1 balanced: " + br.violation);
   problems.progress(std::string("mesh: 2:1 balance: ") + (br.balanced ? "ok" : "VIOLATED"));
   if (problems.full()) return Status::Ok();
   r->mesh_checked = true;
   const size_t before = r->problems.size();
-  WEAVER_RETURN_IF_ERROR(check_mesh_nodes(*octants, *nodes, progress, problems, r));
+  WEAVER_RETURN_IF_ERROR(check_nodes(db, memory, o, problems, r));
   problems.progress("mesh: " + count_text(r->nodes, "nodes") + " (" +
                     count_text(r->dangling, "dangling") + "), " +
                     count_text(r->corners, "element corners") +
@@ -139,7 +182,7 @@ Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyRep
     WEAVER_RETURN_IF_ERROR(check_table(*db, name, memory.table_pool, problems, r, &usable));
     if (!usable && (name == kOctantTable || name == kNodeTable)) mesh_usable = false;
   }
-  if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, memory, o.nodes_progress, problems, r));
+  if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, memory, o, problems, r));
   return Status::Ok();
 }
 

@@ -26,8 +26,9 @@ namespace weaver {
 
 struct VerifyOptions {
   MemoryBudget memory;
-  bool mesh = true;                                       // also check the mesh invariants
-  size_t max_problems = 20;                               // stop collecting after this many
+  bool mesh = true;          // also check the mesh invariants
+  size_t max_problems = 20;  // stop collecting after this many
+  int threads = 1;  // the node check's share of nodes a thread (the same report for any count)
   std::function<void(const std::string& line)> progress;  // one line per finished check
   // The mesh check's nodes: checked, and their fraction of the node table.
   ProgressFn nodes_progress;
