@@ -1,5 +1,6 @@
 #include <chrono>
 #include <cstdio>
+#include <memory>
 
 #include "cli/cli.h"
 #include "util/progress.h"
@@ -47,11 +48,17 @@ int cmd_verify(int argc, char** argv) {
     std::printf("%s\n", line.c_str()), std::fflush(stdout);
   };
   const auto t0 = std::chrono::steady_clock::now();
-  ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "verify", "nodes");
-  o.nodes_progress = line.fn();
+  // Made when the node check starts (its first report), so that its rate
+  // and time left count the node check alone, not the checks before it.
+  std::unique_ptr<ProgressLine> line;
+  const ProgressLine::Style style = ProgressLine::style_for_stderr(args.flags.count("quiet"));
+  o.nodes_progress = [&line, style](uint64_t items, double fraction) {
+    if (!line) line = std::make_unique<ProgressLine>(style, "verify", "nodes");
+    line->update(items, fraction);
+  };
   VerifyReport r;
   st = verify_database(args.positional[0], o, &r);
-  line.finish();
+  if (line) line->finish();
   if (!st.ok()) return report("verify", st);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (const std::string& p : r.problems) std::fprintf(stderr, "problem: %s\n", p.c_str());

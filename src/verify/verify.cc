@@ -107,6 +107,7 @@ Status check_nodes(const Database& db, const VerifyMemory& memory, const VerifyO
     WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, memory.node_pool / n, &s.nodes));
   }
   const uint64_t total = shares[0].nodes->size();
+  if (o.nodes_progress) o.nodes_progress(0, 0.0);  // the node check starts
   std::atomic<uint64_t> checked{0};
   WEAVER_RETURN_IF_ERROR(run_shares(n, [&](int i) {
     NodeShare& s = shares[static_cast<size_t>(i)];

@@ -30,7 +30,8 @@ struct VerifyOptions {
   size_t max_problems = 20;  // stop collecting after this many
   int threads = 1;  // the node check's share of nodes a thread (the same report for any count)
   std::function<void(const std::string& line)> progress;  // one line per finished check
-  // The mesh check's nodes: checked, and their fraction of the node table.
+  // The mesh check's nodes: checked, and their fraction of the node table
+  // (first called with 0 when the node check starts; from one thread).
   ProgressFn nodes_progress;
 };
 
