@@ -271,6 +271,23 @@ constexpr uint64_t octant_key_parent(uint64_t key) {
   return ((m >> 3) << 7) | static_cast<uint64_t>(level);
 }
 
+// Which child of its parent the octant with this key is (0..7, x fastest:
+// octant_child_id's answer, without decoding).
+// REQUIRES: octant_key_is_valid(key), its level above 0.
+constexpr int octant_key_child_id(uint64_t key) {
+  const int level = octant_key_level(key);
+  return static_cast<int>(octant_key_morton(key) >> (3 * (kMaxLevel - level)) & 7);
+}
+
+// The key of child c (0..7, x fastest) of the octant with this key, without
+// decoding.  REQUIRES: octant_key_is_valid(key), its level below kMaxLevel.
+constexpr uint64_t octant_key_child(uint64_t key, int c) {
+  const int level = octant_key_level(key) + 1;
+  const uint64_t m = octant_key_morton(key) | (uint64_t(c) << (3 * (kMaxLevel - level)));
+  const uint64_t slot = level < kMaxLevel ? uint64_t(level) : kKeyLevel20Slot + (m & 7);
+  return ((m >> 3) << 7) | slot;
+}
+
 // The key of the level-20 octant whose Morton code is m (a pixel's code).
 // REQUIRES: m < 2^60.
 constexpr uint64_t pixel_key_of_morton(uint64_t m) {

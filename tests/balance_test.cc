@@ -17,10 +17,29 @@
 #include "model/velocity_model.h"
 #include "reference/reference_mesh.h"
 #include "test_mesh.h"
+#include "test_octrees.h"
 #include "test_util.h"
 
 namespace weaver {
 namespace {
+
+// The message names two input leaves, face or edge neighbours, two or more
+// levels apart.
+void expect_names_a_violation(const std::string& violation, const std::vector<Octant>& leaves) {
+  std::vector<Octant> named;
+  size_t pos = 0;
+  while ((pos = violation.find('(', pos)) != std::string::npos) {
+    unsigned x, y, z, l;
+    ASSERT_EQ(std::sscanf(violation.c_str() + pos, "(%u %u %u %u)", &x, &y, &z, &l), 4);
+    named.push_back({x, y, z, uint8_t(l)});
+    ++pos;
+  }
+  ASSERT_EQ(named.size(), 2u) << violation;
+  EXPECT_TRUE(reference::face_or_edge_adjacent(named[0], named[1])) << violation;
+  EXPECT_GE(std::abs(int(named[0].level) - int(named[1].level)), 2) << violation;
+  EXPECT_NE(std::find(leaves.begin(), leaves.end(), named[0]), leaves.end()) << violation;
+  EXPECT_NE(std::find(leaves.begin(), leaves.end(), named[1]), leaves.end()) << violation;
+}
 
 class BalanceTest : public ::testing::Test {
  protected:
@@ -45,6 +64,27 @@ class BalanceTest : public ::testing::Test {
     }
     return out;
   }
+  // Checks, balances and checks again one octree, against the reference;
+  // returns whether it needed refinement.
+  bool balances_as_the_reference(const std::vector<Octant>& leaves, const BalanceOptions& o) {
+    const std::vector<Octant> want = reference::balance(leaves);
+    const std::string db = import(leaves);
+    BalanceOptions check;
+    check.check_only = true;
+    BalanceResult cr;
+    EXPECT_OK(balance_octree(db, check, &cr));
+    EXPECT_EQ(cr.balanced, want == leaves) << cr.violation;
+    if (!cr.balanced) expect_names_a_violation(cr.violation, leaves);
+    BalanceResult r;
+    EXPECT_OK(balance_octree(db, o, &r));
+    EXPECT_EQ(table(db), want);
+    EXPECT_EQ(r.output_leaves, want.size());
+    EXPECT_EQ(r.input_leaves, leaves.size());
+    BalanceResult after;
+    EXPECT_OK(balance_octree(db, check, &after));
+    EXPECT_TRUE(after.balanced) << after.violation;
+    return want != leaves;
+  }
   testing::TempDir dir_;
   int count_ = 0;
 };
@@ -63,29 +103,15 @@ TEST_F(BalanceTest, MatchesReferenceOnRandomUnbalancedOctrees) {
     g.max_level = g.block_level + 1 + static_cast<int>(rng() % 9);
     std::vector<Octant> leaves;
     ASSERT_OK(generate_octree(g, &leaves));
-    const std::vector<Octant> want = reference::balance(leaves);
-    unbalanced += want != leaves;
-    const std::string db = import(leaves);
     SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) + " leaves");
-    BalanceOptions check;
-    check.check_only = true;
-    BalanceResult cr;
-    ASSERT_OK(balance_octree(db, check, &cr));
-    ASSERT_EQ(cr.balanced, want == leaves) << cr.violation;
     BalanceOptions o;
     o.memory = MemoryBudget((t % 3 == 0) ? (64 << 10) : (64 << 20));  // tiny: sorts spill
     if (t % 2 == 1) {  // every chunk of parents shared among threads
       o.threads = 2 + t % 3;
       o.parallel_chunk = 1;
     }
-    BalanceResult r;
-    ASSERT_OK(balance_octree(db, o, &r));
-    ASSERT_EQ(table(db), want);
-    EXPECT_EQ(r.output_leaves, want.size());
-    EXPECT_EQ(r.input_leaves, leaves.size());
-    BalanceResult after;
-    ASSERT_OK(balance_octree(db, check, &after));
-    EXPECT_TRUE(after.balanced) << after.violation;
+    unbalanced += balances_as_the_reference(leaves, o);
+    ASSERT_FALSE(HasFailure());
   }
   EXPECT_GT(unbalanced, cases / 2);  // the cases exercise real refinement
 }
@@ -105,17 +131,39 @@ TEST_F(BalanceTest, MatchesReferenceOnDomainsFinerThanTheDomainMap) {
     g.max_level = g.block_level + 2 + static_cast<int>(rng() % 4);
     std::vector<Octant> leaves;
     ASSERT_OK(generate_octree(g, &leaves));
-    const std::vector<Octant> want = reference::balance(leaves);
-    const std::string db = import(leaves);
     SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) + " leaves");
     BalanceOptions o;
     o.memory = MemoryBudget(64 << 10);
     o.threads = 1 + t % 2;
     o.parallel_chunk = 1;
-    BalanceResult r;
-    ASSERT_OK(balance_octree(db, o, &r));
-    ASSERT_EQ(table(db), want);
+    balances_as_the_reference(leaves, o);
+    ASSERT_FALSE(HasFailure());
   }
+}
+
+// Holes as fine as the leaves (an imported octree need not fill its
+// parents): a leaf whose siblings are missing asks only for the neighbours
+// it touches, so the result is still the minimal balanced refinement, and
+// --check calls a tree balanced exactly when the reference leaves it alone.
+TEST_F(BalanceTest, MatchesReferenceWhereLeavesDoNotFillTheirParents) {
+  std::mt19937_64 rng(17);
+  const int cases = static_cast<int>(testing::scaled(200, 40));
+  int unbalanced = 0;
+  for (int t = 0; t < cases; ++t) {
+    const uint64_t seed = rng(), count = 30 + rng() % 300;
+    const int max_level = 3 + static_cast<int>(rng() % 7);
+    const std::vector<Octant> leaves =
+        testing::random_holed(seed, count, max_level, 0.5 + 0.1 * double(rng() % 5));
+    if (leaves.empty()) continue;
+    SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) + " leaves");
+    BalanceOptions o;
+    o.memory = MemoryBudget((t % 2 == 0) ? (64 << 10) : (64 << 20));  // the map coarse or fine
+    o.threads = 1 + t % 3;
+    o.parallel_chunk = 1;
+    unbalanced += balances_as_the_reference(leaves, o);
+    ASSERT_FALSE(HasFailure());
+  }
+  EXPECT_GT(unbalanced, cases / 3);
 }
 
 // The basin's octree and a random one, balanced on 1 to 3 threads, with
@@ -251,20 +299,7 @@ TEST_F(BalanceTest, CheckNamesTwoOctantsThatReallyViolate) {
     BalanceResult r;
     ASSERT_OK(balance_octree(db, check, &r));
     ASSERT_FALSE(r.balanced);
-    // Parse "(x y z l)" twice out of the message and check the pair.
-    std::vector<Octant> named;
-    size_t pos = 0;
-    while ((pos = r.violation.find('(', pos)) != std::string::npos) {
-      unsigned x, y, z, l;
-      ASSERT_EQ(std::sscanf(r.violation.c_str() + pos, "(%u %u %u %u)", &x, &y, &z, &l), 4);
-      named.push_back({x, y, z, uint8_t(l)});
-      ++pos;
-    }
-    ASSERT_EQ(named.size(), 2u) << r.violation;
-    EXPECT_TRUE(reference::face_or_edge_adjacent(named[0], named[1])) << r.violation;
-    EXPECT_GE(std::abs(int(named[0].level) - int(named[1].level)), 2) << r.violation;
-    EXPECT_NE(std::find(leaves.begin(), leaves.end(), named[0]), leaves.end());
-    EXPECT_NE(std::find(leaves.begin(), leaves.end(), named[1]), leaves.end());
+    expect_names_a_violation(r.violation, leaves);
   }
 }
 

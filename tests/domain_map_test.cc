@@ -59,7 +59,7 @@ std::vector<Octant> octants_near(const std::vector<Octant>& leaves, std::mt19937
 
 TEST(DomainMap, AnswersAsTheLeavesDoAtEveryLevel) {
   std::mt19937_64 rng(17);
-  int asked = 0, holes = 0;
+  int asked = 0, holes = 0, covered = 0;
   for (int t = 0; t < static_cast<int>(testing::scaled(60, 15)); ++t) {
     GenOptions g;
     g.seed = rng();
@@ -98,11 +98,19 @@ TEST(DomainMap, AnswersAsTheLeavesDoAtEveryLevel) {
           ASSERT_EQ(a == DomainMap::Answer::kYes, want)
               << "(" << o.x << " " << o.y << " " << o.z << " " << int(o.level) << ")";
         }
+        // covers: never wrongly; always for an octant in a covered cell.
+        if (map.covers(octant_key(o))) {
+          ASSERT_TRUE(leaves_cover(leaves, o));
+          ++covered;
+        } else if (o.level >= level) {
+          ASSERT_FALSE(leaves_cover(leaves, octant_ancestor(o, level)));
+        }
       }
     }
   }
   EXPECT_GT(holes, 0);
   EXPECT_GT(asked, 0);  // some cells are covered in part
+  EXPECT_GT(covered, 0);
 }
 
 TEST(DomainMap, LevelFitsTheBytesAndStopsAtTheFinestLeaves) {

@@ -41,11 +41,13 @@ void check_one(const Octant& o) {
     ASSERT_EQ(octant_parent(o), reference::parent(o));
     ASSERT_EQ(octant_key_parent(key), octant_key(reference::parent(o)));
     ASSERT_EQ(octant_child_id(o), reference::child_id(o));
+    ASSERT_EQ(octant_key_child_id(key), reference::child_id(o));
   }
   if (o.level < kMaxLevel) {
     for (int k = 0; k < 8; ++k) {
       const Octant c = octant_child(o, k);
       ASSERT_EQ(c, reference::child(o, k));
+      ASSERT_EQ(octant_key_child(key, k), octant_key(reference::child(o, k)));
       ASSERT_TRUE(octant_is_ancestor(o, c));
       ASSERT_LT(key, octant_key(c));
       ASSERT_LT(octant_key(c), octant_key_subtree_end(o));

@@ -3,8 +3,6 @@
 // as a violation.
 #include <unistd.h>
 
-#include <algorithm>
-
 #include "balance/balance.h"
 #include "balance/closure.h"
 #include "schema/octant.h"
@@ -12,39 +10,15 @@
 namespace weaver {
 namespace {
 
-// The leaf of parent(asker) that touches `coarse`: the leaf holding the
-// pixel of parent(asker) nearest to it.  (The asker itself may sit on the far
-// side of its parent; the parent is covered by leaves at least as fine.)
-Status touching_leaf(BTree& leaves, const Octant& coarse, const Octant& asker, Octant* out) {
-  const Octant p = octant_parent(asker);
-  const uint32_t s = octant_edge(p), e = octant_edge(coarse);
-  const uint32_t lo[3] = {p.x, p.y, p.z}, clo[3] = {coarse.x, coarse.y, coarse.z};
-  uint32_t px[3];
-  for (int a = 0; a < 3; ++a) {
-    if (clo[a] >= lo[a] + s) {
-      px[a] = lo[a] + s - 1;  // coarse lies beyond on this axis
-    } else if (clo[a] + e <= lo[a]) {
-      px[a] = lo[a];  // coarse lies before
-    } else {
-      px[a] = std::max(lo[a], clo[a]);  // overlapping range: a shared coordinate
-    }
-  }
-  uint64_t key = 0;
-  bool found = false;
-  WEAVER_RETURN_IF_ERROR(leaves.floor(pixel_key({px[0], px[1], px[2]}), &key, nullptr, &found));
-  *out = found ? octant_from_key(key) : asker;
-  return Status::Ok();
-}
-
 // The first required octant strictly inside a leaf is a violation.
 Status find_violation(BTree& leaves, KeyTagSource& required, BalanceResult* r) {
   return for_each_leaf(
       leaves, required, [&](const BTreeCursor& c, const std::vector<KeyTag>& inside, bool* stop) {
         if (inside.empty()) return Status::Ok();
+        // Without propagation every required octant's tag is a leaf that
+        // touches it (see parent_asks.h), two or more levels finer than c.
         const Octant coarse = octant_from_key(c.key());
-        Octant fine;
-        WEAVER_RETURN_IF_ERROR(
-            touching_leaf(leaves, coarse, octant_from_key(inside[0].tag), &fine));
+        const Octant fine = octant_from_key(inside[0].tag);
         r->balanced = false;
         r->violation = "octants " + describe_octant(coarse) + " and " + describe_octant(fine) +
                        " are face or edge neighbours more than one level apart";

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <filesystem>
 
+#include "balance/parent_asks.h"
 #include "schema/octant.h"
 #include "sort/external_sort.h"
 #include "util/key_set.h"
@@ -33,23 +35,30 @@ class DomainProbe {
       *yes = a == DomainMap::Answer::kYes;
       return Status::Ok();
     }
-    return ask_the_leaves(key, yes);
+    WEAVER_RETURN_IF_ERROR(advance_to(key));
+    // A leaf equal to or containing the octant, or a leaf inside it.
+    *yes = (has_last_ && key < octant_key_subtree_end(last_)) ||
+           (cursor_.valid() && cursor_.key() < octant_key_subtree_end(key));
+    return Status::Ok();
+  }
+
+  // Whether the octant lies in one leaf bigger than itself (the keys asked,
+  // here and of overlaps, nondecreasing).
+  Status strictly_inside_a_leaf(uint64_t key, bool* yes) {
+    WEAVER_RETURN_IF_ERROR(advance_to(key));
+    *yes = has_last_ && last_ != key && key < octant_key_subtree_end(last_);
+    return Status::Ok();
   }
 
  private:
-  Status ask_the_leaves(uint64_t key, bool* yes) {
+  // last_ := the last leaf <= key; the cursor at the first leaf > key.
+  Status advance_to(uint64_t key) {
     for (int steps = 0; cursor_.valid() && cursor_.key() <= key; ++steps) {
-      if (steps == kWalk) {
-        WEAVER_RETURN_IF_ERROR(jump_to(key));
-        break;
-      }
+      if (steps == kWalk) return jump_to(key);
       last_ = cursor_.key();
       has_last_ = true;
       WEAVER_RETURN_IF_ERROR(cursor_.next());
     }
-    // A leaf equal to or containing the octant, or a leaf inside it.
-    *yes = (has_last_ && key < octant_key_subtree_end(last_)) ||
-           (cursor_.valid() && cursor_.key() < octant_key_subtree_end(key));
     return Status::Ok();
   }
 
@@ -57,7 +66,6 @@ class DomainProbe {
   // which a jump (two searches through cached inner pages) costs anyway.
   static constexpr int kWalk = 64;
 
-  // last_ := the last leaf <= key; the cursor at the first leaf > key.
   Status jump_to(uint64_t key) {
     uint64_t floor = 0;
     bool hit = false;
@@ -110,6 +118,11 @@ Status Closure::build(int max_level, bool propagate) {
     required_.push_back(spool("r", l));
   }
   domain_ = std::make_unique<DomainMap>(DomainMap::level_for(memory_.domain_map, max_level));
+  // By level: the parent whose leaves are being gathered, with the set of
+  // them so far in its tag.  Leaves of one level under one parent come one
+  // after another in that level's stream: nothing else of that level lies
+  // between them in key order.
+  std::vector<KeyTag> open(max_level + 1, KeyTag{0, 0});
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(leaves_.seek_keys(0, &c));
   while (c.valid()) {
@@ -117,12 +130,18 @@ Status Closure::build(int max_level, bool propagate) {
     domain_->add_leaf(key);
     ++r_->input_leaves;
     if (progress_ != nullptr) progress_->scanned(r_->input_leaves);
-    // Tag: the leaf that asks, for naming violations.
     const int level = octant_key_level(key);
     if (level > 0) {
-      WEAVER_RETURN_IF_ERROR(leaf_parents_[level - 1]->add({octant_key_parent(key), key}));
+      KeyTag& p = open[level - 1];
+      const uint64_t parent = octant_key_parent(key);
+      if (p.tag != 0 && p.key != parent) WEAVER_RETURN_IF_ERROR(leaf_parents_[level - 1]->add(p));
+      if (p.tag == 0 || p.key != parent) p = {parent, parent_asks::children_tag(0)};
+      p.tag |= parent_asks::children_tag(1u << octant_key_child_id(key));
     }
     WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  for (int l = 0; l <= max_level; ++l) {
+    if (open[l].tag != 0) WEAVER_RETURN_IF_ERROR(leaf_parents_[l]->add(open[l]));
   }
   domain_->finish();
   for (int l = max_level - 1; l >= 0; --l) {
@@ -149,22 +168,28 @@ std::unique_ptr<SortedSpool> Closure::spool(const char* name, int level) const {
                                        memory_.spool_buffer);
 }
 
-// The face and edge neighbours of the level's parents, into the candidate
-// sorters.  Parents pass through memory in chunks of what fits in the chunk
-// share (16 bytes each in the list, and a key set of four times as many
-// slots); a neighbour that is a parent of the same chunk is skipped (see
-// expand_level).  Any subset may be skipped, and Z-order keeps most
-// neighbours in one chunk.  A large chunk is cut into one share per sorter,
-// each on its own thread; which sorter gets a candidate does not change
-// the merged stream.
+// The face and edge neighbours that the level's parents ask for (see
+// parent_asks.h), into the candidate sorters.  Parents pass through memory
+// in chunks of what fits in the chunk share (17 bytes each in the lists,
+// and a key set of four times as many slots); a neighbour that is a parent
+// of the same chunk is skipped (see expand_level).  Any subset may be
+// skipped, and Z-order keeps most neighbours in one chunk.  A large chunk
+// is cut into one share per sorter, each on its own thread; which sorter
+// gets a candidate does not change the merged stream.
+//
+// A candidate's tag names a leaf that asks for it: one of the parent's
+// leaves that touches it, or the leaf that a required octant's entry names.
 Status Closure::emit_candidates(int l, KeyTagSource& parents, uint64_t parent_count,
                                 Sorters& sorters, uint64_t* added) {
+  constexpr size_t kEntry = sizeof(KeyTag) + 1;
   size_t fits = 1024;
-  while (2 * fits * sizeof(KeyTag) + KeySet::slots_for(2 * fits) * 8 <= memory_.parent_chunk) {
-    fits *= 2;
-  }
+  while (2 * fits * kEntry + KeySet::slots_for(2 * fits) * 8 <= memory_.parent_chunk) fits *= 2;
+  // A parent, with the leaf a required octant's entry named (or 0), and the
+  // children that are leaves (all 8 for a parent wholly in the domain).
   std::vector<KeyTag> chunk;
+  std::vector<uint8_t> children;
   chunk.reserve(fits);
+  children.reserve(fits);
   KeySet chunk_keys;
   std::vector<uint64_t> share_added(sorters.size());
   // Candidates of chunk[begin, end) into `into`.
@@ -172,15 +197,21 @@ Status Closure::emit_candidates(int l, KeyTagSource& parents, uint64_t parent_co
     for (size_t p = begin; p < end; ++p) {
       const KeyTag& q = chunk[p];
       std::array<uint64_t, kFaceAndEdgeDirections.size()> near;
+      std::array<uint8_t, kFaceAndEdgeDirections.size()> direction;
       size_t n = 0;
-      for (const Direction& d : kFaceAndEdgeDirections) {
-        if (octant_key_neighbour(q.key, d, &near[n])) chunk_keys.prefetch(near[n++]);
+      for (uint32_t bits = parent_asks::kTouchedBy[children[p]]; bits != 0; bits &= bits - 1) {
+        direction[n] = static_cast<uint8_t>(std::countr_zero(bits));
+        if (octant_key_neighbour(q.key, kFaceAndEdgeDirections[direction[n]], &near[n])) {
+          chunk_keys.prefetch(near[n++]);
+        }
       }
       for (size_t i = 0; i < n; ++i) {
-        if (!chunk_keys.contains(near[i])) {
-          WEAVER_RETURN_IF_ERROR(into.add({near[i], q.tag}));
-          ++*count;
-        }
+        if (chunk_keys.contains(near[i])) continue;
+        const unsigned touching = children[p] & parent_asks::kTouching[direction[i]];
+        const uint64_t tag =
+            q.tag != 0 ? q.tag : octant_key_child(q.key, std::countr_zero(touching));
+        WEAVER_RETURN_IF_ERROR(into.add({near[i], tag}));
+        ++*count;
       }
     }
     return Status::Ok();
@@ -194,19 +225,30 @@ Status Closure::emit_candidates(int l, KeyTagSource& parents, uint64_t parent_co
                         &share_added[i]);
     }));
     chunk.clear();
+    children.clear();
     return Status::Ok();
   };
+  // The entries of one parent (one from each spool at most) are merged.
   uint64_t consumed = 0;
   KeyTag p;
-  bool done = false, has_prev = false;
-  uint64_t prev = 0;
+  bool done = false;
   while (true) {
-    WEAVER_RETURN_IF_ERROR(next_unique(parents, &prev, &has_prev, &p, &done));
+    WEAVER_RETURN_IF_ERROR(parents.next(&p, &done));
     if (done) break;
     ++consumed;
     report(l, consumed, 0.5 * double(consumed) / std::max<uint64_t>(parent_count, 1));
-    chunk.push_back(p);
-    if (chunk.size() == fits) WEAVER_RETURN_IF_ERROR(flush_chunk());
+    const bool leaves = parent_asks::is_children_tag(p.tag);
+    if (chunk.empty() || chunk.back().key != p.key) {
+      if (chunk.size() == fits) WEAVER_RETURN_IF_ERROR(flush_chunk());
+      chunk.push_back({p.key, 0});
+      children.push_back(0);
+    }
+    if (leaves) {
+      children.back() |= static_cast<uint8_t>(parent_asks::children_of(p.tag));
+    } else {
+      chunk.back().tag = p.tag;
+      children.back() = 255;
+    }
   }
   WEAVER_RETURN_IF_ERROR(flush_chunk());
   for (uint64_t a : share_added) *added += a;
@@ -247,10 +289,18 @@ Status Closure::expand_level(int l, KeyTagSource& parents, uint64_t parent_count
     if (!inside) continue;
     WEAVER_RETURN_IF_ERROR(required_[l]->add(n));
     ++r_->required;
-    if (l > 0 && propagate) {
-      WEAVER_RETURN_IF_ERROR(required_parents_[l - 1]->add(
-          {octant_key(octant_parent(octant_from_key(n.key))), n.tag}));
-    }
+    if (l == 0 || !propagate) continue;
+    // Once n is resolved, the leaves of its parent are at least as fine as
+    // n, and they touch all of the parent's neighbours if the parent lies
+    // wholly in the domain: then it asks for them all.  That holds when n
+    // lies in a leaf bigger than itself (which the refinement splits: the
+    // requirements that must ripple on); the map may know it for others
+    // too (asking then is necessary all the same, and saves the search).
+    // Otherwise n's leaves are there already and ask for themselves.
+    const uint64_t parent = octant_key_parent(n.key);
+    bool whole = domain_->covers(parent);
+    if (!whole) WEAVER_RETURN_IF_ERROR(probe.strictly_inside_a_leaf(n.key, &whole));
+    if (whole) WEAVER_RETURN_IF_ERROR(required_parents_[l - 1]->add({parent, n.tag}));
   }
 }
 

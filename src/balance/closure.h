@@ -1,12 +1,16 @@
 // The closure of balance: the octants that 2:1 balance requires to be
 // resolved (covered by leaves at least as fine), found out of core.
 //
-// Every leaf (or required octant) q at level l requires the face and edge
-// neighbours of its parent, at level l-1, to be resolved.  These
-// requirements ripple from fine to coarse, one level at a time; each level's
-// set is sorted and deduplicated out of core, and octants outside the domain
-// are dropped (they hold no leaves to balance against).  Every requirement
-// is necessary, so a refinement that resolves exactly these is minimal.
+// Every leaf q at level l requires the octants of level l-1 that it touches
+// by a face or an edge (its parent's face and edge neighbours on q's sides)
+// to be resolved; so does every required octant that the refinement will
+// make a leaf, and its siblings, which are all of its parent's neighbours.
+// These requirements ripple from fine to coarse, one level at a time; each
+// level's set is sorted and deduplicated out of core, and octants outside
+// the domain are dropped (they hold no leaves to balance against).  Every
+// requirement is necessary, even where the leaves do not fill their
+// parents (holes in the domain), so a refinement that resolves exactly
+// these is minimal.
 #pragma once
 
 #include <array>

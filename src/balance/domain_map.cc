@@ -29,6 +29,13 @@ bool any_bit(const std::vector<uint64_t>& bits, uint64_t begin, uint64_t count) 
   return false;
 }
 
+bool all_bits(const std::vector<uint64_t>& bits, uint64_t begin, uint64_t count) {
+  for (uint64_t i = begin; i < begin + count; ++i) {
+    if (!(bits[i / 64] >> (i % 64) & 1)) return false;
+  }
+  return true;
+}
+
 bool bit(const std::vector<uint64_t>& bits, uint64_t i) { return bits[i / 64] >> (i % 64) & 1; }
 
 // Cells of level `level` are Morton codes with 3 * (20 - level) low bits dropped.
@@ -92,6 +99,15 @@ DomainMap::Answer DomainMap::overlaps(uint64_t key) const {
   if (!bit(any_, first)) return Answer::kNo;
   if (bit(full_, first)) return Answer::kYes;
   return Answer::kAskTheLeaves;
+}
+
+bool DomainMap::covers(uint64_t key) const {
+  const int l = octant_key_level(key);
+  const uint64_t first = octant_key_morton(key) >> cell_shift(level_);
+  if (l >= level_) return bit(full_, first);
+  // Up to 512 cells are read; a coarser octant is left to the leaves.
+  if (level_ - l > 3) return false;
+  return all_bits(full_, first, uint64_t{1} << (3 * (level_ - l)));
 }
 
 }  // namespace weaver

@@ -34,6 +34,11 @@ class DomainMap {
   // a cell the leaves cover in part.
   Answer overlaps(uint64_t key) const;
 
+  // Whether the map knows the octant to lie wholly in the domain: it is in
+  // a covered cell, or (a little coarser than the map) all its cells are
+  // covered.  False says nothing.
+  bool covers(uint64_t key) const;
+
   int level() const { return level_; }
 
  private:

@@ -105,14 +105,19 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
 
 namespace {
 
-// Whether `first` and `last`, 7 leaves apart in key order, are children 0 and
-// 7 of one parent: then the 6 leaves between are children 1 to 6.
-bool siblings(uint64_t first, uint64_t last) {
-  const int level = octant_key_level(first);
-  if (level == 0 || octant_key_level(last) != level) return false;
+// Whether the 8 leaves from `first` on, in key order, are the 8 children of
+// one parent: children 0 and 7, with 6 leaves of their level between.  (The
+// levels matter where leaves need not fill their parents: with holes, 6
+// finer leaves can sit between two children.)
+bool siblings(const uint64_t* first) {
+  const int level = octant_key_level(first[0]);
+  if (level == 0) return false;
+  for (int i = 1; i < 8; ++i) {
+    if (octant_key_level(first[i]) != level) return false;
+  }
   const int bits = 3 * (kMaxLevel - level);
-  const uint64_t m = octant_key_morton(first);
-  return ((m >> bits) & 7) == 0 && octant_key_morton(last) == m + (uint64_t{7} << bits);
+  const uint64_t m = octant_key_morton(first[0]);
+  return ((m >> bits) & 7) == 0 && octant_key_morton(first[7]) == m + (uint64_t{7} << bits);
 }
 
 // The direction mask of lattice point (a, b, c), each 0..2, of a complete
@@ -195,7 +200,7 @@ Status BucketWorker::run(BucketTask& t) {
   uint64_t corners[8];
   const std::vector<uint64_t>& leaves = t.leaf_keys;
   for (size_t i = 0; i < leaves.size();) {
-    if (i + 8 <= leaves.size() && siblings(leaves[i], leaves[i + 7])) {
+    if (i + 8 <= leaves.size() && siblings(&leaves[i])) {
       add_sibling_lattice(leaves[i], t.end);
       i += 8;
       continue;

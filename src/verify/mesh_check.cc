@@ -123,8 +123,13 @@ class NodeChecker {
       WEAVER_RETURN_IF_ERROR(nodes_.get(node_key(anchors[i]), &k, &found));
       if (!found)
         return problem(name() + ": its anchor " + describe_point(anchors[i]) + " is not a node");
+      // Face+edge 2:1 balance keeps every anchor anchored where the leaves
+      // fill their parents; next to holes finer than that it cannot (a
+      // fine leaf may touch a leaf two levels coarser at a point alone).
       if (static_cast<NodeKind>(*k) != NodeKind::kAnchored) {
-        return problem(name() + ": its anchor " + describe_point(anchors[i]) + " is not anchored");
+        return problem(name() + ": its anchor " + describe_point(anchors[i]) +
+                       " is not anchored (it dangles too: a chain of dependencies, which "
+                       "holes in the domain finer than the leaves' parents allow)");
       }
     }
     return Status::Ok();
