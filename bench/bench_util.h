@@ -5,6 +5,7 @@
 
 #include <fcntl.h>
 #include <malloc.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -103,6 +104,22 @@ inline std::string collect_child(pid_t pid, int read_fd, uint64_t* peak_rss) {
   return text;
 }
 
+// Restricts this process, and the threads and programs it starts after, to
+// the first CPU it may run on: the one-core baseline of a speedup, whatever
+// helper threads the stage starts.  False if the kernel refuses.
+inline bool pin_to_one_core() {
+  cpu_set_t allowed;
+  if (sched_getaffinity(0, sizeof allowed, &allowed) != 0) return false;
+  for (int c = 0; c < CPU_SETSIZE; ++c) {
+    if (!CPU_ISSET(c, &allowed)) continue;
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(c, &one);
+    return sched_setaffinity(0, sizeof one, &one) == 0;
+  }
+  return false;
+}
+
 // Runs fn in a child process and returns its JSON line (with peak_rss_bytes
 // added), or "" if the child failed.
 inline std::string run_in_child(const std::function<bool(Json*)>& fn) {
@@ -128,9 +145,10 @@ inline std::string run_in_child(const std::function<bool(Json*)>& fn) {
 // this one: a fork inherits this process's heap, and copy-on-write faults
 // then distort a multi-threaded child's timing.
 // With out_path, the program's stdout goes to that file (as a user's shell
-// redirect would) and the result is "ok" on success.
+// redirect would) and the result is "ok" on success.  With one_core, it
+// runs on one CPU (pin_to_one_core).
 inline std::string run_program(const std::vector<std::string>& args, uint64_t* peak_rss,
-                               const std::string& out_path = "") {
+                               const std::string& out_path = "", bool one_core = false) {
   int fds[2];
   if (pipe(fds) != 0) return "";
   std::fflush(stdout);
@@ -147,6 +165,7 @@ inline std::string run_program(const std::vector<std::string>& args, uint64_t* p
     if (!out_path.empty()) ::write(fds[1], "ok", 2), close(out);
     close(fds[0]);
     close(fds[1]);
+    if (one_core && !pin_to_one_core()) _exit(126);
     std::vector<char*> argv;
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
