@@ -11,13 +11,15 @@
 #include "query/explorer.h"
 #include "reference/reference_mesh.h"
 #include "test_mesh.h"
+#include "test_octrees.h"
 #include "test_util.h"
 
 namespace weaver {
 namespace {
 
-// Random refinements of non-cube block domains: unbalanced (steps of several
-// levels) when `balanced` is false.
+// Random refinements of non-cube block domains, and of the root with holes
+// as fine as the leaves: unbalanced (steps of several levels) when
+// `balanced` is false.
 std::vector<std::vector<Octant>> octrees(bool balanced, uint64_t leaves) {
   std::vector<std::vector<Octant>> out;
   for (uint64_t seed = 1; seed <= testing::scaled(4, 2); ++seed) {
@@ -30,6 +32,8 @@ std::vector<std::vector<Octant>> octrees(bool balanced, uint64_t leaves) {
     std::vector<Octant> o;
     EXPECT_OK(generate_octree(g, &o));
     out.push_back(balanced ? reference::balance(o) : o);
+    const std::vector<Octant> holed = testing::random_holed(seed, leaves, 8, 0.7);
+    out.push_back(balanced ? reference::balance(holed) : holed);
     std::sort(out.back().begin(), out.back().end(),
               [](const Octant& a, const Octant& b) { return octant_key(a) < octant_key(b); });
   }

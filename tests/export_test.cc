@@ -18,6 +18,7 @@
 #include "mesh/mesh_reader.h"
 #include "reference/reference_mesh.h"
 #include "test_mesh.h"
+#include "test_octrees.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -102,6 +103,11 @@ TEST(Export, CsvMatchesReferenceOnGradedAndNonCubeOctrees) {
     ASSERT_OK(generate_octree(g, &leaves));
     ASSERT_NO_FATAL_FAILURE(check_export(reference::balance(leaves), dir));
   }
+  for (uint64_t seed = 1; seed <= 5; ++seed) {  // holes as fine as the leaves
+    testing::TempDir dir;
+    ASSERT_NO_FATAL_FAILURE(
+        check_export(reference::balance(testing::random_holed(seed, 300, 7, 0.7)), dir));
+  }
 }
 
 // Every leaf's face neighbours, found by floor and rank queries, are the
@@ -120,6 +126,7 @@ TEST(Export, FaceNeighborsMatchBruteForce) {
     ASSERT_OK(generate_octree(g, &leaves));
     cases.push_back(leaves);  // unbalanced: steps of several levels
     cases.push_back(reference::balance(leaves));
+    cases.push_back(testing::random_holed(seed, g.leaves / 3, 8, 0.7));  // holes, unbalanced
   }
   for (const auto& leaves : cases) {
     testing::TempDir dir;

@@ -18,6 +18,7 @@
 #include "mesh/mesh_reader.h"
 #include "reference/reference_mesh.h"
 #include "test_mesh.h"
+#include "test_octrees.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -37,6 +38,7 @@ std::vector<std::vector<Octant>> meshes() {
     std::vector<Octant> leaves;
     EXPECT_OK(generate_octree(g, &leaves));
     out.push_back(reference::balance(leaves));
+    out.push_back(reference::balance(testing::random_holed(seed, 300, 7, 0.7)));  // holes
   }
   return out;
 }
