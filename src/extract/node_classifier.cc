@@ -6,21 +6,19 @@
 namespace weaver {
 namespace {
 
-// The pixel next to node n in direction d (bit a set: the + side on axis a).
-// False if it lies outside the root.
-bool direction_pixel(Coord n, int d, Coord* p) {
-  const uint32_t c[3] = {n.x, n.y, n.z};
-  uint32_t q[3];
+// The Morton code of the pixel next to the node with code m in direction d
+// (bit a set: the + side on axis a), without decoding.  False if it lies
+// outside the root.
+bool direction_pixel(uint64_t m, int d, uint64_t* pixel) {
   for (int a = 0; a < 3; ++a) {
     if ((d >> a) & 1) {
-      if (c[a] >= kRootEdge) return false;
-      q[a] = c[a];
+      if ((m >> (3 * kMaxLevel + a)) & 1) return false;  // the node is on the root's far side
     } else {
-      if (c[a] == 0) return false;
-      q[a] = c[a] - 1;
+      if ((m & (0x1249249249249249ULL << a)) == 0) return false;  // on the near side
+      m = morton_step_back(m, a, 0);
     }
   }
-  *p = {q[0], q[1], q[2]};
+  *pixel = m;
   return true;
 }
 
@@ -77,11 +75,11 @@ const uint64_t* NodeClassifier::local_floor(uint64_t pm, uint64_t pk) const {
 // leaf's face or edge all ask for it in the same direction), else the active bucket's leaves if p
 // is in its range (no other leaf can hold it), else the octant table.  Works on Morton codes: a
 // leaf holds p iff p's code is in its subtree's code range.
-Status NodeClassifier::leaf_at(Coord p, int direction, Octant* leaf, bool* found) {
-  const uint64_t pm = morton_encode(p);
+// The leaf is handed out where it is kept, not copied.
+Status NodeClassifier::leaf_at(uint64_t pm, int direction, const Octant** leaf, bool* found) {
   for (const RecentLeaf& r : recent_) {
     if (((r.morton ^ pm) >> r.span_bits) == 0) {
-      *leaf = r.leaf;
+      *leaf = &r.leaf;
       *found = true;
       return Status::Ok();
     }
@@ -102,9 +100,18 @@ Status NodeClassifier::leaf_at(Coord p, int direction, Octant* leaf, bool* found
     WEAVER_RETURN_IF_ERROR(octants_.floor(pk, &key, nullptr, &hit));
     if (!hit || !holds_p(key)) return Status::Ok();
   }
-  *leaf = octant_from_key(key);
+  RecentLeaf& r = recent_[direction];
+  r.morton = octant_key_morton(key);
+  r.span_bits = 3 * (kMaxLevel - octant_key_level(key));
+  // Field by field: a whole-struct copy of the decoded octant reads back
+  // 8 bytes across two just-made stores, which does not forward.
+  const Coord c = morton_decode(r.morton);
+  r.leaf.x = c.x;
+  r.leaf.y = c.y;
+  r.leaf.z = c.z;
+  r.leaf.level = static_cast<uint8_t>(octant_key_level(key));
+  *leaf = &r.leaf;
   *found = true;
-  recent_[direction] = {octant_key_morton(key), 3 * (kMaxLevel - octant_key_level(key)), *leaf};
   return Status::Ok();
 }
 
@@ -115,18 +122,18 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
   uint8_t settled = mask;
   for (int d = 0; d < 8; ++d) {
     if ((settled >> d) & 1) continue;
-    Coord p;
-    Octant leaf;
+    uint64_t p = 0;
+    const Octant* leaf = nullptr;
     bool found = false;
-    if (direction_pixel(n, d, &p)) WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
+    if (direction_pixel(key, d, &p)) WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
     if (!found) {  // outside the root or the domain
       settled |= static_cast<uint8_t>(1u << d);
       continue;
     }
     NodeKind here = NodeKind::kAnchored;
     uint8_t covered = 0;
-    WEAVER_RETURN_IF_ERROR(kind_on(n, leaf, mask, &here, &covered));
-    if (*kind != NodeKind::kAnchored && here != *kind) return unbalanced(n, leaf, mask);
+    WEAVER_RETURN_IF_ERROR(kind_on(n, *leaf, mask, &here, &covered));
+    if (*kind != NodeKind::kAnchored && here != *kind) return unbalanced(n, *leaf, mask);
     *kind = here;
     settled |= covered;
   }
@@ -162,21 +169,23 @@ Status NodeClassifier::kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKi
 }
 
 // Names the coarse leaf and a finer element that has n as a corner.
+// (coarse may be kept in recent_, which leaf_at overwrites: named first.)
 Status NodeClassifier::unbalanced(Coord n, const Octant& coarse, uint8_t mask) {
+  const std::string coarse_name = describe_octant(coarse);
   std::string fine = "?";
   for (int d = 0; d < 8; ++d) {
-    Coord p;
-    Octant leaf;
+    uint64_t p = 0;
+    const Octant* leaf = nullptr;
     bool found = false;
-    if (!((mask >> d) & 1) || !direction_pixel(n, d, &p)) continue;
+    if (!((mask >> d) & 1) || !direction_pixel(morton_encode(n), d, &p)) continue;
     WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
     if (found) {
-      fine = describe_octant(leaf);
+      fine = describe_octant(*leaf);
       break;
     }
   }
-  return Status::InvalidArgument("the octree is not 2:1 balanced: octant " +
-                                 describe_octant(coarse) + " and octant " + fine +
+  return Status::InvalidArgument("the octree is not 2:1 balanced: octant " + coarse_name +
+                                 " and octant " + fine +
                                  " are face or edge neighbours more than one level apart");
 }
 

@@ -42,8 +42,9 @@ class NodeClassifier {
   Status classify(uint64_t key, uint8_t mask, NodeKind* kind);
 
  private:
-  // p is the pixel in `direction` (0..7) of a node.
-  Status leaf_at(Coord p, int direction, Octant* leaf, bool* found);
+  // pm is the Morton code of the pixel in `direction` (0..7) of a node.
+  // *leaf points into recent_: valid until the next call.
+  Status leaf_at(uint64_t pm, int direction, const Octant** leaf, bool* found);
   // The last local leaf key <= pk, pm's pixel key, or null.
   const uint64_t* local_floor(uint64_t pm, uint64_t pk) const;
   Status kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind, uint8_t* covered);
