@@ -103,13 +103,7 @@ Status NodeClassifier::leaf_at(uint64_t pm, int direction, const Octant** leaf, 
   RecentLeaf& r = recent_[direction];
   r.morton = octant_key_morton(key);
   r.span_bits = 3 * (kMaxLevel - octant_key_level(key));
-  // Field by field: a whole-struct copy of the decoded octant reads back
-  // 8 bytes across two just-made stores, which does not forward.
-  const Coord c = morton_decode(r.morton);
-  r.leaf.x = c.x;
-  r.leaf.y = c.y;
-  r.leaf.z = c.z;
-  r.leaf.level = static_cast<uint8_t>(octant_key_level(key));
+  octant_decode_into(key, &r.leaf);
   *leaf = &r.leaf;
   *found = true;
   return Status::Ok();

@@ -36,7 +36,7 @@ class LeafFinder {
     Recent& r = recent_[next_++ % recent_.size()];
     r.key = key;
     r.end = octant_key_subtree_end(key);
-    r.leaf = octant_from_key(key);
+    octant_decode_into(key, &r.leaf);
     *leaf = &r.leaf;
     return Status::Ok();
   }
