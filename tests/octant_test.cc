@@ -34,6 +34,9 @@ void check_one(const Octant& o) {
   const uint64_t key = octant_key(o);
   ASSERT_TRUE(octant_key_is_valid(key));
   ASSERT_EQ(octant_from_key(key), o);
+  Octant into{1, 2, 3, 4};
+  octant_decode_into(key, &into);
+  ASSERT_EQ(into, o);
   ASSERT_EQ(octant_key_morton(key), reference::morton_encode(o.x, o.y, o.z));
   ASSERT_EQ(octant_key_level(key), o.level);
   ASSERT_EQ(octant_morton(o), reference::morton_encode(o.x, o.y, o.z));
