@@ -44,6 +44,32 @@ Status scan_selected(Mesh& mesh, const Selection& sel, bool with_nodes,
   return flush();
 }
 
+namespace {
+
+// Adds the anchors of node `id` to `out`, and theirs where they dangle too:
+// next to holes in the domain finer than the leaves' parents, an anchor can
+// (README, extract), and a part that holds a dangling node must hold all
+// the nodes its value follows from.  Where the leaves fill their parents
+// every anchor is anchored, and this costs a kind lookup per anchor.
+Status add_anchors(Mesh& mesh, uint64_t id, ExternalSorter& out) {
+  MeshNode n;
+  WEAVER_RETURN_IF_ERROR(mesh.node(id, true, &n));
+  std::vector<uint64_t> todo(n.anchors.begin(), n.anchors.begin() + n.anchor_count);
+  while (!todo.empty()) {
+    const uint64_t a = todo.back();
+    todo.pop_back();
+    WEAVER_RETURN_IF_ERROR(out.add({a, 0}));
+    MeshNode m;
+    WEAVER_RETURN_IF_ERROR(mesh.node(a, false, &m));
+    if (m.kind == NodeKind::kAnchored) continue;
+    WEAVER_RETURN_IF_ERROR(mesh.node(a, true, &m));
+    todo.insert(todo.end(), m.anchors.begin(), m.anchors.begin() + m.anchor_count);
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
                          const std::string& scratch_dir, uint64_t memory) {
   identity_ = sel.whole();
@@ -74,9 +100,7 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
     last = kt.key;
     WEAVER_RETURN_IF_ERROR(sorter.add({kt.key, 0}));
     if (!with_anchors) continue;
-    MeshNode n;
-    WEAVER_RETURN_IF_ERROR(mesh.node(kt.key, true, &n));
-    for (int a = 0; a < n.anchor_count; ++a) WEAVER_RETURN_IF_ERROR(sorter.add({n.anchors[a], 0}));
+    WEAVER_RETURN_IF_ERROR(add_anchors(mesh, kt.key, sorter));
   }
   WEAVER_RETURN_IF_ERROR(sorter.finish());
   scratch_dir_ = scratch_dir;
@@ -104,6 +128,7 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
 
 LocalNodes::~LocalNodes() {
   if (tree_ == nullptr) return;
+  cursor_ = BTreeCursor();  // it pins a page of the tree: let go first
   tree_.reset();
   std::remove(scratch_file_.c_str());
   ::rmdir(scratch_dir_.c_str());

@@ -17,6 +17,7 @@ is set (as .ci/run does), where a missing tool is a failure.
 """
 import json
 import os
+import random
 import re
 import shutil
 import subprocess
@@ -409,6 +410,29 @@ def main():
         print(f"{name}: {check_raw_parts(db, m, d, 3)}")
         print(f"{name}: {check_partition(db, m)}")
         print(f"{name}: {check_raw_parts(db, m, d, 4)}")
+    # Holes as fine as the leaves (an imported octree need not fill its
+    # parents): some dangling nodes have anchors that dangle too, and a part
+    # must hold the whole chain (with 256 parts, chains cross parts).
+    d = os.path.join(WORK, "holes")
+    shutil.rmtree(d, ignore_errors=True)
+    os.makedirs(d)
+    run(WEAVER, "generate", d + "/all.txt", "--kind", "random", "--leaves", "20000",
+        "--max-level", "8", "--seed", "3")
+    with open(d + "/all.txt") as f, open(d + "/o.txt", "w") as out:
+        leaves = [line for line in f if line.strip() and not line.startswith("#")]
+        coin = random.Random(5)
+        out.writelines(line for line in leaves if coin.random() < 0.7)
+    db = d + "/db"
+    run(WEAVER, "import", db, "--octants", d + "/o.txt", "--quiet")
+    run(WEAVER, "balance", db, "--quiet")
+    run(WEAVER, "extract", db, "--quiet")
+    m = Mesh(db, d + "/csv")
+    anchors = np.stack([m.n[f"a{k}"] for k in range(4)], axis=1)
+    chained = int(sum((m.n["kind"][a[a >= 0]] != 0).any() for a in anchors))
+    assert chained > 0, "the holed octree has no chain of dangling nodes"
+    raw, msg = check_raw(db, m, d)
+    print(f"holes: {len(m.e['id'])} elements, {chained} nodes with a dangling anchor: {msg}")
+    print(f"holes: {check_raw_parts(db, m, d, 256)}")
     # A mesh built from a velocity model carries vp, vs and rho.
     d = os.path.join(WORK, "basin")
     shutil.rmtree(d, ignore_errors=True)
