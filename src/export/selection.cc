@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <vector>
@@ -46,21 +47,23 @@ Status scan_selected(Mesh& mesh, const Selection& sel, bool with_nodes,
 
 namespace {
 
-// Adds the anchors of node `id` to `out`, and theirs where they dangle too:
-// next to holes in the domain finer than the leaves' parents, an anchor can
-// (README, extract), and a part that holds a dangling node must hold all
-// the nodes its value follows from.  Where the leaves fill their parents
-// every anchor is anchored, and this costs a kind lookup per anchor.
-Status add_anchors(Mesh& mesh, uint64_t id, ExternalSorter& out) {
+// Adds node `id` to `out` with its anchors, and theirs where they dangle
+// too: next to holes in the domain finer than the leaves' parents, an
+// anchor can (README, extract), and a part that holds a dangling node must
+// hold all the nodes its value follows from.  Where the leaves fill their
+// parents every anchor is anchored, and this costs a kind lookup an anchor.
+// Each node's tag is its kind, so that the node set counts its dangling.
+Status add_with_anchors(Mesh& mesh, uint64_t id, ExternalSorter& out) {
   MeshNode n;
   WEAVER_RETURN_IF_ERROR(mesh.node(id, true, &n));
+  WEAVER_RETURN_IF_ERROR(out.add({id, uint64_t(n.kind)}));
   std::vector<uint64_t> todo(n.anchors.begin(), n.anchors.begin() + n.anchor_count);
   while (!todo.empty()) {
     const uint64_t a = todo.back();
     todo.pop_back();
-    WEAVER_RETURN_IF_ERROR(out.add({a, 0}));
     MeshNode m;
     WEAVER_RETURN_IF_ERROR(mesh.node(a, false, &m));
+    WEAVER_RETURN_IF_ERROR(out.add({a, uint64_t(m.kind)}));
     if (m.kind == NodeKind::kAnchored) continue;
     WEAVER_RETURN_IF_ERROR(mesh.node(a, true, &m));
     todo.insert(todo.end(), m.anchors.begin(), m.anchors.begin() + m.anchor_count);
@@ -98,10 +101,14 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
     if (done) break;
     if (kt.key == last) continue;
     last = kt.key;
-    WEAVER_RETURN_IF_ERROR(sorter.add({kt.key, 0}));
-    if (!with_anchors) continue;
-    WEAVER_RETURN_IF_ERROR(add_anchors(mesh, kt.key, sorter));
+    if (with_anchors) {
+      WEAVER_RETURN_IF_ERROR(add_with_anchors(mesh, kt.key, sorter));
+    } else {
+      WEAVER_RETURN_IF_ERROR(sorter.add({kt.key, 0}));
+    }
   }
+  knows_dangling_ = with_anchors;
+  dangling_ = 0;
   WEAVER_RETURN_IF_ERROR(sorter.finish());
   scratch_dir_ = scratch_dir;
   scratch_file_ = scratch_dir + "/local_nodes.bt";
@@ -110,7 +117,11 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
   TableOptions t;
   t.key_kind = KeyKind::kNode;
   t.packed = true;
-  WEAVER_RETURN_IF_ERROR(BTree::create(std::move(file), t, memory / 2, &tree_));
+  // memory / 2 - 1 MiB for the tree's pool: the rest holds the ids found lately.
+  found_.assign(size_t{1} << kFoundBits, Found{});
+  const uint64_t found_bytes = found_.size() * sizeof(Found);
+  WEAVER_RETURN_IF_ERROR(BTree::create(
+      std::move(file), t, std::max<uint64_t>(memory / 2, 2 * found_bytes) - found_bytes, &tree_));
   nodes_ = 0;
   last = 0;
   for (;;) {
@@ -119,6 +130,7 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
     WEAVER_RETURN_IF_ERROR(sorter.next(&kt, &done));
     if (done) break;
     if (nodes_ > 0 && kt.key == last) continue;
+    dangling_ += kt.tag != uint64_t(NodeKind::kAnchored);
     WEAVER_RETURN_IF_ERROR(tree_->append(kt.key, nullptr));
     last = kt.key;
     ++nodes_;
@@ -136,11 +148,14 @@ LocalNodes::~LocalNodes() {
 
 Status LocalNodes::local_id(uint64_t global, uint64_t* local) {
   if (identity_) return *local = global, Status::Ok();
+  Found& f = found_[(global * 0x9E3779B97F4A7C15ULL) >> (64 - kFoundBits)];
+  if (f.global == global) return *local = f.local, Status::Ok();
   bool present = false;
   WEAVER_RETURN_IF_ERROR(tree_->rank_exact(global, local, &present));
   if (!present) {
     return Status::Internal("node " + std::to_string(global) + " is not in the selection");
   }
+  f = {global, *local};
   return Status::Ok();
 }
 

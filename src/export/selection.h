@@ -62,6 +62,13 @@ class LocalNodes {
                uint64_t memory);
   uint64_t node_count() const { return nodes_; }
   uint64_t element_count() const { return elements_; }
+  // Whether build counted the dangling nodes of the set (it did with
+  // anchors, or for the whole mesh: false), and how many.
+  bool knows_dangling() const { return !identity_ && knows_dangling_; }
+  uint64_t dangling_count() const { return dangling_; }
+  // The local id of a node of the selection: a search of the node set, or
+  // a look at the ids found lately (an element's corners are corners of
+  // its neighbours too, which come soon after it in Z-order).
   Status local_id(uint64_t global, uint64_t* local);
   // Global ids in order: start, then valid / global / next.
   Status start();
@@ -70,11 +77,18 @@ class LocalNodes {
   Status next();
 
  private:
-  bool identity_ = true;
-  uint64_t nodes_ = 0, elements_ = 0, at_ = 0;
+  bool identity_ = true, knows_dangling_ = false;
+  uint64_t nodes_ = 0, elements_ = 0, at_ = 0, dangling_ = 0;
   std::unique_ptr<BTree> tree_;
   BTreeCursor cursor_;
   std::string scratch_dir_, scratch_file_;
+  // Global id -> local id of nodes asked lately, a slot per hash of the
+  // global id (empty: global UINT64_MAX).  Counted in the selection's share.
+  struct Found {
+    uint64_t global = UINT64_MAX, local = 0;
+  };
+  static constexpr int kFoundBits = 16;  // 1 MiB
+  std::vector<Found> found_;
 };
 
 }  // namespace weaver
