@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include "db/database.h"
@@ -78,6 +79,39 @@ void check_export(const std::vector<Octant>& leaves, const testing::TempDir& dir
     for (uint64_t n : ref.corners[i]) expect.push_back(std::to_string(n));
     ASSERT_EQ(elements[i], expect) << "element row " << i;
   }
+}
+
+// A part's nodes are visited by seeking one cursor forward (export's
+// for_each_node): each stop is the node a lookup by id gives, whether the
+// next id is the following one, a few ahead or far away; past the last
+// node is an error.
+TEST(Export, NodeScanSeeksToTheNodesALookupByIdFinds) {
+  testing::TempDir dir;
+  const std::string db =
+      testing::build_mesh(reference::balance(testing::random_holed(4, 3000, 7, 0.8)), dir);
+  std::unique_ptr<Mesh> mesh;
+  ASSERT_OK(Mesh::open(db, 1 << 20, 1 << 20, &mesh));
+  std::mt19937_64 rng(9);
+  NodeScan scan;
+  ASSERT_OK(scan.start(*mesh, true));
+  uint64_t id = 0, seeks = 0;
+  while (true) {
+    const uint64_t gap = rng() % 8 == 0 ? rng() % 1000 : rng() % 4;  // near and far
+    if (id + gap >= mesh->node_count()) break;
+    id += gap;
+    ASSERT_OK(scan.seek(id));
+    MeshNode want;
+    ASSERT_OK(mesh->node(id, true, &want));
+    const MeshNode& got = scan.node();
+    ASSERT_EQ(got.id, want.id);
+    ASSERT_EQ(got.c, want.c) << "node " << id;
+    ASSERT_EQ(got.kind, want.kind) << "node " << id;
+    ASSERT_EQ(got.anchor_count, want.anchor_count) << "node " << id;
+    for (int a = 0; a < want.anchor_count; ++a) ASSERT_EQ(got.anchors[a], want.anchors[a]);
+    ++seeks;
+  }
+  EXPECT_GT(seeks, 100u);
+  EXPECT_FALSE(scan.seek(mesh->node_count()).ok());
 }
 
 TEST(Export, CsvMatchesReferenceOnGradedAndNonCubeOctrees) {

@@ -46,12 +46,14 @@ Status for_each_node(ExportJob& job, bool with_anchors,
     }
     return scan.status();
   }
+  // The selection's nodes are nearly runs of ids: one cursor walks them.
   LocalNodes& local = *job.local;
-  MeshNode n;
+  NodeScan scan;
   WEAVER_RETURN_IF_ERROR(local.start());
+  if (local.valid()) WEAVER_RETURN_IF_ERROR(scan.start(job.mesh, with_anchors));
   while (local.valid()) {
-    WEAVER_RETURN_IF_ERROR(job.mesh.node(local.global(), with_anchors, &n));
-    WEAVER_RETURN_IF_ERROR(fn(n));
+    WEAVER_RETURN_IF_ERROR(scan.seek(local.global()));
+    WEAVER_RETURN_IF_ERROR(fn(scan.node()));
     ++job.result->nodes;
     job.tick();
     WEAVER_RETURN_IF_ERROR(local.next());

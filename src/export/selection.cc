@@ -84,13 +84,27 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
   ::mkdir(scratch_dir.c_str(), 0755);
   // The corners of the selected elements, sorted; then, with the anchors
   // of those that dangle (one lookup a distinct node), sorted again.
-  ExternalSorter corners(scratch_dir + "/corners", memory / 4);
+  // A node is a corner of up to 8 elements, mostly near in Z-order: each
+  // batch of corners goes to the sorter without its repeats.  The batch and
+  // the sorter share a quarter of the memory.
+  ExternalSorter corners(scratch_dir + "/corners", memory / 8);
+  std::vector<uint64_t> batch;
+  const size_t batch_size = std::max<size_t>(4096, memory / 8 / sizeof(uint64_t));
+  auto add_batch = [&]() -> Status {
+    std::sort(batch.begin(), batch.end());
+    batch.erase(std::unique(batch.begin(), batch.end()), batch.end());
+    for (uint64_t id : batch) WEAVER_RETURN_IF_ERROR(corners.add({id, 0}));
+    batch.clear();
+    return Status::Ok();
+  };
   elements_ = 0;
   WEAVER_RETURN_IF_ERROR(scan_selected(mesh, sel, true, [&](MeshElement& e) {
     ++elements_;
-    for (uint64_t id : e.nodes) WEAVER_RETURN_IF_ERROR(corners.add({id, 0}));
-    return Status::Ok();
+    batch.insert(batch.end(), e.nodes.begin(), e.nodes.end());
+    return batch.size() >= batch_size ? add_batch() : Status::Ok();
   }));
+  WEAVER_RETURN_IF_ERROR(add_batch());
+  std::vector<uint64_t>().swap(batch);
   WEAVER_RETURN_IF_ERROR(corners.finish());
   ExternalSorter sorter(scratch_dir + "/sort", memory / 4);
   uint64_t last = UINT64_MAX;

@@ -164,6 +164,24 @@ void NodeScan::next() {
   if (status_.ok()) status_ = load();
 }
 
+Status NodeScan::seek(uint64_t id) {
+  if (!status_.ok()) return status_;
+  if (cursor_.valid() && id >= n_.id && id - n_.id <= kMaxSteps) {
+    for (; n_.id < id && cursor_.valid(); ++n_.id) WEAVER_RETURN_IF_ERROR(status_ = cursor_.next());
+  } else {
+    uint64_t key = 0;
+    std::byte kind{};
+    WEAVER_RETURN_IF_ERROR(status_ = mesh_->nodes().select(id, &key, &kind));
+    WEAVER_RETURN_IF_ERROR(status_ = mesh_->nodes().seek_cursor(key, &cursor_));
+    n_.id = id;
+  }
+  if (!cursor_.valid()) {
+    return status_ = Status::InvalidArgument("node " + std::to_string(id) + " does not exist");
+  }
+  n_.id = id;
+  return status_ = load();
+}
+
 Status NodeScan::load() {
   if (!cursor_.valid()) return Status::Ok();
   n_.c = morton_decode(cursor_.key());

@@ -130,9 +130,14 @@ class NodeScan {
   bool valid() const { return status_.ok() && cursor_.valid(); }
   const MeshNode& node() const { return n_; }  // REQUIRES: valid()
   void next();                                 // as ElementScan's
+  // Moves to node `id`: a few cursor steps when it is a little ahead (the
+  // nodes of a part are nearly a run of ids), else a search.
+  Status seek(uint64_t id);
   const Status& status() const { return status_; }
 
  private:
+  // Farther than this many nodes ahead, a search is cheaper than steps.
+  static constexpr uint64_t kMaxSteps = 64;
   Status status_;
   Status load();
   Mesh* mesh_ = nullptr;
