@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 
+#include "balance/parent_asks.h"
 #include "construct/construct.h"
 #include "db/database.h"
 #include "gen/octree_gen.h"
@@ -39,6 +40,31 @@ void expect_names_a_violation(const std::string& violation, const std::vector<Oc
   EXPECT_GE(std::abs(int(named[0].level) - int(named[1].level)), 2) << violation;
   EXPECT_NE(std::find(leaves.begin(), leaves.end(), named[0]), leaves.end()) << violation;
   EXPECT_NE(std::find(leaves.begin(), leaves.end(), named[1]), leaves.end()) << violation;
+}
+
+// The tables of what a parent's leaves ask for, against geometry: child c
+// asks for neighbour d of its parent iff they share a face or an edge.
+TEST(ParentAsks, ChildrenAskForTheNeighboursTheyTouch) {
+  const Octant parent{1u << 18, 1u << 18, 1u << 18, 2};  // inside the root on every side
+  for (unsigned children = 0; children < 256; ++children) {
+    uint32_t want = 0;
+    for (size_t i = 0; i < kFaceAndEdgeDirections.size(); ++i) {
+      Octant n;
+      ASSERT_TRUE(octant_neighbour(parent, kFaceAndEdgeDirections[i], &n));
+      uint8_t touching = 0;
+      for (int c = 0; c < 8; ++c) {
+        if (reference::face_or_edge_adjacent(octant_child(parent, c), n)) touching |= 1u << c;
+      }
+      if (children == 255) {
+        ASSERT_EQ(parent_asks::kTouching[i], touching) << i;
+      }
+      if (children & touching) want |= 1u << i;
+    }
+    ASSERT_EQ(parent_asks::kTouchedBy[children], want) << children;
+  }
+  EXPECT_TRUE(parent_asks::is_children_tag(parent_asks::children_tag(0x5a)));
+  EXPECT_EQ(parent_asks::children_of(parent_asks::children_tag(0x5a)), 0x5au);
+  EXPECT_FALSE(octant_key_is_valid(parent_asks::children_tag(0x5a)));
 }
 
 class BalanceTest : public ::testing::Test {
