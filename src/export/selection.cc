@@ -10,6 +10,7 @@
 
 #include "sort/external_sort.h"
 #include "storage/file.h"
+#include "util/radix_sort.h"
 
 namespace weaver {
 
@@ -86,12 +87,13 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
   // of those that dangle (one lookup a distinct node), sorted again.
   // A node is a corner of up to 8 elements, mostly near in Z-order: each
   // batch of corners goes to the sorter without its repeats.  The batch and
-  // the sorter share a quarter of the memory.
+  // the sorter (and the radix sort's other buffer) share a quarter of the memory.
   ExternalSorter corners(scratch_dir + "/corners", memory / 8);
   std::vector<uint64_t> batch;
-  const size_t batch_size = std::max<size_t>(4096, memory / 8 / sizeof(uint64_t));
+  const size_t batch_size = std::max<size_t>(4096, memory / 16 / sizeof(uint64_t));
+  std::vector<uint64_t> scratch;
   auto add_batch = [&]() -> Status {
-    std::sort(batch.begin(), batch.end());
+    radix_sort_by(batch, scratch, [](uint64_t id) { return id; });
     batch.erase(std::unique(batch.begin(), batch.end()), batch.end());
     for (uint64_t id : batch) WEAVER_RETURN_IF_ERROR(corners.add({id, 0}));
     batch.clear();
@@ -105,6 +107,7 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
   }));
   WEAVER_RETURN_IF_ERROR(add_batch());
   std::vector<uint64_t>().swap(batch);
+  std::vector<uint64_t>().swap(scratch);
   WEAVER_RETURN_IF_ERROR(corners.finish());
   ExternalSorter sorter(scratch_dir + "/sort", memory / 4);
   uint64_t last = UINT64_MAX;
