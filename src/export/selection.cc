@@ -62,11 +62,9 @@ Status add_with_anchors(Mesh& mesh, uint64_t id, ExternalSorter& out) {
   while (!todo.empty()) {
     const uint64_t a = todo.back();
     todo.pop_back();
-    MeshNode m;
-    WEAVER_RETURN_IF_ERROR(mesh.node(a, false, &m));
-    WEAVER_RETURN_IF_ERROR(out.add({a, uint64_t(m.kind)}));
-    if (m.kind == NodeKind::kAnchored) continue;
+    MeshNode m;  // an anchored node has no anchors to look up
     WEAVER_RETURN_IF_ERROR(mesh.node(a, true, &m));
+    WEAVER_RETURN_IF_ERROR(out.add({a, uint64_t(m.kind)}));
     todo.insert(todo.end(), m.anchors.begin(), m.anchors.begin() + m.anchor_count);
   }
   return Status::Ok();
@@ -84,7 +82,8 @@ Status LocalNodes::build(Mesh& mesh, const Selection& sel, bool with_anchors,
   }
   ::mkdir(scratch_dir.c_str(), 0755);
   // The corners of the selected elements, sorted; then, with the anchors
-  // of those that dangle (one lookup a distinct node), sorted again.
+  // of those that dangle (one lookup a distinct node and an anchor), sorted
+  // again.
   // A node is a corner of up to 8 elements, mostly near in Z-order: each
   // batch of corners goes to the sorter without its repeats.  The batch and
   // the sorter (and the radix sort's other buffer) share a quarter of the memory.

@@ -173,7 +173,6 @@ Status NodeScan::seek(uint64_t id) {
     std::byte kind{};
     WEAVER_RETURN_IF_ERROR(status_ = mesh_->nodes().select(id, &key, &kind));
     WEAVER_RETURN_IF_ERROR(status_ = mesh_->nodes().seek_cursor(key, &cursor_));
-    n_.id = id;
   }
   if (!cursor_.valid()) {
     return status_ = Status::InvalidArgument("node " + std::to_string(id) + " does not exist");
