@@ -26,7 +26,13 @@ Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref, uint64_t* ran
     path->e[path->depth++] = {pg, idx};
     pg = v.child(idx);
   }
-  return fetch_typed(pg, leaf_type(), leaf_ref, options_.page_size);
+  // A plain leaf's search reads the header and the key column: those lines
+  // only are prefetched (the whole page was 7% slower at 10M random gets in
+  // the pool and 20% at 100K: a core has about a dozen line-fill buffers,
+  // and prefetches beyond them stall it).  A packed leaf is read whole.
+  const uint32_t prefetch =
+      options_.packed ? options_.page_size : page::kPageHeaderBytes + 8 * leaf_cap_;
+  return fetch_typed(pg, leaf_type(), leaf_ref, prefetch);
 }
 
 Status BTree::find(uint64_t key, LeafSlot* s, uint64_t* rank_before) {
