@@ -14,13 +14,13 @@ constexpr size_t kBatch = 4096;
 // Writes leaf t, split just enough that every required octant strictly
 // inside it is resolved.  `inside` holds those, in key order.  Pages are
 // encoded and written on the appender's thread, alongside this one's
-// reading and splitting.
+// reading, splitting and filling in new leaves' material: the appender has
+// the larger share of the work (at 1 Hz it was busy 61% of the samples of
+// the refinement when it filled the material too, this thread 39%).
 class Completion {
  public:
-  // New leaves' payloads are filled on the appender's thread, which has
-  // time to spare beside this one.
   Completion(BTree& out, const FillPayload& fill, uint32_t payload)
-      : out_(out, fill_on_append(fill)), fill_(payload > 0 && fill), payload_(payload) {}
+      : out_(out), fill_(payload > 0 ? fill : nullptr), payload_(payload) {}
 
   Status write(const Octant& t, const std::byte* parent_payload, const std::vector<KeyTag>& inside,
                BalanceResult* r) {
@@ -55,14 +55,9 @@ class Completion {
   }
 
   Status emit(const Octant& o, bool is_new, const std::byte* parent_payload, BalanceResult* r) {
-    if (is_new && fill_) batch_.to_complete.push_back(static_cast<uint32_t>(batch_.keys.size()));
     add_entry(octant_key(o), o.level, parent_payload, r);
+    if (is_new && fill_) fill_(o, &*(batch_.payloads.end() - payload_));
     return flush_if_full();
-  }
-
-  static AsyncAppender::Complete fill_on_append(const FillPayload& fill) {
-    if (!fill) return nullptr;
-    return [fill](uint64_t key, std::byte* payload) { fill(octant_from_key(key), payload); };
   }
 
   // Adds a leaf to the batch with a copy of `payload`.
@@ -75,7 +70,7 @@ class Completion {
   Status flush_if_full() { return batch_.keys.size() == kBatch ? flush() : Status::Ok(); }
 
   AsyncAppender out_;
-  bool fill_;  // new leaves get their own payload
+  FillPayload fill_;  // gives new leaves their own payload, if set
   uint32_t payload_;
   AsyncAppender::Batch batch_;
 };

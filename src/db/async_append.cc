@@ -7,8 +7,7 @@ namespace {
 constexpr size_t kMaxWaiting = 2;
 }  // namespace
 
-AsyncAppender::AsyncAppender(BTree& out, Complete complete)
-    : out_(out), complete_(std::move(complete)), thread_([this] { run(); }) {}
+AsyncAppender::AsyncAppender(BTree& out) : out_(out), thread_([this] { run(); }) {}
 
 AsyncAppender::~AsyncAppender() { (void)finish(); }
 
@@ -25,7 +24,6 @@ Status AsyncAppender::append(Batch* batch) {
   }
   batch->keys.clear();
   batch->payloads.clear();
-  batch->to_complete.clear();
   changed_.notify_all();
   return Status::Ok();
 }
@@ -58,8 +56,6 @@ void AsyncAppender::run() {
 }
 
 Status AsyncAppender::append_now(Batch& b) {
-  const size_t size = out_.payload_size();
-  for (uint32_t i : b.to_complete) complete_(b.keys[i], b.payloads.data() + i * size);
   return out_.append_batch(b.keys.data(), b.payloads.data(), b.keys.size());
 }
 

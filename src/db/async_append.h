@@ -1,16 +1,15 @@
 // Appends batches of records to a table on a thread of its own, so that
 // encoding and writing pages overlaps with the work that makes the records
-// (balance's refinement: reading, merging and splitting leaves), and so
-// can the finishing of payloads the producer leaves to it.  Batches
-// are appended in the order given: the table is the one a plain sorted
-// append builds.  At most two batches wait, so memory stays two batches.
+// (balance's refinement: reading, merging and splitting leaves, and the
+// material of new leaves).  Batches are appended in the order given: the
+// table is the one a plain sorted append builds.  At most two batches wait,
+// so memory stays two batches.
 #pragma once
 
 #include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <deque>
-#include <functional>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -25,14 +24,10 @@ class AsyncAppender {
   struct Batch {
     std::vector<uint64_t> keys;
     std::vector<std::byte> payloads;  // payload_size bytes a key
-    // Entries whose payload `complete` finishes on the appender's thread
-    // (work taken off the thread that makes the records).
-    std::vector<uint32_t> to_complete;
   };
-  using Complete = std::function<void(uint64_t key, std::byte* payload)>;
 
   // `out` is used only by the appender's thread until finish() returns.
-  explicit AsyncAppender(BTree& out, Complete complete = nullptr);
+  explicit AsyncAppender(BTree& out);
   ~AsyncAppender();  // finishes if finish() was not called
   AsyncAppender(const AsyncAppender&) = delete;
   AsyncAppender& operator=(const AsyncAppender&) = delete;
@@ -48,7 +43,6 @@ class AsyncAppender {
   Status append_now(Batch& b);
 
   BTree& out_;
-  Complete complete_;
   std::mutex mu_;
   std::condition_variable changed_;
   std::deque<Batch> waiting_;
