@@ -1,6 +1,7 @@
-// AsyncAppender builds, from batches handed over on another thread, the
-// same file a plain sorted append builds; an append error (keys out of
-// order) comes back from a later append or from finish.
+// AsyncAppender builds, from batches handed over on another thread (or
+// appended at once, without one), the same file a plain sorted append
+// builds; an append error (keys out of order) comes back from a later
+// append or from finish.
 #include "db/async_append.h"
 
 #include <gtest/gtest.h>
@@ -32,89 +33,60 @@ std::string bytes_of(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-TEST(AsyncAppend, ThreadedBatchesBuildTheFileAPlainAppendBuilds) {
-  testing::TempDir dir;
-  std::mt19937_64 rng(5);
-  std::vector<uint64_t> keys;
-  uint64_t k = 0;
-  for (int i = 0; i < 200000; ++i) keys.push_back(k += 1 + rng() % 1000);
-  std::vector<std::byte> payloads(keys.size() * 8);
-  for (auto& b : payloads) b = static_cast<std::byte>(rng());
-  auto plain = new_table(dir.file("plain"));
-  ASSERT_OK(plain->append_batch(keys.data(), payloads.data(), keys.size()));
-  ASSERT_OK(plain->commit());
-  auto threaded = new_table(dir.file("threaded"));
-  {
-    AsyncAppender appender(*threaded);
-    AsyncAppender::Batch batch;
-    for (size_t i = 0; i < keys.size();) {
-      const size_t n = std::min<size_t>(keys.size() - i, 1 + rng() % 5000);
-      batch.keys.assign(keys.begin() + i, keys.begin() + i + n);
-      batch.payloads.assign(payloads.begin() + 8 * i, payloads.begin() + 8 * (i + n));
-      ASSERT_OK(appender.append(&batch));
-      EXPECT_TRUE(batch.keys.empty() && batch.payloads.empty());
-      i += n;
-    }
-    ASSERT_OK(appender.finish());
-  }
-  ASSERT_OK(threaded->commit());
-  EXPECT_EQ(threaded->size(), keys.size());
-  EXPECT_EQ(bytes_of(dir.file("threaded")), bytes_of(dir.file("plain")));
-}
-
-// Payloads left to the appender (every third entry) are finished on its
-// thread before their batch is appended; the others keep their bytes.
-TEST(AsyncAppend, EntriesLeftToCompleteAreFinishedBeforeTheyAreAppended) {
-  testing::TempDir dir;
-  std::vector<uint64_t> keys(30000);
-  for (size_t i = 0; i < keys.size(); ++i) keys[i] = 7 * i + 3;
-  std::vector<std::byte> payloads(keys.size() * 8, std::byte{0x5a});
-  auto mark = [](uint64_t key, std::byte* p) {
-    for (int b = 0; b < 8; ++b) p[b] = static_cast<std::byte>(key >> (8 * b));
-  };
-  std::vector<std::byte> want = payloads;
-  for (size_t i = 0; i < keys.size(); i += 3) mark(keys[i], want.data() + 8 * i);
-  auto plain = new_table(dir.file("plain"));
-  ASSERT_OK(plain->append_batch(keys.data(), want.data(), keys.size()));
-  ASSERT_OK(plain->commit());
-  auto threaded = new_table(dir.file("threaded"));
-  {
-    AsyncAppender appender(*threaded, mark);
-    AsyncAppender::Batch batch;
-    for (size_t i = 0; i < keys.size(); i += 1000) {
-      batch.keys.assign(keys.begin() + i, keys.begin() + i + 1000);
-      batch.payloads.assign(payloads.begin() + 8 * i, payloads.begin() + 8 * (i + 1000));
-      for (size_t j = 0; j < 1000; ++j) {
-        if ((i + j) % 3 == 0) batch.to_complete.push_back(static_cast<uint32_t>(j));
+TEST(AsyncAppend, BatchesBuildTheFileAPlainAppendBuildsWithOrWithoutAThread) {
+  for (const bool own_thread : {true, false}) {
+    SCOPED_TRACE(own_thread ? "on its own thread" : "on the caller's thread");
+    testing::TempDir dir;
+    std::mt19937_64 rng(5);
+    std::vector<uint64_t> keys;
+    uint64_t k = 0;
+    for (int i = 0; i < 200000; ++i) keys.push_back(k += 1 + rng() % 1000);
+    std::vector<std::byte> payloads(keys.size() * 8);
+    for (auto& b : payloads) b = static_cast<std::byte>(rng());
+    auto plain = new_table(dir.file("plain"));
+    ASSERT_OK(plain->append_batch(keys.data(), payloads.data(), keys.size()));
+    ASSERT_OK(plain->commit());
+    auto threaded = new_table(dir.file("threaded"));
+    {
+      AsyncAppender appender(*threaded, own_thread);
+      AsyncAppender::Batch batch;
+      for (size_t i = 0; i < keys.size();) {
+        const size_t n = std::min<size_t>(keys.size() - i, 1 + rng() % 5000);
+        batch.keys.assign(keys.begin() + i, keys.begin() + i + n);
+        batch.payloads.assign(payloads.begin() + 8 * i, payloads.begin() + 8 * (i + n));
+        ASSERT_OK(appender.append(&batch));
+        EXPECT_TRUE(batch.keys.empty() && batch.payloads.empty());
+        i += n;
       }
-      ASSERT_OK(appender.append(&batch));
-      EXPECT_TRUE(batch.to_complete.empty());
+      ASSERT_OK(appender.finish());
     }
-    ASSERT_OK(appender.finish());
+    ASSERT_OK(threaded->commit());
+    EXPECT_EQ(threaded->size(), keys.size());
+    EXPECT_EQ(bytes_of(dir.file("threaded")), bytes_of(dir.file("plain")));
   }
-  ASSERT_OK(threaded->commit());
-  EXPECT_EQ(bytes_of(dir.file("threaded")), bytes_of(dir.file("plain")));
 }
 
 TEST(AsyncAppend, AnAppendErrorComesBackToTheThreadThatHandsBatches) {
-  testing::TempDir dir;
-  auto t = new_table(dir.file("t"));
-  AsyncAppender appender(*t);
-  AsyncAppender::Batch batch;
-  batch.keys = {10, 20};
-  batch.payloads.resize(16);
-  ASSERT_OK(appender.append(&batch));
-  batch.keys = {5};  // out of order
-  batch.payloads.resize(8);
-  Status st = appender.append(&batch);
-  for (int i = 0; i < 3 && st.ok(); ++i) {
-    batch.keys = {uint64_t(100 + i)};
+  for (const bool own_thread : {true, false}) {
+    testing::TempDir dir;
+    auto t = new_table(dir.file("t"));
+    AsyncAppender appender(*t, own_thread);
+    AsyncAppender::Batch batch;
+    batch.keys = {10, 20};
+    batch.payloads.resize(16);
+    ASSERT_OK(appender.append(&batch));
+    batch.keys = {5};  // out of order
     batch.payloads.resize(8);
-    st = appender.append(&batch);
+    Status st = appender.append(&batch);
+    for (int i = 0; i < 3 && st.ok(); ++i) {
+      batch.keys = {uint64_t(100 + i)};
+      batch.payloads.resize(8);
+      st = appender.append(&batch);
+    }
+    const Status done = appender.finish();
+    EXPECT_FALSE(done.ok());
+    EXPECT_NE(done.message().find("out of order"), std::string::npos) << done.to_string();
   }
-  const Status done = appender.finish();
-  EXPECT_FALSE(done.ok());
-  EXPECT_NE(done.message().find("out of order"), std::string::npos) << done.to_string();
 }
 
 }  // namespace

@@ -67,9 +67,11 @@ BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
   leaf_pool = plan.take("leaf table pool", 1, 8, 32ull << 20);
   // A sorted append touches only the right spine of the output.
   output_pool = plan.take("output table pool", 1, 8, 8ull << 20);
-  // 3 spools a level for levels 0..kMaxLevel (63 <= 64 of them), each
-  // buffering sorted runs on their way to its file.
-  spool_buffer = std::min<uint64_t>(plan.take("spools (64 buffers)", 1, 8) / 64, 1ull << 20);
+  // 4 spools a level for levels 0..kMaxLevel (84 of them: the leaves'
+  // parents from each of the first scan's two stretches, the required
+  // octants' parents, the required), each buffering sorted runs on their
+  // way to its file.
+  spool_buffer = std::min<uint64_t>(plan.take("spools (84 buffers)", 1, 8) / 84, 1ull << 20);
   // The larger the chunk of parents, the more neighbours it finds among
   // itself and never hands to the sorter.
   parent_chunk = plan.take("parent chunk", 1, 4);
@@ -77,6 +79,8 @@ BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
   // A finer map leaves fewer candidates to the table (those in cells the
   // domain's boundary cuts) and takes 8 times the memory: 32 MiB is level 9.
   domain_map = plan.take("domain map", 1, 16, 32ull << 20);
+  // It reads its stretch of the leaves in order: a few pages at a time.
+  second_reader = plan.take("second reader's pool", 1, 64, 1ull << 20);
 }
 
 int finest_level_bound(BTree& leaves) {
@@ -105,7 +109,11 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
     levels_from_metadata(leaves->options().metadata, &levels);
     progress = std::make_unique<BalanceProgress>(o.progress, leaves->size(), levels);
   }
-  Closure closure(*leaves, memory, scratch.path, o, progress.get(), r);
+  std::unique_ptr<BTree> second_reader;
+  if (o.threads > 1) {
+    WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, memory.second_reader, &second_reader));
+  }
+  Closure closure(*leaves, memory, scratch.path, o, progress.get(), r, second_reader.get());
   WEAVER_RETURN_IF_ERROR(closure.build(finest_level_bound(*leaves), true));
   const TableOptions topt = leaves->options();
   std::unique_ptr<BTree> out;
@@ -113,7 +121,7 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, memory.output_pool, &out, &file));
   const std::unique_ptr<VelocityModel> model = model_of(topt.metadata);
   const Status st = write_refinement(*leaves, closure.required(), material_fill(model.get(), topt),
-                                     *out, progress.get(), r);
+                                     *out, o.threads, progress.get(), r);
   if (st.ok()) out->set_metadata(replace_levels(topt.metadata, r->levels));
   return db->publish(kOctantTable, file, out, st);
 }

@@ -27,7 +27,8 @@ struct BalanceOptions {
   MemoryBudget memory;
   bool check_only = false;  // verify only; name the first violation
   // The closure's neighbour generation and sorts share the work among this
-  // many threads; the table is the same for any count.
+  // many threads, and with more than one the refinement's output is written
+  // on a thread of its own; the table is the same for any count.
   int threads = 1;
   // Chunks of parents at least this large are shared among the threads
   // (smaller ones cost more to hand out than they take); tests lower it.
@@ -44,10 +45,11 @@ struct BalanceMemory {
   MemoryPlan plan;
   uint64_t leaf_pool = 0;       // the input leaves, read in order by several cursors
   uint64_t output_pool = 0;     // the output table, written by sorted append
-  uint64_t spool_buffer = 0;    // each of the closure's spools (3 per level)
+  uint64_t spool_buffer = 0;    // each of the closure's spools (4 per level)
   uint64_t parent_chunk = 0;    // a chunk of parents and its key set
   uint64_t candidate_sort = 0;  // the sorter of a level's candidates
   uint64_t domain_map = 0;      // which coarse cells the leaves cover (domain_map.h)
+  uint64_t second_reader = 0;   // the pool of the first scan's second reader (threads > 1)
 };
 
 struct BalanceResult {

@@ -100,8 +100,10 @@ Status next_unique(KeyTagSource& s, uint64_t* prev, bool* has_prev, KeyTag* out,
 }  // namespace
 
 Closure::Closure(BTree& leaves, const BalanceMemory& memory, const std::string& scratch_dir,
-                 const BalanceOptions& options, BalanceProgress* progress, BalanceResult* result)
+                 const BalanceOptions& options, BalanceProgress* progress, BalanceResult* result,
+                 BTree* second_reader)
     : leaves_(leaves),
+      second_reader_(second_reader),
       memory_(memory),
       scratch_(scratch_dir),
       threads_(std::max(1, options.threads)),
@@ -113,44 +115,22 @@ Closure::~Closure() = default;
 
 Status Closure::build(int max_level, bool propagate) {
   for (int l = 0; l <= max_level; ++l) {
-    leaf_parents_.push_back(spool("lp", l));
     required_parents_.push_back(spool("rp", l));
     required_.push_back(spool("r", l));
   }
-  domain_ = std::make_unique<DomainMap>(DomainMap::level_for(memory_.domain_map, max_level));
-  // By level: the parent whose leaves are being gathered, with the set of
-  // them so far in its tag.  Leaves of one level under one parent come one
-  // after another in that level's stream: nothing else of that level lies
-  // between them in key order.
-  std::vector<KeyTag> open(max_level + 1, KeyTag{0, 0});
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(leaves_.seek_keys(0, &c));
-  while (c.valid()) {
-    const uint64_t key = c.key();
-    domain_->add_leaf(key);
-    ++r_->input_leaves;
-    if (progress_ != nullptr) progress_->scanned(r_->input_leaves);
-    const int level = octant_key_level(key);
-    if (level > 0) {
-      KeyTag& p = open[level - 1];
-      const uint64_t parent = octant_key_parent(key);
-      if (p.tag != 0 && p.key != parent) WEAVER_RETURN_IF_ERROR(leaf_parents_[level - 1]->add(p));
-      if (p.tag == 0 || p.key != parent) p = {parent, parent_asks::children_tag(0)};
-      p.tag |= parent_asks::children_tag(1u << octant_key_child_id(key));
-    }
-    WEAVER_RETURN_IF_ERROR(c.next());
-  }
-  for (int l = 0; l <= max_level; ++l) {
-    if (open[l].tag != 0) WEAVER_RETURN_IF_ERROR(leaf_parents_[l]->add(open[l]));
-  }
-  domain_->finish();
+  WEAVER_RETURN_IF_ERROR(scan_leaves(max_level));
   for (int l = max_level - 1; l >= 0; --l) {
-    WEAVER_RETURN_IF_ERROR(leaf_parents_[l]->finish());
     WEAVER_RETURN_IF_ERROR(required_parents_[l]->finish());
-    KeyTagMerge parents({leaf_parents_[l].get(), required_parents_[l].get()});
-    const uint64_t parent_count = leaf_parents_[l]->size() + required_parents_[l]->size();
+    std::vector<KeyTagSource*> sources = {required_parents_[l].get()};
+    uint64_t parent_count = required_parents_[l]->size();
+    for (Spools& stretch : leaf_parents_) {
+      WEAVER_RETURN_IF_ERROR(stretch[l]->finish());
+      sources.push_back(stretch[l].get());
+      parent_count += stretch[l]->size();
+    }
+    KeyTagMerge parents(std::move(sources));
     WEAVER_RETURN_IF_ERROR(expand_level(l, parents, parent_count, propagate));
-    leaf_parents_[l].reset();
+    for (Spools& stretch : leaf_parents_) stretch[l].reset();
     required_parents_[l].reset();
     if (progress_ != nullptr) progress_->level_done(l);
   }
@@ -163,7 +143,76 @@ Status Closure::build(int max_level, bool propagate) {
   return Status::Ok();
 }
 
-std::unique_ptr<SortedSpool> Closure::spool(const char* name, int level) const {
+// The first scan: every leaf into the domain map, and the parents of the
+// leaves, each with the set of its children that are leaves, into the
+// spools of their level.  Given a second reader it runs as two stretches of
+// key order on two threads, cut near the median leaf where the map's words
+// part (DomainMap::stretch_start).  A parent cut in two gets an entry from
+// each stretch; the level pass merges them.
+Status Closure::scan_leaves(int max_level) {
+  domain_ = std::make_unique<DomainMap>(DomainMap::level_for(memory_.domain_map, max_level));
+  uint64_t cut = 0;
+  if (second_reader_ != nullptr && threads_ > 1 && leaves_.size() >= 2 * parallel_chunk_) {
+    uint64_t median = 0;
+    WEAVER_RETURN_IF_ERROR(leaves_.select(leaves_.size() / 2, &median, nullptr));
+    cut = domain_->stretch_start(median);
+  }
+  const int stretches = cut > 0 ? 2 : 1;
+  std::vector<DomainMap::Writer> writers(stretches, DomainMap::Writer(domain_.get()));
+  for (int i = 0; i < stretches; ++i) {
+    leaf_parents_.emplace_back();
+    for (int l = 0; l <= max_level; ++l) {
+      leaf_parents_[i].push_back(spool("lp" + std::to_string(i) + "-", l));
+    }
+  }
+  std::atomic<uint64_t> scanned{0};
+  std::vector<uint64_t> counts(stretches, 0);
+  WEAVER_RETURN_IF_ERROR(run_shares(stretches, [&](int i) {
+    BTree& reader = i == 0 ? leaves_ : *second_reader_;
+    const uint64_t from = i == 0 ? 0 : cut, to = i + 1 < stretches ? cut : ~uint64_t{0};
+    return scan_stretch(reader, from, to, leaf_parents_[i], writers[i], &scanned, i == 0,
+                        &counts[i]);
+  }));
+  for (uint64_t n : counts) r_->input_leaves += n;
+  return Status::Ok();
+}
+
+// The leaves with keys in [from, to).  Leaves of one level under one parent
+// come one after another in that level's stream (nothing else of that level
+// lies between them in key order), so each level has one open parent, with
+// the set of its children so far in its tag.
+Status Closure::scan_stretch(BTree& leaves, uint64_t from, uint64_t to, Spools& parents,
+                             DomainMap::Writer& map, std::atomic<uint64_t>* scanned, bool report,
+                             uint64_t* read) {
+  std::vector<KeyTag> open(parents.size(), KeyTag{0, 0});
+  uint64_t& count = *read;
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(leaves.seek_keys(from, &c));
+  while (c.valid() && c.key() < to) {
+    const uint64_t key = c.key();
+    map.add_leaf(key);
+    if (++count % BalanceProgress::kEvery == 0) {
+      const uint64_t all = scanned->fetch_add(BalanceProgress::kEvery) + BalanceProgress::kEvery;
+      if (report && progress_ != nullptr) progress_->scanned(all);
+    }
+    const int level = octant_key_level(key);
+    if (level > 0) {
+      KeyTag& p = open[level - 1];
+      const uint64_t parent = octant_key_parent(key);
+      if (p.tag != 0 && p.key != parent) WEAVER_RETURN_IF_ERROR(parents[level - 1]->add(p));
+      if (p.tag == 0 || p.key != parent) p = {parent, parent_asks::children_tag(0)};
+      p.tag |= parent_asks::children_tag(1u << octant_key_child_id(key));
+    }
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  for (size_t l = 0; l < open.size(); ++l) {
+    if (open[l].tag != 0) WEAVER_RETURN_IF_ERROR(parents[l]->add(open[l]));
+  }
+  map.finish();
+  return Status::Ok();
+}
+
+std::unique_ptr<SortedSpool> Closure::spool(const std::string& name, int level) const {
   return std::make_unique<SortedSpool>(scratch_ + "/" + name + std::to_string(level),
                                        memory_.spool_buffer);
 }

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -41,8 +42,11 @@ class Closure {
   // leaves: the input octant table, open.  Spools and sorter runs go in scratch_dir.
   // progress may be null.
   // The level passes' neighbour generation and sorts run on options.threads.
+  // second_reader, if not null, is another handle on the same table: the
+  // first scan then reads half the leaves through it, on a thread of its own.
   Closure(BTree& leaves, const BalanceMemory& memory, const std::string& scratch_dir,
-          const BalanceOptions& options, BalanceProgress* progress, BalanceResult* result);
+          const BalanceOptions& options, BalanceProgress* progress, BalanceResult* result,
+          BTree* second_reader = nullptr);
   ~Closure();
 
   // Builds the required octants of levels 0..max_level-1.  Without
@@ -57,7 +61,13 @@ class Closure {
  private:
   using Sorters = std::vector<std::unique_ptr<ExternalSorter>>;
 
-  std::unique_ptr<SortedSpool> spool(const char* name, int level) const;
+  using Spools = std::vector<std::unique_ptr<SortedSpool>>;
+
+  std::unique_ptr<SortedSpool> spool(const std::string& name, int level) const;
+  Status scan_leaves(int max_level);
+  Status scan_stretch(BTree& leaves, uint64_t from, uint64_t to, Spools& parents,
+                      DomainMap::Writer& map, std::atomic<uint64_t>* scanned, bool report,
+                      uint64_t* read);
   Status emit_candidates(int l, KeyTagSource& parents, uint64_t parent_count, Sorters& sorters,
                          uint64_t* added);
   Status expand_level(int l, KeyTagSource& parents, uint64_t parent_count, bool propagate);
@@ -67,14 +77,17 @@ class Closure {
   }
 
   BTree& leaves_;
+  BTree* second_reader_;
   const BalanceMemory& memory_;
   std::string scratch_;
   int threads_;
   size_t parallel_chunk_;
   BalanceProgress* progress_;
   BalanceResult* r_;
-  // By level: parents of leaves, parents of required octants, the required.
-  std::vector<std::unique_ptr<SortedSpool>> leaf_parents_, required_parents_, required_;
+  // By level: parents of leaves (a set of spools for each stretch of the
+  // first scan), parents of required octants, the required.
+  std::vector<Spools> leaf_parents_;
+  Spools required_parents_, required_;
   std::unique_ptr<KeyTagMerge> required_merge_;
   std::unique_ptr<DomainMap> domain_;  // built by the first scan
 };

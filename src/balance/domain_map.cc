@@ -59,17 +59,18 @@ DomainMap::DomainMap(int level) : level_(level) {
   full_.assign(words, 0);
 }
 
-void DomainMap::add_leaf(uint64_t key) {
+void DomainMap::Writer::add_leaf(uint64_t key) {
+  const int level = map_->level_;
   const int l = octant_key_level(key);
   const uint64_t m = octant_key_morton(key);
-  if (l <= level_) {  // covers whole cells
+  if (l <= level) {  // covers whole cells
     close_cell();
-    const uint64_t count = uint64_t{1} << (3 * (level_ - l));
-    set_bits(any_, m >> cell_shift(level_), count);
-    set_bits(full_, m >> cell_shift(level_), count);
+    const uint64_t count = uint64_t{1} << (3 * (level - l));
+    set_bits(map_->any_, m >> cell_shift(level), count);
+    set_bits(map_->full_, m >> cell_shift(level), count);
     return;
   }
-  const uint64_t cell = m >> cell_shift(level_);
+  const uint64_t cell = m >> cell_shift(level);
   if (!open_ || cell != cell_) {
     close_cell();
     cell_ = cell;
@@ -78,16 +79,23 @@ void DomainMap::add_leaf(uint64_t key) {
   volume_ += uint64_t{1} << cell_shift(l);
 }
 
-void DomainMap::finish() { close_cell(); }
-
-void DomainMap::close_cell() {
+void DomainMap::Writer::close_cell() {
   if (!open_) return;
-  set_bits(any_, cell_, 1);
+  set_bits(map_->any_, cell_, 1);
   // Leaves do not overlap, so their volumes add up to the cell's only
   // when they cover it.
-  if (volume_ == uint64_t{1} << cell_shift(level_)) set_bits(full_, cell_, 1);
+  if (volume_ == uint64_t{1} << cell_shift(map_->level_)) set_bits(map_->full_, cell_, 1);
   open_ = false;
   volume_ = 0;
+}
+
+// A stretch's leaves write the bits of their own cells, which lie in its
+// words, and a coarse leaf's whole cells: a run of 8^k cells aligned to
+// its length, so either within one word or whole words that no other
+// leaf's cells share.
+uint64_t DomainMap::stretch_start(uint64_t key) const {
+  const uint64_t cell = (octant_key_morton(key) >> cell_shift(level_)) & ~uint64_t{63};
+  return ((cell << cell_shift(level_)) >> 3) << 7;  // the first key at that corner
 }
 
 DomainMap::Answer DomainMap::overlaps(uint64_t key) const {

@@ -24,10 +24,36 @@ class DomainMap {
   static int level_for(uint64_t bytes, int finest_leaf_level);
 
   explicit DomainMap(int level);
+  DomainMap(const DomainMap&) = delete;  // its writer points to it
+  DomainMap& operator=(const DomainMap&) = delete;
 
-  // Leaf keys, in increasing order, then finish().
-  void add_leaf(uint64_t key);
-  void finish();
+  // Adds the leaves of one stretch of key order to the map: leaf keys in
+  // increasing order, then finish().  Writers of stretches that meet at a
+  // key stretch_start gave write different words of the map, so they may
+  // run on threads of their own.
+  class Writer {
+   public:
+    explicit Writer(DomainMap* map) : map_(map) {}
+    void add_leaf(uint64_t key);
+    void finish() { close_cell(); }
+
+   private:
+    void close_cell();
+
+    DomainMap* map_;
+    uint64_t cell_ = 0;    // the cell the leaves finer than the map are filling
+    uint64_t volume_ = 0;  // what they cover of it, in level-20 cells
+    bool open_ = false;
+  };
+
+  // All the leaves, in increasing order, then finish(): one stretch.
+  void add_leaf(uint64_t key) { writer_.add_leaf(key); }
+  void finish() { writer_.finish(); }
+
+  // The first key of the run of 64 cells (one word of the map) that holds
+  // the octant with this key: where two writers' stretches may meet.  0
+  // when that is the map's start.
+  uint64_t stretch_start(uint64_t key) const;
 
   // Whether the octant with this key overlaps some leaf (shares volume
   // with it): kAskTheLeaves only for an octant finer than the map, inside
@@ -42,13 +68,9 @@ class DomainMap {
   int level() const { return level_; }
 
  private:
-  void close_cell();
-
   int level_;
   std::vector<uint64_t> any_, full_;  // a bit a cell, cells in Morton order
-  uint64_t cell_ = 0;                 // the cell the leaves finer than the map are filling
-  uint64_t volume_ = 0;               // what they cover of it, in level-20 cells
-  bool open_ = false;
+  Writer writer_{this};
 };
 
 }  // namespace weaver

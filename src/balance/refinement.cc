@@ -13,14 +13,14 @@ constexpr size_t kBatch = 4096;
 
 // Writes leaf t, split just enough that every required octant strictly
 // inside it is resolved.  `inside` holds those, in key order.  Pages are
-// encoded and written on the appender's thread, alongside this one's
-// reading, splitting and filling in new leaves' material: the appender has
-// the larger share of the work (at 1 Hz it was busy 61% of the samples of
-// the refinement when it filled the material too, this thread 39%).
+// encoded and written on the appender's thread (given more than one),
+// alongside this one's reading, splitting and filling in new leaves'
+// material: the appender has the larger share of the work (at 1 Hz it was busy 61% of the samples
+// of the refinement when it filled the material too, this thread 39%).
 class Completion {
  public:
-  Completion(BTree& out, const FillPayload& fill, uint32_t payload)
-      : out_(out), fill_(payload > 0 ? fill : nullptr), payload_(payload) {}
+  Completion(BTree& out, bool appender_thread, const FillPayload& fill, uint32_t payload)
+      : out_(out, appender_thread), fill_(payload > 0 ? fill : nullptr), payload_(payload) {}
 
   Status write(const Octant& t, const std::byte* parent_payload, const std::vector<KeyTag>& inside,
                BalanceResult* r) {
@@ -78,9 +78,9 @@ class Completion {
 }  // namespace
 
 Status write_refinement(BTree& leaves, KeyTagSource& required, const FillPayload& fill, BTree& out,
-                        BalanceProgress* progress, BalanceResult* r) {
+                        int threads, BalanceProgress* progress, BalanceResult* r) {
   uint64_t read = 0;
-  Completion completion(out, fill, leaves.payload_size());
+  Completion completion(out, threads > 1, fill, leaves.payload_size());
   std::vector<std::byte> payload(leaves.payload_size());
   WEAVER_RETURN_IF_ERROR(for_each_leaf(
       leaves, required, [&](const BTreeCursor& c, const std::vector<KeyTag>& inside, bool*) {

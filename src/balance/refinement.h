@@ -22,8 +22,10 @@ using FillPayload = std::function<void(const Octant& o, std::byte* payload)>;
 
 // Writes the refinement of `leaves` by `required` (key order, as from
 // Closure::required) into `out`, which has the payload size of `leaves`.
-// fill may be empty.  Counts go to r: output_leaves, split, levels.
+// fill may be empty.  Counts go to r: output_leaves, split, levels.  With
+// threads > 1 the output's pages are encoded and written on a thread of
+// their own, beside the reading and splitting.
 Status write_refinement(BTree& leaves, KeyTagSource& required, const FillPayload& fill, BTree& out,
-                        BalanceProgress* progress, BalanceResult* r);
+                        int threads, BalanceProgress* progress, BalanceResult* r);
 
 }  // namespace weaver

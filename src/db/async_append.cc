@@ -7,11 +7,19 @@ namespace {
 constexpr size_t kMaxWaiting = 2;
 }  // namespace
 
-AsyncAppender::AsyncAppender(BTree& out) : out_(out), thread_([this] { run(); }) {}
+AsyncAppender::AsyncAppender(BTree& out, bool own_thread) : out_(out) {
+  if (own_thread) thread_ = std::thread([this] { run(); });
+}
 
 AsyncAppender::~AsyncAppender() { (void)finish(); }
 
 Status AsyncAppender::append(Batch* batch) {
+  if (!thread_.joinable()) {
+    if (status_.ok()) status_ = append_now(*batch);
+    batch->keys.clear();
+    batch->payloads.clear();
+    return status_;
+  }
   std::unique_lock<std::mutex> lock(mu_);
   changed_.wait(lock, [&] { return waiting_.size() < kMaxWaiting || !status_.ok(); });
   if (!status_.ok()) return status_;

@@ -27,7 +27,9 @@ class AsyncAppender {
   };
 
   // `out` is used only by the appender's thread until finish() returns.
-  explicit AsyncAppender(BTree& out);
+  // Without a thread of its own (own_thread false: a caller given one
+  // thread), append() appends the batch before it returns.
+  explicit AsyncAppender(BTree& out, bool own_thread = true);
   ~AsyncAppender();  // finishes if finish() was not called
   AsyncAppender(const AsyncAppender&) = delete;
   AsyncAppender& operator=(const AsyncAppender&) = delete;
