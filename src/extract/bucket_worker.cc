@@ -18,17 +18,39 @@ void leaf_corner_keys(uint64_t leaf_key, uint64_t out[8]) {
   for (int k = 0; k < 4; ++k) out[k + 4] = morton_step(out[k], 2, bit);
 }
 
+namespace {
+
+// Where the last bucket of leaves ends: where its last leaf does.  Not
+// sooner (a bucket's range holds whole leaves: the classifier looks no
+// further for a leaf holding a pixel in it), and not later: the nodes past
+// it wait for the tail (gather_tail).
+uint64_t leaves_end(const std::vector<uint64_t>& leaves) {
+  const uint64_t last = leaves.back();
+  return octant_key_morton(last) + (uint64_t{1} << (3 * (kMaxLevel - octant_key_level(last))));
+}
+
+}  // namespace
+
 Status BucketReader::next(BucketTask* task, bool* more) {
-  *more = !finished_ && (cursor_.valid() || !carry_.empty());
+  const bool leaves_left = cursor_.valid() || !carry_.empty();
+  *more = leaves_left || !spills_.empty();
   if (!*more) return Status::Ok();
   task->leaf_keys.clear();
+  task->incoming.clear();
   task->start = next_start_;
+  if (!leaves_left) return gather_tail(task);
   WEAVER_RETURN_IF_ERROR(policy_.level >= 0 ? gather_aligned(task) : gather_counted(task));
   next_start_ = task->end;
-  finished_ = task->end == UINT64_MAX;
-  task->incoming.clear();
   WEAVER_RETURN_IF_ERROR(spills_.take_below(task->end, &task->incoming));
   return spill_far_corners(*task);
+}
+
+Status BucketReader::gather_tail(BucketTask* task) {
+  // A bucket of K leaves has about 1.5 K nodes.
+  const uint64_t nodes = std::max<uint64_t>(policy_.leaves, 1 << 15) * 3 / 2;
+  WEAVER_RETURN_IF_ERROR(spills_.take_first(nodes, &task->end, &task->incoming));
+  next_start_ = task->end;
+  return Status::Ok();
 }
 
 // The paper's S2: the leaves under one aligned octant of the policy's level.
@@ -39,7 +61,7 @@ Status BucketReader::gather_aligned(BucketTask* task) {
     task->leaf_keys.push_back(cursor_.key());
     WEAVER_RETURN_IF_ERROR(cursor_.next());
   }
-  task->end = cursor_.valid() ? octant_key_morton(cursor_.key()) : UINT64_MAX;
+  task->end = cursor_.valid() ? octant_key_morton(cursor_.key()) : leaves_end(task->leaf_keys);
   return Status::Ok();
 }
 
@@ -55,8 +77,8 @@ Status BucketReader::gather_counted(BucketTask* task) {
     leaves.push_back(cursor_.key());
     WEAVER_RETURN_IF_ERROR(cursor_.next());
   }
-  if (leaves.size() < window) {  // the table's last leaves
-    task->end = UINT64_MAX;
+  if (leaves.size() < window) {
+    task->end = leaves_end(leaves);  // the table's last leaves
     return Status::Ok();
   }
   size_t cut = want;
@@ -74,7 +96,6 @@ Status BucketReader::gather_counted(BucketTask* task) {
 // Hands the corners of the bucket's leaves at or past its end to the spill
 // store, as one run sorted by key with duplicates merged.
 Status BucketReader::spill_far_corners(const BucketTask& task) {
-  if (task.end == UINT64_MAX) return Status::Ok();
   // Every far corner goes in the scratch, which is reused; the run keeps
   // them with duplicates merged, in a buffer of just their size (the spill
   // store holds thousands of runs).

@@ -49,6 +49,16 @@ Status SpillStore::take_below(uint64_t end, std::vector<SpillRecord>* out) {
   return Status::Ok();
 }
 
+Status SpillStore::take_first(size_t count, uint64_t* end, std::vector<SpillRecord>* out) {
+  const size_t enough = out->size() + count;
+  while (!heap_.empty() && out->size() < enough) {
+    // The smallest key waiting, from every run that has it.
+    WEAVER_RETURN_IF_ERROR(take_below(heap_.front()->first_key() + 1, out));
+  }
+  *end = heap_.empty() ? UINT64_MAX : heap_.front()->first_key();
+  return Status::Ok();
+}
+
 // Moves the run's records below `end` to *out, reading its log blocks as
 // they come due; leaves the run empty or with head[pos] >= end.
 Status SpillStore::take_from(Run& run, uint64_t end, std::vector<SpillRecord>* out) {

@@ -38,6 +38,10 @@ class SpillStore {
   bool empty() const { return heap_.empty(); }
   // Appends every waiting record with key < end to *out (in no set order).
   Status take_below(uint64_t end, std::vector<SpillRecord>* out);
+  // Appends the waiting records with the smallest keys to *out, all those
+  // of a key together, until at least `count` more are there or none wait;
+  // *end := the smallest key left waiting (UINT64_MAX when none is).
+  Status take_first(size_t count, uint64_t* end, std::vector<SpillRecord>* out);
 
   uint64_t records_added() const { return records_added_; }
   uint64_t records_written() const { return records_written_; }
