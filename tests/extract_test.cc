@@ -8,8 +8,10 @@
 #include <random>
 
 #include "db/database.h"
+#include "db/leaf_reader.h"
 #include "db/node_table.h"
 #include "export/export.h"
+#include "extract/bucket_worker.h"
 #include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
@@ -249,6 +251,47 @@ TEST_F(ExtractTest, GradedAroundASphereWithManyBucketsAndSpillFiles) {
 // Buckets of about K leaves hold K to 1.25 K leaves (the last one fewer).
 // At the same budget they spill less than the paper's buckets on a graded
 // octree, whose buckets are sized for the finest leaves everywhere.
+// The nodes on the root's far faces have codes past every leaf's; they come
+// last, in buckets of bounded size, not all in the last bucket of leaves
+// (which at 2 Hz held 100 MB more than --memory 64M).  A uniform grid of
+// level 6 has 8385 such nodes; buckets of 256 leaves take at most a few
+// hundred spilled corners each, and the tail's buckets about 1536.
+TEST_F(ExtractTest, TheNodesPastTheLastLeafComeInBucketsOfBoundedSize) {
+  GenOptions g;
+  g.kind = GenOptions::Kind::kUniform;
+  g.level = 6;
+  std::vector<Octant> leaves;
+  ASSERT_OK(generate_octree(g, &leaves));
+  ExtractOptions o;
+  o.bucket_leaves = 256;
+  ExtractResult r;
+  ASSERT_OK(extract(leaves, o, &r));
+  std::unique_ptr<Database> db;
+  std::unique_ptr<BTree> octants;
+  ASSERT_OK(Database::open(db_, Database::Mode::kRead, false, &db));
+  ASSERT_OK(db->open_table(kOctantTable, 1 << 20, &octants));
+  LeafReader cursor;
+  ASSERT_OK(cursor.open(*octants));
+  testing::TempDir scratch;
+  SpillStore spills(scratch.file("spill"), 1 << 20);
+  BucketReader reader(cursor, BucketPolicy{-1, 256}, spills);
+  BucketTask task;
+  uint64_t tail_buckets = 0, tail_nodes = 0, last_end = 0;
+  for (bool more = true;;) {
+    ASSERT_OK(reader.next(&task, &more));
+    if (!more) break;
+    EXPECT_EQ(task.start, last_end);
+    EXPECT_LT(task.start, task.end);
+    EXPECT_LE(task.incoming.size(), 1536u + 8) << "bucket from " << task.start;
+    if (task.leaf_keys.empty()) ++tail_buckets, tail_nodes += task.incoming.size();
+    last_end = task.end;
+  }
+  EXPECT_EQ(last_end, UINT64_MAX);
+  EXPECT_GE(tail_buckets, 5u);
+  EXPECT_GE(tail_nodes, 8385u);  // every far-face node, with the masks of its leaves
+  EXPECT_EQ(r.nodes, 65u * 65 * 65);
+}
+
 TEST_F(ExtractTest, LeafCountBucketsAreEvenAndSpillLessOnGradedOctrees) {
   const auto leaves = graded_sphere(2, testing::small_scale() ? 3 : 4, 0.3);
   ExtractOptions o;

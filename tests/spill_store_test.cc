@@ -83,6 +83,45 @@ TEST(SpillStoreTest, RecordsComeBackFromTheSpillLogUnderASmallCap) {
   }
 }
 
+// take_first hands out the waiting records from the smallest key on, a key's
+// records from every run together, at least as many as asked (unless fewer
+// wait) and no key more than needed; *end is the first key left waiting.
+TEST(SpillStoreTest, TakeFirstTakesTheSmallestKeysWholeAndSaysWhereItStopped) {
+  for (const uint64_t cap : {uint64_t{1} << 30, uint64_t{512}}) {
+    testing::TempDir dir;
+    std::mt19937_64 rng(cap);
+    SpillStore store(dir.file("spill"), cap);
+    std::multiset<std::pair<uint64_t, int>> waiting;
+    for (int r = 0; r < 40; ++r) {
+      std::vector<SpillRecord> run;
+      uint64_t key = rng() % 50;
+      for (int i = 0; i < 300; ++i) run.push_back({key += rng() % 20, uint8_t(1u << (r % 8))});
+      for (const SpillRecord& x : run) waiting.insert({x.key, x.mask});
+      ASSERT_OK(store.add_run(std::move(run)));
+    }
+    uint64_t end = 0;
+    while (!waiting.empty()) {
+      std::vector<SpillRecord> got;
+      const size_t want = 1 + rng() % 500;
+      ASSERT_OK(store.take_first(want, &end, &got));
+      const auto stop = waiting.lower_bound({end, 0});
+      ASSERT_EQ(sorted(got), Records(waiting.begin(), stop));
+      waiting.erase(waiting.begin(), stop);
+      if (!waiting.empty()) {
+        ASSERT_EQ(end, waiting.begin()->first);
+        ASSERT_GE(got.size(), want);
+        // Without its largest key, it would have taken too few.
+        const uint64_t last = sorted(got).back().first;
+        const auto without = std::count_if(got.begin(), got.end(),
+                                           [&](const SpillRecord& x) { return x.key < last; });
+        ASSERT_LT(static_cast<size_t>(without), want);
+      }
+    }
+    EXPECT_EQ(end, UINT64_MAX);
+    EXPECT_TRUE(store.empty());
+  }
+}
+
 // A run handed over in a buffer far larger than its records (extraction's
 // buffers held every corner before duplicates merged) is counted at that
 // buffer, and one moved to the log gives its buffer back: the heap in use
