@@ -168,8 +168,7 @@ int main(int argc, char** argv) {
                       "extract_t2_per_s", "extract_t2_rss"});
   std::printf(
       "\nScaling: rates on one core (the process pinned to one CPU, 1 thread), with 1 thread "
-      "(a stage's\nhelper threads, such as balance's page writer, may use the second core) and "
-      "with 2 threads:\n");
+      "(on\nany core) and with 2 threads:\n");
   print_table(scaling, {"freq_hz", "stage", "one_core_per_s", "t1_per_s", "t2_per_s", "t2_vs_t1",
                         "t2_vs_one_core"});
   std::printf(
