@@ -34,9 +34,9 @@ namespace weaver {
 class ExternalSorter;
 
 // Where the budget goes.  Everything else is sorted already: a level's
-// parents arrive as two sorted streams (of the leaves, of the octants
-// required one level finer), and each level's required octants come out of
-// the candidate sorter in order.
+// parents arrive as sorted streams (of the leaves, one from each stretch of
+// the first scan; of the octants required one level finer), and each
+// level's required octants come out of the candidate sorter in order.
 class Closure {
  public:
   // leaves: the input octant table, open.  Spools and sorter runs go in scratch_dir.
