@@ -3,6 +3,7 @@
 // (no sibling links on disk).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -37,6 +38,17 @@ class BTreeCursor final : public Cursor {
   Status next() override {
     if (++i_ < n_) return Status::Ok();
     return next_leaf();
+  }
+  // Moves on, within the leaf it holds, to the first record with key > k,
+  // if the leaf has one, setting *last to the record before it; false (and
+  // no move) if the leaf ends at or before k.  A search in keys decoded
+  // already: seeking from the tree would decode a whole packed leaf again.
+  // REQUIRES: valid(), key() <= k.
+  bool skip_in_leaf(uint64_t k, uint64_t* last) {
+    if (keys_[n_ - 1] <= k) return false;
+    i_ = static_cast<uint32_t>(std::upper_bound(keys_ + i_, keys_ + n_, k) - keys_);
+    *last = keys_[i_ - 1];
+    return true;
   }
 
  private:

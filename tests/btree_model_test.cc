@@ -96,10 +96,39 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
     }
   }
 
+  // From each position a keys-only cursor reaches, a skip to a key up to
+  // 64 records ahead (or just past one) lands on the first key past it and
+  // names the one before, or declines (the leaf ends first) and stays.
+  void check_skips() {
+    std::mt19937_64 rng(model_.size());
+    BTreeCursor c;
+    ASSERT_OK(tree_->seek_keys(0, &c));
+    auto it = model_.begin();
+    while (c.valid()) {
+      ASSERT_EQ(c.key(), it->first);
+      auto target = it;
+      for (uint64_t n = rng() % 64; n > 0 && std::next(target) != model_.end(); --n) ++target;
+      const uint64_t k = target->first + rng() % 2;
+      uint64_t last = 0;
+      if (c.skip_in_leaf(k, &last)) {
+        it = model_.upper_bound(k);
+        ASSERT_NE(it, model_.end());
+        ASSERT_EQ(c.key(), it->first);
+        ASSERT_EQ(last, std::prev(it)->first);
+      } else {
+        ASSERT_EQ(c.key(), it->first);
+        ASSERT_OK(c.next());
+        ++it;
+      }
+    }
+    ASSERT_EQ(it, model_.end());
+  }
+
   void check_everything() {
     ASSERT_OK(tree_->check_invariants());
     ASSERT_EQ(tree_->size(), model_.size());
     check_scan(0, static_cast<int>(model_.size()) + 1);
+    check_skips();
   }
 
   testing::TempDir dir_;

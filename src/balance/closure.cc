@@ -62,11 +62,16 @@ class DomainProbe {
     return Status::Ok();
   }
 
-  // Leaves read one by one before jumping: about a packed page's worth,
-  // which a jump (two searches through cached inner pages) costs anyway.
+  // Leaves read one by one before jumping.  A jump within the leaf the
+  // cursor holds is a search of keys decoded already; one past it, two
+  // searches from the root, decoding the new leaf whole.
   static constexpr int kWalk = 64;
 
   Status jump_to(uint64_t key) {
+    if (cursor_.skip_in_leaf(key, &last_)) {
+      has_last_ = true;
+      return Status::Ok();
+    }
     uint64_t floor = 0;
     bool hit = false;
     WEAVER_RETURN_IF_ERROR(leaves_->floor(key, &floor, nullptr, &hit));
