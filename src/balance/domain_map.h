@@ -24,13 +24,13 @@ class DomainMap {
   static int level_for(uint64_t bytes, int finest_leaf_level);
 
   explicit DomainMap(int level);
-  DomainMap(const DomainMap&) = delete;  // its writer points to it
+  DomainMap(const DomainMap&) = delete;  // writers point to it
   DomainMap& operator=(const DomainMap&) = delete;
 
   // Adds the leaves of one stretch of key order to the map: leaf keys in
-  // increasing order, then finish().  Writers of stretches that meet at a
-  // key stretch_start gave write different words of the map, so they may
-  // run on threads of their own.
+  // increasing order, then finish().  All the leaves are one stretch;
+  // writers of stretches that meet at a key stretch_start gave write
+  // different words of the map, so they may run on threads of their own.
   class Writer {
    public:
     explicit Writer(DomainMap* map) : map_(map) {}
@@ -45,10 +45,6 @@ class DomainMap {
     uint64_t volume_ = 0;  // what they cover of it, in level-20 cells
     bool open_ = false;
   };
-
-  // All the leaves, in increasing order, then finish(): one stretch.
-  void add_leaf(uint64_t key) { writer_.add_leaf(key); }
-  void finish() { writer_.finish(); }
 
   // The first key of the run of 64 cells (one word of the map) that holds
   // the octant with this key: where two writers' stretches may meet.  0
@@ -70,7 +66,6 @@ class DomainMap {
  private:
   int level_;
   std::vector<uint64_t> any_, full_;  // a bit a cell, cells in Morton order
-  Writer writer_{this};
 };
 
 }  // namespace weaver
