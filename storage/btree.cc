@@ -45,8 +45,10 @@ BTree::BTree(std::unique_ptr<File> file, const TableOptions& options, uint64_t p
       payload_(options.schema.record_size()),
       leaf_cap_(page::leaf_capacity(options.page_size, payload_)),
       internal_cap_(page::internal_capacity(options.page_size)),
-      pool_(std::make_unique<BufferPool>(file_.get(), options.page_size, pool_bytes)),
-      shape_(page::PackedShape::of(options.page_size, options.key_kind, options.schema)) {
+      pool_(std::make_unique<BufferPool>(file_.get(), options.page_size,
+                                         pool_bytes - pool_bytes / kDirectoryShare)),
+      shape_(page::PackedShape::of(options.page_size, options.key_kind, options.schema)),
+      dir_budget_(pool_bytes / kDirectoryShare) {
   if (options.packed) {
     tail_ = std::make_unique<page::PackedLeafBuilder>(shape_);
     edit_ = std::make_unique<page::PackedLeafBuilder>(shape_);

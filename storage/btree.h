@@ -5,7 +5,9 @@
 // in place; a split at the right end of the tree keeps the left page full.
 // Deletes free pages that become empty (no merging of half-empty pages).
 // Internal entries carry subtree record counts, so rank and select are
-// O(log n): ids in weaver are ranks.
+// O(log n): ids in weaver are ranks.  Point lookups in a tree that has
+// stopped changing go through an in-memory directory of its leaves
+// (storage/leaf_directory.h), paid for from the pool's budget.
 //
 // Not thread-safe.  Changes reach the file on commit() (or when the buffer
 // pool evicts); commit() writes the header last and syncs.
@@ -19,6 +21,7 @@
 #include "storage/btree_cursor.h"
 #include "storage/buffer_pool.h"
 #include "storage/file.h"
+#include "storage/leaf_directory.h"
 #include "storage/packed_leaf.h"
 #include "storage/page_format.h"
 #include "storage/store.h"
@@ -27,6 +30,9 @@ namespace weaver {
 
 class BTree final : public Store {
  public:
+  // pool_bytes bounds the tree's memory: its buffer pool, and a 32nd of it
+  // for the leaf directory.
+  static constexpr uint64_t kDirectoryShare = 32;
   // Makes an empty tree in `file` (which should be empty).
   static Status create(std::unique_ptr<File> file, const TableOptions& options, uint64_t pool_bytes,
                        std::unique_ptr<BTree>* out);
@@ -74,6 +80,8 @@ class BTree final : public Store {
   void set_metadata(std::string metadata) { options_.metadata = std::move(metadata); }
   uint32_t height() const { return height_; }
   uint32_t page_count() const { return page_count_; }
+  // Leaves in the lookup directory: 0 until it is built, and after a change.
+  uint32_t directory_leaves() const { return dir_.size(); }
   uint64_t file_bytes() const {
     return page::kFileHeaderBytes + uint64_t{page_count_} * options_.page_size;
   }
@@ -103,6 +111,9 @@ class BTree final : public Store {
   Status new_page(page::PageType type, bool at_end, PageRef* ref);
   Status free_page(uint32_t page_no);
   page::LeafView leaf(const PageRef& r) const { return {r.data(), leaf_cap_, payload_}; }
+  page::LeafView leaf(const std::byte* pg) const {
+    return {const_cast<std::byte*>(pg), leaf_cap_, payload_};
+  }
   page::PageType leaf_type() const {
     return options_.packed ? page::PageType::kPackedLeaf : page::PageType::kLeaf;
   }
@@ -128,6 +139,34 @@ class BTree final : public Store {
     uint32_t pos = 0;
     bool exact = false;  // the key is present at pos
   };
+  // The leaf a point lookup reads: through the leaf directory when there is
+  // one, else by descent.  *dir_leaf is the leaf's place in the directory,
+  // or kNoDirLeaf.  With first_rank, also the rank of the leaf's first record.
+  // REQUIRES: height_ > 0.
+  static constexpr uint32_t kNoDirLeaf = UINT32_MAX;
+  Status locate(uint64_t key, PageRef* leaf, uint32_t* dir_leaf, uint64_t* first_rank = nullptr);
+  // How many lookups pass unchanged before the directory is built (enough
+  // that building costs a fraction of what they cost), or 0: never, it would
+  // not fit in its share of the memory budget.
+  uint64_t directory_threshold() const;
+  Status build_directory();
+  Status add_leaves_below(uint32_t page_no, uint32_t level, uint64_t fence, uint64_t* rank);
+  // Every change calls this: the directory no longer matches the tree.
+  void changed() {
+    if (!dir_.empty()) dir_.clear();
+    reads_since_change_ = 0;
+  }
+  uint32_t leaf_prefetch_bytes() const;
+  // The fast path of get, floor and rank_exact on plain leaves: the leaf the
+  // directory routes key to, when there is a directory and the pool holds
+  // the leaf, read without a pin (nothing else uses the pool until the
+  // lookup is done), and its place in the directory; else null, and the
+  // lookup takes the general path.
+  const std::byte* peek_plain_leaf(uint64_t key, uint32_t* dir_leaf);
+  // For floor, when every key of the leaf `key` is routed to is > key (a
+  // separator went stale when its key was erased): the leaf before it, or
+  // *first_leaf.  dir_leaf as locate gave it.
+  Status preceding_leaf(uint64_t key, uint32_t dir_leaf, PageRef* leaf, bool* first_leaf);
   // REQUIRES: height_ > 0.  With rank_before, also counts the records in the
   // subtrees left of the path.
   Status descend(uint64_t key, Path* path, PageRef* leaf, uint64_t* rank_before = nullptr);
@@ -198,6 +237,10 @@ class BTree final : public Store {
   std::unique_ptr<page::PackedLeafBuilder> edit_;  // packed only: re-packs edited leaves
   bool tail_dirty_ = false;                        // tail_ holds entries its page does not
   page::PackedLeaf reader_;                        // for point lookups
+
+  LeafDirectory dir_;  // empty until built, and after any change
+  uint64_t reads_since_change_ = 0;
+  uint64_t dir_budget_ = 0;  // the directory's share of the memory budget
 };
 
 }  // namespace weaver

@@ -11,6 +11,7 @@ namespace weaver {
 using page::PageType;
 
 Status BTree::erase(uint64_t key) {
+  changed();
   if (options_.packed) return packed_edit(key, nullptr, true, nullptr);
   drop_spine();
   if (height_ == 0) return Status::NotFound("key " + std::to_string(key));

@@ -26,13 +26,7 @@ Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref, uint64_t* ran
     path->e[path->depth++] = {pg, idx};
     pg = v.child(idx);
   }
-  // A plain leaf's search reads the header and the key column: those lines
-  // only are prefetched (the whole page was 7% slower at 10M random gets in
-  // the pool and 20% at 100K: a core has about a dozen line-fill buffers,
-  // and prefetches beyond them stall it).  A packed leaf is read whole.
-  const uint32_t prefetch =
-      options_.packed ? options_.page_size : page::kPageHeaderBytes + 8 * leaf_cap_;
-  return fetch_typed(pg, leaf_type(), leaf_ref, prefetch);
+  return fetch_typed(pg, leaf_type(), leaf_ref, leaf_prefetch_bytes());
 }
 
 Status BTree::find(uint64_t key, LeafSlot* s, uint64_t* rank_before) {
@@ -140,10 +134,21 @@ Status BTree::get(uint64_t key, std::byte* payload_out, bool* found) {
   *found = false;
   seal_tail();
   if (height_ == 0) return Status::Ok();
-  LeafSlot s;
-  WEAVER_RETURN_IF_ERROR(find(key, &s));
-  *found = s.exact;
-  if (s.exact && payload_out != nullptr) return leaf_payload(s.leaf, s.pos, payload_out);
+  uint32_t dir_leaf = 0, pos = 0;
+  if (const std::byte* d = peek_plain_leaf(key, &dir_leaf)) {
+    const page::LeafView v = leaf(d);
+    const uint32_t n = page::count(d);
+    pos = page::lower_bound(v.key_at(0), n, key);
+    *found = pos < n && v.key(pos) == key;
+    if (*found && payload_out != nullptr) std::memcpy(payload_out, v.value(pos), payload_);
+    return Status::Ok();
+  }
+  PageRef lf;
+  uint64_t at = 0;
+  WEAVER_RETURN_IF_ERROR(locate(key, &lf, &dir_leaf));
+  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, false, &pos, nullptr, &at));
+  *found = pos < page::count(lf.data()) && at == key;
+  if (*found && payload_out != nullptr) return leaf_payload(lf, pos, payload_out);
   return Status::Ok();
 }
 
@@ -151,26 +156,28 @@ Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, boo
   *found = false;
   seal_tail();
   if (height_ == 0) return Status::Ok();
-  Path path;
+  uint32_t dir_leaf = 0, ub = 0;
+  if (const std::byte* d = peek_plain_leaf(key, &dir_leaf)) {
+    const page::LeafView v = leaf(d);
+    ub = page::upper_bound(v.key_at(0), page::count(d), key);
+    if (ub > 0) {
+      *found = true;
+      *key_out = v.key(ub - 1);
+      if (payload_out != nullptr) std::memcpy(payload_out, v.value(ub - 1), payload_);
+      return Status::Ok();
+    }
+  }
   PageRef lf;
-  WEAVER_RETURN_IF_ERROR(descend(key, &path, &lf));
-  uint32_t ub = 0;
   uint64_t below = 0;  // the key at ub - 1
+  WEAVER_RETURN_IF_ERROR(locate(key, &lf, &dir_leaf));
   WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, true, &ub, &below));
   if (ub == 0) {
     // Every key here is > key (a separator went stale when its key was
     // erased): the floor is the last record of the preceding leaf.
-    int d = path.depth - 1;
-    while (d >= 0 && path.e[d].index == 0) --d;
-    if (d < 0) return Status::Ok();
-    uint32_t left_child;
-    {
-      PageRef p;
-      WEAVER_RETURN_IF_ERROR(fetch_typed(path.e[d].page_no, PageType::kInternal, &p));
-      left_child = internal(p).child(path.e[d].index - 1);
-    }
     lf.reset();
-    WEAVER_RETURN_IF_ERROR(descend_edge(left_child, d + 1, true, &path, &lf));
+    bool first_leaf = false;
+    WEAVER_RETURN_IF_ERROR(preceding_leaf(key, dir_leaf, &lf, &first_leaf));
+    if (first_leaf) return Status::Ok();
     ub = page::count(lf.data());
     WEAVER_RETURN_IF_ERROR(leaf_key(lf, ub - 1, &below));
   }
@@ -178,6 +185,31 @@ Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, boo
   *key_out = below;
   if (payload_out != nullptr) return leaf_payload(lf, ub - 1, payload_out);
   return Status::Ok();
+}
+
+Status BTree::preceding_leaf(uint64_t key, uint32_t dir_leaf, PageRef* lf, bool* first_leaf) {
+  *first_leaf = false;
+  if (dir_leaf != kNoDirLeaf) {
+    *first_leaf = dir_leaf == 0;
+    if (*first_leaf) return Status::Ok();
+    WEAVER_RETURN_IF_ERROR(fetch_typed(dir_.page(dir_leaf - 1), leaf_type(), lf));
+    if (page::count(lf->data()) > 0) return Status::Ok();
+    return Status::Corruption(where(lf->page_no()) + ": empty leaf page");
+  }
+  Path path;
+  WEAVER_RETURN_IF_ERROR(descend(key, &path, lf));
+  lf->reset();
+  int d = path.depth - 1;
+  while (d >= 0 && path.e[d].index == 0) --d;
+  *first_leaf = d < 0;
+  if (*first_leaf) return Status::Ok();
+  uint32_t left_child;
+  {
+    PageRef p;
+    WEAVER_RETURN_IF_ERROR(fetch_typed(path.e[d].page_no, PageType::kInternal, &p));
+    left_child = internal(p).child(path.e[d].index - 1);
+  }
+  return descend_edge(left_child, d + 1, true, &path, lf);
 }
 
 Status BTree::rank(uint64_t key, uint64_t* out) {
@@ -190,11 +222,21 @@ Status BTree::rank_exact(uint64_t key, uint64_t* rank, bool* present) {
   *present = false;
   seal_tail();
   if (height_ == 0) return Status::Ok();
-  uint64_t before = 0;
-  LeafSlot s;
-  WEAVER_RETURN_IF_ERROR(find(key, &s, &before));
-  *rank = before + s.pos;
-  *present = s.exact;
+  uint32_t dir_leaf = 0, pos = 0;
+  if (const std::byte* d = peek_plain_leaf(key, &dir_leaf)) {
+    const page::LeafView v = leaf(d);
+    const uint32_t n = page::count(d);
+    pos = page::lower_bound(v.key_at(0), n, key);
+    *rank = dir_.first_rank(dir_leaf) + pos;
+    *present = pos < n && v.key(pos) == key;
+    return Status::Ok();
+  }
+  PageRef lf;
+  uint64_t before = 0, at = 0;
+  WEAVER_RETURN_IF_ERROR(locate(key, &lf, &dir_leaf, &before));
+  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, false, &pos, nullptr, &at));
+  *rank = before + pos;
+  *present = pos < page::count(lf.data()) && at == key;
   return Status::Ok();
 }
 
@@ -205,9 +247,9 @@ Status BTree::leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* fir
   *first_rank = 0;
   seal_tail();
   if (height_ == 0) return Status::Ok();
-  Path path;
   PageRef lf;
-  WEAVER_RETURN_IF_ERROR(descend(key, &path, &lf, first_rank));
+  uint32_t dir_leaf = 0;
+  WEAVER_RETURN_IF_ERROR(locate(key, &lf, &dir_leaf, first_rank));
   return leaf_entries(lf, keys, payloads);
 }
 

@@ -194,16 +194,26 @@ Status BufferPool::read_page(uint32_t page_no, Frame* f) {
   return Status::Ok();
 }
 
+const std::byte* BufferPool::hit(Frame* f, uint32_t prefetch_bytes) {
+  // Ask for the lines the caller reads next now, all at once, from the
+  // page's address alone: they, and the frame's own miss, overlap instead
+  // of following one another.
+  const std::byte* data = data_of(f);
+  for (uint32_t off = 0; off < prefetch_bytes; off += 64) __builtin_prefetch(data + off);
+  ++stats_.hits;
+  f->referenced = true;
+  return data;
+}
+
+const std::byte* BufferPool::peek(uint32_t page_no, uint32_t prefetch_bytes) {
+  Frame* f = lookup(page_no);
+  return f == nullptr ? nullptr : hit(f, prefetch_bytes);
+}
+
 Status BufferPool::fetch(uint32_t page_no, Frame** out, uint32_t prefetch_bytes) {
   if (Frame* f = lookup(page_no)) {
-    // Ask for the lines the caller reads next now, all at once, from the
-    // page's address alone: they, and the frame's own miss, overlap instead
-    // of following one another.
-    const std::byte* data = arena_.get() + size_t(f - frames_.data()) * page_size_;
-    for (uint32_t off = 0; off < prefetch_bytes; off += 64) __builtin_prefetch(data + off);
-    ++stats_.hits;
+    hit(f, prefetch_bytes);
     ++f->pins;
-    f->referenced = true;
     *out = f;
     return Status::Ok();
   }

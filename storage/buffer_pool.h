@@ -66,6 +66,11 @@ class BufferPool {
   // reused page): zero-filled and dirty.  REQUIRES: page_no not pinned.
   Status create(uint32_t page_no, Frame** out);
   void unpin(Frame* f) { --f->pins; }
+  // A cached page's bytes without a pin, prefetched as fetch() does, or null
+  // when the page is not in the pool (the caller then fetches it).  Valid
+  // until the pool's next fetch or create: for a lookup that reads one page
+  // and is done with it, and so needs no pin to keep it.
+  const std::byte* peek(uint32_t page_no, uint32_t prefetch_bytes);
   // Unpins a page the caller is done with for good (a scan moving on): it
   // becomes the next victim, so a long scan recycles a few frames instead of
   // flushing the pool, and never faults in fresh memory.
@@ -91,6 +96,8 @@ class BufferPool {
   Status find_victim(Frame** out);
   Status write_run_from(Frame* first);
   Status read_page(uint32_t page_no, Frame* f);
+  // A pool hit on f: counts it, marks it referenced, prefetches its page.
+  const std::byte* hit(Frame* f, uint32_t prefetch_bytes);
   // Pages covered by the direct map, per frame (see direct_).
   static constexpr uint32_t kDirectPagesPerFrame = 4;
   Frame* lookup(uint32_t page_no) const;

@@ -46,7 +46,8 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
     o.schema = *RecordSchema::parse(text, &err);
     std::unique_ptr<File> f;
     ASSERT_OK(open_posix_file(path_, OpenMode::kCreateTruncate, &f));
-    ASSERT_OK(BTree::create(std::move(f), o, p.pool_bytes, &tree_));
+    pool_bytes_ = p.pool_bytes;
+    ASSERT_OK(BTree::create(std::move(f), o, pool_bytes_, &tree_));
   }
 
   void reopen() {
@@ -54,7 +55,7 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
     tree_.reset();
     std::unique_ptr<File> f;
     ASSERT_OK(open_posix_file(path_, OpenMode::kReadWrite, &f));
-    ASSERT_OK(BTree::open(std::move(f), GetParam().pool_bytes, &tree_));
+    ASSERT_OK(BTree::open(std::move(f), pool_bytes_, &tree_));
   }
 
   std::vector<std::byte> payload_for(uint64_t key, uint64_t version) const {
@@ -124,6 +125,8 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
     ASSERT_EQ(it, model_.end());
   }
 
+  void check_lookups(uint64_t k);
+
   void check_everything() {
     ASSERT_OK(tree_->check_invariants());
     ASSERT_EQ(tree_->size(), model_.size());
@@ -133,6 +136,7 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
 
   testing::TempDir dir_;
   std::string path_;
+  uint64_t pool_bytes_ = 0;
   std::unique_ptr<BTree> tree_;
   Map model_;
   OrderTree order_;
@@ -245,6 +249,99 @@ TEST_P(BTreeModel, RandomMixMatchesStdMap) {
   ASSERT_NO_FATAL_FAILURE(reopen());
   ASSERT_EQ(tree_->size(), 1000u);
   ASSERT_OK(tree_->check_invariants());
+}
+
+// Every point lookup against the model in a read burst long enough for the
+// tree to build its leaf directory (storage/leaf_directory.h), after changes
+// that leave stale separators (erased first keys) and split leaves.
+void BTreeModel::check_lookups(uint64_t k) {
+  std::vector<std::byte> buf(GetParam().payload + 1);
+  bool found = false;
+  ASSERT_OK(tree_->get(k, buf.data(), &found));
+  ASSERT_EQ(found, model_.count(k) == 1) << "get " << k;
+  if (found) {
+    ASSERT_TRUE(std::equal(model_[k].begin(), model_[k].end(), buf.begin()));
+  }
+  ASSERT_NO_FATAL_FAILURE(check_floor(k));
+  uint64_t rank = 0;
+  bool present = false;
+  ASSERT_OK(tree_->rank_exact(k, &rank, &present));
+  ASSERT_EQ(rank, order_.order_of_key(k)) << "rank " << k;
+  ASSERT_EQ(present, found);
+  // leaf_keys: a run of the model's keys, ranked right, whose gap to its
+  // neighbours holds k (the leaf the tree routes k to).
+  std::vector<uint64_t> keys;
+  std::vector<std::byte> payloads;
+  uint64_t first = 0;
+  ASSERT_OK(tree_->leaf_keys(k, &keys, &first, &payloads));
+  if (model_.empty()) return;
+  ASSERT_FALSE(keys.empty());
+  ASSERT_EQ(first, order_.order_of_key(keys.front()));
+  auto it = model_.find(keys.front());
+  ASSERT_NE(it, model_.end());
+  if (it != model_.begin()) {
+    ASSERT_LT(std::prev(it)->first, k);
+  }
+  for (size_t i = 0; i < keys.size(); ++i, ++it) {
+    ASSERT_EQ(keys[i], it->first);
+    ASSERT_TRUE(std::equal(it->second.begin(), it->second.end(),
+                           payloads.begin() + i * GetParam().payload));
+  }
+  if (it != model_.end()) {
+    ASSERT_GT(it->first, k);
+  }
+}
+
+TEST_P(BTreeModel, ReadBurstsBetweenChangesMatchStdMap) {
+  const Params p = GetParam();
+  std::mt19937_64 rng(p.seed + 100);
+  const uint64_t key_space = 60'000;
+  // Pools of 1 MiB get room for the directory of the deepest trees (128-byte
+  // pages); the smaller ones stay too small for one.
+  const bool roomy = p.pool_bytes >= (1 << 20);
+  if (roomy) {
+    pool_bytes_ = 16 << 20;
+    ASSERT_NO_FATAL_FAILURE(reopen());
+  }
+  bool built_once = false;
+  for (int round = 0; round < 6; ++round) {
+    // Changes: inserts, then erases of present keys (some the first of a leaf).
+    for (int i = 0; i < (round == 0 ? 20'000 : 300); ++i) {
+      const uint64_t k = rng() % key_space;
+      ASSERT_OK(tree_->put(k, payload_for(k, round).data(), nullptr));
+      model_[k] = payload_for(k, round);
+      order_.insert(k);
+    }
+    for (int i = 0; i < (round == 0 ? 4'000 : 100) && !model_.empty(); ++i) {
+      auto it = model_.lower_bound(rng() % key_space);
+      if (it == model_.end()) it = model_.begin();
+      ASSERT_OK(tree_->erase(it->first));
+      order_.erase(it->first);
+      model_.erase(it);
+    }
+    ASSERT_EQ(tree_->directory_leaves(), 0u) << "a change drops the directory";
+    if (round == 3) {
+      ASSERT_NO_FATAL_FAILURE(reopen());
+    }
+    // The burst: edges, present keys, their neighbours, random keys.
+    std::vector<uint64_t> probes = {0, 1, key_space, UINT64_MAX - 1, UINT64_MAX};
+    for (auto it = model_.begin(); it != model_.end(); ++it) {
+      if (rng() % 8 != 0) continue;
+      probes.insert(probes.end(), {it->first - 1, it->first, it->first + 1});
+    }
+    for (int i = 0; i < 4000; ++i) probes.push_back(rng() % (key_space + 100));
+    for (const uint64_t k : probes) ASSERT_NO_FATAL_FAILURE(check_lookups(k));
+    if (LeafDirectory::bytes_for(tree_->page_count()) <= pool_bytes_ / BTree::kDirectoryShare) {
+      ASSERT_GT(tree_->directory_leaves(), 0u) << "the burst builds the directory";
+      built_once = true;
+    } else {
+      ASSERT_EQ(tree_->directory_leaves(), 0u) << "no room in the budget";
+    }
+    // Again, now through the directory where there is one.
+    for (const uint64_t k : probes) ASSERT_NO_FATAL_FAILURE(check_lookups(k));
+  }
+  ASSERT_EQ(built_once, roomy);
+  ASSERT_NO_FATAL_FAILURE(check_everything());
 }
 
 INSTANTIATE_TEST_SUITE_P(
