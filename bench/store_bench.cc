@@ -1,4 +1,5 @@
-// Named workloads over both stores (--backends btree,lsm), in the LevelDB
+// Named workloads over the stores (--backends btree,packed,lsm: the B+tree
+// with plain leaves, with packed leaves, and the LSM), in the LevelDB
 // tradition, all through the Store interface:
 //   fillseq      sorted append of n records, then commit (flush + fsync)
 //   readseq      cursor scan of every record
@@ -95,20 +96,21 @@ class Permutation {
   uint64_t mask_ = 1;
 };
 
-TableOptions table_options() {
+TableOptions table_options(bool packed = false) {
   TableOptions o;
   std::string err;
   o.schema = *RecordSchema::parse("a:u64,b:u64", &err);
   o.key_kind = KeyKind::kOctant;
+  o.packed = packed;
   return o;
 }
 
-// A store of either backend; `path` names a file (B+tree) or a directory (LSM).
+// A store of any backend; `path` names a file (B+tree) or a directory (LSM).
 struct Backend {
   std::string name;
   uint64_t memtable_bytes = 0;  // LSM only
   std::string path(const std::string& dir, const std::string& what) const {
-    return dir + "/" + what + (name == "lsm" ? ".lsm" : ".bt");
+    return dir + "/" + what + (name == "lsm" ? ".lsm" : name == "packed" ? ".pbt" : ".bt");
   }
 };
 
@@ -138,7 +140,7 @@ bool create_store(const Backend& b, const std::string& path, uint64_t pool,
   std::unique_ptr<File> f;
   std::unique_ptr<BTree> t;
   Status st = open_posix_file(path, OpenMode::kCreateTruncate, &f);
-  if (st.ok()) st = BTree::create(std::move(f), table_options(), pool, &t);
+  if (st.ok()) st = BTree::create(std::move(f), table_options(b.name == "packed"), pool, &t);
   *out = std::move(t);
   return report(st);
 }
@@ -400,6 +402,8 @@ int usage() {
       "fillrandom]\n"
       "                   [--pool 20M] [--large-pool 512M] [--queries 2M] [--repeat 3]\n"
       "                   [--backends btree,lsm] [--dir /tmp/weaver-bench]\n"
+      "Backends: btree (plain leaves), packed (the B+tree with packed leaves, as weaver's\n"
+      "mesh tables are), lsm.\n"
       "Lookups run twice: with the small pool and with the large one (which holds the tree).\n"
       "With lookups, two rows give the machine's floors: 'memory dependent_read', dependent\n"
       "random reads per second over a buffer the size of the tree file (a lookup in the\n"

@@ -122,8 +122,9 @@ class BTree final : public Store {
   Status open_packed(const PageRef& lf, page::PackedLeaf* reader);
   // The first slot with a key >= key (> key when upper), and the keys either
   // side of it (as PackedLeaf::bound), from one search.
+  // payload_next: the caller reads the payload at the answer next.
   Status leaf_bound(const PageRef& lf, uint64_t key, bool upper, uint32_t* pos,
-                    uint64_t* below = nullptr, uint64_t* at = nullptr);
+                    uint64_t* below = nullptr, uint64_t* at = nullptr, bool payload_next = false);
   Status leaf_key(const PageRef& lf, uint32_t i, uint64_t* key);
   Status leaf_payload(const PageRef& lf, uint32_t i, std::byte* out);
   // All entries of a leaf: keys, and payloads packed row-wise unless vals is null.
@@ -139,12 +140,14 @@ class BTree final : public Store {
     uint32_t pos = 0;
     bool exact = false;  // the key is present at pos
   };
-  // The leaf a point lookup reads: through the leaf directory when there is
-  // one, else by descent.  *dir_leaf is the leaf's place in the directory,
-  // or kNoDirLeaf.  With first_rank, also the rank of the leaf's first record.
+  // The leaf a lookup reads: through the leaf directory when there is one,
+  // else by descent.  whole_leaf: the caller reads all of it (else one entry).
+  // *dir_leaf is the leaf's place in the directory, or kNoDirLeaf.  With
+  // first_rank, also the rank of the leaf's first record.
   // REQUIRES: height_ > 0.
   static constexpr uint32_t kNoDirLeaf = UINT32_MAX;
-  Status locate(uint64_t key, PageRef* leaf, uint32_t* dir_leaf, uint64_t* first_rank = nullptr);
+  Status locate(uint64_t key, bool whole_leaf, PageRef* leaf, uint32_t* dir_leaf,
+                uint64_t* first_rank = nullptr);
   // How many lookups pass unchanged before the directory is built (enough
   // that building costs a fraction of what they cost), or 0: never, it would
   // not fit in its share of the memory budget.
@@ -156,7 +159,9 @@ class BTree final : public Store {
     if (!dir_.empty()) dir_.clear();
     reads_since_change_ = 0;
   }
-  uint32_t leaf_prefetch_bytes() const;
+  // How much of a leaf to prefetch on a pool hit, for a reader of all of it
+  // (whole) or of one entry.
+  uint32_t leaf_prefetch_bytes(bool whole) const;
   // The fast path of get, floor and rank_exact on plain leaves: the leaf the
   // directory routes key to, when there is a directory and the pool holds
   // the leaf, read without a pin (nothing else uses the pool until the
@@ -169,7 +174,8 @@ class BTree final : public Store {
   Status preceding_leaf(uint64_t key, uint32_t dir_leaf, PageRef* leaf, bool* first_leaf);
   // REQUIRES: height_ > 0.  With rank_before, also counts the records in the
   // subtrees left of the path.
-  Status descend(uint64_t key, Path* path, PageRef* leaf, uint64_t* rank_before = nullptr);
+  Status descend(uint64_t key, Path* path, PageRef* leaf, uint64_t* rank_before = nullptr,
+                 bool whole_leaf = true);
   // seek_cursor and seek_keys: the cursor at the first key >= key.
   Status position(uint64_t key, bool keys_only, BTreeCursor* cursor);
   Status find(uint64_t key, LeafSlot* slot, uint64_t* rank_before = nullptr);

@@ -9,7 +9,8 @@ namespace weaver {
 
 using page::PageType;
 
-Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref, uint64_t* rank_before) {
+Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref, uint64_t* rank_before,
+                      bool whole_leaf) {
   path->depth = 0;
   uint32_t pg = root_;
   for (uint32_t level = 0; level + 1 < height_; ++level) {
@@ -26,7 +27,7 @@ Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref, uint64_t* ran
     path->e[path->depth++] = {pg, idx};
     pg = v.child(idx);
   }
-  return fetch_typed(pg, leaf_type(), leaf_ref, leaf_prefetch_bytes());
+  return fetch_typed(pg, leaf_type(), leaf_ref, leaf_prefetch_bytes(whole_leaf));
 }
 
 Status BTree::find(uint64_t key, LeafSlot* s, uint64_t* rank_before) {
@@ -50,7 +51,7 @@ Status BTree::open_packed(const PageRef& lf, page::PackedLeaf* reader) {
 }
 
 Status BTree::leaf_bound(const PageRef& lf, uint64_t key, bool upper, uint32_t* pos,
-                         uint64_t* below, uint64_t* at) {
+                         uint64_t* below, uint64_t* at, bool payload_next) {
   if (!options_.packed) {
     const page::LeafView v = leaf(lf);
     const uint32_t n = page::count(lf.data());
@@ -60,7 +61,7 @@ Status BTree::leaf_bound(const PageRef& lf, uint64_t key, bool upper, uint32_t* 
     return Status::Ok();
   }
   WEAVER_RETURN_IF_ERROR(open_packed(lf, &reader_));
-  if (!reader_.bound(key, upper, pos, below, at)) {
+  if (!reader_.bound(key, upper, pos, below, at, payload_next && payload_ > 0)) {
     return Status::Corruption(where(lf.page_no()) + ": packed key block out of bounds");
   }
   return Status::Ok();
@@ -145,8 +146,8 @@ Status BTree::get(uint64_t key, std::byte* payload_out, bool* found) {
   }
   PageRef lf;
   uint64_t at = 0;
-  WEAVER_RETURN_IF_ERROR(locate(key, &lf, &dir_leaf));
-  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, false, &pos, nullptr, &at));
+  WEAVER_RETURN_IF_ERROR(locate(key, false, &lf, &dir_leaf));
+  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, false, &pos, nullptr, &at, payload_out != nullptr));
   *found = pos < page::count(lf.data()) && at == key;
   if (*found && payload_out != nullptr) return leaf_payload(lf, pos, payload_out);
   return Status::Ok();
@@ -169,8 +170,8 @@ Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, boo
   }
   PageRef lf;
   uint64_t below = 0;  // the key at ub - 1
-  WEAVER_RETURN_IF_ERROR(locate(key, &lf, &dir_leaf));
-  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, true, &ub, &below));
+  WEAVER_RETURN_IF_ERROR(locate(key, false, &lf, &dir_leaf));
+  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, true, &ub, &below, nullptr, payload_out != nullptr));
   if (ub == 0) {
     // Every key here is > key (a separator went stale when its key was
     // erased): the floor is the last record of the preceding leaf.
@@ -233,7 +234,7 @@ Status BTree::rank_exact(uint64_t key, uint64_t* rank, bool* present) {
   }
   PageRef lf;
   uint64_t before = 0, at = 0;
-  WEAVER_RETURN_IF_ERROR(locate(key, &lf, &dir_leaf, &before));
+  WEAVER_RETURN_IF_ERROR(locate(key, false, &lf, &dir_leaf, &before));
   WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, false, &pos, nullptr, &at));
   *rank = before + pos;
   *present = pos < page::count(lf.data()) && at == key;
@@ -249,7 +250,7 @@ Status BTree::leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* fir
   if (height_ == 0) return Status::Ok();
   PageRef lf;
   uint32_t dir_leaf = 0;
-  WEAVER_RETURN_IF_ERROR(locate(key, &lf, &dir_leaf, first_rank));
+  WEAVER_RETURN_IF_ERROR(locate(key, true, &lf, &dir_leaf, first_rank));
   return leaf_entries(lf, keys, payloads);
 }
 

