@@ -17,8 +17,8 @@ uint32_t BTree::leaf_prefetch_bytes(bool whole) const {
   if (whole) return options_.page_size;
   // A point lookup in a packed leaf reads its index (block bases and table),
   // then one block: the index's lines, as many as a leaf of the tree's mean
-  // entry count has, and one more, are prefetched (the whole page: 2.5-2.6M
-  // gets/s at 10M records in the pool, against 3.4-3.7M).
+  // entry count has, and one more, are prefetched (10M random gets in the
+  // pool: 2.8-3.2M/s, against 2.5-2.65M/s prefetching the whole page).
   const uint64_t mean = record_count_ / std::max<uint64_t>(page_count_, 1);
   return static_cast<uint32_t>(
       std::min<uint64_t>(options_.page_size, shape_.index_bytes(mean) + 64));

@@ -145,6 +145,10 @@ class PackedLeaf {
   bool decode(uint64_t* keys, std::byte* vals) const;
 
  private:
+  // Block j's key bits, entry count, residual width and mode; null if the
+  // block's bits lie outside the page.
+  const std::byte* block_bits(uint32_t j, uint32_t* cnt, uint32_t* w, uint8_t* mode) const;
+
   const std::byte* pg_ = nullptr;
   const PackedShape* shape_ = nullptr;
   uint32_t n_ = 0, m_ = 0;

@@ -127,10 +127,18 @@ size_t pack_and_check(const PackedShape& shape, const Entries& e, std::mt19937_6
            {keys[i], keys[i] - 1, keys[i] + 1, uint64_t(rng()), uint64_t{0}}) {
         for (const bool upper : {false, true}) {
           uint32_t pos = 0;
-          EXPECT_TRUE(leaf.bound(probe, upper, &pos));
+          uint64_t below = 0, at = 0;
+          EXPECT_TRUE(leaf.bound(probe, upper, &pos, &below, &at));
           const auto want = upper ? std::upper_bound(keys.begin(), keys.end(), probe)
                                   : std::lower_bound(keys.begin(), keys.end(), probe);
           EXPECT_EQ(pos, want - keys.begin()) << "probe " << probe << (upper ? " upper" : " lower");
+          // The keys either side of the answer, from the same block search.
+          if (pos > 0) {
+            EXPECT_EQ(below, keys[pos - 1]) << "probe " << probe;
+          }
+          if (pos < n) {
+            EXPECT_EQ(at, keys[pos]) << "probe " << probe;
+          }
         }
       }
     }
