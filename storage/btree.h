@@ -178,7 +178,9 @@ class BTree final : public Store {
                  bool whole_leaf = true);
   // seek_cursor and seek_keys: the cursor at the first key >= key.
   Status position(uint64_t key, bool keys_only, BTreeCursor* cursor);
-  Status find(uint64_t key, LeafSlot* slot, uint64_t* rank_before = nullptr);
+  // For a change at key (put, erase): its leaf slot, by descent (the path
+  // is needed to split or free pages).
+  Status find(uint64_t key, LeafSlot* slot);
   Status descend_edge(uint32_t page_no, int level, bool rightmost, Path* path, PageRef* leaf);
   Status add_to_path_counts(const Path& path, int upto, int64_t delta);
   bool path_is_rightmost(const Path& path);

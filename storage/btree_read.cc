@@ -30,8 +30,8 @@ Status BTree::descend(uint64_t key, Path* path, PageRef* leaf_ref, uint64_t* ran
   return fetch_typed(pg, leaf_type(), leaf_ref, leaf_prefetch_bytes(whole_leaf));
 }
 
-Status BTree::find(uint64_t key, LeafSlot* s, uint64_t* rank_before) {
-  WEAVER_RETURN_IF_ERROR(descend(key, &s->path, &s->leaf, rank_before));
+Status BTree::find(uint64_t key, LeafSlot* s) {
+  WEAVER_RETURN_IF_ERROR(descend(key, &s->path, &s->leaf));
   s->n = page::count(s->leaf.data());
   uint64_t at = 0;
   WEAVER_RETURN_IF_ERROR(leaf_bound(s->leaf, key, false, &s->pos, nullptr, &at));
