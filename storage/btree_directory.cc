@@ -75,6 +75,7 @@ const std::byte* BTree::peek_plain_leaf(uint64_t key, uint32_t* dir_leaf) {
 
 Status BTree::build_directory() {
   dir_.clear();
+  dir_.reserve(page_count_);  // bounds the leaves, and fits the budget (directory_threshold)
   if (height_ == 1) dir_.add(0, root_, 0);
   if (height_ <= 1) return Status::Ok();
   uint64_t rank = 0;

@@ -11,6 +11,12 @@ uint64_t LeafDirectory::bytes_for(uint64_t leaves) {
   return chunks * (sizeof(Chunk) + sizeof(uint64_t)) + leaves * sizeof(uint64_t);
 }
 
+void LeafDirectory::reserve(uint64_t leaves) {
+  chunks_.reserve((leaves + kChunk - 1) / kChunk);
+  top_.reserve((leaves + kChunk - 1) / kChunk);
+  first_rank_.reserve(leaves);
+}
+
 void LeafDirectory::add(uint64_t fence, uint32_t page_no, uint64_t first_rank) {
   const uint32_t slot = count_ % kChunk;
   if (slot == 0) {

@@ -27,6 +27,8 @@ class LeafDirectory {
   // What a directory of `leaves` leaves takes in memory.
   static uint64_t bytes_for(uint64_t leaves);
 
+  // Room for `leaves` leaves, so that adding them never holds two copies.
+  void reserve(uint64_t leaves);
   // Adds the next leaf in key order.  The first fence must be 0 (every key
   // below the second fence goes to the first leaf); fences never decrease.
   void add(uint64_t fence, uint32_t page_no, uint64_t first_rank);
