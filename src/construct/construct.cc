@@ -12,6 +12,7 @@
 #include "construct/estimate.h"
 #include "db/database.h"
 #include "model/velocity_model.h"
+#include "modeldb/open_model.h"
 #include "schema/octant.h"
 #include "util/work_queue.h"
 
@@ -153,7 +154,7 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
                                    std::to_string(p->block_level) + ", finer than --max-level");
   }
   std::unique_ptr<VelocityModel> model;
-  WEAVER_RETURN_IF_ERROR(make_model(o.model, o.grid_file, &model));
+  WEAVER_RETURN_IF_ERROR(open_velocity_model(o.model, o.grid_file, o.memory, &model));
   p->model = model->describe();
   const ConstructEstimate e = estimate_construct(o, *p, *model);
   p->estimated_elements = e.elements;
@@ -174,7 +175,7 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   *r = ConstructResult{};
   WEAVER_RETURN_IF_ERROR(plan_construct(o, p));
   std::unique_ptr<VelocityModel> model;
-  WEAVER_RETURN_IF_ERROR(make_model(o.model, o.grid_file, &model));
+  WEAVER_RETURN_IF_ERROR(open_velocity_model(o.model, o.grid_file, o.memory, &model));
   ConstructEstimate e;
   e.elements = p->estimated_elements;
   e.disk_bytes = p->estimated_disk_bytes;

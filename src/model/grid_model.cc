@@ -63,14 +63,14 @@ Status bad(const std::string& path, const std::string& why) {
 
 }  // namespace
 
-Status load_grid_model(const std::string& path, std::unique_ptr<VelocityModel>* out) {
+Status read_grid_header(const std::string& path, GridSpec* spec, uint64_t* data_offset) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return Status::NotFound(path + ": cannot open the grid model file");
   std::string line;
   if (!std::getline(in, line) || line != kMagic) {
     return bad(path, "not a weaver grid model (first line must be '" + std::string(kMagic) + "')");
   }
-  GridSpec s;
+  GridSpec& s = *spec;
   std::string l1, l2, l3;
   std::getline(in, l1);
   std::getline(in, l2);
@@ -95,7 +95,17 @@ Status load_grid_model(const std::string& path, std::unique_ptr<VelocityModel>* 
                          "the header, found " +
                          std::to_string(bytes));
   }
-  in.seekg(data_start);
+  *data_offset = static_cast<uint64_t>(data_start);
+  return Status::Ok();
+}
+
+Status load_grid_model(const std::string& path, std::unique_ptr<VelocityModel>* out) {
+  GridSpec s;
+  uint64_t data_start = 0;
+  WEAVER_RETURN_IF_ERROR(read_grid_header(path, &s, &data_start));
+  std::ifstream in(path, std::ios::binary);
+  const size_t count = size_t(s.nx) * s.ny * s.nz;
+  in.seekg(static_cast<std::streamoff>(data_start));
   std::vector<Material> values(count);
   std::vector<float> raw(count * 3);
   in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(raw.size() * 4));

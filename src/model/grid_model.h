@@ -21,6 +21,11 @@ namespace weaver {
 Status load_grid_model(const std::string& path, std::unique_ptr<VelocityModel>* out);
 
 // Writes a grid file (for tests and for users converting their models).
+struct GridSpec;
+// Reads and checks a grid file's header (and that the file holds exactly
+// the data it promises): its spec and where the float32 records start.
+Status read_grid_header(const std::string& path, GridSpec* spec, uint64_t* data_offset);
+
 struct GridSpec {
   int nx = 2, ny = 2, nz = 2;
   double x0 = 0, y0 = 0, z0 = 0, dx = 1, dy = 1, dz = 1;

@@ -1,0 +1,209 @@
+// The model database: imports from the etree library's own files and from
+// grid files, answered by the aggregate-hit query, and construct from it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "construct/construct.h"
+#include "db/database.h"
+#include "model/grid_model.h"
+#include "modeldb/db_model.h"
+#include "modeldb/model_import.h"
+#include "storage/btree.h"
+
+namespace weaver {
+namespace {
+
+std::string fresh(const std::string& name) {
+  const std::string dir = ::testing::TempDir() + "model_db_" + name;
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+std::string fixture(const std::string& name) {
+  return std::string(WEAVER_SOURCE_DIR) + "/tests/data/etree/" + name;
+}
+
+class FromEtree : public ::testing::TestWithParam<const char*> {};
+
+// Every pixel the etree library searched gives, through the model database,
+// the values the library answered (merging at tolerance 0 keeps them).
+TEST_P(FromEtree, AnswersAsTheLibrarysSearchDid) {
+  const std::string name = GetParam();
+  const std::string db = fresh(name);
+  ModelImportOptions o;
+  o.from = "etree:" + fixture(name + ".e");
+  ModelImportResult r;
+  const Status st = import_model(db, o, &r);
+  ASSERT_TRUE(st.ok()) << st.to_string();
+  EXPECT_LT(r.octants, r.read);  // the fixtures' uniform sibling sets merged
+  std::unique_ptr<DbModel> m;
+  ASSERT_TRUE(DbModel::open(db, MemoryBudget(), &m).ok());
+  EXPECT_DOUBLE_EQ(m->info().tick_m * kRootEdge, 100000.0);
+  std::ifstream in(fixture(name + ".search"));
+  std::string line;
+  int checked = 0;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    uint32_t p[3];
+    s >> p[0] >> p[1] >> p[2];
+    std::string skip;
+    for (int i = 0; i < 5; ++i) s >> skip;  // "->" and the hit's address
+    double want[5] = {0, 0, 0, 0, 0};
+    for (int i = 0; i < 5 && s >> want[i]; ++i) {
+    }
+    double at[3];
+    for (int a = 0; a < 3; ++a) at[a] = ((p[a] >> 11) + 0.5) * m->info().tick_m;
+    ModelHit h;
+    ASSERT_TRUE(m->lookup(at[0], at[1], at[2], &h).ok()) << line;
+    for (int f = 0; f < (m->info().has_q ? 5 : 3); ++f) {
+      ASSERT_FLOAT_EQ(h.values[f], float(want[f])) << line << " field " << f;
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2000);
+  EXPECT_EQ(m->info().has_q, name == std::string("usgs"));
+}
+
+INSTANTIATE_TEST_SUITE_P(LibraryFiles, FromEtree, ::testing::Values("cmu", "usgs"));
+
+TEST(ModelDb, RefusesAnEtreeWithoutTheFieldsAndLeavesNoTable) {
+  const std::string db = fresh("nofields");
+  ModelImportOptions o;
+  o.from = "etree:" + fixture("make_fixtures.c");
+  ModelImportResult r;
+  EXPECT_FALSE(import_model(db, o, &r).ok());
+  o.from = "grid:/nonexistent/file";
+  const Status st = import_model(db, o, &r);
+  EXPECT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("/nonexistent/file"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(db + "/MANIFEST"));
+}
+
+// A grid of equal spacings: one octant per point, holding its values
+// exactly; unequal spacings: trilinear values at the octants' centres.
+TEST(ModelDb, GridPointsAreOctantCentres) {
+  for (bool equal : {true, false}) {
+    GridSpec g;
+    g.nx = 37, g.ny = 21, g.nz = 11;
+    g.x0 = 1000, g.y0 = -500, g.z0 = 0;
+    g.dx = 100, g.dy = 100, g.dz = equal ? 100 : 250;
+    std::vector<Material> values;
+    for (int k = 0; k < g.nz; ++k)
+      for (int j = 0; j < g.ny; ++j)
+        for (int i = 0; i < g.nx; ++i) {
+          const float vs = 300 + 7 * i + 13 * j + 29 * k + ((i * j + k) % 5 == 0 ? 50 : 0);
+          values.push_back({2 * vs, vs, 1800 + vs / 10});
+        }
+    const std::string grid = ::testing::TempDir() + "model_db.grid";
+    ASSERT_TRUE(write_grid_model(grid, g, values).ok());
+    const std::string db = fresh(equal ? "grid_equal" : "grid_unequal");
+    ModelImportOptions o;
+    o.from = "grid:" + grid;
+    o.memory = MemoryBudget(4ull << 20);
+    ModelImportResult r;
+    ASSERT_TRUE(import_model(db, o, &r).ok());
+    std::unique_ptr<DbModel> m;
+    ASSERT_TRUE(DbModel::open(db, MemoryBudget(), &m).ok());
+    std::unique_ptr<VelocityModel> ref;
+    ASSERT_TRUE(load_grid_model(grid, &ref).ok());
+    const int nz = equal ? g.nz : (g.nz - 1) * 250 / 100 + 1;
+    EXPECT_EQ(r.read, uint64_t(g.nx) * g.ny * nz);
+    for (int k = 0; k < nz; ++k)
+      for (int j = 0; j < g.ny; ++j)
+        for (int i = 0; i < g.nx; ++i) {
+          const double x = g.x0 + 100 * i, y = g.y0 + 100 * j, z = g.z0 + 100 * k;
+          ModelHit h;
+          ASSERT_TRUE(m->lookup(x + 30, y - 40, z + 10, &h).ok());
+          const Material want = ref->at(x, y, z);
+          ASSERT_NEAR(h.values[1], want.vs, 1e-3 * want.vs) << i << " " << j << " " << k;
+          ASSERT_NEAR(h.values[0], want.vp, 1e-3 * want.vp);
+          if (equal) {
+            ASSERT_EQ(h.values[1], values[(size_t(k) * g.ny + j) * g.nx + i].vs);
+          }
+        }
+    // Outside the box: the nearest cell's value.
+    ModelHit h, corner;
+    ASSERT_TRUE(m->lookup(-1e6, -1e6, -1e6, &h).ok());
+    ASSERT_TRUE(m->lookup(g.x0, g.y0, g.z0, &corner).ok());
+    EXPECT_TRUE(h.clamped);
+    EXPECT_EQ(h.values, corner.values);
+  }
+}
+
+// construct --model db:: every leaf carries the model's value at its centre,
+// and obeys the rule with Vs taken from the model database.
+TEST(ModelDb, ConstructSamplesTheModelDatabase) {
+  GridSpec g;
+  g.nx = g.ny = 33, g.nz = 17;
+  g.dx = g.dy = g.dz = 250;
+  std::vector<Material> values;
+  for (int k = 0; k < g.nz; ++k)
+    for (int j = 0; j < g.ny; ++j)
+      for (int i = 0; i < g.nx; ++i) {
+        const float vs =
+            (i - 16) * (i - 16) + (j - 10) * (j - 10) < 40 && k < 5 ? 300 : 1500 + 40 * k;
+        values.push_back({2 * vs, vs, 2000});
+      }
+  const std::string grid = ::testing::TempDir() + "model_db_construct.grid";
+  ASSERT_TRUE(write_grid_model(grid, g, values).ok());
+  const std::string model = fresh("construct_model");
+  ModelImportOptions io;
+  io.from = "grid:" + grid;
+  ModelImportResult ir;
+  ASSERT_TRUE(import_model(model, io, &ir).ok());
+  std::unique_ptr<DbModel> m;
+  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), &m).ok());
+  for (int threads : {1, 2}) {
+    ConstructOptions o;
+    o.model = "db:" + model;
+    o.freq = 0.5;
+    o.domain_m = {8000, 8000, 4000};
+    o.threads = threads;
+    ConstructPlan p;
+    ConstructResult r;
+    const std::string db = fresh("construct_" + std::to_string(threads));
+    const Status st = construct_octree(db, o, &p, &r);
+    ASSERT_TRUE(st.ok()) << st.to_string();
+    ASSERT_GT(r.elements, 100u);
+    std::unique_ptr<Database> d;
+    ASSERT_TRUE(Database::open(db, Database::Mode::kRead, false, &d).ok());
+    std::unique_ptr<BTree> t;
+    ASSERT_TRUE(d->open_table("octants", 8 << 20, &t).ok());
+    std::unique_ptr<Cursor> c;
+    ASSERT_TRUE(t->seek(0, &c).ok());
+    int fine = 0;
+    for (; c->valid(); (void)c->next()) {
+      const Octant o8 = octant_from_key(c->key());
+      const double e = octant_edge(o8) * p.tick_m;
+      float leaf[3];
+      std::memcpy(leaf, c->payload(), 12);
+      ModelHit h;
+      ASSERT_TRUE(m->lookup((o8.x + octant_edge(o8) / 2.0) * p.tick_m,
+                            (o8.y + octant_edge(o8) / 2.0) * p.tick_m,
+                            (o8.z + octant_edge(o8) / 2.0) * p.tick_m, &h)
+                      .ok());
+      ASSERT_EQ(leaf[1], h.values[1]);
+      // The 27 samples' least Vs from the model database bounds the edge.
+      double vs_min = 1e30;
+      for (int s = 0; s < 27; ++s) {
+        ModelHit q;
+        ASSERT_TRUE(m->lookup(o8.x * p.tick_m + e * (s % 3) / 2,
+                              o8.y * p.tick_m + e * (s / 3 % 3) / 2,
+                              o8.z * p.tick_m + e * (s / 9) / 2, &q)
+                        .ok());
+        vs_min = std::min<double>(vs_min, q.values[1]);
+      }
+      ASSERT_LE(e, vs_min / (o.freq * o.ppw) * (1 + 1e-9));
+      fine += vs_min < 1000;
+    }
+    EXPECT_GT(fine, 0);  // the slow inclusion was found and refined
+  }
+}
+
+}  // namespace
+}  // namespace weaver
