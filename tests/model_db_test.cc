@@ -84,6 +84,25 @@ TEST(ModelDb, RefusesAnEtreeWithoutTheFieldsAndLeavesNoTable) {
   EXPECT_FALSE(std::filesystem::exists(db + "/MANIFEST"));
 }
 
+TEST(ModelDb, RefusesAGridPointWithANonPositiveVelocityNamingIt) {
+  GridSpec g;
+  g.nx = g.ny = g.nz = 4;
+  std::vector<Material> values(64, Material{2000, 1000, 2000});
+  values[37].vs = -1;
+  const std::string grid = ::testing::TempDir() + "model_db_bad.grid";
+  ASSERT_TRUE(write_grid_model(grid, g, values).ok());
+  const std::string db = fresh("bad_grid");
+  ModelImportOptions o;
+  o.from = "grid:" + grid;
+  ModelImportResult r;
+  const Status st = import_model(db, o, &r);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("grid point 37 has Vs -1"), std::string::npos) << st.message();
+  std::unique_ptr<Database> d;
+  ASSERT_TRUE(Database::open(db, Database::Mode::kRead, false, &d).ok());
+  EXPECT_FALSE(d->has_table(kModelTable));  // nothing committed
+}
+
 // A grid of equal spacings: one octant per point, holding its values
 // exactly; unequal spacings: trilinear values at the octants' centres.
 TEST(ModelDb, GridPointsAreOctantCentres) {

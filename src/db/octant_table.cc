@@ -12,19 +12,24 @@ std::string units_to_metadata(const Units& u) {
   return buf;
 }
 
-void units_from_metadata(const std::string& metadata, Units* u) {
+void for_each_metadata_item(const std::string& metadata,
+                            const std::function<void(const std::string&, const std::string&)>& fn) {
   std::istringstream in(metadata);
   std::string item;
   while (std::getline(in, item, ';')) {
     const size_t eq = item.find('=');
-    if (eq == std::string::npos) continue;
-    const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
+    if (eq != std::string::npos) fn(item.substr(0, eq), item.substr(eq + 1));
+  }
+}
+
+void units_from_metadata(const std::string& metadata, Units* u) {
+  for_each_metadata_item(metadata, [u](const std::string& key, const std::string& value) {
     if (key == "tick_m") {
       std::sscanf(value.c_str(), "%lf", &u->tick_m);
     } else if (key == "origin_m") {
       std::sscanf(value.c_str(), "%lf,%lf,%lf", &u->origin_m[0], &u->origin_m[1], &u->origin_m[2]);
     }
-  }
+  });
 }
 
 std::string levels_to_metadata(const LevelCounts& levels) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <string>
 
 namespace weaver {
@@ -18,6 +19,10 @@ struct Units {
 
 // Metadata text: "tick_m=<v>;origin_m=<x>,<y>,<z>".
 std::string units_to_metadata(const Units& u);
+// Calls fn(key, value) for each "key=value" item of ";"-separated metadata
+// text, in order; items without "=" are skipped.
+void for_each_metadata_item(const std::string& metadata,
+                            const std::function<void(const std::string&, const std::string&)>& fn);
 // Fills *u from metadata; unknown or missing fields keep their defaults.
 void units_from_metadata(const std::string& metadata, Units* u);
 

@@ -58,19 +58,13 @@ Status EtreeFile::bad(const std::string& why) const {
   return Status::Corruption(path_ + ": " + why);
 }
 
-uint64_t EtreeFile::u64(const std::byte* p) const {
-  unsigned char b[8];
-  std::memcpy(b, p, 8);
+// An unsigned integer of `bytes` bytes in the file's byte order.
+uint64_t EtreeFile::unsigned_at(const std::byte* p, int bytes) const {
   uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v |= uint64_t{b[info_.byte_order == 'L' ? i : 7 - i]} << (8 * i);
-  return v;
-}
-
-uint32_t EtreeFile::u32(const std::byte* p) const {
-  unsigned char b[4];
-  std::memcpy(b, p, 4);
-  uint32_t v = 0;
-  for (int i = 0; i < 4; ++i) v |= uint32_t{b[info_.byte_order == 'L' ? i : 3 - i]} << (8 * i);
+  for (int i = 0; i < bytes; ++i) {
+    const int at = info_.byte_order == 'L' ? i : bytes - 1 - i;
+    v |= uint64_t{static_cast<unsigned char>(p[at])} << (8 * i);
+  }
   return v;
 }
 

@@ -93,8 +93,9 @@ class EtreeFile {
   explicit EtreeFile(std::string path) : path_(std::move(path)) {}
   Status read_headers();
   Status read_page(uint64_t page_no);
-  uint64_t u64(const std::byte* p) const;
-  uint32_t u32(const std::byte* p) const;
+  uint64_t unsigned_at(const std::byte* p, int bytes) const;
+  uint64_t u64(const std::byte* p) const { return unsigned_at(p, 8); }
+  uint32_t u32(const std::byte* p) const { return static_cast<uint32_t>(unsigned_at(p, 4)); }
   Status bad(const std::string& why) const;
 
   std::string path_;

@@ -23,24 +23,27 @@ constexpr int kGridBlockLevels = 5;
 
 using Emit = std::function<Status(const Octant&, const ModelValues&)>;
 
-Status check_values(const ModelValues& v, int fields, const std::string& what) {
+// The first field out of range (velocities and density positive, Q not
+// negative, all finite), or -1.  Cheap: it runs on every record.
+int bad_field(const ModelValues& v, int fields) {
   for (int f = 0; f < fields; ++f) {
-    const bool velocity = f < 3;
-    if (!std::isfinite(v[f]) || (velocity ? v[f] <= 0 : v[f] < 0)) {
-      static const char* names[] = {"Vp", "Vs", "density", "Qp", "Qs"};
-      return Status::Corruption(what + " has " + names[f] + " " + std::to_string(v[f]) +
-                                " (velocities and density must be positive and finite)");
-    }
+    if (!std::isfinite(v[f]) || (f < 3 ? v[f] <= 0 : v[f] < 0)) return f;
   }
-  return Status::Ok();
+  return -1;
+}
+
+// The error for a record whose field f is out of range; `what` names it.
+Status bad_value(const std::string& what, const ModelValues& v, int f) {
+  static const char* names[] = {"Vp", "Vs", "density", "Qp", "Qs"};
+  return Status::Corruption(what + " has " + names[f] + " " + std::to_string(v[f]) +
+                            " (velocities and density must be positive and finite)");
 }
 
 // ---- etree -----------------------------------------------------------------
 
-Status import_etree(const std::string& path, const ModelImportOptions& o, ModelInfo* info,
-                    uint64_t* read, const Emit& emit) {
-  std::unique_ptr<EtreeFile> f;
-  WEAVER_RETURN_IF_ERROR(EtreeFile::open(path, &f));
+Status import_etree(EtreeFile* f, const ModelImportOptions& o, ModelInfo* info, uint64_t* read,
+                    const Emit& emit) {
+  const std::string& path = f->path();
   const EtreeField* fields[5] = {f->field("Vp"), f->field("Vs"), f->field("density"),
                                  f->field("Qp"), f->field("Qs")};
   if (!fields[2]) fields[2] = f->field("rho");
@@ -70,12 +73,15 @@ Status import_etree(const std::string& path, const ModelImportOptions& o, ModelI
     if (done) break;
     if (!e.leaf) continue;  // interior octants (the USGS file's means)
     const Octant oct{e.x >> kShift, e.y >> kShift, e.z >> kShift, static_cast<uint8_t>(e.level)};
-    const std::string what = path + ": octant (" + std::to_string(e.x) + " " + std::to_string(e.y) +
-                             " " + std::to_string(e.z) + " level " + std::to_string(e.level) + ")";
-    if (e.level > kMaxLevel) return Status::Corruption(what + " is finer than weaver's 20 levels");
+    auto what = [&] {
+      return path + ": octant (" + std::to_string(e.x) + " " + std::to_string(e.y) + " " +
+             std::to_string(e.z) + " level " + std::to_string(e.level) + ")";
+    };
+    if (e.level > kMaxLevel)
+      return Status::Corruption(what() + " is finer than weaver's 20 levels");
     ModelValues v{};
     for (int i = 0; i < n; ++i) v[i] = static_cast<float>(f->read_field(e.payload, *fields[i]));
-    WEAVER_RETURN_IF_ERROR(check_values(v, n, what));
+    if (const int bad = bad_field(v, n); bad >= 0) return bad_value(what(), v, bad);
     ++*read;
     WEAVER_RETURN_IF_ERROR(emit(oct, v));
   }
@@ -139,8 +145,9 @@ class GridBlockReader {
         }
         for (int x = 0; x < span_[0]; ++x) {
           const ModelValues v{row[3 * x], row[3 * x + 1], row[3 * x + 2], 0, 0};
-          WEAVER_RETURN_IF_ERROR(
-              check_values(v, 3, path_ + ": grid point " + std::to_string(point + x)));
+          if (const int bad = bad_field(v, 3); bad >= 0) {
+            return bad_value(path_ + ": grid point " + std::to_string(point + x), v, bad);
+          }
         }
       }
     }
@@ -197,9 +204,7 @@ Status plan_grid(const std::string& path, GridPlan* g, ModelInfo* info) {
   return Status::Ok();
 }
 
-Status import_grid(const std::string& path, ModelInfo* info, uint64_t* read, const Emit& emit) {
-  GridPlan g;
-  WEAVER_RETURN_IF_ERROR(plan_grid(path, &g, info));
+Status import_grid(const GridPlan& g, const std::string& path, uint64_t* read, const Emit& emit) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return Status::NotFound(path + ": cannot open the grid model file");
   GridBlockReader reader(g, fd, path);
@@ -247,26 +252,22 @@ Status import_model(const std::string& db_dir, const ModelImportOptions& o, Mode
   if (!(o.tolerance >= 0) || !std::isfinite(o.tolerance)) {
     return Status::InvalidArgument("--tolerance must be a number >= 0");
   }
-  // The source's header first: a bad file is refused before anything is written.
-  ModelInfo probe;
+  // The source's headers first: a bad file is refused before anything is
+  // written.  An etree says whether it holds Q; a grid never does.
+  ModelInfo& info = r->info;
+  info.source = kind + " " + path;
+  std::unique_ptr<EtreeFile> etree;
+  GridPlan grid;
   if (kind == "etree") {
-    std::unique_ptr<EtreeFile> f;
-    WEAVER_RETURN_IF_ERROR(EtreeFile::open(path, &f));
+    WEAVER_RETURN_IF_ERROR(EtreeFile::open(path, &etree));
   } else {
-    GridPlan g;
-    WEAVER_RETURN_IF_ERROR(plan_grid(path, &g, &probe));
+    WEAVER_RETURN_IF_ERROR(plan_grid(path, &grid, &info));
   }
+  const bool has_q = etree && etree->field("Qp") && etree->field("Qs");
   std::unique_ptr<Database> db;
   WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, true, &db));
   MemoryPlan plan(o.memory);
   const uint64_t pool = plan.take("model table pool", 1, 8, 8ull << 20);
-  // Etree files say whether they hold Q only once opened; a grid never does.
-  bool has_q = false;
-  if (kind == "etree") {
-    std::unique_ptr<EtreeFile> f;
-    WEAVER_RETURN_IF_ERROR(EtreeFile::open(path, &f));
-    has_q = f->field("Qp") && f->field("Qs");
-  }
   TableOptions topt;
   topt.key_kind = KeyKind::kOctant;
   topt.schema = model_schema(has_q);
@@ -274,16 +275,15 @@ Status import_model(const std::string& db_dir, const ModelImportOptions& o, Mode
   std::unique_ptr<BTree> table;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kModelTable, topt, pool, &table, &file));
+  // The record is ModelValues' leading floats (the schema packs f32 little-endian).
+  static_assert(sizeof(ModelValues) == kModelFields * sizeof(float));
   MaterialMerger merger(o.tolerance, has_q ? 5 : 3, [&](uint64_t key, const ModelValues& v) {
     ++r->levels[octant_key_level(key)];
     return table->append(key, reinterpret_cast<const std::byte*>(v.data()));
   });
-  static_assert(sizeof(ModelValues) == 20);
   const Emit emit = [&](const Octant& oct, const ModelValues& v) { return merger.add(oct, v); };
-  ModelInfo& info = r->info;
-  info.source = kind + " " + path;
-  Status st = kind == "etree" ? import_etree(path, o, &info, &r->read, emit)
-                              : import_grid(path, &info, &r->read, emit);
+  Status st = etree ? import_etree(etree.get(), o, &info, &r->read, emit)
+                    : import_grid(grid, path, &r->read, emit);
   if (st.ok()) st = merger.finish();
   r->octants = merger.emitted();
   if (st.ok() && r->octants == 0) st = Status::Corruption(path + ": the model has no leaves");

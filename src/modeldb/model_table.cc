@@ -44,12 +44,7 @@ void model_info_from_metadata(const std::string& metadata, ModelInfo* m) {
   units_from_metadata(metadata, &u);
   m->tick_m = u.tick_m;
   m->origin_m = u.origin_m;
-  std::istringstream in(metadata);
-  std::string item;
-  while (std::getline(in, item, ';')) {
-    const size_t eq = item.find('=');
-    if (eq == std::string::npos) continue;
-    const std::string key = item.substr(0, eq), value = item.substr(eq + 1);
+  for_each_metadata_item(metadata, [m](const std::string& key, const std::string& value) {
     if (key == "extent_m") {
       std::sscanf(value.c_str(), "%lf,%lf,%lf", &m->extent_m[0], &m->extent_m[1], &m->extent_m[2]);
     } else if (key == "q") {
@@ -61,7 +56,7 @@ void model_info_from_metadata(const std::string& metadata, ModelInfo* m) {
     } else if (key == "producer") {
       m->producer = value;
     }
-  }
+  });
 }
 
 namespace {
