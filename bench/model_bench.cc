@@ -1,0 +1,171 @@
+// The model database's numbers (issue: real velocity models): import of a
+// CVM-sized grid, construct from the model database beside the analytic
+// basin, and batch point material queries.  Each weaver command runs as a
+// process of its own (its peak RSS is its own).  One JSON line per run, then
+// a table of medians.
+//
+//   model_bench [--grid NX,NY,NZ] [--spacing M] [--freq F] [--repeat N] [--dir DIR]
+//
+// The grid (default 1000 x 1000 x 375 points at 100 m, 4.5 GB as float32)
+// is written once into DIR: a smooth sediment bowl in rock whose Vs steps
+// every 200 m/s, so exact merging has uniform regions to merge.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "bench_util.h"
+#include "modeldb/db_model.h"
+#include "schema/morton.h"
+
+using namespace weaver;
+using namespace weaver::bench;
+
+namespace {
+
+bool write_grid(const std::string& path, int nx, int ny, int nz, double d) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) return false;
+  std::fprintf(f, "weaver-grid 1\n%d %d %d\n0 0 0\n%g %g %g\n", nx, ny, nz, d, d, d);
+  std::vector<float> row(3 * size_t(nx));
+  const double cx = nx * d / 2, cy = ny * d / 2, r2 = 2 * std::pow(nx * d / 5, 2);
+  for (int k = 0; k < nz; ++k) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const double x = i * d, y = j * d, z = k * d;
+        const double bowl = 4000 * std::exp(-((x - cx) * (x - cx) + (y - cy) * (y - cy)) / r2);
+        const float vs = z < bowl ? float(575 + 0.75 * z)
+                                  : float(std::floor(std::min(2600 + 0.2 * z, 3900.0) / 200) * 200);
+        row[3 * i] = 1.8f * vs, row[3 * i + 1] = vs, row[3 * i + 2] = 2000;
+      }
+      if (std::fwrite(row.data(), 4, row.size(), f) != row.size()) return false;
+    }
+  }
+  return std::fclose(f) == 0;
+}
+
+// A number after `label` in a command's printout ("read       375000000 ...").
+double number_after(const std::string& text, const std::string& label) {
+  const size_t at = text.find(label);
+  if (at == std::string::npos) return -1;
+  return std::atof(text.c_str() + at + label.size());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int nx = 1000, ny = 1000, nz = 375, repeat = 1;
+  double spacing = 100, freq = 0.5;
+  std::string dir = "/tmp/weaver-model-bench", weaver = WEAVER_BINARY;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--grid" && i + 1 < argc) {
+      if (std::sscanf(argv[++i], "%d,%d,%d", &nx, &ny, &nz) != 3) return 2;
+    } else if (a == "--spacing" && i + 1 < argc) {
+      spacing = std::atof(argv[++i]);
+    } else if (a == "--freq" && i + 1 < argc) {
+      freq = std::atof(argv[++i]);
+    } else if (a == "--repeat" && i + 1 < argc) {
+      repeat = std::stoi(argv[++i]);
+    } else if (a == "--dir" && i + 1 < argc) {
+      dir = argv[++i];
+    } else {
+      std::fprintf(stderr,
+                   "usage: model_bench [--grid NX,NY,NZ] [--spacing M] [--freq F] [--repeat N] "
+                   "[--dir DIR]\n");
+      return 2;
+    }
+  }
+  std::filesystem::create_directories(dir);
+  char name[96];
+  std::snprintf(name, sizeof name, "/grid-%dx%dx%d-%g.grid", nx, ny, nz, spacing);
+  const std::string grid = dir + name, model = dir + "/model.db";
+  if (!std::filesystem::exists(grid)) {
+    std::fprintf(stderr, "writing %s\n", grid.c_str());
+    if (!write_grid(grid + ".tmp", nx, ny, nz, spacing)) return 1;
+    std::filesystem::rename(grid + ".tmp", grid);
+  }
+  const std::string domain = std::to_string(nx * spacing) + "," + std::to_string(ny * spacing) +
+                             "," + std::to_string(nz * spacing);
+  std::map<std::string, std::vector<double>> rate, rss;
+  auto record = [&](const std::string& what, double r, uint64_t peak) {
+    Json j;
+    j.add("bench", "model").add("what", what).add("rate_per_s", r).add("peak_rss_mb", peak / 1e6);
+    std::printf("%s\n", j.str().c_str());
+    rate[what].push_back(r);
+    rss[what].push_back(peak / 1e6);
+  };
+  for (int run = 0; run < repeat; ++run) {
+    std::filesystem::remove_all(model);
+    uint64_t peak = 0;
+    const double t0 = now_seconds();
+    const std::string out = run_program(
+        {weaver, "model", "import", model, "--from", "grid:" + grid, "--memory", "256M"}, &peak);
+    if (out.empty()) return 1;
+    record("import grid points (256M)", number_after(out, "read") / (now_seconds() - t0), peak);
+    for (const std::string& source : {"db:" + model, std::string("basin")}) {
+      for (const char* threads : {"1", "2"}) {
+        const std::string db = dir + "/construct.db";
+        std::filesystem::remove_all(db);
+        const double c0 = now_seconds();
+        const std::string c =
+            run_program({weaver, "construct", db, "--model", source, "--freq", std::to_string(freq),
+                         "--domain", domain, "--threads", threads, "--quiet"},
+                        &peak);
+        if (c.empty()) return 1;
+        record(std::string("construct leaves, ") + (source == "basin" ? "basin" : "model db") +
+                   ", --threads " + threads,
+               number_after(c, "constructed") / (now_seconds() - c0), peak);
+      }
+    }
+    // Batch material queries through the API, in a child of its own: a
+    // million random points, then the same points in Z-order.
+    for (bool sorted : {false, true}) {
+      const std::string q = run_in_child([&](Json* j) {
+        std::unique_ptr<DbModel> m;
+        if (!DbModel::open(model, MemoryBudget(), &m).ok()) return false;
+        std::mt19937_64 rng(run);
+        std::vector<std::array<double, 3>> pts(1'000'000);
+        for (auto& p : pts) {
+          for (int a = 0; a < 3; ++a) {
+            p[a] = std::uniform_real_distribution<double>(0, m->info().extent_m[a])(rng);
+          }
+        }
+        if (sorted) {
+          std::sort(pts.begin(), pts.end(), [&](const auto& a, const auto& b) {
+            auto key = [&](const std::array<double, 3>& p) {
+              return morton_encode(uint32_t(p[0] / m->info().tick_m),
+                                   uint32_t(p[1] / m->info().tick_m),
+                                   uint32_t(p[2] / m->info().tick_m));
+            };
+            return key(a) < key(b);
+          });
+        }
+        ModelHit h;
+        double sum = 0;
+        const double t = now_seconds();
+        for (const auto& p : pts) {
+          if (!m->lookup(p[0], p[1], p[2], &h).ok()) return false;
+          sum += h.values[1];
+        }
+        j->add("rate", pts.size() / (now_seconds() - t)).add("checksum", sum);
+        return true;
+      });
+      if (q.empty()) return 1;
+      const auto f = parse_flat_json(q);
+      record(sorted ? "material queries, Z-ordered batch" : "material queries, random batch",
+             std::atof(f.at("rate").c_str()), std::stoull(f.at("peak_rss_bytes")));
+    }
+  }
+  std::printf(
+      "\nmodel_bench: grid %d x %d x %d at %g m (%.2f GB), construct at %g Hz, medians of %d\n\n",
+      nx, ny, nz, spacing, 12.0 * nx * ny * nz / 1e9, freq, repeat);
+  std::vector<std::map<std::string, std::string>> rows;
+  for (const auto& [what, r] : rate) {
+    rows.push_back(
+        {{"what", what}, {"per s", fmt(median(r))}, {"peak RSS MB", fmt(median(rss[what]))}});
+  }
+  print_table(rows, {"what", "per s", "peak RSS MB"});
+  return 0;
+}
