@@ -156,7 +156,7 @@ TEST(ModelDb, GridPointsAreOctantCentres) {
 
 // construct --model db:: every leaf carries the model's value at its centre,
 // and obeys the rule with Vs taken from the model database.
-TEST(ModelDb, ConstructSamplesTheModelDatabase) {
+TEST(ModelDb, ConstructSamplesTheModelDatabaseOnOneAndTwoThreads) {
   GridSpec g;
   g.nx = g.ny = 33, g.nz = 17;
   g.dx = g.dy = g.dz = 250;
