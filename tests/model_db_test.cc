@@ -42,7 +42,7 @@ TEST_P(FromEtree, AnswersAsTheLibrarysSearchDid) {
   ASSERT_TRUE(st.ok()) << st.to_string();
   EXPECT_LT(r.octants, r.read);  // the fixtures' uniform sibling sets merged
   std::unique_ptr<DbModel> m;
-  ASSERT_TRUE(DbModel::open(db, MemoryBudget(), &m).ok());
+  ASSERT_TRUE(DbModel::open(db, MemoryBudget(), 1, &m).ok());
   EXPECT_DOUBLE_EQ(m->info().tick_m * kRootEdge, 100000.0);
   std::ifstream in(fixture(name + ".search"));
   std::string line;
@@ -127,7 +127,7 @@ TEST(ModelDb, GridPointsAreOctantCentres) {
     ModelImportResult r;
     ASSERT_TRUE(import_model(db, o, &r).ok());
     std::unique_ptr<DbModel> m;
-    ASSERT_TRUE(DbModel::open(db, MemoryBudget(), &m).ok());
+    ASSERT_TRUE(DbModel::open(db, MemoryBudget(), 1, &m).ok());
     std::unique_ptr<VelocityModel> ref;
     ASSERT_TRUE(load_grid_model(grid, &ref).ok());
     const int nz = equal ? g.nz : (g.nz - 1) * 250 / 100 + 1;
@@ -176,7 +176,7 @@ TEST(ModelDb, ConstructSamplesTheModelDatabaseOnOneAndTwoThreads) {
   ModelImportResult ir;
   ASSERT_TRUE(import_model(model, io, &ir).ok());
   std::unique_ptr<DbModel> m;
-  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), &m).ok());
+  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &m).ok());
   for (int threads : {1, 2}) {
     ConstructOptions o;
     o.model = "db:" + model;

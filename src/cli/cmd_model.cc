@@ -59,7 +59,7 @@ int material(const ParsedArgs& args) {
   Status st = memory_option(args, &memory);
   if (!st.ok()) return usage_error("model", st.message(), kUsage);
   std::unique_ptr<DbModel> m;
-  st = DbModel::open(pos[1], memory, &m);
+  st = DbModel::open(pos[1], memory, 1, &m);
   if (!st.ok()) return report("model", st);
   if (!batch) {
     double p[3];

@@ -154,7 +154,8 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
                                    std::to_string(p->block_level) + ", finer than --max-level");
   }
   std::unique_ptr<VelocityModel> model;
-  WEAVER_RETURN_IF_ERROR(open_velocity_model(o.model, o.grid_file, o.memory, &model));
+  WEAVER_RETURN_IF_ERROR(open_velocity_model(o.model, o.grid_file, ConstructMemory(o.memory).model,
+                                             std::max(1, o.threads), &model));
   p->model = model->describe();
   const ConstructEstimate e = estimate_construct(o, *p, *model);
   p->estimated_elements = e.elements;
@@ -168,14 +169,19 @@ ConstructMemory::ConstructMemory(MemoryBudget budget) : plan(budget) {
   // Leaves of the subtrees visited ahead of the writer (kSubtreesPerThread
   // a thread); each is capped, so a small share only means smaller caps.
   subtrees = plan.take("subtrees in flight", 1, 4, 256ull << 20);
+  // A model read from storage (modeldb/db_model.h): each worker's table
+  // cache and the decoded model octants around its subtree.
+  model = plan.take_budget("model readers", 1, 2);
 }
 
 Status construct_octree(const std::string& db_dir, const ConstructOptions& o, ConstructPlan* p,
                         ConstructResult* r) {
   *r = ConstructResult{};
   WEAVER_RETURN_IF_ERROR(plan_construct(o, p));
+  const ConstructMemory memory(o.memory);
   std::unique_ptr<VelocityModel> model;
-  WEAVER_RETURN_IF_ERROR(open_velocity_model(o.model, o.grid_file, o.memory, &model));
+  WEAVER_RETURN_IF_ERROR(
+      open_velocity_model(o.model, o.grid_file, memory.model, std::max(1, o.threads), &model));
   ConstructEstimate e;
   e.elements = p->estimated_elements;
   e.disk_bytes = p->estimated_disk_bytes;
@@ -187,7 +193,6 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   std::string error;
   topt.schema = *RecordSchema::parse(kMaterialSchema, &error);
   topt.packed = o.packed;
-  const ConstructMemory memory(o.memory);
   std::unique_ptr<BTree> table;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, memory.table_pool, &table, &file));

@@ -54,6 +54,7 @@ struct ConstructMemory {
   MemoryPlan plan;
   uint64_t table_pool = 0;  // the octant table, written by sorted append
   uint64_t subtrees = 0;    // leaves of the subtrees in flight (descent.h)
+  MemoryBudget model;       // a model database's readers (modeldb/db_model.h)
 };
 
 // The domain as a union of blocks: resolved before anything is written.

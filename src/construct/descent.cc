@@ -65,6 +65,15 @@ bool Descent::splits(const Octant& o) const {
 
 void Descent::visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const {
   out->clear();
+  // The subtree's closed box, as lattice() computes its far corner.
+  const double quarter = p_.tick_m / 4;
+  const uint64_t e4 = 4 * uint64_t{octant_edge(o)};
+  const double lo[3] = {double(4 * uint64_t{o.x}) * quarter, double(4 * uint64_t{o.y}) * quarter,
+                        double(4 * uint64_t{o.z}) * quarter};
+  const double hi[3] = {double(4 * uint64_t{o.x} + e4) * quarter,
+                        double(4 * uint64_t{o.y} + e4) * quarter,
+                        double(4 * uint64_t{o.z} + e4) * quarter};
+  model_.focus(lo, hi);
   float samples[27];
   lattice(o, 3, samples);
   out->overflow = !visit(o, samples, cap, out);

@@ -29,6 +29,13 @@ class VelocityModel {
       for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) out[(k * n + j) * n + i] = at(xs[i], ys[j], zs[k]).vs;
   }
+  // The points asked next (until the next focus, on this thread) lie in the
+  // box [lo, hi] (metres, bounds included): construct says so before each
+  // subtree.  A model read from storage loads the box once; others ignore it.
+  virtual void focus(const double lo[3], const double hi[3]) const {
+    (void)lo;
+    (void)hi;
+  }
   // A one-line description with the parameters, for logs and metadata.
   virtual std::string describe() const = 0;
 };

@@ -1,6 +1,7 @@
 #include "modeldb/db_model.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 
@@ -10,9 +11,14 @@
 
 namespace weaver {
 
+namespace {
+std::atomic<uint64_t> g_next_serial{1};
+}  // namespace
+
 struct DbModel::Reader {
   std::unique_ptr<BTree> table;
   Status opened;
+  ModelRegion region;
   // The last octant found: [lo, lo + edge) ticks, and its values.
   Coord lo{0, 0, 0};
   uint32_t edge = 0;
@@ -21,14 +27,21 @@ struct DbModel::Reader {
 
 DbModel::~DbModel() = default;
 
-Status DbModel::open(const std::string& dir, MemoryBudget memory, std::unique_ptr<DbModel>* out) {
+Status DbModel::open(const std::string& dir, MemoryBudget memory, int threads,
+                     std::unique_ptr<DbModel>* out) {
   std::unique_ptr<DbModel> m(new DbModel());
   m->dir_ = dir;
+  m->serial_ = g_next_serial.fetch_add(1);
   WEAVER_RETURN_IF_ERROR(Database::open(dir, Database::Mode::kRead, false, &m->db_));
   if (!m->db_->has_table(kModelTable)) {
     return Status::NotFound(dir + ": no model table (make one with 'weaver model import')");
   }
-  m->pool_bytes_ = std::max<uint64_t>(memory.bytes() / 4, 1ull << 20);
+  const uint64_t per_reader = memory.bytes() / std::max(1, threads);
+  m->pool_bytes_ = std::max<uint64_t>(per_reader / 2, 1ull << 20);
+  // A region octant takes its key and values twice over at most (vectors
+  // grow by doubling); the raster is a fixed 1 MiB.
+  const uint64_t region_bytes = per_reader / 2 > (2ull << 20) ? per_reader / 2 - (1ull << 20) : 0;
+  m->region_octants_ = std::max<size_t>(region_bytes / (2 * (8 + sizeof(ModelValues))), 4096);
   std::unique_ptr<BTree> t;
   WEAVER_RETURN_IF_ERROR(m->db_->open_table(kModelTable, m->pool_bytes_, &t));
   model_info_from_metadata(t->options().metadata, &m->info_);
@@ -41,26 +54,64 @@ Status DbModel::open(const std::string& dir, MemoryBudget memory, std::unique_pt
   return Status::Ok();
 }
 
+// The calling thread's reader: remembered in the thread (a lock and a map
+// lookup for each octant construct visits cost as much as the answer).
 DbModel::Reader& DbModel::reader() const {
+  thread_local uint64_t cached_serial = 0;
+  thread_local Reader* cached = nullptr;
+  if (cached_serial == serial_) return *cached;
   std::lock_guard<std::mutex> lock(mu_);
   auto& r = readers_[std::this_thread::get_id()];
   if (!r) {
     r = std::make_unique<Reader>();
     r->opened = db_->open_table(kModelTable, pool_bytes_, &r->table);
   }
+  cached_serial = serial_;
+  cached = r.get();
   return *r;
+}
+
+uint32_t DbModel::pixel_on(int a, double m, bool* clamped) const {
+  const double ticks = std::floor((m - info_.origin_m[a]) / info_.tick_m);
+  const double c = std::clamp(ticks, 0.0, double(limit_[a]));
+  *clamped = *clamped || c != ticks;
+  return static_cast<uint32_t>(c);
+}
+
+Status DbModel::hole_at(double x, double y, double z) const {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "the model has no octant at (%g, %g, %g) m", x, y, z);
+  return Status::NotFound(buf);
+}
+
+void DbModel::focus(const double lo[3], const double hi[3]) const {
+  Reader& r = reader();
+  if (!r.opened.ok()) return;
+  bool clamped = false;
+  const Coord a{pixel_on(0, lo[0], &clamped), pixel_on(1, lo[1], &clamped),
+                pixel_on(2, lo[2], &clamped)};
+  const Coord b{pixel_on(0, hi[0], &clamped), pixel_on(1, hi[1], &clamped),
+                pixel_on(2, hi[2], &clamped)};
+  // On a read error the region stays empty and the table answers (and
+  // reports the error) point by point.
+  if (!r.region.load(*r.table, a, b, r.table->options().schema.record_size(), region_octants_)
+           .ok()) {
+    r.region.clear();
+  }
 }
 
 Status DbModel::find(Reader& r, double x, double y, double z, ModelHit* hit) const {
   WEAVER_RETURN_IF_ERROR(r.opened);
-  const double m[3] = {x, y, z};
-  uint32_t t[3];
   bool clamped = false;
-  for (int a = 0; a < 3; ++a) {
-    const double ticks = std::floor((m[a] - info_.origin_m[a]) / info_.tick_m);
-    const double c = std::clamp(ticks, 0.0, double(limit_[a]));
-    clamped = clamped || c != ticks;
-    t[a] = static_cast<uint32_t>(c);
+  const uint32_t t[3] = {pixel_on(0, x, &clamped), pixel_on(1, y, &clamped),
+                         pixel_on(2, z, &clamped)};
+  if (r.region.covers({t[0], t[1], t[2]})) {
+    const int32_t i = r.region.find({t[0], t[1], t[2]});
+    if (i == ModelRegion::kHole) return hole_at(x, y, z);
+    hit->values = r.region.values(i);
+    hit->octant = r.region.octant(i);
+    hit->clamped = clamped;
+    return Status::Ok();
   }
   if (t[0] - r.lo.x < r.edge && t[1] - r.lo.y < r.edge && t[2] - r.lo.z < r.edge) {
     *hit = r.last;
@@ -72,11 +123,7 @@ Status DbModel::find(Reader& r, double x, double y, double z, ModelHit* hit) con
   std::byte payload[sizeof(ModelValues)] = {};
   WEAVER_RETURN_IF_ERROR(r.table->floor(pixel_key({t[0], t[1], t[2]}), &key, payload, &found));
   const Octant o = found ? octant_from_key(key) : Octant{};
-  if (!found || !octant_contains_point(o, {t[0], t[1], t[2]})) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "the model has no octant at (%g, %g, %g) m", x, y, z);
-    return Status::NotFound(buf);
-  }
+  if (!found || !octant_contains_point(o, {t[0], t[1], t[2]})) return hole_at(x, y, z);
   std::memcpy(r.last.values.data(), payload, r.table->options().schema.record_size());
   r.last.octant = o;
   r.lo = octant_corner(o);
@@ -98,9 +145,30 @@ Material DbModel::at(double x, double y, double z) const {
   return {h.values[0], h.values[1], h.values[2]};
 }
 
+// From the focused region where it holds the lattice (construct's case):
+// the pixels and raster cells of each axis once, then a load or two a point.
 void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                             float* out) const {
   Reader& r = reader();
+  const ModelRegion& g = r.region;
+  bool clamped = false, covered = g.loaded();
+  uint32_t px[5], py[5], pz[5], cx[5], cy[5], cz[5];
+  for (int i = 0; i < n && covered && n <= 5; ++i) {
+    px[i] = pixel_on(0, xs[i], &clamped);
+    py[i] = pixel_on(1, ys[i], &clamped);
+    pz[i] = pixel_on(2, zs[i], &clamped);
+    covered = g.covers({px[i], py[i], pz[i]});
+    if (covered) cx[i] = g.cell_x(px[i]), cy[i] = g.cell_y(py[i]), cz[i] = g.cell_z(pz[i]);
+  }
+  if (covered && n <= 5) {
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const int32_t o = g.find({px[i], py[j], pz[k]}, cx[i], cy[j], cz[k]);
+          out[(k * n + j) * n + i] = o == ModelRegion::kHole ? 0.0f : g.values(o)[1];
+        }
+    return;
+  }
   ModelHit h;
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)

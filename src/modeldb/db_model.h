@@ -2,8 +2,9 @@
 // material at a point is the model octant holding it, found by the
 // aggregate-hit (floor) query.  Points outside the model's box are clamped
 // into it.  Safe to use from many threads at once (construct's workers):
-// each thread gets its own table handle, with its own share of the cache,
-// and remembers the last octant it hit.
+// each thread gets its own table handle, with its own share of the memory,
+// remembers the last octant it hit, and holds the octants of the box it was
+// last focused on (modeldb/model_region.h), which answer without the table.
 #pragma once
 
 #include <memory>
@@ -15,6 +16,7 @@
 
 #include "model/material_merge.h"
 #include "model/velocity_model.h"
+#include "modeldb/model_region.h"
 #include "modeldb/model_table.h"
 #include "util/memory_budget.h"
 
@@ -31,9 +33,11 @@ struct ModelHit {
 
 class DbModel final : public VelocityModel {
  public:
-  // Opens the model table of the database in dir, read-only.  Each thread's
-  // handle takes a quarter of `memory` (construct runs at most a few).
-  static Status open(const std::string& dir, MemoryBudget memory, std::unique_ptr<DbModel>* out);
+  // Opens the model table of the database in dir, read-only.  `memory` is
+  // shared by the handles of up to `threads` threads (each takes its part:
+  // half its table cache, half its region).
+  static Status open(const std::string& dir, MemoryBudget memory, int threads,
+                     std::unique_ptr<DbModel>* out);
   ~DbModel() override;
 
   const ModelInfo& info() const { return info_; }
@@ -43,6 +47,7 @@ class DbModel final : public VelocityModel {
   Status lookup(double x, double y, double z, ModelHit* hit) const;
 
   Material at(double x, double y, double z) const override;
+  void focus(const double lo[3], const double hi[3]) const override;
   void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                      float* out) const override;
   std::string describe() const override;
@@ -51,13 +56,18 @@ class DbModel final : public VelocityModel {
   struct Reader;
   DbModel() = default;
   Reader& reader() const;
+  // The pixel of coordinate m (metres) on axis a, clamped into the model's box.
+  uint32_t pixel_on(int a, double m, bool* clamped) const;
   Status find(Reader& r, double x, double y, double z, ModelHit* hit) const;
+  Status hole_at(double x, double y, double z) const;
 
   std::string dir_;
   std::unique_ptr<Database> db_;
   ModelInfo info_;
   uint64_t octants_ = 0;
+  uint64_t serial_ = 0;  // tells this model's readers from an earlier one's at the same address
   uint64_t pool_bytes_ = 0;
+  size_t region_octants_ = 0;        // the most octants a reader's region holds
   std::array<uint32_t, 3> limit_{};  // ticks: the last pixel inside the box, per axis
   mutable std::mutex mu_;
   mutable std::unordered_map<std::thread::id, std::unique_ptr<Reader>> readers_;

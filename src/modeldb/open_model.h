@@ -10,7 +10,9 @@
 
 namespace weaver {
 
+// `memory` bounds what a model read from storage holds, for up to `threads`
+// threads asking it at once.
 Status open_velocity_model(const std::string& name, const std::string& grid_file,
-                           MemoryBudget memory, std::unique_ptr<VelocityModel>* out);
+                           MemoryBudget memory, int threads, std::unique_ptr<VelocityModel>* out);
 
 }  // namespace weaver

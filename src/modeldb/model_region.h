@@ -1,0 +1,86 @@
+// The model octants around one box, decoded into memory, with a raster that
+// finds the octant holding a pixel in a few loads.  Construct asks up to 125
+// points of the model for every octant it splits; a B+tree floor for each
+// (hundreds of ns) made construct from a model database 12x slower than from
+// an analytic model.  A construct subtree's points all lie in its closed box,
+// so DbModel loads that box once (a few range scans of the model table) and
+// answers the subtree's points from here.
+//
+// Loading: the box is covered by aligned model-space cells of at least a
+// quarter of its size (at most 5 a side); each cell is one floor (a model
+// octant holding the whole cell) or one cursor scan of the cell's subtree.
+// Records come in key order, so the octants are sorted and disjoint.
+//
+// The raster: cells of 2^shift pixels, aligned, over the box; shift is the
+// finest model octant's edge in the box, coarsened until the raster has at
+// most kMaxCells.  A cell holds the index of the one octant covering it, or
+// kHole (no octant meets it), or kMixed (smaller octants share it: a binary
+// search of the sorted keys answers).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "model/material_merge.h"
+#include "schema/octant.h"
+#include "schema/status.h"
+
+namespace weaver {
+
+class BTree;
+
+class ModelRegion {
+ public:
+  static constexpr int32_t kHole = -1;
+  static constexpr int32_t kMixed = -2;
+  // 256K cells (1 MiB): a raster per construct worker stays in L2/L3.
+  static constexpr uint64_t kMaxCells = uint64_t{1} << 18;
+
+  // Loads the octants of `table` (model records of record_bytes) that meet
+  // the pixel box [lo, hi] (bounds included).  Gives up (loaded() false,
+  // Ok) past max_octants, so memory stays bounded wherever the model is
+  // dense; the caller then asks the table.
+  Status load(BTree& table, Coord lo, Coord hi, size_t record_bytes, size_t max_octants);
+  void clear();
+
+  bool loaded() const { return loaded_; }
+  // Whether pixel p lies in the loaded box.
+  bool covers(Coord p) const {
+    return loaded_ && p.x - lo_.x <= hi_.x - lo_.x && p.y - lo_.y <= hi_.y - lo_.y &&
+           p.z - lo_.z <= hi_.z - lo_.z;
+  }
+  // The raster cell of pixel p on each axis: cell(x, y, z) needs all three.
+  // REQUIRES: covers(p).
+  uint32_t cell_x(uint32_t x) const { return (x >> shift_) - base_[0]; }
+  uint32_t cell_y(uint32_t y) const { return (y >> shift_) - base_[1]; }
+  uint32_t cell_z(uint32_t z) const { return (z >> shift_) - base_[2]; }
+  // The octant holding pixel p, given its cells: an index, or kHole.
+  int32_t find(Coord p, uint32_t cx, uint32_t cy, uint32_t cz) const {
+    const int32_t v = raster_[(size_t{cz} * dims_[1] + cy) * dims_[0] + cx];
+    return v != kMixed ? v : search(p);
+  }
+  int32_t find(Coord p) const { return find(p, cell_x(p.x), cell_y(p.y), cell_z(p.z)); }
+
+  const ModelValues& values(int32_t i) const { return values_[i]; }
+  Octant octant(int32_t i) const { return octant_from_key(keys_[i]); }
+  size_t octants() const { return keys_.size(); }
+  int shift() const { return shift_; }
+
+ private:
+  int32_t search(Coord p) const;
+  Status scan_cell(BTree& table, const Octant& cell, size_t record_bytes, size_t max_octants,
+                   bool* full);
+  void add(uint64_t key, const std::byte* record, size_t record_bytes);
+  void build_raster();
+
+  bool loaded_ = false;
+  Coord lo_{0, 0, 0}, hi_{0, 0, 0};
+  std::vector<uint64_t> keys_;  // sorted, disjoint octants
+  std::vector<ModelValues> values_;
+  int shift_ = 0;
+  uint32_t base_[3] = {0, 0, 0};  // lo >> shift_
+  uint32_t dims_[3] = {0, 0, 0};
+  std::vector<int32_t> raster_;
+};
+
+}  // namespace weaver

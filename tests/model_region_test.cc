@@ -1,0 +1,154 @@
+// ModelRegion: the model octants around a box, decoded, answer every pixel
+// of the box as a linear search of all the model's octants does, on random
+// models with holes and deep grading; a region past its octant cap stays
+// unloaded.
+#include "modeldb/model_region.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <random>
+
+#include "db/database.h"
+#include "modeldb/model_table.h"
+#include "storage/btree.h"
+
+namespace weaver {
+namespace {
+
+struct ModelOctant {
+  Octant o;
+  ModelValues v;
+};
+
+// A random octree: random refinement down to level 5, and down to `depth`
+// around a point (deep grading, so a large box's raster is coarser than its
+// finest octants), with about one leaf in `hole_one_in` left out.
+void grow(const Octant& o, int depth, Coord focus, std::mt19937_64& rng, int hole_one_in,
+          std::vector<ModelOctant>* out) {
+  const uint32_t e = octant_edge(o);
+  const bool near = focus.x - o.x < e && focus.y - o.y < e && focus.z - o.z < e;
+  const bool split = o.level < depth && (near || (o.level < 5 && rng() % 3 == 0));
+  if (split) {
+    for (int k = 0; k < 8; ++k) grow(octant_child(o, k), depth, focus, rng, hole_one_in, out);
+    return;
+  }
+  if (rng() % hole_one_in == 0) return;
+  const float vs = 100.0f + float(rng() % 4000);
+  out->push_back({o, ModelValues{2 * vs, vs, 2000, 0, 0}});
+}
+
+std::string write_model(const std::string& name, const std::vector<ModelOctant>& octants) {
+  const std::string dir = ::testing::TempDir() + "model_region_" + name;
+  std::filesystem::remove_all(dir);
+  std::unique_ptr<Database> db;
+  EXPECT_TRUE(Database::open(dir, Database::Mode::kWrite, true, &db).ok());
+  TableOptions topt;
+  topt.key_kind = KeyKind::kOctant;
+  topt.schema = model_schema(false);
+  std::unique_ptr<BTree> t;
+  std::string file;
+  EXPECT_TRUE(db->create_table(kModelTable, topt, 8 << 20, &t, &file).ok());
+  std::vector<ModelOctant> sorted = octants;
+  std::sort(sorted.begin(), sorted.end(), [](const ModelOctant& a, const ModelOctant& b) {
+    return octant_key(a.o) < octant_key(b.o);
+  });
+  Status st;
+  for (const ModelOctant& m : sorted) {
+    if (st.ok()) st = t->append(octant_key(m.o), reinterpret_cast<const std::byte*>(m.v.data()));
+  }
+  EXPECT_TRUE(db->publish(kModelTable, file, t, st).ok());
+  return dir;
+}
+
+// The slow reference: the octant holding p, by looking at every one.
+int reference(const std::vector<ModelOctant>& octants, Coord p) {
+  for (size_t i = 0; i < octants.size(); ++i) {
+    if (octant_contains_point(octants[i].o, p)) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+TEST(ModelRegion, AnswersEveryPixelAsALinearSearchDoes) {
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    std::mt19937_64 rng(seed);
+    const Coord focus{uint32_t(rng() % kRootEdge), uint32_t(rng() % kRootEdge),
+                      uint32_t(rng() % kRootEdge)};
+    std::vector<ModelOctant> octants;
+    grow(octant_root(), 6 + 2 * int(seed % 4), focus, rng, seed % 2 ? 7 : 1000000, &octants);
+    const std::string dir = write_model(std::to_string(seed), octants);
+    std::unique_ptr<Database> db;
+    ASSERT_TRUE(Database::open(dir, Database::Mode::kRead, false, &db).ok());
+    std::unique_ptr<BTree> t;
+    ASSERT_TRUE(db->open_table(kModelTable, 8 << 20, &t).ok());
+    for (int box = 0; box < 40; ++box) {
+      // Boxes of every size, from a few pixels to the whole root, some
+      // unaligned, some around the finely graded point.
+      const uint32_t side = 1 + uint32_t(rng() % (kRootEdge >> (rng() % 14)));
+      Coord lo;
+      uint32_t* c[3] = {&lo.x, &lo.y, &lo.z};
+      const uint32_t f[3] = {focus.x, focus.y, focus.z};
+      for (int a = 0; a < 3; ++a) {
+        const uint32_t centre = box % 2 ? f[a] : uint32_t(rng() % kRootEdge);
+        *c[a] = std::min(centre - std::min(centre, side / 2), kRootEdge - side);
+      }
+      const Coord hi{lo.x + side - 1, lo.y + side - 1, lo.z + side - 1};
+      ModelRegion r;
+      ASSERT_TRUE(r.load(*t, lo, hi, 12, 1u << 20).ok());
+      ASSERT_TRUE(r.loaded());
+      for (int s = 0; s < 400; ++s) {
+        // Corners and edges of the box as often as its inside.
+        const auto pick = [&](uint32_t l, uint32_t h) {
+          const uint64_t k = rng() % 6;
+          return k == 0 ? l : k == 1 ? h : l + uint32_t(rng() % (uint64_t{h} - l + 1));
+        };
+        // And, in boxes around the graded point, its fine octants often.
+        const auto near = [&](uint32_t f, uint32_t l, uint32_t h) {
+          const uint32_t v = f - std::min<uint32_t>(f, 4096) + uint32_t(rng() % 8192);
+          return std::clamp(v, l, h);
+        };
+        const bool fine = box % 2 && s % 2;
+        const Coord p = fine ? Coord{near(focus.x, lo.x, hi.x), near(focus.y, lo.y, hi.y),
+                                     near(focus.z, lo.z, hi.z)}
+                             : Coord{pick(lo.x, hi.x), pick(lo.y, hi.y), pick(lo.z, hi.z)};
+        ASSERT_TRUE(r.covers(p));
+        const int want = reference(octants, p);
+        const int32_t got = r.find(p);
+        if (want < 0) {
+          ASSERT_EQ(got, ModelRegion::kHole) << "seed " << seed << " box " << box;
+        } else {
+          ASSERT_NE(got, ModelRegion::kHole) << "seed " << seed << " box " << box;
+          EXPECT_EQ(r.octant(got), octants[want].o);
+          EXPECT_EQ(r.values(got), octants[want].v);
+        }
+      }
+      const Coord outside{hi.x + 1, lo.y, lo.z};
+      if (hi.x + 1 < kRootEdge) {
+        EXPECT_FALSE(r.covers(outside));
+      }
+    }
+  }
+}
+
+TEST(ModelRegion, PastItsCapTheRegionStaysUnloaded) {
+  std::mt19937_64 rng(9);
+  std::vector<ModelOctant> octants;
+  grow(octant_root(), 4, {0, 0, 0}, rng, 1000000, &octants);
+  ASSERT_GT(octants.size(), 64u);
+  const std::string dir = write_model("cap", octants);
+  std::unique_ptr<Database> db;
+  ASSERT_TRUE(Database::open(dir, Database::Mode::kRead, false, &db).ok());
+  std::unique_ptr<BTree> t;
+  ASSERT_TRUE(db->open_table(kModelTable, 8 << 20, &t).ok());
+  ModelRegion r;
+  const Coord all{kRootEdge - 1, kRootEdge - 1, kRootEdge - 1};
+  ASSERT_TRUE(r.load(*t, {0, 0, 0}, all, 12, 64).ok());
+  EXPECT_FALSE(r.loaded());
+  EXPECT_FALSE(r.covers({0, 0, 0}));
+  ASSERT_TRUE(r.load(*t, {0, 0, 0}, all, 12, octants.size()).ok());
+  EXPECT_TRUE(r.loaded());
+  EXPECT_EQ(r.octants(), octants.size());
+}
+
+}  // namespace
+}  // namespace weaver
