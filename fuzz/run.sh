@@ -12,7 +12,8 @@ total=${1:?usage: fuzz/run.sh SECONDS [TARGET...]}
 shift
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(octant_text grid_model manifest btree_file packed_leaf lsm_run_list record_schema options)
+  targets=(octant_text grid_model manifest btree_file packed_leaf lsm_run_list record_schema options
+           etree_file layer_table xyz_grid)
 fi
 cmake --preset fuzz >/dev/null && cmake --build --preset fuzz >/dev/null
 per=$(( total / ${#targets[@]} )); [ "$per" -ge 1 ] || per=1

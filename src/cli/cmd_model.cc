@@ -11,8 +11,9 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver model import MODEL.db --from etree:FILE|grid:FILE [--tolerance REL]\n"
-    "                           [--root-edge METRES] [--memory BYTES] [--plain]\n"
+    "usage: weaver model import MODEL.db --from etree:FILE|grid:FILE|layers:FILE|xyz:FILE\n"
+    "                           [--tolerance REL] [--root-edge METRES] [--memory BYTES]\n"
+    "                           [--plain]\n"
     "       weaver model material MODEL.db X Y Z | --points FILE [--memory BYTES]\n"
     "\n"
     "A velocity model as a database of its own: an octree of materials (Vp, Vs,\n"
@@ -28,6 +29,12 @@ constexpr char kUsage[] =
     "                     its metadata\n"
     "  --from grid:FILE   a weaver-grid 1 file (src/model/grid_model.h), read a\n"
     "                     block of rows at a time: one octant per grid point\n"
+    "  --from layers:FILE a 1-D layered model, one line a layer: 'top_depth vp vs\n"
+    "                     rho [qp qs]' (metres, m/s, kg/m^3; the first top 0, tops\n"
+    "                     increasing, the last layer a half-space; '#' comments)\n"
+    "  --from xyz:FILE    a regular grid as ASCII 'x y z vp vs rho' lines in any\n"
+    "                     order (SPECFEM3D tomography style), every point once;\n"
+    "                     placed on disk in grid order first, never held whole\n"
     "  --tolerance REL    merge siblings whose values differ by at most REL of the\n"
     "                     smallest (default 0: exactly equal)\n"
     "  --root-edge M      etree: the edge of the etree's root in metres, when its\n"
@@ -107,16 +114,24 @@ int import(const ParsedArgs& args) {
   const ModelInfo& i = r.info;
   std::printf("source     %s\n", i.source.c_str());
   std::printf("read       %llu %s in %.2f s (%.3gM/s)\n", (unsigned long long)r.read,
-              o.from.rfind("grid:", 0) == 0 ? "grid points" : "leaves", s, r.read / s / 1e6);
+              o.from.rfind("etree:", 0) == 0    ? "leaves"
+              : o.from.rfind("layers:", 0) == 0 ? "layers"
+                                                : "grid points",
+              s, r.read / s / 1e6);
   std::printf("stored     %llu octants (%.1f%% of those read), %.3g MB, levels",
               (unsigned long long)r.octants, 100.0 * r.octants / std::max<uint64_t>(r.read, 1),
               r.table_bytes / 1e6);
   for (int l = 0; l <= kMaxLevel; ++l) {
     if (r.levels[l]) std::printf(" %d:%llu", l, (unsigned long long)r.levels[l]);
   }
-  std::printf("\nbox        %g x %g x %g m from (%g, %g, %g)%s\n", i.extent_m[0], i.extent_m[1],
-              i.extent_m[2], i.origin_m[0], i.origin_m[1], i.origin_m[2],
-              i.has_q ? "; with Qp, Qs" : "");
+  if (i.extent_m[0] == 0 && i.extent_m[1] == 0) {
+    std::printf("\nbox        any x, y; depth %g m from %g (deeper: the last layer)%s\n",
+                i.extent_m[2], i.origin_m[2], i.has_q ? "; with Qp, Qs" : "");
+  } else {
+    std::printf("\nbox        %g x %g x %g m from (%g, %g, %g)%s\n", i.extent_m[0], i.extent_m[1],
+                i.extent_m[2], i.origin_m[0], i.origin_m[1], i.origin_m[2],
+                i.has_q ? "; with Qp, Qs" : "");
+  }
   if (!i.geo.empty()) std::printf("geo        origin lon,lat[,azimuth] %s\n", i.geo.c_str());
   if (!i.producer.empty()) std::printf("producer   %s\n", i.producer.c_str());
   return 0;

@@ -72,6 +72,7 @@ DbModel::Reader& DbModel::reader() const {
 }
 
 uint32_t DbModel::pixel_on(int a, double m, bool* clamped) const {
+  if (info_.extent_m[a] == 0) return 0;  // the model does not vary along this axis
   const double ticks = std::floor((m - info_.origin_m[a]) / info_.tick_m);
   const double c = std::clamp(ticks, 0.0, double(limit_[a]));
   *clamped = *clamped || c != ticks;

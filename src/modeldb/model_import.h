@@ -8,6 +8,11 @@
 //   grid:FILE    a weaver-grid 1 file, read a block of rows at a time: one
 //                octant per grid point (edge: the smallest spacing, centred
 //                on the point), trilinear where the spacings differ
+//   layers:FILE  a 1-D layer table (model/layer_table.h): a column of
+//                cells, the model the same across (x and y extents 0)
+//   xyz:FILE     ASCII x y z vp vs rho lines in any order (model/xyz_grid.h):
+//                written out as a grid in the database's directory (out of
+//                core), then imported as grid:
 //
 // Refuses (one line, naming the file and the record) a schema without the
 // fields, octants finer than weaver's 20 levels, a non-positive or
@@ -25,7 +30,7 @@
 namespace weaver {
 
 struct ModelImportOptions {
-  std::string from;        // "etree:FILE" or "grid:FILE"
+  std::string from;        // "etree:FILE", "grid:FILE", "layers:FILE" or "xyz:FILE"
   double tolerance = 0;    // relative; 0 merges exactly equal siblings only
   double root_edge_m = 0;  // etree: the root's edge when its metadata does not say
   MemoryBudget memory;

@@ -23,7 +23,9 @@ inline constexpr char kModelTable[] = "model";
 struct ModelInfo {
   double tick_m = 1;                           // metres per tick (the root's edge / 2^20)
   std::array<double, 3> origin_m = {0, 0, 0};  // where tick 0 is, in model metres
-  std::array<double, 3> extent_m = {0, 0, 0};  // the model's box, from its origin
+  // The model's box, from its origin; 0 on an axis the model does not vary
+  // along (a layered model's x and y), where every point is inside.
+  std::array<double, 3> extent_m = {0, 0, 0};
   bool has_q = false;
   std::string source;  // "etree FILE", "grid FILE"
   // Longitude, latitude of the origin and azimuth of x (degrees) where the

@@ -215,5 +215,41 @@ int main(int argc, char** argv) {
   if (etree_close(ep) != 0) fail(NULL, "close usgs");
   fprintf(stderr, "usgs.e: %d octants\n", node_count);
   record(argv[1], "usgs", 1);
+
+  /* tiny.e: the seed of the etree_file fuzz target (fuzz/corpus): the root,
+   * its 8 children and their 64, every one stored, appended depth-first
+   * (a parent before its children, the library's key order). */
+  snprintf(path, sizeof path, "%s/tiny.e", argv[1]);
+  ep = etree_open(path, O_CREAT | O_TRUNC | O_RDWR, 1, 0, 3);
+  if (!ep) fail(NULL, "open tiny");
+  if (etree_registerschema(ep, "float Vp; float Vs; float density;") != 0) fail(ep, "schema");
+  if (etree_beginappend(ep, 1.0) != 0) fail(ep, "beginappend");
+  {
+    etree_addr_t a;
+    memset(&a, 0, sizeof a);
+    a.type = ETREE_INTERIOR;
+    cmu_t v = {2000, 1000, 2100};
+    if (etree_append(ep, a, &v) != 0) fail(ep, "append");
+    for (int c = 0; c < 8; ++c) {
+      const etree_tick_t h = (etree_tick_t)1 << 30, q = (etree_tick_t)1 << 29;
+      a.level = 1, a.type = ETREE_INTERIOR;
+      a.x = (c & 1) * h, a.y = ((c >> 1) & 1) * h, a.z = ((c >> 2) & 1) * h;
+      v.vs = (float)(500 + 100 * c);
+      if (etree_append(ep, a, &v) != 0) fail(ep, "append");
+      etree_addr_t b = a;
+      for (int g = 0; g < 8; ++g) {
+        b.level = 2, b.type = ETREE_LEAF;
+        b.x = a.x + (g & 1) * q, b.y = a.y + ((g >> 1) & 1) * q, b.z = a.z + ((g >> 2) & 1) * q;
+        cmu_t w = {v.vp, v.vs + 10 * g, v.rho};
+        if (etree_append(ep, b, &w) != 0) fail(ep, "append");
+      }
+    }
+  }
+  if (etree_endappend(ep) != 0) fail(ep, "endappend");
+  if (etree_setappmeta(ep, "Title:tiny Author:make_fixtures Date:2026-11-25 3 "
+                           "Vp(float);Vs(float);density(float) 33.58 -118.7 "
+                           "100000.0 100000.0 0.0 100000.0 2147483648 2147483648 2147483648") != 0)
+    fail(ep, "appmeta");
+  if (etree_close(ep) != 0) fail(NULL, "close tiny");
   return 0;
 }

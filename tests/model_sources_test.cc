@@ -1,0 +1,227 @@
+// Model import from the text sources users publish: 1-D layer tables and
+// xyz grids (ASCII, any order).  Each is checked against the plain reading of
+// its file; bad files are refused naming the line, leaving no table.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "db/database.h"
+#include "model/grid_model.h"
+#include "model/layer_table.h"
+#include "modeldb/db_model.h"
+#include "modeldb/model_import.h"
+#include "storage/btree.h"
+
+namespace weaver {
+namespace {
+
+std::string fresh(const std::string& name) {
+  const std::string dir = ::testing::TempDir() + "model_sources_" + name;
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+std::string write_text(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + "model_sources_" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+Status import_from(const std::string& db, const std::string& from) {
+  ModelImportOptions o;
+  o.from = from;
+  o.memory = MemoryBudget(8ull << 20);
+  ModelImportResult r;
+  return import_model(db, o, &r);
+}
+
+bool has_model_table(const std::string& db) {
+  std::unique_ptr<Database> d;
+  return Database::open(db, Database::Mode::kRead, false, &d).ok() && d->has_table(kModelTable);
+}
+
+// Southern California's 1-D model (Hadley and Kanamori, 1977, as SCEC
+// publishes it), with Q; and an awkward one whose tops share no round divisor.
+const char* kHadleyKanamori =
+    "# top  vp   vs   rho  qp  qs\n"
+    "0      5500 3180 2400 600 300\n"
+    "5500   6300 3640 2670 700 350   # upper crust\n"
+    "\n"
+    "16000  6700 3870 2800 800 400\n"
+    "32000  7800 4500 3000 900 450\n";
+const char* kAwkward =
+    "0 1800 300 1900\n"
+    "12.345 2500 900 2000\n"
+    "400.5 4000 2300 2400\n"
+    "7777.777 6000 3500 2700\n";
+
+// The slow reference: the last layer whose top is at or above z.
+const Layer& layer_at(const LayerTable& t, double z) {
+  size_t i = 0;
+  while (i + 1 < t.layers.size() && t.layers[i + 1].top_m <= z) ++i;
+  return t.layers[i];
+}
+
+TEST(ModelSources, LayersAnswerTheLayerAtEachDepthAnywhereAcross) {
+  for (const char* text : {kHadleyKanamori, kAwkward}) {
+    const std::string file = write_text("layers.txt", text);
+    LayerTable table;
+    ASSERT_TRUE(read_layer_table(file, &table).ok());
+    const std::string db = fresh("layers");
+    const Status st = import_from(db, "layers:" + file);
+    ASSERT_TRUE(st.ok()) << st.to_string();
+    std::unique_ptr<DbModel> m;
+    ASSERT_TRUE(DbModel::open(db, MemoryBudget(), 1, &m).ok());
+    EXPECT_EQ(m->info().has_q, table.has_q);
+    std::mt19937_64 rng(7);
+    const double deepest = table.layers.back().top_m;
+    std::vector<double> depths;
+    for (const Layer& l : table.layers) {
+      // Each top, and just above it: exact tops hold to 1 mm, rounded ones
+      // to half a tick.
+      const double near =
+          m->info().producer.find("exact") != std::string::npos ? 0.001 : m->info().tick_m;
+      if (near < m->info().tick_m) depths.push_back(l.top_m);
+      depths.push_back(l.top_m + near);
+      if (l.top_m > 0) depths.push_back(l.top_m - near);
+    }
+    for (int i = 0; i < 3000; ++i)
+      depths.push_back(std::uniform_real_distribution<>(0, 2 * deepest)(rng));
+    for (double z : depths) {
+      const double x = std::uniform_real_distribution<>(-1e6, 1e6)(rng);
+      const double y = std::uniform_real_distribution<>(-1e6, 1e6)(rng);
+      ModelHit h;
+      ASSERT_TRUE(m->lookup(x, y, z, &h).ok());
+      const Layer& want = layer_at(table, z);
+      EXPECT_FALSE(h.clamped && z < deepest) << z;
+      for (int f = 0; f < (table.has_q ? 5 : 3); ++f) {
+        ASSERT_EQ(h.values[f], want.values[f]) << "depth " << z << " field " << f;
+      }
+    }
+  }
+}
+
+TEST(ModelSources, BadLayerTablesAreRefusedNamingTheLine) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"0 5500 3180 2400\n16000 6700 3870 2800\n5500 6300 3640 2670\n", ":3: tops must increase"},
+      {"100 5500 3180 2400\n", ":1: the first layer's top must be 0"},
+      {"0 5500 -3180 2400\n", ":1: Vs"},
+      {"0 5500 3180 2400\n10 1 2\n", ":2: a layer is"},
+      {"0 5500 3180 2400 600 300\n10 5500 3180 2400\n", ":2: give Qp and Qs"},
+      {"0 5500 3180 2400\n10 fast 3180 2400\n", ":2: 'fast' is not a number"},
+      {"0 5500 nan 2400\n", ":1: Vs"},
+      {"# nothing\n", ": no layers"},
+  };
+  for (const auto& [text, error] : cases) {
+    const std::string file = write_text("bad_layers.txt", text);
+    const std::string db = fresh("bad_layers");
+    const Status st = import_from(db, "layers:" + file);
+    ASSERT_FALSE(st.ok()) << text;
+    EXPECT_NE(st.message().find(file + error), std::string::npos) << st.message();
+    EXPECT_FALSE(has_model_table(db));
+  }
+}
+
+struct XyzCase {
+  GridSpec g;
+  std::vector<Material> values;
+};
+
+XyzCase make_grid() {
+  XyzCase c;
+  c.g.nx = 23, c.g.ny = 17, c.g.nz = 9;
+  c.g.x0 = -1200, c.g.y0 = 350.5, c.g.z0 = 0;
+  c.g.dx = c.g.dy = c.g.dz = 250;
+  for (int k = 0; k < c.g.nz; ++k)
+    for (int j = 0; j < c.g.ny; ++j)
+      for (int i = 0; i < c.g.nx; ++i) {
+        const float vs = 400 + 11 * i + 5 * j + 90 * k + ((i + 2 * j) % 7 == 0 ? 33 : 0);
+        c.values.push_back({1.8f * vs, vs, 1900 + vs / 8});
+      }
+  return c;
+}
+
+// The grid's points as xyz lines, shuffled, with comments and blank lines.
+std::string xyz_text(const XyzCase& c, uint64_t seed, size_t drop_line = SIZE_MAX) {
+  std::vector<std::string> lines;
+  char buf[200];
+  for (size_t p = 0; p < c.values.size(); ++p) {
+    const size_t i = p % c.g.nx, j = p / c.g.nx % c.g.ny, k = p / c.g.nx / c.g.ny;
+    std::snprintf(buf, sizeof buf, "%.10g %.10g %.10g %.9g %.9g %.9g\n", c.g.x0 + i * c.g.dx,
+                  c.g.y0 + j * c.g.dy, c.g.z0 + k * c.g.dz, c.values[p].vp, c.values[p].vs,
+                  c.values[p].rho);
+    lines.push_back(buf);
+  }
+  if (drop_line < lines.size()) lines[drop_line] = lines[(drop_line + 1) % lines.size()];
+  std::mt19937_64 rng(seed);
+  std::shuffle(lines.begin(), lines.end(), rng);
+  std::string text = "# x y z vp vs rho\n\n";
+  for (const std::string& l : lines) text += l;
+  return text;
+}
+
+// Every record of a model table, key and payload.
+std::vector<std::pair<uint64_t, std::string>> table_records(const std::string& db) {
+  std::unique_ptr<Database> d;
+  EXPECT_TRUE(Database::open(db, Database::Mode::kRead, false, &d).ok());
+  std::unique_ptr<BTree> t;
+  EXPECT_TRUE(d->open_table(kModelTable, 4 << 20, &t).ok());
+  std::vector<std::pair<uint64_t, std::string>> out;
+  std::unique_ptr<Cursor> c;
+  EXPECT_TRUE(t->seek(0, &c).ok());
+  for (; c->valid(); (void)c->next()) {
+    out.emplace_back(c->key(), std::string(reinterpret_cast<const char*>(c->payload()), 12));
+  }
+  return out;
+}
+
+TEST(ModelSources, XyzInAnyOrderImportsAsItsGridDoes) {
+  const XyzCase c = make_grid();
+  const std::string grid = ::testing::TempDir() + "model_sources.grid";
+  ASSERT_TRUE(write_grid_model(grid, c.g, c.values).ok());
+  const std::string from_grid = fresh("xyz_as_grid");
+  ASSERT_TRUE(import_from(from_grid, "grid:" + grid).ok());
+  const auto want = table_records(from_grid);
+  ASSERT_EQ(want.size(), c.values.size());
+  for (uint64_t seed : {1, 2}) {
+    const std::string file = write_text("grid.xyz", xyz_text(c, seed));
+    const std::string db = fresh("xyz");
+    const Status st = import_from(db, "xyz:" + file);
+    ASSERT_TRUE(st.ok()) << st.to_string();
+    EXPECT_EQ(table_records(db), want);
+    EXPECT_FALSE(std::filesystem::exists(db + "/xyz-import.grid.tmp"));
+  }
+}
+
+TEST(ModelSources, BadXyzFilesAreRefusedNamingWhatIsWrong) {
+  const XyzCase c = make_grid();
+  std::string uneven = xyz_text(c, 3);
+  uneven += "-1200 350.5 3000 1000 500 2000\n";  // z 3000: off the 250 m steps
+  const std::pair<std::string, std::string> cases[] = {
+      {xyz_text(c, 3, 100), "no line gives grid point (800, 1350.5, 0)"},
+      {xyz_text(c, 3) + "0 0\n", ":3522: a point is 'x y z vp vs rho', not 2 numbers"},
+      {"0 0 0 1 1 1\n0 0 1 1 1 1\n", "at least 2 distinct x values"},
+      {uneven, "z values are not evenly spaced"},
+      {"0 0 0 1000 -5 2000\n", ":1: Vs"},
+      {"0 0 0 1000 5 2000 7\n", ":1: more than 6 numbers"},
+      {"0 0 zero 1000 5 2000\n", ":1: 'zero' is not a number"},
+      {"0 0 0 1 1 1\n1 0 0 1 1 1\n0 1 0 1 1 1\n1 1 0 1 1 1\n0 0 1 1 1 1\n1 1 1 1 1 1\n",
+       "6 points for a 2 x 2 x 2 grid (8)"},
+  };
+  for (const auto& [text, error] : cases) {
+    const std::string file = write_text("bad.xyz", text);
+    const std::string db = fresh("bad_xyz");
+    const Status st = import_from(db, "xyz:" + file);
+    ASSERT_FALSE(st.ok()) << error;
+    EXPECT_NE(st.message().find(error), std::string::npos) << st.message();
+    EXPECT_EQ(st.message().rfind(file, 0), 0u) << st.message();
+    EXPECT_FALSE(has_model_table(db));
+    EXPECT_FALSE(std::filesystem::exists(db + "/xyz-import.grid.tmp"));
+  }
+}
+
+}  // namespace
+}  // namespace weaver
