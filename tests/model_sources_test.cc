@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
 
+#include "bench_util.h"
 #include "db/database.h"
 #include "model/grid_model.h"
 #include "model/layer_table.h"
@@ -221,6 +223,56 @@ TEST(ModelSources, BadXyzFilesAreRefusedNamingWhatIsWrong) {
     EXPECT_FALSE(has_model_table(db));
     EXPECT_FALSE(std::filesystem::exists(db + "/xyz-import.grid.tmp"));
   }
+}
+
+// construct --model etree:FILE (and layers:FILE) imports the model into the
+// database it builds, and its leaves take their values from there; a bad
+// model file fails the command in one line, leaving no table.
+TEST(ModelSources, ConstructImportsAModelFileIntoItsDatabase) {
+  const std::string etree = std::string(WEAVER_SOURCE_DIR) + "/tests/data/etree/cmu.e";
+  const std::string layers = write_text("construct_layers.txt", kHadleyKanamori);
+  for (const std::string& from : {"etree:" + etree, "layers:" + layers}) {
+    const std::string db = fresh("construct_from_file");
+    uint64_t rss = 0;
+    const std::string out =
+        bench::run_program({WEAVER_BINARY, "construct", db, "--model", from, "--freq", "0.05",
+                            "--domain", "40000,40000,20000", "--threads", "2", "--quiet"},
+                           &rss);
+    ASSERT_NE(out.find("imported   " + from), std::string::npos) << out;
+    ASSERT_NE(out.find("constructed"), std::string::npos) << out;
+    std::unique_ptr<DbModel> m;
+    ASSERT_TRUE(DbModel::open(db, MemoryBudget(), 1, &m).ok());
+    std::unique_ptr<Database> d;
+    ASSERT_TRUE(Database::open(db, Database::Mode::kRead, false, &d).ok());
+    std::unique_ptr<BTree> t;
+    ASSERT_TRUE(d->open_table("octants", 4 << 20, &t).ok());
+    const double tick = 40000.0 / kRootEdge;  // one block of 40 km
+    std::unique_ptr<Cursor> c;
+    ASSERT_TRUE(t->seek(0, &c).ok());
+    uint64_t leaves = 0;
+    for (; c->valid(); (void)c->next(), ++leaves) {
+      const Octant o = octant_from_key(c->key());
+      float leaf[3];
+      std::memcpy(leaf, c->payload(), 12);
+      const double half = octant_edge(o) / 2.0;
+      ModelHit h;
+      ASSERT_TRUE(
+          m->lookup((o.x + half) * tick, (o.y + half) * tick, (o.z + half) * tick, &h).ok());
+      ASSERT_EQ(leaf[1], h.values[1]) << from;
+    }
+    EXPECT_GT(leaves, 8u) << from;
+  }
+  const std::string bad = write_text("construct_bad_layers.txt", "0 1 1 1\n5 1 -1 1\n");
+  const std::string db = fresh("construct_bad");
+  const std::string cmd = std::string(WEAVER_BINARY) + " construct " + db +
+                          " --model layers:" + bad + " --freq 0.1 --quiet 2>" + db + ".err";
+  EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 1);
+  std::ifstream err(db + ".err");
+  std::string line, more;
+  std::getline(err, line);
+  EXPECT_NE(line.find(bad + ":2: Vs"), std::string::npos) << line;
+  EXPECT_FALSE(std::getline(err, more)) << more;
+  EXPECT_FALSE(has_model_table(db));
 }
 
 }  // namespace

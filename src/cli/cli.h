@@ -42,6 +42,9 @@ int cmd_mesh(int argc, char** argv);
 // The construct options and plan printout shared by `construct` and `mesh`.
 Status parse_construct_options(const ParsedArgs& args, weaver::ConstructOptions* o);
 void print_construct_plan(const weaver::ConstructOptions& o, const weaver::ConstructPlan& p);
+// A --model naming a model file (etree:, grid:, layers:, xyz:): imported
+// into DB's model table, printed, and read from there ("db:DB").
+Status import_model_option(const std::string& db, weaver::ConstructOptions* o);
 
 // --memory: at least MemoryBudget::kMinBytes and at most the machine's
 // physical memory; MemoryBudget::kDefaultBytes when absent.

@@ -5,6 +5,7 @@
 
 #include "cli/cli.h"
 #include "construct/construct.h"
+#include "modeldb/open_model.h"
 #include "util/progress.h"
 
 namespace weaver::cli {
@@ -22,8 +23,13 @@ constexpr char kUsage[] =
     "and no leaf is finer than needed.  Leaves carry Vp, Vs and density at their\n"
     "centre.  The domain (metres; x, y horizontal, z depth) is made a union of\n"
     "blocks: 100000,100000,37500 is 8 x 8 x 3 blocks of level 3.\n"
-    "  --model NAME       halfspace, loh1, basin (a synthetic sedimentary basin)\n"
-    "                     or grid (with --grid FILE; format in src/model/grid_model.h)\n"
+    "  --model NAME       halfspace, loh1, basin (a synthetic sedimentary basin),\n"
+    "                     grid (with --grid FILE; format in src/model/grid_model.h,\n"
+    "                     read whole), db:MODEL.db (a model database, 'weaver model\n"
+    "                     import'), or a model file imported into DB's own model\n"
+    "                     table first: etree:FILE, grid:FILE, layers:FILE, xyz:FILE\n"
+    "                     (formats in 'weaver model --help'); a model read from\n"
+    "                     storage is sampled within --memory whatever its size\n"
     "  --freq F           highest frequency to resolve, Hz (default 0.5)\n"
     "  --ppw N            points per wavelength (default 10)\n"
     "  --vs-min V         Vs floor in the rule, m/s (default none)\n"
@@ -80,6 +86,16 @@ Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
   return memory_option(args, &o->memory);
 }
 
+Status import_model_option(const std::string& db, ConstructOptions* o) {
+  if (!is_model_source(o->model)) return Status::Ok();
+  const std::string from = o->model;
+  ModelImportResult r;
+  WEAVER_RETURN_IF_ERROR(import_model_source(db, o->memory, &o->model, &r));
+  std::printf("imported   %s: %llu read, %llu octants in %s's model table\n", from.c_str(),
+              (unsigned long long)r.read, (unsigned long long)r.octants, db.c_str());
+  return Status::Ok();
+}
+
 void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
   std::printf("model      %s\n", p.model.c_str());
   std::printf("rule       edge <= Vs_min / (%g Hz x %g ppw)%s\n", o.freq, o.ppw,
@@ -107,6 +123,8 @@ int cmd_construct(int argc, char** argv) {
   st = parse_construct_options(args, &o);
   if (st.ok()) st = threads_option(args, default_threads(), &o.threads);
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
+  st = import_model_option(args.positional[0], &o);
+  if (!st.ok()) return report("construct", st);
   ConstructPlan plan;
   st = plan_construct(o, &plan);
   if (st.is_invalid_argument()) return usage_error("construct", st.message(), kUsage);

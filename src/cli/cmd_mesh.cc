@@ -88,6 +88,8 @@ int cmd_mesh(int argc, char** argv) {
   co.threads = eo.threads;
   eo.packed = co.packed;
   const std::string& db = args.positional[0];
+  st = import_model_option(db, &co);
+  if (!st.ok()) return report("mesh", st);
   ConstructPlan plan;
   st = plan_construct(co, &plan);
   if (st.is_invalid_argument()) return usage_error("mesh", st.message(), kUsage);

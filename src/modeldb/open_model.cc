@@ -15,4 +15,21 @@ Status open_velocity_model(const std::string& name, const std::string& grid_file
   return make_model(name, grid_file, out);
 }
 
+bool is_model_source(const std::string& name) {
+  for (const char* kind : {"etree:", "grid:", "layers:", "xyz:"}) {
+    if (name.rfind(kind, 0) == 0) return true;
+  }
+  return false;
+}
+
+Status import_model_source(const std::string& db_dir, MemoryBudget memory, std::string* name,
+                           ModelImportResult* result) {
+  ModelImportOptions o;
+  o.from = *name;
+  o.memory = memory;
+  WEAVER_RETURN_IF_ERROR(import_model(db_dir, o, result));
+  *name = "db:" + db_dir;
+  return Status::Ok();
+}
+
 }  // namespace weaver
