@@ -226,8 +226,9 @@ TEST(ModelSources, BadXyzFilesAreRefusedNamingWhatIsWrong) {
 }
 
 // construct --model etree:FILE (and layers:FILE) imports the model into the
-// database it builds, and its leaves take their values from there; a bad
-// model file fails the command in one line, leaving no table.
+// database it builds, and its leaves take their values from there, those
+// balance adds too (mesh runs both); a bad model file fails the command in
+// one line, leaving no table.
 TEST(ModelSources, ConstructImportsAModelFileIntoItsDatabase) {
   const std::string etree = std::string(WEAVER_SOURCE_DIR) + "/tests/data/etree/cmu.e";
   const std::string layers = write_text("construct_layers.txt", kHadleyKanamori);
@@ -235,11 +236,12 @@ TEST(ModelSources, ConstructImportsAModelFileIntoItsDatabase) {
     const std::string db = fresh("construct_from_file");
     uint64_t rss = 0;
     const std::string out =
-        bench::run_program({WEAVER_BINARY, "construct", db, "--model", from, "--freq", "0.05",
+        bench::run_program({WEAVER_BINARY, "mesh", db, "--model", from, "--freq", "0.1",
                             "--domain", "40000,40000,20000", "--threads", "2", "--quiet"},
                            &rss);
+    ASSERT_NE(out.find("balance"), std::string::npos) << out;
     ASSERT_NE(out.find("imported   " + from), std::string::npos) << out;
-    ASSERT_NE(out.find("constructed"), std::string::npos) << out;
+    ASSERT_NE(out.find("elements per level"), std::string::npos) << out;
     std::unique_ptr<DbModel> m;
     ASSERT_TRUE(DbModel::open(db, MemoryBudget(), 1, &m).ok());
     std::unique_ptr<Database> d;

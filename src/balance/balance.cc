@@ -11,18 +11,21 @@
 #include "balance/refinement.h"
 #include "db/database.h"
 #include "model/velocity_model.h"
+#include "modeldb/open_model.h"
 #include "schema/octant.h"
 
 namespace weaver {
 namespace {
 
-// The model named in the table's metadata, if it is a built-in one.
-std::unique_ptr<VelocityModel> model_of(const std::string& metadata) {
+// The model named in the table's metadata, if it is a built-in one or a
+// model database ("db:MODEL.db", read within `memory` by `threads` threads).
+std::unique_ptr<VelocityModel> model_of(const std::string& metadata, MemoryBudget memory,
+                                        int threads) {
   const size_t at = metadata.find("model=");
   if (at == std::string::npos) return nullptr;
   const std::string name = metadata.substr(at + 6, metadata.find(';', at) - at - 6);
   std::unique_ptr<VelocityModel> m;
-  if (name == "grid" || !make_model(name, "", &m).ok()) return nullptr;
+  if (name == "grid" || !open_velocity_model(name, "", memory, threads, &m).ok()) return nullptr;
   return m;
 }
 
@@ -81,6 +84,8 @@ BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
   domain_map = plan.take("domain map", 1, 16, 32ull << 20);
   // It reads its stretch of the leaves in order: a few pages at a time.
   second_reader = plan.take("second reader's pool", 1, 64, 1ull << 20);
+  // A model database's readers, for the material of new leaves.
+  model = plan.take_budget("model readers", 1, 32);
 }
 
 int finest_level_bound(BTree& leaves) {
@@ -119,7 +124,8 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   std::unique_ptr<BTree> out;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, memory.output_pool, &out, &file));
-  const std::unique_ptr<VelocityModel> model = model_of(topt.metadata);
+  const std::unique_ptr<VelocityModel> model =
+      model_of(topt.metadata, memory.model, std::max(1, o.threads));
   const Status st = write_refinement(*leaves, closure.required(), material_fill(model.get(), topt),
                                      *out, o.threads, progress.get(), r);
   if (st.ok()) out->set_metadata(replace_levels(topt.metadata, r->levels));

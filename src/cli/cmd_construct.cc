@@ -5,6 +5,7 @@
 
 #include "cli/cli.h"
 #include "construct/construct.h"
+#include "model/geo_frame.h"
 #include "modeldb/open_model.h"
 #include "util/progress.h"
 
@@ -15,7 +16,8 @@ constexpr char kUsage[] =
     "usage: weaver construct DB --model NAME [--grid FILE] [--freq F] [--ppw N]\n"
     "                           [--vs-min V] [--domain LX,LY,LZ] [--min-level L]\n"
     "                           [--max-level L] [--max-elements N] [--memory BYTES]\n"
-    "                           [--threads N] [--plain] [--quiet]\n"
+    "                           [--threads N] [--origin-geo LON,LAT [--azimuth DEG]\n"
+    "                           [--utm-zone Z]] [--plain] [--quiet]\n"
     "\n"
     "Builds the octant table of DB from a velocity model: every leaf satisfies\n"
     "edge <= Vs_min / (F * N), Vs_min being the least Vs of the model over 27\n"
@@ -34,6 +36,12 @@ constexpr char kUsage[] =
     "  --ppw N            points per wavelength (default 10)\n"
     "  --vs-min V         Vs floor in the rule, m/s (default none)\n"
     "  --domain LX,LY,LZ  metres (default 100000,100000,37500)\n"
+    "  --origin-geo LON,LAT  where the domain's origin (x = y = 0) lies, WGS84\n"
+    "                     degrees: exports add longitude and latitude, queries take\n"
+    "                     --geo; default: the model's own, when it has one\n"
+    "  --azimuth DEG      of the x axis, clockwise from north (default 0: x north,\n"
+    "                     y east, z down); a transverse Mercator about the origin\n"
+    "  --utm-zone Z[s]    project by UTM zone Z instead ('s': southern)\n"
     "  --min-level L, --max-level L   bounds on leaf levels (default 0, 20)\n"
     "  --max-elements N   refuse to start when a coarse sampling of the model\n"
     "                     estimates more leaves than N (default 5G), or more\n"
@@ -51,6 +59,29 @@ constexpr char kUsage[] =
     "                     before the last leaf written, in Z-order)\n";
 
 }  // namespace
+
+// --origin-geo LON,LAT, --azimuth DEG, --utm-zone ZONE[s]: the frame's
+// text form (model/geo_frame.h), checked; "" without --origin-geo.
+Status geo_options(const ParsedArgs& args, std::string* geo) {
+  const bool origin = args.values.count("origin-geo") != 0;
+  if (!origin) {
+    if (args.values.count("azimuth") || args.values.count("utm-zone")) {
+      return Status::InvalidArgument("--azimuth and --utm-zone need --origin-geo LON,LAT");
+    }
+    return Status::Ok();
+  }
+  std::string text = args.values.at("origin-geo");
+  if (args.values.count("azimuth")) {
+    double az = 0;
+    WEAVER_RETURN_IF_ERROR(parse_double(args.values.at("azimuth"), "--azimuth", &az));
+    text += "," + args.values.at("azimuth");
+  }
+  if (args.values.count("utm-zone")) text += ",utm" + args.values.at("utm-zone");
+  GeoFrame g;
+  WEAVER_RETURN_IF_ERROR(GeoFrame::parse(text, &g));
+  *geo = g.to_text();
+  return Status::Ok();
+}
 
 Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
   auto number = [&](const char* name, double* v) -> Status {
@@ -83,6 +114,7 @@ Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
     WEAVER_RETURN_IF_ERROR(parse_double_list(args.values.at("domain"), "--domain", 3, &d));
     o->domain_m = {d[0], d[1], d[2]};
   }
+  WEAVER_RETURN_IF_ERROR(geo_options(args, &o->geo));
   return memory_option(args, &o->memory);
 }
 
@@ -106,16 +138,18 @@ void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
               p.rounded_up ? ", rounded up to whole blocks" : "");
   std::printf("root       %g m, tick %.6g m, levels %d..%d\n", p.root_edge_m, p.tick_m,
               std::max(o.min_level, p.block_level), o.max_level);
+  if (!o.geo.empty()) std::printf("geo        origin lon,lat,azimuth %s\n", o.geo.c_str());
   std::printf("estimate   about %.3g elements, %.3g GB of disk (a coarse sampling of the model)\n",
               p.estimated_elements, p.estimated_disk_bytes / 1e9);
 }
 
 int cmd_construct(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2,
-                         {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level",
-                          "max-level", "memory", "max-elements", "threads"},
-                         {"plain", "quiet"}, &args);
+  Status st =
+      parse_args(argc, argv, 2,
+                 {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level",
+                  "memory", "max-elements", "threads", "origin-geo", "azimuth", "utm-zone"},
+                 {"plain", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("construct", "expected one DB", kUsage);

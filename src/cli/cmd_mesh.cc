@@ -18,7 +18,8 @@ namespace {
 constexpr char kUsage[] =
     "usage: weaver mesh DB --model NAME --freq F [--ppw N] [--vs-min V] [--domain LX,LY,LZ]\n"
     "                      [--min-level L] [--max-level L] [--grid FILE] [--threads N]\n"
-    "                      [--max-elements N] [--memory BYTES] [--plain] [--quiet]\n"
+    "                      [--max-elements N] [--memory BYTES] [--origin-geo LON,LAT\n"
+    "                      [--azimuth DEG] [--utm-zone Z]] [--plain] [--quiet]\n"
     "\n"
     "The whole pipeline: construct the octree from the model, 2:1 balance it, extract\n"
     "the mesh.  Prints a line per stage (count, rate, time, peak memory), then the\n"
@@ -68,10 +69,11 @@ int report_after(const char* stage, const Status& st, const char* committed) {
 
 int cmd_mesh(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2,
-                         {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level",
-                          "max-level", "memory", "threads", "max-elements"},
-                         {"plain", "quiet"}, &args);
+  Status st =
+      parse_args(argc, argv, 2,
+                 {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level",
+                  "memory", "threads", "max-elements", "origin-geo", "azimuth", "utm-zone"},
+                 {"plain", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("mesh", "expected one DB", kUsage);

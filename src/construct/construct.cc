@@ -203,6 +203,7 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   if (st.ok()) {
     Units u;
     u.tick_m = p->tick_m;
+    u.geo = o.geo.empty() ? model->geo() : o.geo;
     char model_meta[256];
     std::snprintf(model_meta, sizeof model_meta, ";model=%s;freq=%.17g;ppw=%.17g;vs_min=%.17g",
                   o.model.c_str(), o.freq, o.ppw, o.vs_min);

@@ -28,6 +28,9 @@ struct ConstructOptions {
   double ppw = 10;        // points per wavelength
   double vs_min = 0;      // floor on Vs in the rule (m/s); 0: none
   std::array<double, 3> domain_m = {100000, 100000, 37500};
+  // Where the domain's origin lies on the Earth (model/geo_frame.h's text
+  // form); "" takes the model's own when it has one.
+  std::string geo;
   int min_level = 0, max_level = kMaxLevel;
   MemoryBudget memory;
   // Worker threads visiting subtrees (descent.h); the table is the same for any count.

@@ -9,7 +9,7 @@ std::string units_to_metadata(const Units& u) {
   char buf[256];
   std::snprintf(buf, sizeof buf, "tick_m=%.17g;origin_m=%.17g,%.17g,%.17g", u.tick_m, u.origin_m[0],
                 u.origin_m[1], u.origin_m[2]);
-  return buf;
+  return u.geo.empty() ? std::string(buf) : buf + (";geo=" + u.geo);
 }
 
 void for_each_metadata_item(const std::string& metadata,
@@ -28,6 +28,8 @@ void units_from_metadata(const std::string& metadata, Units* u) {
       std::sscanf(value.c_str(), "%lf", &u->tick_m);
     } else if (key == "origin_m") {
       std::sscanf(value.c_str(), "%lf,%lf,%lf", &u->origin_m[0], &u->origin_m[1], &u->origin_m[2]);
+    } else if (key == "geo") {
+      u->geo = value;
     }
   });
 }

@@ -15,9 +15,12 @@ inline constexpr char kOctantTable[] = "octants";
 struct Units {
   double tick_m = 1.0;
   std::array<double, 3> origin_m = {0, 0, 0};
+  // Where the frame lies on the Earth, in model/geo_frame.h's text form
+  // ("LON,LAT,AZIMUTH[,utmZONE]"); "" when the mesh is not georeferenced.
+  std::string geo;
 };
 
-// Metadata text: "tick_m=<v>;origin_m=<x>,<y>,<z>".
+// Metadata text: "tick_m=<v>;origin_m=<x>,<y>,<z>[;geo=<text>]".
 std::string units_to_metadata(const Units& u);
 // Calls fn(key, value) for each "key=value" item of ";"-separated metadata
 // text, in order; items without "=" are skipped.

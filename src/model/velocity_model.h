@@ -36,6 +36,9 @@ class VelocityModel {
     (void)lo;
     (void)hi;
   }
+  // Where the model's frame lies on the Earth (model/geo_frame.h's text
+  // form), "" when the model does not say.
+  virtual std::string geo() const { return ""; }
   // A one-line description with the parameters, for logs and metadata.
   virtual std::string describe() const = 0;
 };

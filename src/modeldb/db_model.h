@@ -51,6 +51,7 @@ class DbModel final : public VelocityModel {
   void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                      float* out) const override;
   std::string describe() const override;
+  std::string geo() const override { return info_.geo; }
 
  private:
   struct Reader;

@@ -111,6 +111,12 @@ bool ucvm_form(const std::string& t, double* root, ModelInfo* m) {
   char buf[160];
   std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g", lon, lat, rot);
   m->geo = buf;
+  // A UTM projection string ("+proj=utm +zone=10 [+south]") names the zone.
+  const size_t zone = parts[8].find("+zone=");
+  if (parts[8].find("+proj=utm") != std::string::npos && zone != std::string::npos) {
+    m->geo += ",utm" + std::to_string(std::atoi(parts[8].c_str() + zone + 6)) +
+              (parts[8].find("+south") != std::string::npos ? "s" : "");
+  }
   m->producer = "projection " + parts[8];
   return true;
 }
