@@ -3,8 +3,10 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <sstream>
 
 #include "cli/point_batch.h"
+#include "model/geo_frame.h"
 #include "query/octant_query.h"
 #include "util/args.h"
 
@@ -27,12 +29,15 @@ const char kQueryHelp[] =
     "depends ID              the dangling nodes that depend on node ID\n"
     "Options:\n"
     "  --units ticks|m       coordinates in and out in ticks (default) or metres\n"
+    "  --geo                 locate, material, node-at: points as LON LAT DEPTH (WGS84\n"
+    "                        degrees, metres down), in a georeferenced database\n"
+    "                        (construct --origin-geo); answers in metres\n"
     "  --format MODE         text (default), table, json, csv or tsv; --json = --format json\n";
 
 namespace {
 
 const std::set<std::string> kValueOptions = {"format", "units", "points", "memory"};
-const std::set<std::string> kFlags = {"json", "list", "faces", "edges", "corners", "all"};
+const std::set<std::string> kFlags = {"json", "list", "faces", "edges", "corners", "all", "geo"};
 
 struct Query {
   Explorer& ex;
@@ -120,6 +125,11 @@ struct Query {
   int run();
   int run_points(PointQuery q);
   int run_point_text(PointQuery q, Coord c);
+  // --geo: the point arguments, or the points file, from LON LAT DEPTH to
+  // the frame's metres (and --units m from here on).
+  Status to_frame_metres();
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> geo_points{nullptr, std::fclose};
+  std::string geo_points_name;  // the file the converted points came from
   int run_range();
   int run_element();
   int run_node();
@@ -134,6 +144,61 @@ struct Query {
 
 std::string point_text(Coord c) {
   return std::to_string(c.x) + " " + std::to_string(c.y) + " " + std::to_string(c.z);
+}
+
+Status Query::to_frame_metres() {
+  if (units().geo.empty()) {
+    return Status::NotFound(
+        "this database is not georeferenced (construct it with --origin-geo LON,LAT)");
+  }
+  GeoFrame frame;
+  WEAVER_RETURN_IF_ERROR(GeoFrame::parse(units().geo, &frame));
+  const GeoTransform g(frame);
+  s.metres = true;
+  auto convert = [&](double lon, double lat, double depth) {
+    double x, y;
+    g.to_frame(lon, lat, &x, &y);
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g", x, y, depth);
+    return std::string(buf);
+  };
+  if (!args.values.count("points")) {
+    if (args.positional.size() != 4) return Status::Ok();  // numbers() says what is wrong
+    double v[3];
+    for (int i = 0; i < 3; ++i) {
+      WEAVER_RETURN_IF_ERROR(parse_double(args.positional[i + 1], "coordinate", &v[i]));
+    }
+    std::istringstream words(convert(v[0], v[1], v[2]));
+    for (int i = 1; i <= 3; ++i) words >> args.positional[i];
+    return Status::Ok();
+  }
+  // A points file: each line converted into a scratch file (bounded memory
+  // whatever the batch); lines that are not three numbers pass unchanged,
+  // for the batch to report in place.
+  const std::string& path = args.values.at("points");
+  std::FILE* const from_stdin = s.points_stdin != nullptr ? s.points_stdin : stdin;
+  std::FILE* in = path == "-" ? from_stdin : std::fopen(path.c_str(), "r");
+  if (in == nullptr) return Status::IOError(path + ": " + std::strerror(errno));
+  geo_points.reset(std::tmpfile());
+  if (!geo_points) return Status::IOError(std::string("a scratch file: ") + std::strerror(errno));
+  char line[4096];
+  while (std::fgets(line, sizeof line, in)) {
+    double lon, lat, depth;
+    char extra;
+    std::string point = line;
+    point = point.substr(0, point.find('#'));
+    if (std::sscanf(point.c_str(), "%lf %lf %lf %c", &lon, &lat, &depth, &extra) == 3) {
+      std::fprintf(geo_points.get(), "%s\n", convert(lon, lat, depth).c_str());
+    } else {
+      std::fputs(line, geo_points.get());
+    }
+  }
+  if (in != from_stdin) std::fclose(in);
+  std::rewind(geo_points.get());
+  s.points_stdin = geo_points.get();
+  geo_points_name = path == "-" ? "stdin" : path;
+  args.values["points"] = "-";
+  return Status::Ok();
 }
 
 // locate, material and node-at: a points file, or one point.  Outside text
@@ -163,7 +228,10 @@ int Query::run_points(PointQuery q) {
   std::FILE* const from_stdin = s.points_stdin != nullptr ? s.points_stdin : stdin;
   std::FILE* in = path == "-" ? from_stdin : std::fopen(path.c_str(), "r");
   if (in == nullptr) return fail(Status::IOError(path + ": " + std::strerror(errno)));
-  const Status st = run_point_batch(ex, in, path == "-" ? "stdin" : path, o, out, err, &r);
+  const std::string name = !geo_points_name.empty() ? geo_points_name
+                           : path == "-"            ? "stdin"
+                                                    : path;
+  const Status st = run_point_batch(ex, in, name, o, out, err, &r);
   if (in != from_stdin) std::fclose(in);
   if (!st.ok()) return fail(st);
   if (r.bad_lines == 0) return 0;
@@ -361,9 +429,15 @@ int Query::run() {
     if (u != "m" && u != "ticks") return usage("--units is ticks or m, not '" + u + "'");
     s.metres = u == "m";
   }
-  if (args.values.count("points") && name() != "locate" && name() != "material" &&
-      name() != "node-at") {
+  const bool point_query = name() == "locate" || name() == "material" || name() == "node-at";
+  if (args.values.count("points") && !point_query) {
     return usage("--points is for locate, material and node-at");
+  }
+  if (args.flags.count("geo")) {
+    if (!point_query) return usage("--geo is for locate, material and node-at");
+    const Status st = to_frame_metres();
+    if (st.is_invalid_argument()) return usage(st.message());
+    if (!st.ok()) return fail(st);
   }
   const std::string& q = name();
   if (q == "locate") return run_points(PointQuery::kLocate);
@@ -398,7 +472,8 @@ Status check_query(const std::vector<std::string>& words) {
   if (a.positional.size() != want + 1) {
     return Status::InvalidArgument(q + " takes " + std::to_string(want) + " number(s)");
   }
-  const bool metres = a.values.count("units") && a.values.at("units") == "m";
+  const bool metres =
+      (a.values.count("units") && a.values.at("units") == "m") || a.flags.count("geo");
   for (size_t i = 1; i <= want; ++i) {
     double d = 0;
     uint64_t v = 0;
@@ -413,7 +488,7 @@ int run_query(Explorer& ex, const std::vector<std::string>& words, const QuerySe
               std::FILE* out, std::FILE* err, const std::string& who) {
   std::vector<char*> argv;
   for (const std::string& w : words) argv.push_back(const_cast<char*>(w.c_str()));
-  Query q{ex, {}, settings, out, err, who};
+  Query q{ex, {}, settings, out, err, who, {nullptr, std::fclose}, {}};
   const Status st = parse_args(int(argv.size()), argv.data(), 0, kValueOptions, kFlags, &q.args);
   if (!st.ok()) return q.usage(st.message());
   if (q.args.positional.empty()) return q.usage("expected a query");

@@ -12,6 +12,8 @@
 //   dangling_anchors  (dangling, 4)  <i8  their anchors' ids, -1 past 2 for edges
 //   node_global_id    (nodes,)       <i8  with --box: the node's id in the whole mesh
 //   element_global_id (elements,)    <i8  with --box: the element's id in the whole mesh
+//   node_lonlat       (nodes, 2)     <f8  longitude, latitude (WGS84 degrees), when the
+//                                         mesh is georeferenced (mesh.json's "geo" says how)
 // With --box, node ids in the arrays are local: positions in node_coords.
 // numpy: np.memmap(dir + "/mesh.bin", dtype, "r", offset, tuple(shape)).
 // The directory is built as OUT.tmp and renamed to OUT when complete; an
@@ -57,6 +59,7 @@ enum : int {
   kElementGlobal,
   kSharedNodes,
   kSharedParts,
+  kLonLat,
   kArrays
 };
 
@@ -64,7 +67,7 @@ enum : int {
 // out of mesh.json.
 // shared: the part's (node, other part) pairs, or -1 outside a partition.
 std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool material,
-                          bool selected, int64_t shared) {
+                          bool selected, int64_t shared, bool geo) {
   std::vector<Array> a = {
       {"node_coords", ticks ? "<u4" : "<f8", n, 3, ticks ? 4u : 8u, ticks ? "ticks" : "m"},
       {"node_kind", "|u1", n, 0, 1, ""},
@@ -76,7 +79,8 @@ std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool m
       {"node_global_id", "<i8", selected ? n : 0, 0, 8, ""},
       {"element_global_id", "<i8", selected ? e : 0, 0, 8, ""},
       {"shared_nodes", "<i8", uint64_t(std::max<int64_t>(shared, 0)), 0, 8, ""},
-      {"shared_parts", "<i4", uint64_t(std::max<int64_t>(shared, 0)), 0, 4, ""}};
+      {"shared_parts", "<i4", uint64_t(std::max<int64_t>(shared, 0)), 0, 4, ""},
+      {"node_lonlat", "<f8", geo ? n : 0, 2, 8, "degrees"}};
   a[kDangling].always = a[kAnchors].always = true;
   a[kSharedNodes].always = a[kSharedParts].always = shared >= 0;
   uint64_t at = 0;
@@ -101,6 +105,7 @@ std::string json(const std::vector<Array>& arrays, const ExportJob& job, uint64_
   s += std::string("  \"units\": \"") + job.unit_name() + "\",\n";
   s += "  \"tick_m\": " + number(u.tick_m) + ",\n  \"origin_m\": [" + number(u.origin_m[0]) + ", " +
        number(u.origin_m[1]) + ", " + number(u.origin_m[2]) + "],\n";
+  if (!u.geo.empty()) s += "  \"geo\": \"" + u.geo + "\",\n";
   s += "  \"corner_order\": \"corner k at (x + s*(k&1), y + s*((k>>1)&1), z + s*((k>>2)&1))\",\n";
   s += "  \"node_kinds\": [\"anchored\", \"edge\", \"face\"],\n  \"arrays\": {";
   bool first = true;
@@ -134,11 +139,16 @@ Status count_dangling(ExportJob& job, uint64_t* d) {
   return st;
 }
 
-Status write_nodes(ExportJob& job, std::vector<Section>& out) {
+Status write_nodes(ExportJob& job, std::vector<Section>& out, const GeoTransform* geo) {
   const bool ticks = job.options.units == ExportUnits::kTicks;
   const bool selected = !job.sel.whole();
   uint64_t local = 0;
   return for_each_node(job, true, [&](const MeshNode& n) {
+    if (geo) {
+      double ll[2];
+      job.lon_lat(*geo, n.c, &ll[0], &ll[1]);
+      WEAVER_RETURN_IF_ERROR(out[kLonLat].put(ll, sizeof ll));
+    }
     if (ticks) {
       const uint32_t p[3] = {n.c.x, n.c.y, n.c.z};
       WEAVER_RETURN_IF_ERROR(out[kCoords].put(p, sizeof p));
@@ -227,14 +237,17 @@ Status write_raw_files(ExportJob& job, const std::string& dir, SharedNodes* shar
   uint64_t dangling = 0;
   WEAVER_RETURN_IF_ERROR(count_dangling(job, &dangling));
   const int64_t pairs = shared != nullptr ? int64_t(shared->count(job.sel.part)) : -1;
-  const std::vector<Array> arrays =
-      layout(job.node_count(), job.element_count(), dangling,
-             job.options.units == ExportUnits::kTicks, material, !job.sel.whole(), pairs);
+  GeoFrame geo;
+  const bool georeferenced = job.georeferenced(&geo);
+  const GeoTransform transform(geo);
+  const std::vector<Array> arrays = layout(job.node_count(), job.element_count(), dangling,
+                                           job.options.units == ExportUnits::kTicks, material,
+                                           !job.sel.whole(), pairs, georeferenced);
   OutputFile bin(dir + "/mesh.bin");
   WEAVER_RETURN_IF_ERROR(bin.open());
   std::vector<Section> out;
   for (const Array& a : arrays) out.emplace_back(bin, a.offset, job.section_buffer);
-  WEAVER_RETURN_IF_ERROR(write_nodes(job, out));
+  WEAVER_RETURN_IF_ERROR(write_nodes(job, out, georeferenced ? &transform : nullptr));
   WEAVER_RETURN_IF_ERROR(write_elements(job, out, material));
   if (shared != nullptr) WEAVER_RETURN_IF_ERROR(write_shared(job, *shared, out));
   for (Section& s : out) WEAVER_RETURN_IF_ERROR(s.flush());

@@ -5,7 +5,8 @@
 // and each array streams into its own section of the file: one pass over the
 // nodes, one over the elements.
 //
-//   PointData  node_id Int64 (global ids), kind UInt8 (0 anchored, 1 edge, 2 face)
+//   PointData  node_id Int64 (global ids), kind UInt8 (0 anchored, 1 edge, 2 face),
+//              longitude latitude Float64 (WGS84 degrees, when georeferenced)
 //   CellData   element_id Int64 (global ids), level UInt8, edge Float64 (in
 //              the units), vp vs rho Float32 (when the mesh has material)
 //   Points     Float64 x 3 (metres by default, or ticks)
@@ -39,6 +40,8 @@ struct Array {
 enum : int {
   kNodeId,
   kKind,
+  kLon,
+  kLat,
   kElementId,
   kLevel,
   kEdge,
@@ -52,10 +55,20 @@ enum : int {
   kArrays
 };
 
-// Without material, vp, vs and rho take no bytes and are not declared.
-std::vector<Array> layout(uint64_t n, uint64_t e, bool material) {
-  const uint64_t m = material ? 4 * e : 0;
+// The optional arrays: which the mesh has.
+struct Present {
+  bool material = false, geo = false;
+  bool operator()(int i) const {
+    return (material || i < kVp || i > kRho) && (geo || (i != kLon && i != kLat));
+  }
+};
+
+// Arrays the mesh does not have (vp, vs, rho without material; longitude,
+// latitude when not georeferenced) take no bytes and are not declared.
+std::vector<Array> layout(uint64_t n, uint64_t e, Present has) {
+  const uint64_t m = has.material ? 4 * e : 0, g = has.geo ? 8 * n : 0;
   std::vector<Array> a = {{"node_id", "Int64", 1, 8 * n},    {"kind", "UInt8", 1, n},
+                          {"longitude", "Float64", 1, g},    {"latitude", "Float64", 1, g},
                           {"element_id", "Int64", 1, 8 * e}, {"level", "UInt8", 1, e},
                           {"edge", "Float64", 1, 8 * e},     {"vp", "Float32", 1, m},
                           {"vs", "Float32", 1, m},           {"rho", "Float32", 1, m},
@@ -63,8 +76,7 @@ std::vector<Array> layout(uint64_t n, uint64_t e, bool material) {
                           {"offsets", "Int64", 1, 8 * e},    {"types", "UInt8", 1, e}};
   uint64_t at = 0;
   for (int i = 0; i < kArrays; ++i) {
-    if (!material && i >= kVp && i <= kRho) continue;
-    a[i].offset = at, at += 8 + a[i].bytes;
+    if (has(i)) a[i].offset = at, at += 8 + a[i].bytes;
   }
   return a;
 }
@@ -79,13 +91,14 @@ std::string data_array(const Array& a, bool p = false) {
 }
 
 // The point data, cell data and points declarations, as a vtu or pvtu has them.
-std::string declarations(const std::vector<Array>& a, bool material, bool p) {
+std::string declarations(const std::vector<Array>& a, Present has, bool p) {
   const std::string in = p ? "    <P" : "      <", out = p ? "    </P" : "      </";
-  std::string s = in + "PointData>\n" + data_array(a[kNodeId], p) + data_array(a[kKind], p) + out +
-                  "PointData>\n";
+  std::string s = in + "PointData>\n" + data_array(a[kNodeId], p) + data_array(a[kKind], p);
+  if (has.geo) s += data_array(a[kLon], p) + data_array(a[kLat], p);
+  s += out + "PointData>\n";
   s += in + "CellData>\n" + data_array(a[kElementId], p) + data_array(a[kLevel], p) +
        data_array(a[kEdge], p);
-  if (material) s += data_array(a[kVp], p) + data_array(a[kVs], p) + data_array(a[kRho], p);
+  if (has.material) s += data_array(a[kVp], p) + data_array(a[kVs], p) + data_array(a[kRho], p);
   return s + out + "CellData>\n" + in + "Points>\n" + data_array(a[kPoints], p) + out + "Points>\n";
 }
 
@@ -93,20 +106,26 @@ constexpr char kVtkFile[] = "<?xml version=\"1.0\"?>\n<VTKFile type=\"";
 constexpr char kVtkFileEnd[] =
     "\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
 
-std::string header(const std::vector<Array>& a, uint64_t n, uint64_t e, bool material) {
+std::string header(const std::vector<Array>& a, uint64_t n, uint64_t e, Present has) {
   std::string s = std::string(kVtkFile) + "UnstructuredGrid" + kVtkFileEnd +
                   "  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"" + std::to_string(n) +
                   "\" NumberOfCells=\"" + std::to_string(e) + "\">\n";
-  s += declarations(a, material, false);
+  s += declarations(a, has, false);
   s += "      <Cells>\n" + data_array(a[kConn]) + data_array(a[kOffsets]) + data_array(a[kTypes]) +
        "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n_";
   return s;
 }
 
-Status write_points(ExportJob& job, std::vector<Section>& out) {
+Status write_points(ExportJob& job, std::vector<Section>& out, const GeoTransform* geo) {
   return for_each_node(job, false, [&](const MeshNode& n) {
     WEAVER_RETURN_IF_ERROR(out[kNodeId].value(int64_t(n.id)));
     WEAVER_RETURN_IF_ERROR(out[kKind].value(uint8_t(n.kind)));
+    if (geo) {
+      double lon, lat;
+      job.lon_lat(*geo, n.c, &lon, &lat);
+      WEAVER_RETURN_IF_ERROR(out[kLon].value(lon));
+      WEAVER_RETURN_IF_ERROR(out[kLat].value(lat));
+    }
     const double p[3] = {job.coord(0, n.c.x), job.coord(1, n.c.y), job.coord(2, n.c.z)};
     return out[kPoints].put(p, sizeof p);
   });
@@ -135,8 +154,11 @@ Status write_cells(ExportJob& job, std::vector<Section>& out, bool material) {
 Status write_vtu_file(ExportJob& job, const std::string& path) {
   const uint64_t n = job.node_count(), e = job.element_count();
   const bool material = job.mesh.has_material();
-  const std::vector<Array> arrays = layout(n, e, material);
-  const std::string head = header(arrays, n, e, material);
+  GeoFrame geo;
+  const Present has{material, job.georeferenced(&geo)};
+  const GeoTransform transform(geo);
+  const std::vector<Array> arrays = layout(n, e, has);
+  const std::string head = header(arrays, n, e, has);
   OutputFile file(path);
   WEAVER_RETURN_IF_ERROR(file.open());
   WEAVER_RETURN_IF_ERROR(file.write_at(0, head.data(), head.size()));
@@ -144,9 +166,9 @@ Status write_vtu_file(ExportJob& job, const std::string& path) {
   std::vector<Section> out;
   for (const Array& a : arrays) out.emplace_back(file, base + a.offset, job.section_buffer);
   for (int i = 0; i < kArrays; ++i) {
-    if (material || i < kVp || i > kRho) WEAVER_RETURN_IF_ERROR(out[i].value(arrays[i].bytes));
+    if (has(i)) WEAVER_RETURN_IF_ERROR(out[i].value(arrays[i].bytes));
   }
-  WEAVER_RETURN_IF_ERROR(write_points(job, out));
+  WEAVER_RETURN_IF_ERROR(write_points(job, out, has.geo ? &transform : nullptr));
   WEAVER_RETURN_IF_ERROR(write_cells(job, out, material));
   for (Section& s : out) WEAVER_RETURN_IF_ERROR(s.flush());
   const Array& last = arrays[kTypes];
@@ -197,10 +219,11 @@ Status write_pvtu(ExportJob& job) {
     WEAVER_RETURN_IF_ERROR(write_vtu_file(job, stem + "/" + name));
     pieces += "    <Piece Source=\"" + base_name(stem) + "/" + name + "\"/>\n";
   }
-  const bool material = job.mesh.has_material();
+  GeoFrame geo;
+  const Present has{job.mesh.has_material(), job.georeferenced(&geo)};
   const std::string index = std::string(kVtkFile) + "PUnstructuredGrid" + kVtkFileEnd +
                             "  <PUnstructuredGrid GhostLevel=\"0\">\n" +
-                            declarations(layout(0, 0, material), material, true) + pieces +
+                            declarations(layout(0, 0, has), has, true) + pieces +
                             "  </PUnstructuredGrid>\n</VTKFile>\n";
   OutputFile file(out);
   WEAVER_RETURN_IF_ERROR(file.open());

@@ -12,6 +12,7 @@
 #include "export/output_file.h"
 #include "export/selection.h"
 #include "mesh/mesh_reader.h"
+#include "model/geo_frame.h"
 
 namespace weaver {
 
@@ -61,6 +62,15 @@ struct ExportJob {
     return options.units == ExportUnits::kTicks ? ticks : mesh.units().tick_m * ticks;
   }
   const char* unit_name() const { return options.units == ExportUnits::kTicks ? "ticks" : "m"; }
+  // The mesh's place on the Earth, when it has one (construct --origin-geo).
+  bool georeferenced(GeoFrame* g) const {
+    return !mesh.units().geo.empty() && GeoFrame::parse(mesh.units().geo, g).ok();
+  }
+  // Longitude and latitude (degrees) of the point at ticks c.
+  void lon_lat(const GeoTransform& g, Coord c, double* lon, double* lat) const {
+    const Units& u = mesh.units();
+    g.to_geo(u.origin_m[0] + u.tick_m * c.x, u.origin_m[1] + u.tick_m * c.y, lon, lat);
+  }
 };
 
 // Calls fn for each node of the selection in local id order (id and anchors

@@ -32,7 +32,8 @@ struct GeoFrame {
   int utm_zone = 0;           // 0: transverse Mercator about the origin
   bool utm_south = false;
 
-  // Metres in the frame from longitude, latitude (degrees), and back.
+  // Metres in the frame from longitude, latitude (degrees), and back.  For
+  // many points, GeoTransform does the same without redoing the setup.
   void to_frame(double lon, double lat, double* x, double* y) const;
   void to_geo(double x, double y, double* lon, double* lat) const;
 
@@ -48,6 +49,20 @@ struct TransverseMercator {
   double lon_c = 0, lat_o = 0, k0 = 1, false_e = 0, false_n = 0;
   void forward(double lon, double lat, double* e, double* n) const;
   void inverse(double e, double n, double* lon, double* lat) const;
+};
+
+// A GeoFrame's maps with their constants worked out once (the origin's
+// projected position, the azimuth's sine and cosine): for every node of an
+// export, every point of a batch.
+class GeoTransform {
+ public:
+  explicit GeoTransform(const GeoFrame& g);
+  void to_frame(double lon, double lat, double* x, double* y) const;
+  void to_geo(double x, double y, double* lon, double* lat) const;
+
+ private:
+  TransverseMercator tm_;
+  double xi0_, sin_, cos_, e0_ = 0, n0_ = 0;
 };
 
 }  // namespace weaver
