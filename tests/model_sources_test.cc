@@ -106,6 +106,24 @@ TEST(ModelSources, LayersAnswerTheLayerAtEachDepthAnywhereAcross) {
   }
 }
 
+// weaver query MODEL.db material answers from a model database as weaver
+// model material does; other queries are refused in one line.
+TEST(ModelSources, QueryAnswersMaterialFromAModelDatabase) {
+  const std::string file = write_text("query_layers.txt", kHadleyKanamori);
+  const std::string db = fresh("query_layers");
+  ASSERT_TRUE(import_from(db, "layers:" + file).ok());
+  uint64_t rss = 0;
+  const std::string q =
+      bench::run_program({WEAVER_BINARY, "query", db, "material", "100", "-200", "6000"}, &rss);
+  EXPECT_EQ(q, "100 -200 6000 6300 3640 2670 700 350\n");
+  const std::string m =
+      bench::run_program({WEAVER_BINARY, "model", "material", db, "100", "-200", "6000"}, &rss);
+  EXPECT_EQ(q, m);
+  const std::string cmd =
+      std::string(WEAVER_BINARY) + " query " + db + " locate 1 2 3 >/dev/null 2>&1";
+  EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 2);
+}
+
 TEST(ModelSources, BadLayerTablesAreRefusedNamingTheLine) {
   const std::pair<const char*, const char*> cases[] = {
       {"0 5500 3180 2400\n16000 6700 3870 2800\n5500 6300 3640 2670\n", ":3: tops must increase"},
@@ -236,8 +254,8 @@ TEST(ModelSources, ConstructImportsAModelFileIntoItsDatabase) {
     const std::string db = fresh("construct_from_file");
     uint64_t rss = 0;
     const std::string out =
-        bench::run_program({WEAVER_BINARY, "mesh", db, "--model", from, "--freq", "0.1",
-                            "--domain", "40000,40000,20000", "--threads", "2", "--quiet"},
+        bench::run_program({WEAVER_BINARY, "mesh", db, "--model", from, "--freq", "0.1", "--domain",
+                            "40000,40000,20000", "--threads", "2", "--quiet"},
                            &rss);
     ASSERT_NE(out.find("balance"), std::string::npos) << out;
     ASSERT_NE(out.find("imported   " + from), std::string::npos) << out;

@@ -3,6 +3,9 @@
 
 #include "cli/cli.h"
 #include "cli/query_commands.h"
+#include "db/database.h"
+#include "db/octant_table.h"
+#include "modeldb/model_table.h"
 
 namespace weaver::cli {
 namespace {
@@ -16,12 +19,41 @@ constexpr char kUsage[] =
 constexpr char kUsageTail[] =
     "  --memory BYTES        memory budget (default 256M): the table caches and a points\n"
     "                        batch\n"
+    "A model database (weaver model import) answers 'material X Y Z' and 'material\n"
+    "--points FILE' in metres, as 'weaver model material' does.\n"
     "\n"
     "examples:\n"
     "  weaver query DB locate 440000 576000 1000\n"
     "  weaver query DB material 30000 40000 -500 --units m\n"
     "  weaver query DB locate --points receivers.txt --units m --format csv > answers.csv\n"
     "  weaver query DB neighbors 1234 --all --format table\n";
+
+// A database with a model table and no mesh: a model database.
+bool is_model_only(const std::string& db) {
+  std::unique_ptr<Database> d;
+  return Database::open(db, Database::Mode::kRead, false, &d).ok() && !d->has_table(kOctantTable) &&
+         d->has_table(kModelTable);
+}
+
+// material on a model database: `weaver model material`, in metres.
+int query_model(const std::string& db, const std::vector<std::string>& words,
+                const ParsedArgs& args) {
+  if (words[0] != "material") {
+    return usage_error("query", db + " is a model database: it answers 'material' only", kUsage);
+  }
+  std::vector<std::string> argv = {"weaver", "model", "material", db};
+  for (size_t i = 1; i < words.size(); ++i) {
+    if (words[i] == "--units" && i + 1 < words.size() && words[i + 1] == "m") {
+      ++i;  // a model database's points are in metres anyway
+      continue;
+    }
+    argv.push_back(words[i]);
+  }
+  if (args.values.count("memory")) argv.insert(argv.end(), {"--memory", args.values.at("memory")});
+  std::vector<char*> c;
+  for (std::string& a : argv) c.push_back(a.data());
+  return cmd_model(int(c.size()), c.data());
+}
 
 }  // namespace
 
@@ -48,6 +80,7 @@ int cmd_query(int argc, char** argv) {
   Status st = memory_option(args, &memory);
   const std::string db = words[0];
   words.erase(words.begin());
+  if (st.ok() && is_model_only(db)) return query_model(db, words, args);
   if (st.ok()) st = check_query(words);
   if (!st.ok()) return usage_error("query", st.message(), kUsage);
   std::unique_ptr<Explorer> ex;
