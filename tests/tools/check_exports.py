@@ -143,6 +143,13 @@ def check_vtu(db, m, d, raw):
     assert np.allclose(vtk_to_numpy(cd.GetArray("edge")), edge_m)
     assert (vtk_to_numpy(pd.GetArray("node_id")) == np.arange(N)).all()
     assert (vtk_to_numpy(pd.GetArray("kind")) == m.n["kind"]).all()
+    if "node_lonlat" in raw["arrays"]:
+        ll = raw_array(d + "/m.raw", raw, "node_lonlat")
+        assert np.array_equal(vtk_to_numpy(pd.GetArray("longitude")), ll[:, 0])
+        assert np.array_equal(vtk_to_numpy(pd.GetArray("latitude")), ll[:, 1])
+        assert (abs(ll[:, 0] + 118.2) < 1.5).all() and (abs(ll[:, 1] - 34) < 1.5).all()
+    else:
+        assert pd.GetArray("longitude") is None
     if "element_material" in raw["arrays"]:
         mat = raw_array(d + "/m.raw", raw, "element_material")
         for i, name in enumerate(("vp", "vs", "rho")):
@@ -438,10 +445,13 @@ def main():
     shutil.rmtree(d, ignore_errors=True)
     os.makedirs(d)
     db = d + "/db"
-    run(WEAVER, "mesh", db, "--model", "basin", "--freq", "0.03", "--quiet")
+    # Georeferenced: raw's node_lonlat and the vtu's longitude and latitude.
+    run(WEAVER, "mesh", db, "--model", "basin", "--freq", "0.03", "--origin-geo",
+        "-118.7,33.58", "--azimuth", "30", "--quiet")
     m = Mesh(db, d + "/csv")
     raw, msg = check_raw(db, m, d)
     assert "element_material" in raw["arrays"]
+    assert raw["geo"] == "-118.7,33.58,30" and "node_lonlat" in raw["arrays"]
     print(f"basin: {len(m.e['id'])} elements: {msg}")
     print(f"basin: {check_vtu(db, m, d, raw)}")
     print(f"basin: {check_pvtu(db, m, d, raw, 4)}")
