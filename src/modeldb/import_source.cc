@@ -29,14 +29,14 @@ Status plan_layers(const std::string& path, LayerPlan* p, ModelInfo* info) {
   // 2^19 cells down to the deepest top: a tick divides that cell.
   // Otherwise the deepest top is half the root and tops round to a tick.
   const double cell_m = gcd_mm / 1000.0;
-  if (gcd_mm > 0 && deepest / cell_m <= double(kRootEdge / 2)) {
+  p->exact = gcd_mm > 0 && deepest / cell_m <= double(kRootEdge / 2);
+  if (p->exact) {
     int level = 0;
     while (double(uint64_t{1} << level) < deepest / cell_m + 1) ++level;
     info->tick_m = cell_m / octant_edge(level);
   } else {
     info->tick_m = gcd_mm > 0 ? deepest / (kRootEdge / 2) : 1.0;
   }
-  p->exact = gcd_mm > 0 && deepest / cell_m <= double(kRootEdge / 2);
   p->tops.clear();
   for (const Layer& l : layers) p->tops.push_back(uint32_t(std::llround(l.top_m / info->tick_m)));
   info->has_q = p->table.has_q;
