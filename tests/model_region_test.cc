@@ -45,7 +45,7 @@ std::string write_model(const std::string& name, const std::vector<ModelOctant>&
   EXPECT_TRUE(Database::open(dir, Database::Mode::kWrite, true, &db).ok());
   TableOptions topt;
   topt.key_kind = KeyKind::kOctant;
-  topt.schema = model_schema(false);
+  topt.schema = material_schema(false);
   std::unique_ptr<BTree> t;
   std::string file;
   EXPECT_TRUE(db->create_table(kModelTable, topt, 8 << 20, &t, &file).ok());

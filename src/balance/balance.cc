@@ -30,8 +30,9 @@ std::unique_ptr<VelocityModel> model_of(const std::string& metadata, MemoryBudge
 }
 
 // New leaves of a table built from a model get the model's vp, vs and rho
-// at their centre, where the table's schema has those fields; other tables
-// (and other fields) keep the parent's values.
+// (and qp, qs where the table has them) at their centre, where the table's
+// schema has those fields; other tables (and other fields) keep the
+// parent's values.
 FillPayload material_fill(const VelocityModel* model, const TableOptions& table) {
   const Field* vp = table.schema.find("vp");
   const Field* vs = table.schema.find("vs");
@@ -40,12 +41,16 @@ FillPayload material_fill(const VelocityModel* model, const TableOptions& table)
   Units u;
   units_from_metadata(table.metadata, &u);
   const double tick_m = u.tick_m;
-  return [model, tick_m, vp, vs, rho](const Octant& o, std::byte* payload) {
+  const Field* qp = table.schema.find("qp");
+  const Field* qs = table.schema.find("qs");
+  return [model, tick_m, vp, vs, rho, qp, qs](const Octant& o, std::byte* payload) {
     const double h = octant_edge(o) * tick_m / 2;
     const Material m = model->at(o.x * tick_m + h, o.y * tick_m + h, o.z * tick_m + h);
     RecordSchema::set_double(payload, *vp, m.vp);
     RecordSchema::set_double(payload, *vs, m.vs);
     RecordSchema::set_double(payload, *rho, m.rho);
+    if (qp != nullptr) RecordSchema::set_double(payload, *qp, m.qp);
+    if (qs != nullptr) RecordSchema::set_double(payload, *qs, m.qs);
   };
 }
 

@@ -21,7 +21,6 @@ namespace {
 
 // The deepest block level tried when fitting the domain: 2^10 blocks a side.
 constexpr int kMaxBlockLevel = 10;
-constexpr char kMaterialSchema[] = "vp:f32,vs:f32,rho:f32";
 // Subtrees are cut so that the estimate puts about this many leaves in
 // each: enough to keep a thread busy for a while, few enough to balance.
 constexpr double kLeavesPerSubtree = 4096;
@@ -54,8 +53,8 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
                       ConstructResult* r) {
   const int threads = std::max(1, o.threads);
   const size_t window = kSubtreesPerThread * threads;
-  const size_t cap = std::clamp<uint64_t>(memory.subtrees / window / (8 + Descent::kPayloadBytes),
-                                          64, uint64_t{1} << 16);
+  const size_t cap = std::clamp<uint64_t>(
+      memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64, uint64_t{1} << 16);
   WorkQueue<Slot> queue;
   std::vector<std::thread> workers;
   if (threads > 1) {
@@ -190,8 +189,7 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, true, &db));
   TableOptions topt;
   topt.key_kind = KeyKind::kOctant;
-  std::string error;
-  topt.schema = *RecordSchema::parse(kMaterialSchema, &error);
+  topt.schema = material_schema(model->has_q());
   topt.packed = o.packed;
   std::unique_ptr<BTree> table;
   std::string file;

@@ -107,11 +107,12 @@ void Descent::emit(const Octant& o, double edge_m, double vs, SubtreeLeaves* out
   const double t = p_.tick_m, half = edge_m / 2;
   const Material m = model_.at(o.x * t + half, o.y * t + half, o.z * t + half);
   out->keys.push_back(octant_key(o));
-  const float f[3] = {m.vp, m.vs, m.rho};
-  static_assert(sizeof f == kPayloadBytes);
+  const float f[5] = {m.vp, m.vs, m.rho, m.qp, m.qs};
+  static_assert(sizeof f == kMaxPayloadBytes);
+  const size_t bytes = model_.has_q() ? 20 : 12;  // material_schema's record
   const size_t at = out->payloads.size();
-  out->payloads.resize(at + sizeof f);
-  std::memcpy(out->payloads.data() + at, f, sizeof f);
+  out->payloads.resize(at + bytes);
+  std::memcpy(out->payloads.data() + at, f, bytes);
   ++out->levels[o.level];
   const double ppw = vs / (o_.freq * edge_m);
   if (out->elements == 0 || edge_m < out->smallest_edge_m) out->smallest_edge_m = edge_m;

@@ -24,7 +24,7 @@ namespace weaver {
 // The leaves of one subtree, in key order, and what construct reports of them.
 struct SubtreeLeaves {
   std::vector<uint64_t> keys;
-  std::vector<std::byte> payloads;  // vp, vs, rho as f32, 12 bytes a leaf
+  std::vector<std::byte> payloads;  // vp, vs, rho [, qp, qs] as f32 (material_schema)
   LevelCounts levels{};
   uint64_t elements = 0;
   double smallest_edge_m = 0, largest_edge_m = 0, worst_ppw = 0;
@@ -37,7 +37,7 @@ struct SubtreeLeaves {
 
 class Descent {
  public:
-  static constexpr size_t kPayloadBytes = 12;
+  static constexpr size_t kMaxPayloadBytes = 20;
 
   Descent(const ConstructOptions& o, const ConstructPlan& p, const VelocityModel& m)
       : o_(o), p_(p), model_(m), inv_rate_(1.0 / (o.freq * o.ppw)) {}

@@ -7,10 +7,10 @@
 //   pvtu       the vtu cut into --parts pieces, and the index ParaView opens
 //   vtu        VTK XML UnstructuredGrid, raw binary appended data, 64-bit
 //              headers and ids; VTK_HEXAHEDRON cells in VTK's corner order;
-//              cell data element_id, level, edge, vp, vs, rho; point data
+//              cell data element_id, level, edge, vp, vs, rho (qp, qs); point data
 //              node_id, kind (0 anchored, 1 edge, 2 face)      (export_vtu.cc)
 //   msh        Gmsh MSH 4.1 ASCII, hexahedra (type 5) in Gmsh's corner order,
-//              element data level (and vp, vs, rho)            (export_msh.cc)
+//              element data level (and vp, vs, rho; qp, qs)    (export_msh.cc)
 //   metis      the element dual graph in METIS's graph format (gpmetis): an
 //              edge for every pair of elements sharing a face, the finer
 //              faces across a 2:1 step included              (export_metis.cc)

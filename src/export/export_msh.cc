@@ -1,11 +1,10 @@
 // msh: Gmsh's MSH 4.1, ASCII.  One node block and one element block (entity
 // 3 of dimension 3, no $Entities section), hexahedra (type 5) in Gmsh's
 // corner order, then one $ElementData view per field: level, and vp, vs, rho
-// when the mesh has material.  Tags are 1-based positions: id + 1 for the
-// whole mesh, the local id + 1 with --box.  Coordinates in metres by default,
-// or ticks.  Written in one sequential stream: a pass over the nodes for
-// their tags, one for their coordinates, one over the elements for their
-// corners, and one a field.
+// when the mesh has material (and qp, qs when it has them).  Tags are 1-based positions: id + 1 for
+// the whole mesh, the local id + 1 with --box.  Coordinates in metres by default, or ticks. Written
+// in one sequential stream: a pass over the nodes for their tags, one for their coordinates, one
+// over the elements for their corners, and one a field.
 #include <string>
 
 #include "export/writers.h"
@@ -55,7 +54,7 @@ Status write_elements(ExportJob& job, Section& out) {
   return out.text("$EndElements\n");
 }
 
-// One view of element data: field 0 level, 1 vp, 2 vs, 3 rho.
+// One view of element data: field 0 level, 1 vp, 2 vs, 3 rho, 4 qp, 5 qs.
 Status write_element_data(ExportJob& job, Section& out, const char* name, int field) {
   WEAVER_RETURN_IF_ERROR(out.text(std::string("$ElementData\n1\n\"") + name +
                                   "\"\n1\n0\n3\n0\n1\n" + std::to_string(job.element_count()) +
@@ -67,7 +66,8 @@ Status write_element_data(ExportJob& job, Section& out, const char* name, int fi
     if (field == 0) {
       line.field(uint64_t{el.octant.level});
     } else {
-      line.field(double(field == 1 ? el.vp : field == 2 ? el.vs : el.rho));
+      const float v[6] = {0, el.vp, el.vs, el.rho, el.qp, el.qs};
+      line.field(double(v[field]));
     }
     line.ch('\n');
     return line.emit(out);
@@ -84,7 +84,8 @@ Status write_msh(ExportJob& job) {
     WEAVER_RETURN_IF_ERROR(job.select(s, false, job.options.out + ".scratch"));
   }
   const bool material = job.mesh.has_material();
-  job.plan(job.node_count() + job.element_count() * (material ? 5 : 2));
+  const bool q = job.mesh.has_q();
+  job.plan(job.node_count() + job.element_count() * (material ? (q ? 7 : 5) : 2));
   OutputFile file(job.options.out);
   WEAVER_RETURN_IF_ERROR(file.open());
   Section out(file, 0, job.section_buffer * 4);
@@ -97,6 +98,10 @@ Status write_msh(ExportJob& job) {
     WEAVER_RETURN_IF_ERROR(write_element_data(job, out, "vp", 1));
     WEAVER_RETURN_IF_ERROR(write_element_data(job, out, "vs", 2));
     WEAVER_RETURN_IF_ERROR(write_element_data(job, out, "rho", 3));
+  }
+  if (q) {
+    WEAVER_RETURN_IF_ERROR(write_element_data(job, out, "qp", 4));
+    WEAVER_RETURN_IF_ERROR(write_element_data(job, out, "qs", 5));
   }
   job.result->elements = elements;
   return finish_text(job, out, file);

@@ -8,6 +8,7 @@
 //   element_nodes     (elements, 8)  <i8  node ids of corners 0..7, x fastest
 //   element_level     (elements,)    |u1
 //   element_material  (elements, 3)  <f4  vp, vs, rho (when the mesh has them)
+//   element_q         (elements, 2)  <f4  qp, qs (when its material has them)
 //   dangling_nodes    (dangling,)    <i8  the node ids of dangling nodes
 //   dangling_anchors  (dangling, 4)  <i8  their anchors' ids, -1 past 2 for edges
 //   node_global_id    (nodes,)       <i8  with --box: the node's id in the whole mesh
@@ -60,13 +61,14 @@ enum : int {
   kSharedNodes,
   kSharedParts,
   kLonLat,
+  kQ,
   kArrays
 };
 
 // Arrays with no rows (no material, the whole mesh's global ids) are left
 // out of mesh.json.
 // shared: the part's (node, other part) pairs, or -1 outside a partition.
-std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool material,
+std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool material, bool q,
                           bool selected, int64_t shared, bool geo) {
   std::vector<Array> a = {
       {"node_coords", ticks ? "<u4" : "<f8", n, 3, ticks ? 4u : 8u, ticks ? "ticks" : "m"},
@@ -80,7 +82,8 @@ std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool m
       {"element_global_id", "<i8", selected ? e : 0, 0, 8, ""},
       {"shared_nodes", "<i8", uint64_t(std::max<int64_t>(shared, 0)), 0, 8, ""},
       {"shared_parts", "<i4", uint64_t(std::max<int64_t>(shared, 0)), 0, 4, ""},
-      {"node_lonlat", "<f8", geo ? n : 0, 2, 8, "degrees"}};
+      {"node_lonlat", "<f8", geo ? n : 0, 2, 8, "degrees"},
+      {"element_q", "<f4", q ? e : 0, 2, 4, ""}};
   a[kDangling].always = a[kAnchors].always = true;
   a[kSharedNodes].always = a[kSharedParts].always = shared >= 0;
   uint64_t at = 0;
@@ -173,7 +176,7 @@ Status write_nodes(ExportJob& job, std::vector<Section>& out, const GeoTransform
   });
 }
 
-Status write_elements(ExportJob& job, std::vector<Section>& out, bool material) {
+Status write_elements(ExportJob& job, std::vector<Section>& out, bool material, bool q) {
   const bool selected = !job.sel.whole();
   return for_each_element(job, true, [&](const MeshElement& e) {
     int64_t ids[8];
@@ -181,6 +184,10 @@ Status write_elements(ExportJob& job, std::vector<Section>& out, bool material) 
     WEAVER_RETURN_IF_ERROR(out[kElementNodes].put(ids, sizeof ids));
     WEAVER_RETURN_IF_ERROR(out[kLevel].value(uint8_t(e.octant.level)));
     if (selected) WEAVER_RETURN_IF_ERROR(out[kElementGlobal].value(int64_t(e.id)));
+    if (q) {
+      const float f[2] = {e.qp, e.qs};
+      WEAVER_RETURN_IF_ERROR(out[kQ].put(f, sizeof f));
+    }
     if (!material) return Status::Ok();
     const float m[3] = {e.vp, e.vs, e.rho};
     return out[kMaterial].put(m, sizeof m);
@@ -240,15 +247,15 @@ Status write_raw_files(ExportJob& job, const std::string& dir, SharedNodes* shar
   GeoFrame geo;
   const bool georeferenced = job.georeferenced(&geo);
   const GeoTransform transform(geo);
-  const std::vector<Array> arrays = layout(job.node_count(), job.element_count(), dangling,
-                                           job.options.units == ExportUnits::kTicks, material,
-                                           !job.sel.whole(), pairs, georeferenced);
+  const std::vector<Array> arrays = layout(
+      job.node_count(), job.element_count(), dangling, job.options.units == ExportUnits::kTicks,
+      material, job.mesh.has_q(), !job.sel.whole(), pairs, georeferenced);
   OutputFile bin(dir + "/mesh.bin");
   WEAVER_RETURN_IF_ERROR(bin.open());
   std::vector<Section> out;
   for (const Array& a : arrays) out.emplace_back(bin, a.offset, job.section_buffer);
   WEAVER_RETURN_IF_ERROR(write_nodes(job, out, georeferenced ? &transform : nullptr));
-  WEAVER_RETURN_IF_ERROR(write_elements(job, out, material));
+  WEAVER_RETURN_IF_ERROR(write_elements(job, out, material, job.mesh.has_q()));
   if (shared != nullptr) WEAVER_RETURN_IF_ERROR(write_shared(job, *shared, out));
   for (Section& s : out) WEAVER_RETURN_IF_ERROR(s.flush());
   uint64_t bytes = 0;

@@ -8,7 +8,8 @@
 //   PointData  node_id Int64 (global ids), kind UInt8 (0 anchored, 1 edge, 2 face),
 //              longitude latitude Float64 (WGS84 degrees, when georeferenced)
 //   CellData   element_id Int64 (global ids), level UInt8, edge Float64 (in
-//              the units), vp vs rho Float32 (when the mesh has material)
+//              the units), vp vs rho Float32 (when the mesh has material),
+//              qp qs Float32 (when its material has them)
 //   Points     Float64 x 3 (metres by default, or ticks)
 //   Cells      connectivity Int64 (VTK's corner order), offsets Int64,
 //              types UInt8 (12, VTK_HEXAHEDRON)
@@ -48,6 +49,8 @@ enum : int {
   kVp,
   kVs,
   kRho,
+  kQp,
+  kQs,
   kPoints,
   kConn,
   kOffsets,
@@ -57,21 +60,29 @@ enum : int {
 
 // The optional arrays: which the mesh has.
 struct Present {
-  bool material = false, geo = false;
+  bool material = false, q = false, geo = false;
   bool operator()(int i) const {
-    return (material || i < kVp || i > kRho) && (geo || (i != kLon && i != kLat));
+    return (material || i < kVp || i > kRho) && (q || (i != kQp && i != kQs)) &&
+           (geo || (i != kLon && i != kLat));
   }
 };
 
-// Arrays the mesh does not have (vp, vs, rho without material; longitude,
-// latitude when not georeferenced) take no bytes and are not declared.
+Present present(ExportJob& job) {
+  GeoFrame geo;
+  return {job.mesh.has_material(), job.mesh.has_q(), job.georeferenced(&geo)};
+}
+
+// Arrays the mesh does not have (vp, vs, rho without material; qp, qs
+// without Q; longitude, latitude when not georeferenced) take no bytes and
+// are not declared.
 std::vector<Array> layout(uint64_t n, uint64_t e, Present has) {
-  const uint64_t m = has.material ? 4 * e : 0, g = has.geo ? 8 * n : 0;
+  const uint64_t m = has.material ? 4 * e : 0, q = has.q ? 4 * e : 0, g = has.geo ? 8 * n : 0;
   std::vector<Array> a = {{"node_id", "Int64", 1, 8 * n},    {"kind", "UInt8", 1, n},
                           {"longitude", "Float64", 1, g},    {"latitude", "Float64", 1, g},
                           {"element_id", "Int64", 1, 8 * e}, {"level", "UInt8", 1, e},
                           {"edge", "Float64", 1, 8 * e},     {"vp", "Float32", 1, m},
                           {"vs", "Float32", 1, m},           {"rho", "Float32", 1, m},
+                          {"qp", "Float32", 1, q},           {"qs", "Float32", 1, q},
                           {"Points", "Float64", 3, 24 * n},  {"connectivity", "Int64", 1, 64 * e},
                           {"offsets", "Int64", 1, 8 * e},    {"types", "UInt8", 1, e}};
   uint64_t at = 0;
@@ -99,6 +110,7 @@ std::string declarations(const std::vector<Array>& a, Present has, bool p) {
   s += in + "CellData>\n" + data_array(a[kElementId], p) + data_array(a[kLevel], p) +
        data_array(a[kEdge], p);
   if (has.material) s += data_array(a[kVp], p) + data_array(a[kVs], p) + data_array(a[kRho], p);
+  if (has.q) s += data_array(a[kQp], p) + data_array(a[kQs], p);
   return s + out + "CellData>\n" + in + "Points>\n" + data_array(a[kPoints], p) + out + "Points>\n";
 }
 
@@ -131,16 +143,20 @@ Status write_points(ExportJob& job, std::vector<Section>& out, const GeoTransfor
   });
 }
 
-Status write_cells(ExportJob& job, std::vector<Section>& out, bool material) {
+Status write_cells(ExportJob& job, std::vector<Section>& out, Present has) {
   int64_t cells = 0;
   return for_each_element(job, true, [&](const MeshElement& e) {
     WEAVER_RETURN_IF_ERROR(out[kElementId].value(int64_t(e.id)));
     WEAVER_RETURN_IF_ERROR(out[kLevel].value(uint8_t(e.octant.level)));
     WEAVER_RETURN_IF_ERROR(out[kEdge].value(job.length(octant_edge(e.octant))));
-    if (material) {
+    if (has.material) {
       WEAVER_RETURN_IF_ERROR(out[kVp].value(e.vp));
       WEAVER_RETURN_IF_ERROR(out[kVs].value(e.vs));
       WEAVER_RETURN_IF_ERROR(out[kRho].value(e.rho));
+    }
+    if (has.q) {
+      WEAVER_RETURN_IF_ERROR(out[kQp].value(e.qp));
+      WEAVER_RETURN_IF_ERROR(out[kQs].value(e.qs));
     }
     int64_t conn[8];
     for (int i = 0; i < 8; ++i) conn[i] = int64_t(e.nodes[kVtkHexCorner[i]]);
@@ -153,9 +169,9 @@ Status write_cells(ExportJob& job, std::vector<Section>& out, bool material) {
 // One vtu of the job's selection.
 Status write_vtu_file(ExportJob& job, const std::string& path) {
   const uint64_t n = job.node_count(), e = job.element_count();
-  const bool material = job.mesh.has_material();
   GeoFrame geo;
-  const Present has{material, job.georeferenced(&geo)};
+  job.georeferenced(&geo);
+  const Present has = present(job);
   const GeoTransform transform(geo);
   const std::vector<Array> arrays = layout(n, e, has);
   const std::string head = header(arrays, n, e, has);
@@ -169,7 +185,7 @@ Status write_vtu_file(ExportJob& job, const std::string& path) {
     if (has(i)) WEAVER_RETURN_IF_ERROR(out[i].value(arrays[i].bytes));
   }
   WEAVER_RETURN_IF_ERROR(write_points(job, out, has.geo ? &transform : nullptr));
-  WEAVER_RETURN_IF_ERROR(write_cells(job, out, material));
+  WEAVER_RETURN_IF_ERROR(write_cells(job, out, has));
   for (Section& s : out) WEAVER_RETURN_IF_ERROR(s.flush());
   const Array& last = arrays[kTypes];
   const std::string tail = "\n  </AppendedData>\n</VTKFile>\n";
@@ -219,8 +235,7 @@ Status write_pvtu(ExportJob& job) {
     WEAVER_RETURN_IF_ERROR(write_vtu_file(job, stem + "/" + name));
     pieces += "    <Piece Source=\"" + base_name(stem) + "/" + name + "\"/>\n";
   }
-  GeoFrame geo;
-  const Present has{job.mesh.has_material(), job.georeferenced(&geo)};
+  const Present has = present(job);
   const std::string index = std::string(kVtkFile) + "PUnstructuredGrid" + kVtkFileEnd +
                             "  <PUnstructuredGrid GhostLevel=\"0\">\n" +
                             declarations(layout(0, 0, has), has, true) + pieces +

@@ -25,6 +25,9 @@ Status Mesh::open(const std::string& db_dir, uint64_t octant_pool, uint64_t node
   const Field* rho = m->schema_.find("rho");
   if (vp != nullptr && vs != nullptr && rho != nullptr) {
     m->vp_ = vp, m->vs_ = vs, m->rho_ = rho;
+    const Field* qp = m->schema_.find("qp");
+    const Field* qs = m->schema_.find("qs");
+    if (qp != nullptr && qs != nullptr) m->qp_ = qp, m->qs_ = qs;
   }
   if (m->db_->has_table(kPartitionTable)) {
     WEAVER_RETURN_IF_ERROR(m->db_->open_table(kPartitionTable, 1 << 20, &m->partition_));
@@ -90,6 +93,9 @@ void Mesh::fill_material(const std::byte* payload, MeshElement* e) const {
   e->vp = float(RecordSchema::get_double(payload, *vp_));
   e->vs = float(RecordSchema::get_double(payload, *vs_));
   e->rho = float(RecordSchema::get_double(payload, *rho_));
+  if (qp_ == nullptr) return;
+  e->qp = float(RecordSchema::get_double(payload, *qp_));
+  e->qs = float(RecordSchema::get_double(payload, *qs_));
 }
 
 Status Mesh::fill_anchors(MeshNode* n) {
@@ -128,7 +134,7 @@ Status ElementScan::fill() {
     e.octant = octant_from_key(cursor_.key());
     mesh_->fill_material(cursor_.payload(), &e);
     batch_.push_back(e.octant);
-    material_.push_back({e.vp, e.vs, e.rho});
+    material_.push_back({e.vp, e.vs, e.rho, e.qp, e.qs});
     WEAVER_RETURN_IF_ERROR(cursor_.next());
   }
   if (nodes_) WEAVER_RETURN_IF_ERROR(corners_.resolve(mesh_->nodes(), batch_, &ids_));
@@ -145,7 +151,8 @@ void ElementScan::load() {
   if (at_ >= batch_.size()) return;
   e_.id = batch_first_ + at_;
   e_.octant = batch_[at_];
-  e_.vp = material_[at_][0], e_.vs = material_[at_][1], e_.rho = material_[at_][2];
+  const std::array<float, 5>& m = material_[at_];
+  e_.vp = m[0], e_.vs = m[1], e_.rho = m[2], e_.qp = m[3], e_.qs = m[4];
   if (nodes_) e_.nodes = ids_[at_];
 }
 

@@ -27,6 +27,7 @@ struct MeshElement {
   Octant octant;
   std::array<uint64_t, 8> nodes{};  // node ids of corners 0..7 (x fastest)
   float vp = 0, vs = 0, rho = 0;    // when the mesh has material
+  float qp = 0, qs = 0;             // when its material has them
 };
 
 struct MeshNode {
@@ -53,6 +54,8 @@ class Mesh {
   const Units& units() const { return units_; }
   // Whether the octant table carries vp, vs and rho (a mesh built from a model).
   bool has_material() const { return vp_ != nullptr; }
+  // Whether it carries qp and qs too (a model with attenuation).
+  bool has_q() const { return qp_ != nullptr; }
   // The stored partition (`weaver partition`), if any: its parts, method
   // ("sfc" or "graph") and map.
   bool has_partition() const { return partition_ != nullptr; }
@@ -65,7 +68,8 @@ class Mesh {
   Status node_id(Coord c, uint64_t* id);
   // The node with this id (InvalidArgument past the last), with its anchors' ids.
   Status node(uint64_t id, bool with_anchors, MeshNode* out);
-  // The element's vp, vs and rho from its octant table payload (zeros without material).
+  // The element's vp, vs, rho (and qp, qs) from its octant table payload
+  // (zeros for what the mesh does not have).
   void fill_material(const std::byte* payload, MeshElement* e) const;
   // A node's anchors, from its coordinate and kind.
   Status fill_anchors(MeshNode* n);
@@ -76,7 +80,7 @@ class Mesh {
   std::unique_ptr<BTree> octants_, nodes_;
   Units units_;
   RecordSchema schema_;
-  const Field *vp_ = nullptr, *vs_ = nullptr, *rho_ = nullptr;
+  const Field *vp_ = nullptr, *vs_ = nullptr, *rho_ = nullptr, *qp_ = nullptr, *qs_ = nullptr;
   std::unique_ptr<BTree> partition_;
   uint32_t partition_parts_ = 0;
   std::string partition_method_;
@@ -116,7 +120,7 @@ class ElementScan {
   BTreeCursor cursor_;
   uint64_t batch_first_ = 0;                    // the id of batch_[0]
   std::vector<Octant> batch_;                   // the elements read ahead
-  std::vector<std::array<float, 3>> material_;  // their vp, vs, rho
+  std::vector<std::array<float, 5>> material_;  // their vp, vs, rho, qp, qs
   std::vector<std::array<uint64_t, 8>> ids_;    // their corners' ids
   size_t at_ = 0;                               // batch_[at_] is e_
   CornerBatch corners_;

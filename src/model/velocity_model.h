@@ -7,13 +7,24 @@
 #include <memory>
 #include <string>
 
+#include "schema/record_schema.h"
 #include "schema/status.h"
 
 namespace weaver {
 
 struct Material {
   float vp = 0, vs = 0, rho = 0;  // m/s, m/s, kg/m^3
+  float qp = 0, qs = 0;           // quality factors, where the model has them (has_q())
 };
+
+// The payload of a table of materials (the octant table of a mesh built
+// from a model, a model database's table): f32 fields, Qp and Qs last and
+// only where the model has them.
+inline RecordSchema material_schema(bool has_q) {
+  std::string error;
+  return *RecordSchema::parse(
+      has_q ? "vp:f32,vs:f32,rho:f32,qp:f32,qs:f32" : "vp:f32,vs:f32,rho:f32", &error);
+}
 
 class VelocityModel {
  public:
@@ -36,6 +47,9 @@ class VelocityModel {
     (void)lo;
     (void)hi;
   }
+  // Whether at() gives Qp and Qs (else they are 0): a mesh built from such a
+  // model carries them to its leaves and exports.
+  virtual bool has_q() const { return false; }
   // Where the model's frame lies on the Earth (model/geo_frame.h's text
   // form), "" when the model does not say.
   virtual std::string geo() const { return ""; }

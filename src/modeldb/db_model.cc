@@ -143,7 +143,7 @@ Material DbModel::at(double x, double y, double z) const {
   // A hole in the model: the point takes no material (construct refuses
   // nothing here; the octant's Vs of 0 asks for the finest leaves).
   if (!lookup(x, y, z, &h).ok()) return {};
-  return {h.values[0], h.values[1], h.values[2]};
+  return {h.values[0], h.values[1], h.values[2], h.values[3], h.values[4]};
 }
 
 // From the focused region where it holds the lattice (construct's case):

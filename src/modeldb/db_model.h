@@ -52,6 +52,7 @@ class DbModel final : public VelocityModel {
                      float* out) const override;
   std::string describe() const override;
   std::string geo() const override { return info_.geo; }
+  bool has_q() const override { return info_.has_q; }
 
  private:
   struct Reader;

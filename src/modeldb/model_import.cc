@@ -135,7 +135,7 @@ Status import_model(const std::string& db_dir, const ModelImportOptions& o, Mode
   const uint64_t pool = plan.take("model table pool", 1, 8, 8ull << 20);
   TableOptions topt;
   topt.key_kind = KeyKind::kOctant;
-  topt.schema = model_schema(has_q);
+  topt.schema = material_schema(has_q);
   topt.packed = o.packed;
   std::unique_ptr<BTree> table;
   std::string file;

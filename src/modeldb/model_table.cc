@@ -10,12 +10,6 @@
 
 namespace weaver {
 
-RecordSchema model_schema(bool has_q) {
-  std::string error;
-  return *RecordSchema::parse(
-      has_q ? "vp:f32,vs:f32,rho:f32,qp:f32,qs:f32" : "vp:f32,vs:f32,rho:f32", &error);
-}
-
 namespace {
 
 // Metadata values may not hold the separators.

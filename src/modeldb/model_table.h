@@ -1,6 +1,7 @@
 // The model table: a velocity model stored as an octree of materials in
 // weaver's own storage.  Key = packed octant key (schema/octant.h); payload
-// vp, vs, rho and, where the source has them, qp, qs (f32, m/s and kg/m^3).
+// material_schema: vp, vs, rho and, where the source has them, qp, qs (f32,
+// m/s and kg/m^3).
 // A point's material is the octant holding it: the floor of its pixel key
 // (the aggregate hit).  The leaves need not fill the root: a point the model
 // does not cover is clamped into the model's box first (ModelInfo::extent_m).
@@ -13,6 +14,7 @@
 #include <string>
 
 #include "model/etree_file.h"
+#include "model/velocity_model.h"
 #include "schema/record_schema.h"
 #include "schema/status.h"
 
@@ -34,7 +36,6 @@ struct ModelInfo {
   std::string producer;  // the source's own metadata text, as far as it goes
 };
 
-RecordSchema model_schema(bool has_q);
 // Metadata text (";"-separated key=value; units_from_metadata reads it too).
 std::string model_info_to_metadata(const ModelInfo& info);
 void model_info_from_metadata(const std::string& metadata, ModelInfo* info);

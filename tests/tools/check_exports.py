@@ -157,6 +157,12 @@ def check_vtu(db, m, d, raw):
         assert (mat[:, 0] > mat[:, 1]).all() and (mat[:, 2] > 0).all()
     else:
         assert cd.GetArray("vp") is None
+    if "element_q" in raw["arrays"]:
+        q = raw_array(d + "/m.raw", raw, "element_q")
+        for i, name in enumerate(("qp", "qs")):
+            assert np.array_equal(vtk_to_numpy(cd.GetArray(name)), q[:, i]), name
+    else:
+        assert cd.GetArray("qp") is None
     return "vtu ok"
 
 
@@ -258,6 +264,12 @@ def check_msh(db, m, d, raw):
     if "element_material" in raw["arrays"]:
         mat = raw_array(d + "/m.raw", raw, "element_material")
         assert np.allclose(mm.cell_data["vs"][0], mat[:, 1], rtol=1e-6)
+    if "element_q" in raw["arrays"]:
+        q = raw_array(d + "/m.raw", raw, "element_q")
+        assert np.allclose(mm.cell_data["qp"][0], q[:, 0], rtol=1e-6)
+        assert np.allclose(mm.cell_data["qs"][0], q[:, 1], rtol=1e-6)
+    else:
+        assert "qp" not in mm.cell_data
     return "msh ok (gmsh, meshio)"
 
 
@@ -457,6 +469,41 @@ def main():
     print(f"basin: {check_pvtu(db, m, d, raw, 4)}")
     print(f"basin: {check_box(db, m, d, raw)}")
     print(f"basin: {check_msh(db, m, d, raw)}")
+    check_layered_q()
+
+
+# Southern California's 1-D model (Hadley and Kanamori), with Qp and Qs: a
+# mesh built from it carries them, and each element's values are those of
+# the layer holding its centre (read here from the table, not from weaver).
+HADLEY_KANAMORI = [(0, 5500, 3180, 2400, 600, 300), (5500, 6300, 3640, 2670, 700, 350),
+                   (16000, 6700, 3870, 2800, 800, 400), (32000, 7800, 4500, 3000, 900, 450)]
+
+
+def check_layered_q():
+    d = os.path.join(WORK, "layers")
+    shutil.rmtree(d, ignore_errors=True)
+    os.makedirs(d)
+    table = d + "/hk.txt"
+    with open(table, "w") as f:
+        f.write("# top vp vs rho qp qs\n")
+        f.writelines(" ".join(str(v) for v in row) + "\n" for row in HADLEY_KANAMORI)
+    db = d + "/db"
+    run(WEAVER, "mesh", db, "--model", "layers:" + table, "--freq", "0.1", "--domain",
+        "64000,64000,48000", "--quiet")
+    m = Mesh(db, d + "/csv")
+    raw, msg = check_raw(db, m, d)
+    assert "element_q" in raw["arrays"], raw["arrays"].keys()
+    q = raw_array(d + "/m.raw", raw, "element_q")
+    mat = raw_array(d + "/m.raw", raw, "element_material")
+    centre_z = (m.e["z"] + m.edge / 2.0) * raw["tick_m"] + raw["origin_m"][2]
+    tops = np.array([row[0] for row in HADLEY_KANAMORI])
+    layer = np.searchsorted(tops, centre_z, side="right") - 1
+    expect = np.array(HADLEY_KANAMORI, dtype=np.float32)[layer]
+    assert np.array_equal(mat, expect[:, 1:4]) and np.array_equal(q, expect[:, 4:6])
+    assert len(set(layer)) == len(HADLEY_KANAMORI), "the mesh does not reach every layer"
+    print(f"layers: {len(m.e['id'])} elements, Q from the table: {msg}")
+    print(f"layers: {check_vtu(db, m, d, raw)}")
+    print(f"layers: {check_msh(db, m, d, raw)}")
 
 
 if __name__ == "__main__":
