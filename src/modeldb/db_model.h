@@ -71,6 +71,7 @@ class DbModel final : public VelocityModel {
   uint64_t pool_bytes_ = 0;
   size_t region_octants_ = 0;        // the most octants a reader's region holds
   std::array<uint32_t, 3> limit_{};  // ticks: the last pixel inside the box, per axis
+  double inv_tick_ = 1;              // 1 / info_.tick_m
   mutable std::mutex mu_;
   mutable std::unordered_map<std::thread::id, std::unique_ptr<Reader>> readers_;
 };
