@@ -300,5 +300,77 @@ TEST(ModelSources, ConstructImportsAModelFileIntoItsDatabase) {
   EXPECT_FALSE(has_model_table(db));
 }
 
+// A batch answers in Z-order, whatever the points' order: each point gets
+// what it alone would get, outside the model's box too (clamped, and said).
+TEST(ModelSources, BatchLookupsAnswerAsSingleOnesInAnyOrder) {
+  const std::string etree = std::string(WEAVER_SOURCE_DIR) + "/tests/data/etree/cmu.e";
+  const std::string db = fresh("batch");
+  ASSERT_TRUE(import_from(db, "etree:" + etree).ok());
+  std::unique_ptr<DbModel> m;
+  ASSERT_TRUE(DbModel::open(db, MemoryBudget(), 1, &m).ok());
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> coord(-20000, 120000);  // the box is 0..100 km
+  std::vector<double> xyz(3 * 20000);
+  for (double& v : xyz) v = coord(rng);
+  std::vector<ModelHit> hits(xyz.size() / 3);
+  ASSERT_TRUE(m->lookup_batch(xyz.data(), hits.size(), hits.data()).ok());
+  size_t clamped = 0;
+  for (size_t i = 0; i < hits.size(); ++i) {
+    ModelHit one;
+    ASSERT_TRUE(m->lookup(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2], &one).ok());
+    ASSERT_EQ(hits[i].values, one.values) << i;
+    ASSERT_EQ(hits[i].octant, one.octant) << i;
+    ASSERT_EQ(hits[i].clamped, one.clamped) << i;
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) inside = inside && xyz[3 * i + a] >= 0 && xyz[3 * i + a] < 1e5;
+    ASSERT_EQ(hits[i].clamped, !inside) << i;
+    clamped += !inside;
+  }
+  EXPECT_GT(clamped, 1000u);
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// --outside: points and domains past the model's box take its nearest cell
+// (the default, said once) or are refused in one line, naming them.
+TEST(ModelSources, OutsideTheModelIsClampedAndSaidOrRefused) {
+  const std::string etree = std::string(WEAVER_SOURCE_DIR) + "/tests/data/etree/cmu.e";
+  const std::string db = fresh("outside");
+  ASSERT_TRUE(import_from(db, "etree:" + etree).ok());
+  const std::string points = write_text("outside_points.txt", "10 10 10\n150000 5 5\n-1 2 3\n");
+  const std::string base = std::string(WEAVER_BINARY) + " model material " + db + " --points " +
+                           points + " >" + db + ".out 2>" + db + ".err";
+  ASSERT_EQ(WEXITSTATUS(std::system(base.c_str())), 0);
+  const std::string answers = read_file(db + ".out");
+  EXPECT_EQ(std::count(answers.begin(), answers.end(), '\n'), 3) << answers;
+  const std::string note = read_file(db + ".err");
+  EXPECT_NE(note.find("2 point(s) outside the model's box"), std::string::npos) << note;
+  EXPECT_NE(note.find("first: (150000, 5, 5) m"), std::string::npos) << note;
+  ASSERT_EQ(WEXITSTATUS(std::system((base + " --outside error").c_str())), 1);
+  const std::string err = read_file(db + ".err");
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_NE(err.find("point (150000, 5, 5) m is outside the model's box (x 0..100000"),
+            std::string::npos)
+      << err;
+  // construct over a domain twice the model's width.
+  const std::string mesh = fresh("outside_mesh");
+  const std::string construct =
+      std::string(WEAVER_BINARY) + " construct " + mesh + " --model db:" + db +
+      " --freq 0.05 --domain 200000,100000,50000 --quiet >" + mesh + ".out 2>" + mesh + ".err";
+  ASSERT_EQ(WEXITSTATUS(std::system((construct + " --outside error").c_str())), 1);
+  const std::string refused = read_file(mesh + ".err");
+  EXPECT_NE(refused.find("x past 100000 m (to 200000)"), std::string::npos) << refused;
+  EXPECT_EQ(std::count(refused.begin(), refused.end(), '\n'), 1) << refused;
+  EXPECT_FALSE(std::filesystem::exists(mesh + "/octants-1.bt"));
+  ASSERT_EQ(WEXITSTATUS(std::system(construct.c_str())), 0);
+  const std::string plan = read_file(mesh + ".out");
+  EXPECT_NE(plan.find("outside    the domain reaches outside the model's box: x past 100000 m"),
+            std::string::npos)
+      << plan;
+}
+
 }  // namespace
 }  // namespace weaver

@@ -49,6 +49,9 @@ Status import_model_option(const std::string& db, weaver::ConstructOptions* o);
 // --memory: at least MemoryBudget::kMinBytes and at most the machine's
 // physical memory; MemoryBudget::kDefaultBytes when absent.
 Status memory_option(const ParsedArgs& args, MemoryBudget* budget);
+// --outside clamp|error: whether a point outside a model's box is an error
+// (default: no, it takes the nearest model cell's values).
+Status outside_option(const ParsedArgs& args, bool* error);
 Status threads_option(const ParsedArgs& args, int default_threads, int* threads);
 // The number of cores (at least 1): the default of every --threads.
 int default_threads();

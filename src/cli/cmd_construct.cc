@@ -17,7 +17,8 @@ constexpr char kUsage[] =
     "                           [--vs-min V] [--domain LX,LY,LZ] [--min-level L]\n"
     "                           [--max-level L] [--max-elements N] [--memory BYTES]\n"
     "                           [--threads N] [--origin-geo LON,LAT [--azimuth DEG]\n"
-    "                           [--utm-zone Z]] [--plain] [--quiet]\n"
+    "                           [--utm-zone Z]] [--outside clamp|error] [--plain]\n"
+    "                           [--quiet]\n"
     "\n"
     "Builds the octant table of DB from a velocity model: every leaf satisfies\n"
     "edge <= Vs_min / (F * N), Vs_min being the least Vs of the model over 27\n"
@@ -42,6 +43,9 @@ constexpr char kUsage[] =
     "  --azimuth DEG      of the x axis, clockwise from north (default 0: x north,\n"
     "                     y east, z down); a transverse Mercator about the origin\n"
     "  --utm-zone Z[s]    project by UTM zone Z instead ('s': southern)\n"
+    "  --outside clamp|error  where the domain reaches past a model database's\n"
+    "                     box: take the nearest model cell's values (clamp, the\n"
+    "                     default, said in the plan) or refuse to start (error)\n"
     "  --min-level L, --max-level L   bounds on leaf levels (default 0, 20)\n"
     "  --max-elements N   refuse to start when a coarse sampling of the model\n"
     "                     estimates more leaves than N (default 5G), or more\n"
@@ -115,6 +119,7 @@ Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
     o->domain_m = {d[0], d[1], d[2]};
   }
   WEAVER_RETURN_IF_ERROR(geo_options(args, &o->geo));
+  WEAVER_RETURN_IF_ERROR(outside_option(args, &o->outside_error));
   return memory_option(args, &o->memory);
 }
 
@@ -139,17 +144,21 @@ void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
   std::printf("root       %g m, tick %.6g m, levels %d..%d\n", p.root_edge_m, p.tick_m,
               std::max(o.min_level, p.block_level), o.max_level);
   if (!o.geo.empty()) std::printf("geo        origin lon,lat,azimuth %s\n", o.geo.c_str());
+  if (!p.outside.empty()) {
+    std::printf("outside    %s: points there take the nearest model cell's values\n",
+                p.outside.c_str());
+  }
   std::printf("estimate   about %.3g elements, %.3g GB of disk (a coarse sampling of the model)\n",
               p.estimated_elements, p.estimated_disk_bytes / 1e9);
 }
 
 int cmd_construct(int argc, char** argv) {
   ParsedArgs args;
-  Status st =
-      parse_args(argc, argv, 2,
-                 {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level",
-                  "memory", "max-elements", "threads", "origin-geo", "azimuth", "utm-zone"},
-                 {"plain", "quiet"}, &args);
+  Status st = parse_args(
+      argc, argv, 2,
+      {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level", "memory",
+       "max-elements", "threads", "origin-geo", "azimuth", "utm-zone", "outside"},
+      {"plain", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("construct", "expected one DB", kUsage);

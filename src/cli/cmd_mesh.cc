@@ -19,7 +19,8 @@ constexpr char kUsage[] =
     "usage: weaver mesh DB --model NAME --freq F [--ppw N] [--vs-min V] [--domain LX,LY,LZ]\n"
     "                      [--min-level L] [--max-level L] [--grid FILE] [--threads N]\n"
     "                      [--max-elements N] [--memory BYTES] [--origin-geo LON,LAT\n"
-    "                      [--azimuth DEG] [--utm-zone Z]] [--plain] [--quiet]\n"
+    "                      [--azimuth DEG] [--utm-zone Z]] [--outside clamp|error]\n"
+    "                      [--plain] [--quiet]\n"
     "\n"
     "The whole pipeline: construct the octree from the model, 2:1 balance it, extract\n"
     "the mesh.  Prints a line per stage (count, rate, time, peak memory), then the\n"
@@ -69,11 +70,11 @@ int report_after(const char* stage, const Status& st, const char* committed) {
 
 int cmd_mesh(int argc, char** argv) {
   ParsedArgs args;
-  Status st =
-      parse_args(argc, argv, 2,
-                 {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level",
-                  "memory", "threads", "max-elements", "origin-geo", "azimuth", "utm-zone"},
-                 {"plain", "quiet"}, &args);
+  Status st = parse_args(
+      argc, argv, 2,
+      {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level", "memory",
+       "threads", "max-elements", "origin-geo", "azimuth", "utm-zone", "outside"},
+      {"plain", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("mesh", "expected one DB", kUsage);

@@ -23,6 +23,17 @@ int usage_error(const std::string& command, const std::string& message, const ch
   return 2;
 }
 
+Status outside_option(const ParsedArgs& args, bool* error) {
+  *error = false;
+  if (!args.values.count("outside")) return Status::Ok();
+  const std::string& v = args.values.at("outside");
+  if (v != "clamp" && v != "error") {
+    return Status::InvalidArgument("--outside must be clamp or error, not '" + v + "'");
+  }
+  *error = v == "error";
+  return Status::Ok();
+}
+
 Status memory_option(const ParsedArgs& args, MemoryBudget* budget) {
   *budget = MemoryBudget();
   if (!args.values.count("memory")) return Status::Ok();

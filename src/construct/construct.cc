@@ -156,6 +156,12 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
   WEAVER_RETURN_IF_ERROR(open_velocity_model(o.model, o.grid_file, ConstructMemory(o.memory).model,
                                              std::max(1, o.threads), &model));
   p->model = model->describe();
+  p->outside = model->outside(p->domain_m);
+  if (!p->outside.empty() && o.outside_error) {
+    return Status::NotFound(p->outside +
+                            " (without --outside error, points there take the "
+                            "values of the nearest model cell)");
+  }
   const ConstructEstimate e = estimate_construct(o, *p, *model);
   p->estimated_elements = e.elements;
   p->estimated_disk_bytes = e.disk_bytes;

@@ -31,6 +31,9 @@ struct ConstructOptions {
   // Where the domain's origin lies on the Earth (model/geo_frame.h's text
   // form); "" takes the model's own when it has one.
   std::string geo;
+  // Where the domain reaches past the model's box (VelocityModel::outside):
+  // refuse (true) or sample the model's edge values there (false, the default).
+  bool outside_error = false;
   int min_level = 0, max_level = kMaxLevel;
   MemoryBudget memory;
   // Worker threads visiting subtrees (descent.h); the table is the same for any count.
@@ -69,6 +72,7 @@ struct ConstructPlan {
   std::array<double, 3> domain_m = {0, 0, 0};  // as covered by the blocks
   bool rounded_up = false;        // the domain was not a union of blocks up to level 10
   std::string model;              // the model's description
+  std::string outside;            // where the domain reaches past the model's box ("": nowhere)
   double estimated_elements = 0;  // from a coarse sampling (construct/estimate.h)
   double estimated_disk_bytes = 0;
 };

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <memory>
 #include <string>
 
@@ -50,6 +51,13 @@ class VelocityModel {
   // Whether at() gives Qp and Qs (else they are 0): a mesh built from such a
   // model carries them to its leaves and exports.
   virtual bool has_q() const { return false; }
+  // "" when the model has values over the whole box [0, domain_m] (metres);
+  // else which sides of it reach past the model's own box, whose edge values
+  // at() gives there (construct says so, or refuses with --outside error).
+  virtual std::string outside(const std::array<double, 3>& domain_m) const {
+    (void)domain_m;
+    return "";
+  }
   // Where the model's frame lies on the Earth (model/geo_frame.h's text
   // form), "" when the model does not say.
   virtual std::string geo() const { return ""; }

@@ -101,6 +101,44 @@ uint32_t DbModel::pixel_on(int a, double m, bool* clamped) const {
   return static_cast<uint32_t>(k);
 }
 
+namespace {
+const char kAxes[] = "xyz";
+}  // namespace
+
+Status DbModel::outside_box(double x, double y, double z) const {
+  std::string box;
+  for (int a = 0; a < 3; ++a) {
+    if (info_.extent_m[a] == 0) continue;  // everywhere inside along this axis
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%s%c %g..%g", box.empty() ? "" : ", ", kAxes[a],
+                  info_.origin_m[a], info_.origin_m[a] + info_.extent_m[a]);
+    box += buf;
+  }
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "point (%g, %g, %g) m is outside the model's box (", x, y, z);
+  return Status::NotFound(buf + box + " m)");
+}
+
+std::string DbModel::outside(const std::array<double, 3>& domain_m) const {
+  std::string sides;
+  for (int a = 0; a < 3; ++a) {
+    if (info_.extent_m[a] == 0) continue;
+    const double lo = info_.origin_m[a], hi = lo + info_.extent_m[a];
+    const double slack = 1e-9 * std::max(std::abs(hi), domain_m[a]);
+    char buf[128];
+    if (lo > slack) {
+      std::snprintf(buf, sizeof buf, "%s%c below %g m", sides.empty() ? "" : ", ", kAxes[a], lo);
+      sides += buf;
+    }
+    if (domain_m[a] > hi + slack) {
+      std::snprintf(buf, sizeof buf, "%s%c past %g m (to %g)", sides.empty() ? "" : ", ", kAxes[a],
+                    hi, domain_m[a]);
+      sides += buf;
+    }
+  }
+  return sides.empty() ? "" : "the domain reaches outside the model's box: " + sides;
+}
+
 Status DbModel::hole_at(double x, double y, double z) const {
   char buf[160];
   std::snprintf(buf, sizeof buf, "the model has no octant at (%g, %g, %g) m", x, y, z);
@@ -158,6 +196,24 @@ Status DbModel::find(Reader& r, double x, double y, double z, ModelHit* hit) con
 
 Status DbModel::lookup(double x, double y, double z, ModelHit* hit) const {
   return find(reader(), x, y, z, hit);
+}
+
+Status DbModel::lookup_batch(const double* xyz, size_t n, ModelHit* hits) const {
+  Reader& r = reader();
+  std::vector<std::pair<uint64_t, uint32_t>> order(n);  // (pixel's Morton code, point)
+  for (size_t i = 0; i < n; ++i) {
+    bool clamped = false;
+    const double* p = xyz + 3 * i;
+    const Coord c{pixel_on(0, p[0], &clamped), pixel_on(1, p[1], &clamped),
+                  pixel_on(2, p[2], &clamped)};
+    order[i] = {morton_encode(c), static_cast<uint32_t>(i)};
+  }
+  std::sort(order.begin(), order.end());
+  for (const auto& [code, i] : order) {
+    const double* p = xyz + 3 * i;
+    WEAVER_RETURN_IF_ERROR(find(r, p[0], p[1], p[2], &hits[i]));
+  }
+  return Status::Ok();
 }
 
 Material DbModel::at(double x, double y, double z) const {

@@ -45,6 +45,14 @@ class DbModel final : public VelocityModel {
   // The material at (x, y, z) metres in the model's frame.  NotFound when
   // the model has no octant there (a hole in an etree).
   Status lookup(double x, double y, double z, ModelHit* hit) const;
+  // lookup() of n points (xyz: x, y, z of each in turn) into hits[0..n),
+  // answered in Z-order so the table's pages are read once each, not once
+  // a point: a batch in random order runs as fast as a sorted one.
+  Status lookup_batch(const double* xyz, size_t n, ModelHit* hits) const;
+
+  // The error for a point outside the model's box, naming it and the box.
+  Status outside_box(double x, double y, double z) const;
+  std::string outside(const std::array<double, 3>& domain_m) const override;
 
   Material at(double x, double y, double z) const override;
   void focus(const double lo[3], const double hi[3]) const override;
