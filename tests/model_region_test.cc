@@ -12,6 +12,7 @@
 #include "db/database.h"
 #include "modeldb/model_table.h"
 #include "storage/btree.h"
+#include "verify/verify.h"
 
 namespace weaver {
 namespace {
@@ -148,6 +149,26 @@ TEST(ModelRegion, PastItsCapTheRegionStaysUnloaded) {
   ASSERT_TRUE(r.load(*t, {0, 0, 0}, all, 12, octants.size()).ok());
   EXPECT_TRUE(r.loaded());
   EXPECT_EQ(r.octants(), octants.size());
+}
+
+// weaver verify knows a model table: its octants disjoint (as every octant
+// table) and its values in range, naming the first octant out of range.
+TEST(ModelRegion, VerifyChecksAModelTablesValues) {
+  std::mt19937_64 rng(5);
+  std::vector<ModelOctant> octants;
+  grow(octant_root(), 6, {1000, 2000, 3000}, rng, 1000000, &octants);
+  VerifyOptions o;
+  VerifyReport r;
+  ASSERT_TRUE(verify_database(write_model("verify_good", octants), o, &r).ok());
+  EXPECT_TRUE(r.problems.empty()) << r.problems[0];
+  EXPECT_EQ(r.records, octants.size());
+  ModelOctant& bad = octants[octants.size() / 2];
+  bad.v[1] = -3;
+  ASSERT_TRUE(verify_database(write_model("verify_bad", octants), o, &r).ok());
+  ASSERT_EQ(r.problems.size(), 1u);
+  EXPECT_NE(r.problems[0].find("table model: octant " + describe_octant(bad.o) + " has Vs -3"),
+            std::string::npos)
+      << r.problems[0];
 }
 
 }  // namespace

@@ -122,6 +122,16 @@ TEST(ModelSources, QueryAnswersMaterialFromAModelDatabase) {
   const std::string cmd =
       std::string(WEAVER_BINARY) + " query " + db + " locate 1 2 3 >/dev/null 2>&1";
   EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 2);
+  // The shell answers from the model table too, line by line.
+  const std::string lines = write_text("query_shell.txt",
+                                       "material 100 -200 6000\n# a comment\n"
+                                       "material 0 0 40000\n.quit\nmaterial 1 1 1\n");
+  const std::string shell =
+      std::string(WEAVER_BINARY) + " shell " + db + " <" + lines + " >" + db + ".shell 2>&1";
+  EXPECT_EQ(WEXITSTATUS(std::system(shell.c_str())), 0);
+  std::ifstream in(db + ".shell");
+  const std::string out(std::istreambuf_iterator<char>(in), {});
+  EXPECT_EQ(out, q + "0 0 40000 7800 4500 3000 900 450\n");
 }
 
 TEST(ModelSources, BadLayerTablesAreRefusedNamingTheLine) {

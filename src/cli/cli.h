@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "schema/status.h"
 #include "util/args.h"
@@ -45,6 +46,13 @@ void print_construct_plan(const weaver::ConstructOptions& o, const weaver::Const
 // A --model naming a model file (etree:, grid:, layers:, xyz:): imported
 // into DB's model table, printed, and read from there ("db:DB").
 Status import_model_option(const std::string& db, weaver::ConstructOptions* o);
+
+// A database with a model table and no mesh: a model database, whose
+// queries (`material` only, in metres) 'weaver model material' answers;
+// query_model runs one (memory: --memory's text, "" for the default).
+bool is_model_only(const std::string& db);
+int query_model(const std::string& db, const std::vector<std::string>& words,
+                const std::string& memory);
 
 // --memory: at least MemoryBudget::kMinBytes and at most the machine's
 // physical memory; MemoryBudget::kDefaultBytes when absent.

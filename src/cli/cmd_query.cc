@@ -28,16 +28,16 @@ constexpr char kUsageTail[] =
     "  weaver query DB locate --points receivers.txt --units m --format csv > answers.csv\n"
     "  weaver query DB neighbors 1234 --all --format table\n";
 
-// A database with a model table and no mesh: a model database.
+}  // namespace
+
 bool is_model_only(const std::string& db) {
   std::unique_ptr<Database> d;
   return Database::open(db, Database::Mode::kRead, false, &d).ok() && !d->has_table(kOctantTable) &&
          d->has_table(kModelTable);
 }
 
-// material on a model database: `weaver model material`, in metres.
 int query_model(const std::string& db, const std::vector<std::string>& words,
-                const ParsedArgs& args) {
+                const std::string& memory) {
   if (words[0] != "material") {
     return usage_error("query", db + " is a model database: it answers 'material' only", kUsage);
   }
@@ -49,13 +49,11 @@ int query_model(const std::string& db, const std::vector<std::string>& words,
     }
     argv.push_back(words[i]);
   }
-  if (args.values.count("memory")) argv.insert(argv.end(), {"--memory", args.values.at("memory")});
+  if (!memory.empty()) argv.insert(argv.end(), {"--memory", memory});
   std::vector<char*> c;
   for (std::string& a : argv) c.push_back(a.data());
   return cmd_model(int(c.size()), c.data());
 }
-
-}  // namespace
 
 int cmd_query(int argc, char** argv) {
   // The database and --memory are read here; the rest is the query's.
@@ -80,7 +78,9 @@ int cmd_query(int argc, char** argv) {
   Status st = memory_option(args, &memory);
   const std::string db = words[0];
   words.erase(words.begin());
-  if (st.ok() && is_model_only(db)) return query_model(db, words, args);
+  if (st.ok() && is_model_only(db)) {
+    return query_model(db, words, args.values.count("memory") ? args.values.at("memory") : "");
+  }
   if (st.ok()) st = check_query(words);
   if (!st.ok()) return usage_error("query", st.message(), kUsage);
   std::unique_ptr<Explorer> ex;

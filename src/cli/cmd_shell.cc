@@ -70,9 +70,14 @@ std::vector<std::string> words_of(const std::string& line) {
 
 class Shell {
  public:
-  Shell(std::string db, MemoryBudget memory) : db_(std::move(db)), memory_(memory) {}
+  Shell(std::string db, MemoryBudget memory, std::string memory_text)
+      : db_(std::move(db)), memory_(memory), memory_text_(std::move(memory_text)) {}
 
-  Status open() { return Explorer::open(db_, memory_, &ex_); }
+  // A model database (no mesh) answers 'material' from its model table.
+  Status open() {
+    model_only_ = is_model_only(db_);
+    return model_only_ ? Status::Ok() : Explorer::open(db_, memory_, &ex_);
+  }
   bool failed() const { return failed_; }
 
   // Gives the next line of the input the current line came from; false at its end.
@@ -87,6 +92,9 @@ class Shell {
     bool go_on = true;
     if (w[0][0] == '.') {
       go_on = dot(w);
+    } else if (model_only_) {
+      std::fflush(stdout);
+      failed_ |= query_model(db_, w, memory_text_) != 0;
     } else if (reads_points_from_input(w)) {
       query_with_inline_points(w, next);
     } else {
@@ -111,6 +119,12 @@ class Shell {
   }
 
   void banner() const {
+    if (model_only_) {
+      std::printf("weaver shell: %s, a model database (read-only): 'material X Y Z' in metres\n",
+                  db_.c_str());
+      std::printf("Enter \".help\" for usage hints.\n");
+      return;
+    }
     std::printf("weaver shell: %s, %llu elements, %llu nodes (read-only)\n", db_.c_str(),
                 (unsigned long long)ex_->element_count(), (unsigned long long)ex_->node_count());
     std::printf("Enter \".help\" for usage hints.\n");
@@ -219,6 +233,8 @@ class Shell {
 
   std::string db_;
   MemoryBudget memory_;
+  std::string memory_text_;  // --memory as given, for a model database's queries
+  bool model_only_ = false;
   std::unique_ptr<Explorer> ex_;
   QuerySettings settings_;
   bool timer_ = false;
@@ -242,7 +258,8 @@ int cmd_shell(int argc, char** argv) {
   MemoryBudget memory;
   st = memory_option(args, &memory);
   if (!st.ok()) return usage_error("shell", st.message(), kUsage);
-  Shell shell(args.positional[0], memory);
+  Shell shell(args.positional[0], memory,
+              args.values.count("memory") ? args.values.at("memory") : "");
   st = shell.open();
   if (!st.ok()) return report("shell", st);
   if (!isatty(STDIN_FILENO) || !isatty(STDOUT_FILENO)) {

@@ -1,6 +1,8 @@
 #include "verify/verify.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 
@@ -9,6 +11,8 @@
 #include "db/leaf_reader.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
+#include "modeldb/import_source.h"
+#include "modeldb/model_table.h"
 #include "storage/btree.h"
 #include "util/parallel.h"
 #include "verify/mesh_check.h"
@@ -46,6 +50,28 @@ Status scan_octants(BTree& t, const std::string& name, Problems& problems) {
   return Status::Ok();
 }
 
+// A model table's values: in range, as import leaves them (velocities and
+// density positive, Q not negative, all finite).
+Status scan_model(BTree& t, const std::string& name, Problems& problems) {
+  const int fields =
+      static_cast<int>(std::min<size_t>(t.options().schema.record_size() / 4, kModelFields));
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(t.seek_cursor(0, &c));
+  while (c.valid()) {
+    ModelValues v{};
+    std::memcpy(v.data(), c.payload(), 4 * size_t(fields));
+    if (const int bad = bad_model_field(v, fields); bad >= 0) {
+      problems.add(
+          bad_model_value("table " + name + ": octant " + describe_octant(octant_from_key(c.key())),
+                          v, bad)
+              .message());
+      return Status::Ok();
+    }
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  return Status::Ok();
+}
+
 Status scan_nodes(BTree& t, const std::string& name, Problems& problems) {
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(t.seek_cursor(0, &c));
@@ -79,6 +105,7 @@ Status check_table(const Database& db, const std::string& name, uint64_t pool_by
   const size_t before = r->problems.size();
   if (t->options().key_kind == KeyKind::kOctant) {
     WEAVER_RETURN_IF_ERROR(scan_octants(*t, name, problems));
+    if (name == kModelTable) WEAVER_RETURN_IF_ERROR(scan_model(*t, name, problems));
   } else if (name == kNodeTable) {
     WEAVER_RETURN_IF_ERROR(scan_nodes(*t, name, problems));
   }
