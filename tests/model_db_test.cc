@@ -2,6 +2,7 @@
 // grid files, answered by the aggregate-hit query, and construct from it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -11,7 +12,9 @@
 #include "construct/construct.h"
 #include "db/database.h"
 #include "model/grid_model.h"
+#include "model/material_merge.h"
 #include "modeldb/db_model.h"
+#include "modeldb/grid_import.h"
 #include "modeldb/model_import.h"
 #include "storage/btree.h"
 
@@ -151,6 +154,73 @@ TEST(ModelDb, GridPointsAreOctantCentres) {
     ASSERT_TRUE(m->lookup(g.x0, g.y0, g.z0, &corner).ok());
     EXPECT_TRUE(h.clamped);
     EXPECT_EQ(h.values, corner.values);
+  }
+}
+
+// A grid is read in blocks and merged a block at a time before the merger
+// sees it (model/block_merge.h): the table is the one the merger writes
+// when handed every grid point one by one, in key order (the slow
+// reference), for block sizes that cut the grid unevenly, and tolerances.
+TEST(ModelDb, BlockMergedGridImportIsTheOneByOneMerge) {
+  GridSpec g;
+  g.nx = 77, g.ny = 45, g.nz = 39;
+  g.dx = g.dy = g.dz = 100;
+  std::vector<Material> values;
+  for (int k = 0; k < g.nz; ++k)
+    for (int j = 0; j < g.ny; ++j)
+      for (int i = 0; i < g.nx; ++i) {
+        // Uniform layers, with a patch of noise and a smooth gradient.
+        float vs = 500 + 400 * float(k / 8);
+        if (i > 40 && j < 20 && k > 10) vs += float((i * 7 + j * 13 + k * 3) % 11);
+        if (i < 16) vs += 0.5f * float(i);
+        values.push_back({2 * vs, vs, 2000});
+      }
+  const std::string grid = ::testing::TempDir() + "model_db_blocks.grid";
+  ASSERT_TRUE(write_grid_model(grid, g, values).ok());
+  GridPlan plan;
+  ModelInfo info;
+  ASSERT_TRUE(plan_grid(grid, &plan, &info).ok());
+  for (double tolerance : {0.0, 0.01, 0.3}) {
+    // The reference: every point to the merger, in key order.
+    std::vector<std::pair<uint64_t, ModelValues>> points, want;
+    const uint32_t e = octant_edge(plan.level);
+    for (int k = 0; k < g.nz; ++k)
+      for (int j = 0; j < g.ny; ++j)
+        for (int i = 0; i < g.nx; ++i) {
+          const Material& m = values[(size_t(k) * g.ny + j) * g.nx + i];
+          const Octant o{i * e, j * e, k * e, uint8_t(plan.level)};
+          points.push_back({octant_key(o), ModelValues{m.vp, m.vs, m.rho, 0, 0}});
+        }
+    std::sort(points.begin(), points.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    MaterialMerger ref(tolerance, 3, [&](uint64_t key, const ModelValues& v) {
+      want.push_back({key, v});
+      return Status::Ok();
+    });
+    for (const auto& [key, v] : points) ASSERT_TRUE(ref.add(octant_from_key(key), v).ok());
+    ASSERT_TRUE(ref.finish().ok());
+    ASSERT_LT(want.size(), points.size() / 2) << "the grid should merge";
+    for (uint64_t memory : {2ull << 20, 64ull << 20}) {  // blocks of 2^5 and 2^6 points a side
+      const std::string db = fresh("blocks");
+      ModelImportOptions o;
+      o.from = "grid:" + grid;
+      o.tolerance = tolerance;
+      o.memory = MemoryBudget(memory);
+      ModelImportResult r;
+      ASSERT_TRUE(import_model(db, o, &r).ok());
+      std::unique_ptr<Database> d;
+      ASSERT_TRUE(Database::open(db, Database::Mode::kRead, false, &d).ok());
+      std::unique_ptr<BTree> t;
+      ASSERT_TRUE(d->open_table(kModelTable, 4 << 20, &t).ok());
+      ASSERT_EQ(t->size(), want.size()) << tolerance << " " << memory;
+      std::unique_ptr<Cursor> c;
+      ASSERT_TRUE(t->seek(0, &c).ok());
+      for (size_t n = 0; n < want.size(); ++n, (void)c->next()) {
+        ASSERT_TRUE(c->valid());
+        ASSERT_EQ(c->key(), want[n].first) << n;
+        ASSERT_EQ(std::memcmp(c->payload(), want[n].second.data(), 12), 0) << n;
+      }
+    }
   }
 }
 

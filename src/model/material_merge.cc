@@ -4,7 +4,14 @@
 
 namespace weaver {
 
-Status MaterialMerger::add(const Octant& o, const ModelValues& v) {
+Status MaterialMerger::add(const Entry& e) {
+  const Octant& o = e.octant;
+  // The common case, the next sibling in the deepest open group: no group
+  // closes (its coarser ones held its first member's ancestors, o's too).
+  const Group& same = groups_[o.level];
+  if (o.level > 0 && o.level == deepest_ && same.count > 0 && same.parent == octant_parent(o)) {
+    return push(e);
+  }
   // Pending groups that are not o's ancestors' sibling sets will never
   // complete: their parents' subtrees are behind us.
   for (int l = 1; l <= kMaxLevel; ++l) {
@@ -15,7 +22,7 @@ Status MaterialMerger::add(const Octant& o, const ModelValues& v) {
       break;
     }
   }
-  return push(Entry{o, v, v, v});
+  return push(e);
 }
 
 Status MaterialMerger::finish() { return close_from(0); }
@@ -30,34 +37,41 @@ Status MaterialMerger::push(const Entry& e) {
   }
   if (g.count == 0) g.parent = octant_parent(e.octant);
   g.members[g.count++] = e;
+  deepest_ = std::max(deepest_, l);
   if (g.count < 8) return Status::Ok();
-  if (!agree(g)) {
+  if (!agree(g.members.data())) {
     WEAVER_RETURN_IF_ERROR(break_coarser(l, e.octant));
     for (const Entry& m : g.members) WEAVER_RETURN_IF_ERROR(emit(m));
     g.count = 0;
     g.broken = true;  // until the stream leaves this parent
     return Status::Ok();
   }
-  Entry parent{g.parent, {}, g.members[0].low, g.members[0].high};
-  for (int f = 0; f < fields_; ++f) {
-    double sum = 0;
-    for (const Entry& m : g.members) {
-      sum += m.mean[f];
-      parent.low[f] = std::min(parent.low[f], m.low[f]);
-      parent.high[f] = std::max(parent.high[f], m.high[f]);
-    }
-    parent.mean[f] = static_cast<float>(sum / 8);
-  }
-  g = Group{};
+  const Entry parent = merged(g.parent, g.members.data());
+  g.count = 0;
+  g.broken = false;
   return push(parent);
 }
 
-bool MaterialMerger::agree(const Group& g) const {
+MaterialMerger::Entry MaterialMerger::merged(const Octant& parent, const Entry* eight) const {
+  Entry p{parent, {}, eight[0].low, eight[0].high};
   for (int f = 0; f < fields_; ++f) {
-    float low = g.members[0].low[f], high = g.members[0].high[f];
-    for (const Entry& m : g.members) {
-      low = std::min(low, m.low[f]);
-      high = std::max(high, m.high[f]);
+    double sum = 0;
+    for (int i = 0; i < 8; ++i) {
+      sum += eight[i].mean[f];
+      p.low[f] = std::min(p.low[f], eight[i].low[f]);
+      p.high[f] = std::max(p.high[f], eight[i].high[f]);
+    }
+    p.mean[f] = static_cast<float>(sum / 8);
+  }
+  return p;
+}
+
+bool MaterialMerger::agree(const Entry* eight) const {
+  for (int f = 0; f < fields_; ++f) {
+    float low = eight[0].low[f], high = eight[0].high[f];
+    for (int i = 0; i < 8; ++i) {
+      low = std::min(low, eight[i].low[f]);
+      high = std::max(high, eight[i].high[f]);
     }
     if (tolerance_ == 0 ? high != low : high - low > tolerance_ * std::abs(low)) return false;
   }
@@ -66,6 +80,7 @@ bool MaterialMerger::agree(const Group& g) const {
 
 Status MaterialMerger::close_from(int level) {
   level = std::max(level, 1);
+  deepest_ = std::min(deepest_, level - 1);
   for (int l = level; l <= kMaxLevel; ++l) {
     if (groups_[l].count > 0) {
       WEAVER_RETURN_IF_ERROR(break_coarser(level, groups_[l].members[0].octant));
@@ -77,12 +92,14 @@ Status MaterialMerger::close_from(int level) {
   for (int l = level; l <= kMaxLevel; ++l) {
     Group& g = groups_[l];
     for (int i = 0; i < g.count; ++i) WEAVER_RETURN_IF_ERROR(emit(g.members[i]));
-    g = Group{};
+    g.count = 0;  // the members' slots are written before they are read again
+    g.broken = false;
   }
   return Status::Ok();
 }
 
 Status MaterialMerger::break_coarser(int level, const Octant& finer) {
+  deepest_ = std::max(deepest_, level - 1);
   for (int l = 1; l < level; ++l) {
     Group& g = groups_[l];
     for (int i = 0; i < g.count; ++i) WEAVER_RETURN_IF_ERROR(emit(g.members[i]));

@@ -27,22 +27,31 @@ class MaterialMerger {
  public:
   using Sink = std::function<Status(uint64_t key, const ModelValues&)>;
 
+  // An octant with the mean of what it covers and the least and greatest
+  // of every field there (all three the same for an octant of the input).
+  struct Entry {
+    Octant octant;
+    ModelValues mean, low, high;
+  };
+
   MaterialMerger(double tolerance, int fields, Sink sink)
       : tolerance_(tolerance), fields_(fields), sink_(std::move(sink)) {}
 
   // REQUIRES: octants in strictly increasing key order, none inside an
   // earlier one.
-  Status add(const Octant& o, const ModelValues& v);
+  Status add(const Octant& o, const ModelValues& v) { return add(Entry{o, v, v, v}); }
+  // An octant merged already (model/block_merge.h), with its bounds.
+  Status add(const Entry& e);
+  // Whether eight siblings merge, and the parent they merge into: the rule
+  // add() applies, for those who merge ahead of it.
+  bool agree(const Entry* eight) const;
+  Entry merged(const Octant& parent, const Entry* eight) const;
   // Emits whatever is still pending.  Call once, after the last add.
   Status finish();
 
   uint64_t emitted() const { return emitted_; }
 
  private:
-  struct Entry {
-    Octant octant;
-    ModelValues mean, low, high;
-  };
   struct Group {  // siblings of one parent, waiting for the rest
     Octant parent;
     int count = 0;
@@ -60,12 +69,13 @@ class MaterialMerger {
   // it is about to be emitted, so its ancestors will never be whole.
   Status break_coarser(int level, const Octant& finer);
   Status emit(const Entry& e);
-  bool agree(const Group& g) const;
 
   double tolerance_;
   int fields_;
   Sink sink_;
   std::array<Group, kMaxLevel + 1> groups_{};  // by the members' level
+  // No group finer than this holds members or is broken.
+  int deepest_ = 0;
   uint64_t emitted_ = 0;
 };
 

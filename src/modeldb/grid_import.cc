@@ -4,48 +4,84 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <vector>
 
+#include "model/block_merge.h"
+
 namespace weaver {
 namespace {
 
-// Octants of one block of a grid, a side: blocks of 32^3 points read in
-// 32 x 32 rows keep a block's reads near 400 KB.
-constexpr int kGridBlockLevels = 5;
+// The most levels of a block (2^7 = 128 points a side, 2M points; two are
+// read at once, 52 MB): each row is one pread, so larger blocks read the
+// grid in fewer, longer reads.
+constexpr int kMaxGridBlockLevels = 7;
+// Bytes a block holds a point: its rows as read (12) and some slack, twice
+// over (two blocks are read at once).
+constexpr uint64_t kGridBlockBytesPerPoint = 28;
+// A read block is merged in parts of 2^5 = 32 points a side (model/
+// block_merge.h): their values (640 KB) stay in the cache while they merge.
+constexpr int kMergeLevels = 5;
+
+// The deepest block whose memory fits in the share, at least 2^3 points a side.
+int grid_block_levels(const GridPlan& g, MemoryBudget memory) {
+  int levels = kMaxGridBlockLevels;
+  while (levels > 3 && (uint64_t{1} << (3 * levels)) * kGridBlockBytesPerPoint > memory.bytes()) {
+    --levels;
+  }
+  return std::max(1, std::min(levels, g.level));
+}
+
+// The bits of v spread to every third bit: v's part of a Morton code.
+uint64_t spread3(uint32_t v) { return morton_encode(v, 0, 0); }
 
 class GridBlockReader {
  public:
   GridBlockReader(const GridPlan& g, int fd, std::string path)
       : g_(g), fd_(fd), path_(std::move(path)) {}
 
-  // The material of every octant of block [lo, hi) (in cells), into
-  // out[((k - lo.z) * side + (j - lo.y)) * side + (i - lo.x)].
-  Status read(const std::array<uint32_t, 3>& lo, const std::array<uint32_t, 3>& hi, uint32_t side,
-              std::vector<ModelValues>* out) {
+  // Reads the rows of block [lo, hi) (in cells).
+  Status read(const std::array<uint32_t, 3>& lo, const std::array<uint32_t, 3>& hi) {
     const int n[3] = {g_.s.nx, g_.s.ny, g_.s.nz};
     const double d[3] = {g_.s.dx, g_.s.dy, g_.s.dz};
+    lo_ = lo;
     for (int a = 0; a < 3; ++a) {
       cell_index_[a].clear();
       cell_frac_[a].clear();
+      code_[a].clear();
       for (uint32_t c = lo[a]; c < hi[a]; ++c) {
         const double t = std::clamp(c * g_.edge_m / d[a], 0.0, double(n[a] - 1));
         const int i = std::min(static_cast<int>(t), n[a] - 2);
         cell_index_[a].push_back(i);
         cell_frac_[a].push_back(t - i);
+        // The cell's part of its Morton code in its merge part.
+        code_[a].push_back(spread3((c - lo[a]) & ((1u << kMergeLevels) - 1)) << a);
       }
       first_[a] = cell_index_[a].front();
       span_[a] = cell_index_[a].back() + 2 - first_[a];
     }
-    WEAVER_RETURN_IF_ERROR(read_rows());
-    out->assign(size_t{side} * side * side, ModelValues{});
-    for (uint32_t k = 0; k < hi[2] - lo[2]; ++k)
-      for (uint32_t j = 0; j < hi[1] - lo[1]; ++j)
-        for (uint32_t i = 0; i < hi[0] - lo[0]; ++i)
-          (*out)[(size_t{k} * side + j) * side + i] = interpolate(i, j, k);
-    return Status::Ok();
+    return read_rows();
+  }
+
+  // The material of every octant of part [lo, hi) (in cells, inside the
+  // block read last) into the part's values, by Morton order in the part;
+  // cells past hi (outside the grid) are marked absent.
+  void fill(const std::array<uint32_t, 3>& lo, const std::array<uint32_t, 3>& hi,
+            BlockMerger* part) const {
+    std::vector<ModelValues>& values = part->values();
+    std::vector<uint8_t>& present = part->present();
+    std::fill(present.begin(), present.end(), 0);
+    for (uint32_t k = lo[2] - lo_[2]; k < hi[2] - lo_[2]; ++k)
+      for (uint32_t j = lo[1] - lo_[1]; j < hi[1] - lo_[1]; ++j) {
+        const uint64_t jk = code_[1][j] | code_[2][k];
+        for (uint32_t i = lo[0] - lo_[0]; i < hi[0] - lo_[0]; ++i) {
+          values[code_[0][i] | jk] = interpolate(i, j, k);
+          present[code_[0][i] | jk] = 1;
+        }
+      }
   }
 
  private:
@@ -61,7 +97,11 @@ class GridBlockReader {
             static_cast<ssize_t>(bytes)) {
           return Status::IOError(path_ + ": cannot read the grid data");
         }
-        for (int x = 0; x < span_[0]; ++x) {
+        // Positive and finite (NaN fails the compare); bad_model_field's
+        // rule, a row at a time, and it names the field of the first miss.
+        bool ok = true;
+        for (size_t i = 0; i < size_t(span_[0]) * 3; ++i) ok &= row[i] > 0 && row[i] <= FLT_MAX;
+        for (int x = 0; !ok && x < span_[0]; ++x) {
           const ModelValues v{row[3 * x], row[3 * x + 1], row[3 * x + 2], 0, 0};
           if (const int bad = bad_model_field(v, 3); bad >= 0) {
             return bad_model_value(path_ + ": grid point " + std::to_string(point + x), v, bad);
@@ -72,20 +112,26 @@ class GridBlockReader {
     return Status::Ok();
   }
 
+  const float* point(int x, int y, int z) const {
+    return &rows_[((size_t(z) * span_[1] + y) * span_[0] + x) * 3];
+  }
+
   ModelValues interpolate(uint32_t i, uint32_t j, uint32_t k) const {
     const int base[3] = {cell_index_[0][i] - first_[0], cell_index_[1][j] - first_[1],
                          cell_index_[2][k] - first_[2]};
     const double f[3] = {cell_frac_[0][i], cell_frac_[1][j], cell_frac_[2][k]};
+    if ((f[0] == 0 || f[0] == 1) && (f[1] == 0 || f[1] == 1) && (f[2] == 0 || f[2] == 1)) {
+      // On a grid point (every axis at the smallest spacing): no weights.
+      const float* p = point(base[0] + int(f[0]), base[1] + int(f[1]), base[2] + int(f[2]));
+      return {p[0], p[1], p[2], 0, 0};
+    }
     double sum[3] = {0, 0, 0};
     for (int c = 0; c < 8; ++c) {
       const double w =
           ((c & 1) ? f[0] : 1 - f[0]) * ((c & 2) ? f[1] : 1 - f[1]) * ((c & 4) ? f[2] : 1 - f[2]);
       if (w == 0) continue;
-      const size_t at =
-          ((size_t(base[2] + ((c >> 2) & 1)) * span_[1] + base[1] + ((c >> 1) & 1)) * span_[0] +
-           base[0] + (c & 1)) *
-          3;
-      for (int v = 0; v < 3; ++v) sum[v] += w * rows_[at + v];
+      const float* p = point(base[0] + (c & 1), base[1] + ((c >> 1) & 1), base[2] + ((c >> 2) & 1));
+      for (int v = 0; v < 3; ++v) sum[v] += w * p[v];
     }
     return {float(sum[0]), float(sum[1]), float(sum[2]), 0, 0};
   }
@@ -95,6 +141,8 @@ class GridBlockReader {
   std::string path_;
   std::vector<int> cell_index_[3];
   std::vector<double> cell_frac_[3];
+  std::array<uint32_t, 3> lo_{};   // the block read last
+  std::vector<uint64_t> code_[3];  // the cell's part of its Morton code in its merge part
   int first_[3] = {0, 0, 0}, span_[3] = {0, 0, 0};
   std::vector<float> rows_;
 };
@@ -124,35 +172,63 @@ Status plan_grid(const std::string& path, GridPlan* g, ModelInfo* info) {
   return Status::Ok();
 }
 
-Status import_grid(const GridPlan& g, const std::string& path, uint64_t* read,
-                   const ModelEmit& emit) {
+Status import_grid(const GridPlan& g, const std::string& path, MemoryBudget memory, uint64_t* read,
+                   MaterialMerger& merger) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return Status::NotFound(path + ": cannot open the grid model file");
   GridBlockReader reader(g, fd, path);
-  const int block_level = std::max(0, g.level - kGridBlockLevels);
-  const uint32_t side = uint32_t{1} << (g.level - block_level);  // cells a block
-  const uint32_t cell_ticks = octant_edge(g.level);
-  std::vector<ModelValues> values;
-  // Blocks in Z-order, those that meet the grid's box.
+  const int levels = grid_block_levels(g, memory);
+  const int block_level = g.level - levels;
+  const uint32_t side = uint32_t{1} << levels;  // cells a block
+  BlockMerger part(std::min(levels, kMergeLevels));
+  const uint32_t shift = kMaxLevel - g.level;
+  // The grid cells of octant o: [lo, hi), empty when o lies past the grid.
+  auto cells_of = [&](const Octant& o, uint32_t cells, std::array<uint32_t, 3>* lo,
+                      std::array<uint32_t, 3>* hi) {
+    *lo = {o.x >> shift, o.y >> shift, o.z >> shift};
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+      (*hi)[a] = std::min((*lo)[a] + cells, g.cells[a]);
+      inside = inside && (*lo)[a] < g.cells[a];
+    }
+    return inside;
+  };
+  const int part_level = g.level - part.levels();
+  // A block's parts in Z-order, merged one after another.
+  std::function<Status(const Octant&)> merge = [&](const Octant& p) -> Status {
+    std::array<uint32_t, 3> lo, hi;
+    if (!cells_of(p, part.side(), &lo, &hi)) return Status::Ok();
+    if (p.level < part_level) {
+      for (int c = 0; c < 8; ++c) WEAVER_RETURN_IF_ERROR(merge(octant_child(p, c)));
+      return Status::Ok();
+    }
+    reader.fill(lo, hi, &part);
+    return part.merge_into(p, merger);
+  };
+  // Reads blocks `first` and the `count` - 1 after it along x (Morton
+  // neighbours: children 2i and 2i + 1 of one parent) in one go, and merges them.
+  auto read_and_merge = [&](const Octant& first, int count) -> Status {
+    std::array<uint32_t, 3> lo, hi;
+    if (!cells_of(first, side, &lo, &hi)) return Status::Ok();
+    hi[0] = std::min(lo[0] + count * side, g.cells[0]);
+    WEAVER_RETURN_IF_ERROR(reader.read(lo, hi));
+    *read += uint64_t{hi[0] - lo[0]} * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+    WEAVER_RETURN_IF_ERROR(merge(first));
+    Octant next = first;
+    next.x += octant_edge(first);
+    return count == 2 && next.x < kRootEdge ? merge(next) : Status::Ok();
+  };
+  // Blocks in Z-order, those that meet the grid's box: x-neighbour pairs
+  // read together (rows twice as long, half the preads).
   std::function<Status(const Octant&)> visit = [&](const Octant& b) -> Status {
-    const uint32_t shift = kMaxLevel - g.level;
-    const std::array<uint32_t, 3> lo = {b.x >> shift, b.y >> shift, b.z >> shift};
-    if (lo[0] >= g.cells[0] || lo[1] >= g.cells[1] || lo[2] >= g.cells[2]) return Status::Ok();
-    if (b.level < block_level) {
+    std::array<uint32_t, 3> lo, hi;
+    if (!cells_of(b, uint32_t{1} << (g.level - b.level), &lo, &hi)) return Status::Ok();
+    if (b.level == block_level) return read_and_merge(b, 1);  // the grid is one block
+    if (b.level + 1 < block_level) {
       for (int c = 0; c < 8; ++c) WEAVER_RETURN_IF_ERROR(visit(octant_child(b, c)));
       return Status::Ok();
     }
-    std::array<uint32_t, 3> hi;
-    for (int a = 0; a < 3; ++a) hi[a] = std::min(lo[a] + side, g.cells[a]);
-    WEAVER_RETURN_IF_ERROR(reader.read(lo, hi, side, &values));
-    for (uint64_t m = 0; m < uint64_t{side} * side * side; ++m) {
-      const Coord c = morton_decode(m);
-      if (lo[0] + c.x >= hi[0] || lo[1] + c.y >= hi[1] || lo[2] + c.z >= hi[2]) continue;
-      const Octant o{b.x + c.x * cell_ticks, b.y + c.y * cell_ticks, b.z + c.z * cell_ticks,
-                     static_cast<uint8_t>(g.level)};
-      ++*read;
-      WEAVER_RETURN_IF_ERROR(emit(o, values[(size_t(c.z) * side + c.y) * side + c.x]));
-    }
+    for (int c = 0; c < 8; c += 2) WEAVER_RETURN_IF_ERROR(read_and_merge(octant_child(b, c), 2));
     return Status::Ok();
   };
   const Status st = visit(octant_root());

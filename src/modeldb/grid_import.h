@@ -8,8 +8,10 @@
 #include <string>
 
 #include "model/grid_model.h"
+#include "model/material_merge.h"
 #include "model/xyz_grid.h"
 #include "modeldb/import_source.h"
+#include "util/memory_budget.h"
 
 namespace weaver {
 
@@ -25,8 +27,10 @@ struct GridPlan {
 // points; sets the model's placement in *info.
 Status plan_grid(const std::string& path, GridPlan* g, ModelInfo* info);
 // Emits the grid's octants in key order, trilinear where spacings differ.
-Status import_grid(const GridPlan& g, const std::string& path, uint64_t* read,
-                   const ModelEmit& emit);
+// Blocks of up to 128 points a side as `memory` allows, each merged in
+// memory (model/block_merge.h) before the merger sees it.
+Status import_grid(const GridPlan& g, const std::string& path, MemoryBudget memory, uint64_t* read,
+                   MaterialMerger& merger);
 
 // Writes the xyz file's points as a weaver-grid 1 file at grid_path, each
 // where its index says (the file is made sparse first, so any order of

@@ -103,22 +103,28 @@ Status plan_source(const ModelImportOptions& o, SourcePlan* s, ModelInfo* info) 
 
 // The octants of the source, in key order.  An xyz file goes through a grid
 // file in the database's directory, removed after.
-Status emit_source(SourcePlan& s, const ModelImportOptions& o, const std::string& db_dir,
-                   ModelInfo* info, uint64_t* read, const ModelEmit& emit) {
+Status emit_source(SourcePlan& s, const ModelImportOptions& o, MemoryBudget blocks,
+                   const std::string& db_dir, ModelInfo* info, uint64_t* read,
+                   MaterialMerger& merger) {
+  const ModelEmit emit = [&](const Octant& oct, const ModelValues& v) {
+    return merger.add(oct, v);
+  };
   if (s.kind == "etree") return import_etree(s.etree.get(), o, info, read, emit);
   if (s.kind == "layers") return import_layers(s.layers, read, emit);
-  if (s.kind == "grid") return import_grid(s.grid, s.path, read, emit);
+  if (s.kind == "grid") return import_grid(s.grid, s.path, blocks, read, merger);
   const std::string grid = db_dir + "/xyz-import.grid.tmp";
   WEAVER_RETURN_IF_ERROR(write_xyz_as_grid(s.path, s.xyz, grid));
   const std::string source = info->source;
   Status st = plan_grid(grid, &s.grid, info);
-  if (st.ok()) st = import_grid(s.grid, grid, read, emit);
+  if (st.ok()) st = import_grid(s.grid, grid, blocks, read, merger);
   info->source = source;
   ::unlink(grid.c_str());
   return st;
 }
 
 }  // namespace
+
+constexpr size_t kAppendBatch = 4096;
 
 Status import_model(const std::string& db_dir, const ModelImportOptions& o, ModelImportResult* r) {
   *r = ModelImportResult{};
@@ -133,6 +139,8 @@ Status import_model(const std::string& db_dir, const ModelImportOptions& o, Mode
   WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, true, &db));
   MemoryPlan plan(o.memory);
   const uint64_t pool = plan.take("model table pool", 1, 8, 8ull << 20);
+  // A grid's block of points, read and merged in memory (grid_import.h).
+  const MemoryBudget blocks = plan.take_budget("grid blocks", 1, 2);
   TableOptions topt;
   topt.key_kind = KeyKind::kOctant;
   topt.schema = material_schema(has_q);
@@ -142,15 +150,26 @@ Status import_model(const std::string& db_dir, const ModelImportOptions& o, Mode
   WEAVER_RETURN_IF_ERROR(db->create_table(kModelTable, topt, pool, &table, &file));
   // The record is ModelValues' leading floats (the schema packs f32 little-endian).
   static_assert(sizeof(ModelValues) == kModelFields * sizeof(float));
+  // Appended a batch at a time (a record at a time was a tenth of a grid import).
+  const size_t record = topt.schema.record_size();
+  std::vector<uint64_t> keys;
+  std::vector<std::byte> records;
+  auto flush = [&]() {
+    const Status s = table->append_batch(keys.data(), records.data(), keys.size());
+    keys.clear();
+    records.clear();
+    return s;
+  };
   MaterialMerger merger(o.tolerance, has_q ? 5 : 3, [&](uint64_t key, const ModelValues& v) {
     ++r->levels[octant_key_level(key)];
-    return table->append(key, reinterpret_cast<const std::byte*>(v.data()));
+    keys.push_back(key);
+    const std::byte* bytes = reinterpret_cast<const std::byte*>(v.data());
+    records.insert(records.end(), bytes, bytes + record);
+    return keys.size() < kAppendBatch ? Status::Ok() : flush();
   });
-  const ModelEmit emit = [&](const Octant& oct, const ModelValues& v) {
-    return merger.add(oct, v);
-  };
-  Status st = emit_source(source, o, db_dir, &info, &r->read, emit);
+  Status st = emit_source(source, o, blocks, db_dir, &info, &r->read, merger);
   if (st.ok()) st = merger.finish();
+  if (st.ok()) st = flush();
   r->octants = merger.emitted();
   if (st.ok() && r->octants == 0) {
     st = Status::Corruption(source.path + ": the model has no leaves");
