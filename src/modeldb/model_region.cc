@@ -73,6 +73,9 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
     }
   }
   const uint64_t end = octant_key_subtree_end(cell);
+  // A cell reaches past the box by up to its own size: its octants there
+  // are skipped, not kept (about half of what the scans read).
+  const bool inside = meets(cell, true);
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(table.seek_cursor(key, &c));
   while (c.valid() && c.key() < end) {
@@ -80,10 +83,21 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
       *full = true;
       return Status::Ok();
     }
-    add(c.key(), c.payload(), record_bytes);
+    if (inside || meets(octant_from_key(c.key()), false)) add(c.key(), c.payload(), record_bytes);
     WEAVER_RETURN_IF_ERROR(c.next());
   }
   return Status::Ok();
+}
+
+bool ModelRegion::meets(const Octant& o, bool within) const {
+  const uint32_t last = octant_edge(o) - 1;
+  const uint32_t c[3] = {o.x, o.y, o.z}, l[3] = {lo_.x, lo_.y, lo_.z}, h[3] = {hi_.x, hi_.y, hi_.z};
+  for (int a = 0; a < 3; ++a) {
+    const bool ok =
+        within ? c[a] >= l[a] && c[a] + last <= h[a] : c[a] <= h[a] && c[a] + last >= l[a];
+    if (!ok) return false;
+  }
+  return true;
 }
 
 void ModelRegion::add(uint64_t key, const std::byte* record, size_t record_bytes) {
