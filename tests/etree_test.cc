@@ -2,7 +2,9 @@
 // that library answered about them (tests/data/etree/README.md).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -178,6 +180,84 @@ TEST_F(EtreeDamage, EachDamageIsOneErrorNamingTheFile) {
     EXPECT_FALSE(st.ok()) << what;
     EXPECT_NE(st.message().find(path), std::string::npos) << what << ": " << st.message();
     EXPECT_EQ(st.message().find('\n'), std::string::npos) << what;
+  }
+}
+
+// The etree library writes in its host's byte order, so its files here are
+// all 'L'.  A 'B' file is made from each by turning every multi-byte number
+// around where the format (etree_file.h) says the file's byte order rules:
+// the headers' integers, the schema's order letter, the pages' sibling,
+// count and child numbers, and each payload field; keys and text stay.
+// It must read as the original, octant for octant, value for value.
+std::string big_endian_copy(const std::string& little) {
+  std::string b = little;
+  auto le = [&](size_t at, int bytes) {
+    uint64_t v = 0;
+    for (int i = 0; i < bytes; ++i) v |= uint64_t{static_cast<unsigned char>(b[at + i])} << (8 * i);
+    return v;
+  };
+  auto reverse = [&](size_t at, int bytes) {
+    std::reverse(b.begin() + at, b.begin() + at + bytes);
+  };
+  const size_t bt = 273;  // the B-tree header
+  const uint32_t page = uint32_t(le(bt + 1, 4)), key = uint32_t(le(bt + 21, 4)),
+                 value = uint32_t(le(bt + 25, 4)), schema_bytes = uint32_t(le(bt + 29, 4));
+  const uint64_t count = le(bt + 5, 8), root = le(bt + 13, 8);
+  std::istringstream schema(b.substr(bt + 33, schema_bytes));
+  std::string order;
+  int fields = 0;
+  schema >> order >> fields;
+  std::vector<std::pair<uint32_t, uint32_t>> layout;  // offset, size
+  for (int f = 0; f < fields; ++f) {
+    std::string name, type;
+    uint32_t size = 0, offset = 0;
+    schema >> name >> type >> size >> offset;
+    layout.push_back({offset, size});
+  }
+  for (uint64_t p = root; p < root + count; ++p) {
+    const size_t at = size_t(p) * page;
+    const uint32_t entries = uint32_t(le(at + 16, 4));
+    const bool leaf = b[at + 24] == 'l';
+    reverse(at, 8);
+    reverse(at + 16, 4);
+    for (uint32_t e = 0; e < entries; ++e) {
+      const size_t entry = at + 25 + size_t(e) * (key + (leaf ? value : 8)) + key;
+      if (!leaf) reverse(entry, 8);
+      for (const auto& [offset, size] : layout) {
+        if (leaf) reverse(entry + offset, int(size));
+      }
+    }
+  }
+  b[0] = b[bt] = b[bt + 33] = 'B';
+  for (size_t at = 1; at < 273; at += 4) reverse(at, 4);
+  reverse(bt + 1, 4), reverse(bt + 5, 8), reverse(bt + 13, 8);
+  reverse(bt + 21, 4), reverse(bt + 25, 4), reverse(bt + 29, 4);
+  return b;
+}
+
+TEST(EtreeFile, ABigEndianFileReadsAsItsLittleEndianOriginal) {
+  for (const char* name : {"cmu", "usgs"}) {
+    std::ifstream in(fixture(std::string(name) + ".e"), std::ios::binary);
+    const std::string little(std::istreambuf_iterator<char>(in), {});
+    const std::string path = ::testing::TempDir() + "etree_big_" + name + ".e";
+    std::ofstream(path, std::ios::binary) << big_endian_copy(little);
+    std::unique_ptr<EtreeFile> a, b;
+    ASSERT_TRUE(EtreeFile::open(fixture(std::string(name) + ".e"), &a).ok());
+    const Status st = EtreeFile::open(path, &b);
+    ASSERT_TRUE(st.ok()) << st.to_string();
+    EXPECT_EQ(b->info().byte_order, 'B');
+    EXPECT_EQ(b->info().app_metadata, a->info().app_metadata);
+    const std::vector<Recorded> want = scan(*a), got = scan(*b);
+    ASSERT_EQ(got.size(), want.size()) << name;
+    ASSERT_EQ(got.size(), read_octants(std::string(name) + ".octants").size());
+    for (size_t i = 0; i < got.size(); ++i) {
+      ASSERT_EQ(got[i].x, want[i].x) << name << " " << i;
+      ASSERT_EQ(got[i].y, want[i].y);
+      ASSERT_EQ(got[i].z, want[i].z);
+      ASSERT_EQ(got[i].level, want[i].level);
+      ASSERT_EQ(got[i].leaf, want[i].leaf);
+      ASSERT_EQ(got[i].values, want[i].values) << name << " " << i;
+    }
   }
 }
 
