@@ -382,5 +382,33 @@ TEST(ModelSources, OutsideTheModelIsClampedAndSaidOrRefused) {
       << plan;
 }
 
+// A mesh whose model has Q answers point queries with qp and qs, in text
+// and in the column formats, single points and batches.
+TEST(ModelSources, QueriesOnAMeshWithQGiveQpAndQs) {
+  const std::string table = write_text("q_layers.txt", kHadleyKanamori);
+  const std::string db = fresh("q_mesh");
+  uint64_t rss = 0;
+  ASSERT_NE(bench::run_program({WEAVER_BINARY, "mesh", db, "--model", "layers:" + table, "--freq",
+                                "0.1", "--domain", "64000,64000,48000", "--quiet"},
+                               &rss),
+            "");
+  const std::string text = bench::run_program(
+      {WEAVER_BINARY, "query", db, "material", "100", "200", "6000", "--units", "m"}, &rss);
+  EXPECT_NE(text.find("vp 6300 m/s, vs 3640 m/s, rho 2670 kg/m^3, qp 700, qs 350"),
+            std::string::npos)
+      << text;
+  const std::string points = write_text("q_points.txt", "100 200 6000\n5 5 40000\n");
+  const std::string csv = bench::run_program({WEAVER_BINARY, "query", db, "material", "--points",
+                                              points, "--units", "m", "--format", "csv"},
+                                             &rss);
+  EXPECT_NE(csv.find("x,y,z,status,element,vp,vs,rho,qp,qs\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",6300,3640,2670,700,350\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",7800,4500,3000,900,450\n"), std::string::npos) << csv;
+  const std::string element =
+      bench::run_program({WEAVER_BINARY, "query", db, "element", "0", "--format", "csv"}, &rss);
+  EXPECT_NE(element.find(",vp,vs,rho,qp,qs\n"), std::string::npos) << element;
+  EXPECT_NE(element.find(",5500,3180,2400,600,300\n"), std::string::npos) << element;
+}
+
 }  // namespace
 }  // namespace weaver

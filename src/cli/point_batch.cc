@@ -149,6 +149,7 @@ class BatchRunner {
       c.insert(c.end(), {"element", "level", "edge", "corner_x", "corner_y", "corner_z"});
       if (ex_.mesh().has_material()) c.insert(c.end(), {"vp", "vs", "rho"});
     }
+    if (o_.query != PointQuery::kNodeAt && ex_.mesh().has_q()) c.insert(c.end(), {"qp", "qs"});
     w_.header(c);
   }
 
@@ -295,6 +296,7 @@ class BatchRunner {
       if (!ex_.mesh().has_material()) return;
     }
     w_.number(h.vp), w_.number(h.vs), w_.number(h.rho);
+    if (ex_.mesh().has_q()) w_.number(h.qp), w_.number(h.qs);
   }
 
   Explorer& ex_;

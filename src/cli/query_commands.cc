@@ -15,7 +15,8 @@ namespace weaver::cli {
 const char kQueryHelp[] =
     "locate X Y Z            the element holding the point: id, corner, level, edge, node ids\n"
     "                        and material; an element holds corner <= p < corner + edge\n"
-    "material X Y Z          vp, vs and rho of the element holding the point\n"
+    "material X Y Z          vp, vs and rho of the element holding the point (and qp, qs\n"
+    "                        when the mesh's model had them)\n"
     "node-at X Y Z           the node at the point, if any\n"
     "  (each of the three also takes --points FILE, or - for stdin: one 'x y z' per\n"
     "   line, answered in input order, one row each, status inside/outside/bad)\n"
@@ -84,10 +85,27 @@ struct Query {
     for (int i = 0; i < n; ++i) items.push_back(std::to_string(v[i]));
     return Cell::list(items);
   }
+  // vp, vs, rho (and qp, qs when the mesh has them): the columns, and one
+  // element's cells.
+  void material_columns(std::vector<std::string>* columns) const {
+    columns->insert(columns->end(), {"vp", "vs", "rho"});
+    if (ex.mesh().has_q()) columns->insert(columns->end(), {"qp", "qs"});
+  }
   void material_cells(const MeshElement& e, std::vector<Cell>* row) const {
     row->push_back(Cell::number(e.vp));
     row->push_back(Cell::number(e.vs));
     row->push_back(Cell::number(e.rho));
+    if (!ex.mesh().has_q()) return;
+    row->push_back(Cell::number(e.qp));
+    row->push_back(Cell::number(e.qs));
+  }
+  // "vp .. m/s, vs .. m/s, rho .. kg/m^3[, qp .., qs ..]", for text output.
+  std::string material_text(const MeshElement& e) const {
+    char buf[160];
+    int n =
+        std::snprintf(buf, sizeof buf, "vp %g m/s, vs %g m/s, rho %g kg/m^3", e.vp, e.vs, e.rho);
+    if (ex.mesh().has_q()) std::snprintf(buf + n, sizeof buf - n, ", qp %g, qs %g", e.qp, e.qs);
+    return buf;
   }
 
   // The numbers after the query's name.
@@ -263,8 +281,8 @@ int Query::run_point_text(PointQuery q, Coord c) {
   }
   if (!h.inside) return std::fprintf(out, "point (%s) is outside the domain\n", asked.c_str()), 0;
   if (q == PointQuery::kMaterial) {
-    std::fprintf(out, "point (%s): vp %g m/s, vs %g m/s, rho %g kg/m^3 (element %llu)\n",
-                 asked.c_str(), e.vp, e.vs, e.rho, (unsigned long long)e.id);
+    std::fprintf(out, "point (%s): %s (element %llu)\n", asked.c_str(), material_text(e).c_str(),
+                 (unsigned long long)e.id);
     return 0;
   }
   std::fprintf(out, "point (%s) is in element %llu: leaf (%s %d), edge %u ticks = %.10g m\n",
@@ -272,8 +290,7 @@ int Query::run_point_text(PointQuery q, Coord c) {
                point_text({e.octant.x, e.octant.y, e.octant.z}).c_str(), e.octant.level,
                octant_edge(e.octant), octant_edge(e.octant) * units().tick_m);
   if (ex.has_nodes()) std::fprintf(out, "  nodes %s\n", plain_text(ids(e.nodes.data(), 8)).c_str());
-  if (ex.mesh().has_material())
-    std::fprintf(out, "  vp %g m/s, vs %g m/s, rho %g kg/m^3\n", e.vp, e.vs, e.rho);
+  if (ex.mesh().has_material()) std::fprintf(out, "  %s\n", material_text(e).c_str());
   return 0;
 }
 
@@ -318,7 +335,7 @@ int Query::run_element() {
                  (unsigned long long)id, point_text({e.octant.x, e.octant.y, e.octant.z}).c_str(),
                  e.octant.level, edge, edge * units().tick_m);
     if (nodes) std::fprintf(out, "  nodes %s\n", plain_text(ids(e.nodes.data(), 8)).c_str());
-    if (material) std::fprintf(out, "  vp %g m/s, vs %g m/s, rho %g kg/m^3\n", e.vp, e.vs, e.rho);
+    if (material) std::fprintf(out, "  %s\n", material_text(e).c_str());
     return 0;
   }
   Table t;
@@ -326,7 +343,7 @@ int Query::run_element() {
   std::vector<Cell> row{Cell::number(id)};
   octant_cells(e.octant, &row);
   if (nodes) t.columns.push_back("nodes"), row.push_back(ids(e.nodes.data(), 8));
-  if (material) t.columns.insert(t.columns.end(), {"vp", "vs", "rho"}), material_cells(e, &row);
+  if (material) material_columns(&t.columns), material_cells(e, &row);
   t.rows.push_back(row);
   return print(t);
 }

@@ -66,7 +66,7 @@ Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
     h.id = f.rank;
     h.leaf = octant_from_key(f.key);
     mesh_->fill_material(f.payload, &m);
-    h.vp = m.vp, h.vs = m.vs, h.rho = m.rho;
+    h.vp = m.vp, h.vs = m.vs, h.rho = m.rho, h.qp = m.qp, h.qs = m.qs;
   }
   return Status::Ok();
 }

@@ -38,6 +38,7 @@ struct PointHit {
   uint64_t id = 0;      // element id: the leaf's rank in key order
   Octant leaf;
   float vp = 0, vs = 0, rho = 0;
+  float qp = 0, qs = 0;  // when the mesh has them (Mesh::has_q)
 };
 
 // The node at a point.
