@@ -172,57 +172,46 @@ Status plan_grid(const std::string& path, GridPlan* g, ModelInfo* info) {
   return Status::Ok();
 }
 
-Status import_grid(const GridPlan& g, const std::string& path, MemoryBudget memory, uint64_t* read,
-                   MaterialMerger& merger) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return Status::NotFound(path + ": cannot open the grid model file");
-  GridBlockReader reader(g, fd, path);
-  const int levels = grid_block_levels(g, memory);
-  const int block_level = g.level - levels;
-  const uint32_t side = uint32_t{1} << levels;  // cells a block
-  BlockMerger part(std::min(levels, kMergeLevels));
-  const uint32_t shift = kMaxLevel - g.level;
-  // The grid cells of octant o: [lo, hi), empty when o lies past the grid.
-  auto cells_of = [&](const Octant& o, uint32_t cells, std::array<uint32_t, 3>* lo,
-                      std::array<uint32_t, 3>* hi) {
+namespace {
+
+// The grid's octants to the merger, in key order: blocks in Z-order, those
+// that meet the grid's box, x-neighbour pairs read together (rows twice as
+// long, half the preads), each block merged a part at a time.
+class GridImport {
+ public:
+  GridImport(const GridPlan& g, int fd, const std::string& path, MemoryBudget memory,
+             MaterialMerger& merger)
+      : g_(g),
+        reader_(g, fd, path),
+        levels_(grid_block_levels(g, memory)),
+        part_(std::min(levels_, kMergeLevels)),
+        merger_(merger) {}
+
+  Status run(uint64_t* read) {
+    const Status st = visit(octant_root());
+    *read = read_;
+    return st;
+  }
+
+ private:
+  // The grid cells of octant o, `cells` a side: [lo, hi), false when o lies
+  // past the grid.
+  bool cells_of(const Octant& o, uint32_t cells, std::array<uint32_t, 3>* lo,
+                std::array<uint32_t, 3>* hi) const {
+    const uint32_t shift = kMaxLevel - g_.level;
     *lo = {o.x >> shift, o.y >> shift, o.z >> shift};
     bool inside = true;
     for (int a = 0; a < 3; ++a) {
-      (*hi)[a] = std::min((*lo)[a] + cells, g.cells[a]);
-      inside = inside && (*lo)[a] < g.cells[a];
+      (*hi)[a] = std::min((*lo)[a] + cells, g_.cells[a]);
+      inside = inside && (*lo)[a] < g_.cells[a];
     }
     return inside;
-  };
-  const int part_level = g.level - part.levels();
-  // A block's parts in Z-order, merged one after another.
-  std::function<Status(const Octant&)> merge = [&](const Octant& p) -> Status {
+  }
+
+  Status visit(const Octant& b) {
+    const int block_level = g_.level - levels_;
     std::array<uint32_t, 3> lo, hi;
-    if (!cells_of(p, part.side(), &lo, &hi)) return Status::Ok();
-    if (p.level < part_level) {
-      for (int c = 0; c < 8; ++c) WEAVER_RETURN_IF_ERROR(merge(octant_child(p, c)));
-      return Status::Ok();
-    }
-    reader.fill(lo, hi, &part);
-    return part.merge_into(p, merger);
-  };
-  // Reads blocks `first` and the `count` - 1 after it along x (Morton
-  // neighbours: children 2i and 2i + 1 of one parent) in one go, and merges them.
-  auto read_and_merge = [&](const Octant& first, int count) -> Status {
-    std::array<uint32_t, 3> lo, hi;
-    if (!cells_of(first, side, &lo, &hi)) return Status::Ok();
-    hi[0] = std::min(lo[0] + count * side, g.cells[0]);
-    WEAVER_RETURN_IF_ERROR(reader.read(lo, hi));
-    *read += uint64_t{hi[0] - lo[0]} * (hi[1] - lo[1]) * (hi[2] - lo[2]);
-    WEAVER_RETURN_IF_ERROR(merge(first));
-    Octant next = first;
-    next.x += octant_edge(first);
-    return count == 2 && next.x < kRootEdge ? merge(next) : Status::Ok();
-  };
-  // Blocks in Z-order, those that meet the grid's box: x-neighbour pairs
-  // read together (rows twice as long, half the preads).
-  std::function<Status(const Octant&)> visit = [&](const Octant& b) -> Status {
-    std::array<uint32_t, 3> lo, hi;
-    if (!cells_of(b, uint32_t{1} << (g.level - b.level), &lo, &hi)) return Status::Ok();
+    if (!cells_of(b, uint32_t{1} << (g_.level - b.level), &lo, &hi)) return Status::Ok();
     if (b.level == block_level) return read_and_merge(b, 1);  // the grid is one block
     if (b.level + 1 < block_level) {
       for (int c = 0; c < 8; ++c) WEAVER_RETURN_IF_ERROR(visit(octant_child(b, c)));
@@ -230,8 +219,52 @@ Status import_grid(const GridPlan& g, const std::string& path, MemoryBudget memo
     }
     for (int c = 0; c < 8; c += 2) WEAVER_RETURN_IF_ERROR(read_and_merge(octant_child(b, c), 2));
     return Status::Ok();
-  };
-  const Status st = visit(octant_root());
+  }
+
+  // Reads block `first` and, for count 2, its x-neighbour (children 2i and
+  // 2i + 1 of one parent: Morton neighbours) in one go, and merges them.
+  Status read_and_merge(const Octant& first, int count) {
+    const uint32_t side = uint32_t{1} << levels_;
+    std::array<uint32_t, 3> lo, hi;
+    if (!cells_of(first, side, &lo, &hi)) return Status::Ok();
+    hi[0] = std::min(lo[0] + count * side, g_.cells[0]);
+    WEAVER_RETURN_IF_ERROR(reader_.read(lo, hi));
+    read_ += uint64_t{hi[0] - lo[0]} * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+    WEAVER_RETURN_IF_ERROR(merge(first));
+    Octant next = first;
+    next.x += octant_edge(first);
+    return count == 2 && next.x < kRootEdge ? merge(next) : Status::Ok();
+  }
+
+  // A block's parts in Z-order, merged one after another.
+  Status merge(const Octant& p) {
+    std::array<uint32_t, 3> lo, hi;
+    if (!cells_of(p, part_.side(), &lo, &hi)) return Status::Ok();
+    if (p.level < g_.level - part_.levels()) {
+      for (int c = 0; c < 8; ++c) WEAVER_RETURN_IF_ERROR(merge(octant_child(p, c)));
+      return Status::Ok();
+    }
+    reader_.fill(lo, hi, &part_);
+    return part_.merge_into(p, merger_);
+  }
+
+  const GridPlan& g_;
+  GridBlockReader reader_;
+  const int levels_;  // of a block
+  BlockMerger part_;
+  MaterialMerger& merger_;
+  uint64_t read_ = 0;
+};
+
+}  // namespace
+
+Status import_grid(const GridPlan& g, const std::string& path, MemoryBudget memory, uint64_t* read,
+                   MaterialMerger& merger) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return Status::NotFound(path + ": cannot open the grid model file");
+  uint64_t n = 0;
+  const Status st = GridImport(g, fd, path, memory, merger).run(&n);
+  *read += n;
   ::close(fd);
   return st;
 }
