@@ -103,6 +103,19 @@ constexpr bool octant_contains_point(const Octant& o, Coord p) {
   return p.x - o.x < s && p.y - o.y < s && p.z - o.z < s;
 }
 
+// Whether the octant meets the closed tick box [lo, hi] (bounds included),
+// and whether it lies wholly inside it.  Accepts: octant.
+constexpr bool octant_meets_box(const Octant& o, Coord lo, Coord hi) {
+  const uint32_t last = octant_edge(o) - 1;
+  return o.x <= hi.x && o.x + last >= lo.x && o.y <= hi.y && o.y + last >= lo.y && o.z <= hi.z &&
+         o.z + last >= lo.z;
+}
+constexpr bool octant_in_box(const Octant& o, Coord lo, Coord hi) {
+  const uint32_t last = octant_edge(o) - 1;
+  return o.x >= lo.x && o.x + last <= hi.x && o.y >= lo.y && o.y + last <= hi.y && o.z >= lo.z &&
+         o.z + last <= hi.z;
+}
+
 // Whether `a` is a strict ancestor of `b`.  Accepts: octants.
 constexpr bool octant_is_ancestor(const Octant& a, const Octant& b) {
   assert(octant_is_valid(a) && octant_is_valid(b));

@@ -14,16 +14,12 @@
 
 #include "bench_util.h"
 #include "model/geo_frame.h"
+#include "test_util.h"
 
 namespace weaver {
 namespace {
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using testing::slurp;
 
 // The byte offset of a raw export's array, from mesh.json.
 uint64_t offset_of(const std::string& json, const std::string& array) {

@@ -17,15 +17,12 @@
 #include "modeldb/grid_import.h"
 #include "modeldb/model_import.h"
 #include "storage/btree.h"
+#include "test_util.h"
 
 namespace weaver {
 namespace {
 
-std::string fresh(const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "model_db_" + name;
-  std::filesystem::remove_all(dir);
-  return dir;
-}
+std::string fresh(const std::string& name) { return testing::fresh_path("model_db_" + name); }
 
 std::string fixture(const std::string& name) {
   return std::string(WEAVER_SOURCE_DIR) + "/tests/data/etree/" + name;

@@ -16,15 +16,12 @@
 #include "modeldb/db_model.h"
 #include "modeldb/model_import.h"
 #include "storage/btree.h"
+#include "test_util.h"
 
 namespace weaver {
 namespace {
 
-std::string fresh(const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "model_sources_" + name;
-  std::filesystem::remove_all(dir);
-  return dir;
-}
+std::string fresh(const std::string& name) { return testing::fresh_path("model_sources_" + name); }
 
 std::string write_text(const std::string& name, const std::string& text) {
   const std::string path = ::testing::TempDir() + "model_sources_" + name;
@@ -129,8 +126,7 @@ TEST(ModelSources, QueryAnswersMaterialFromAModelDatabase) {
   const std::string shell =
       std::string(WEAVER_BINARY) + " shell " + db + " <" + lines + " >" + db + ".shell 2>&1";
   EXPECT_EQ(WEXITSTATUS(std::system(shell.c_str())), 0);
-  std::ifstream in(db + ".shell");
-  const std::string out(std::istreambuf_iterator<char>(in), {});
+  const std::string out = testing::slurp(db + ".shell");
   EXPECT_EQ(out, q + "0 0 40000 7800 4500 3000 900 450\n");
 }
 
@@ -339,11 +335,6 @@ TEST(ModelSources, BatchLookupsAnswerAsSingleOnesInAnyOrder) {
   EXPECT_GT(clamped, 1000u);
 }
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
 // --outside: points and domains past the model's box take its nearest cell
 // (the default, said once) or are refused in one line, naming them.
 TEST(ModelSources, OutsideTheModelIsClampedAndSaidOrRefused) {
@@ -354,13 +345,13 @@ TEST(ModelSources, OutsideTheModelIsClampedAndSaidOrRefused) {
   const std::string base = std::string(WEAVER_BINARY) + " model material " + db + " --points " +
                            points + " >" + db + ".out 2>" + db + ".err";
   ASSERT_EQ(WEXITSTATUS(std::system(base.c_str())), 0);
-  const std::string answers = read_file(db + ".out");
+  const std::string answers = testing::slurp(db + ".out");
   EXPECT_EQ(std::count(answers.begin(), answers.end(), '\n'), 3) << answers;
-  const std::string note = read_file(db + ".err");
+  const std::string note = testing::slurp(db + ".err");
   EXPECT_NE(note.find("2 point(s) outside the model's box"), std::string::npos) << note;
   EXPECT_NE(note.find("first: (150000, 5, 5) m"), std::string::npos) << note;
   ASSERT_EQ(WEXITSTATUS(std::system((base + " --outside error").c_str())), 1);
-  const std::string err = read_file(db + ".err");
+  const std::string err = testing::slurp(db + ".err");
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   EXPECT_NE(err.find("point (150000, 5, 5) m is outside the model's box (x 0..100000"),
             std::string::npos)
@@ -371,12 +362,12 @@ TEST(ModelSources, OutsideTheModelIsClampedAndSaidOrRefused) {
       std::string(WEAVER_BINARY) + " construct " + mesh + " --model db:" + db +
       " --freq 0.05 --domain 200000,100000,50000 --quiet >" + mesh + ".out 2>" + mesh + ".err";
   ASSERT_EQ(WEXITSTATUS(std::system((construct + " --outside error").c_str())), 1);
-  const std::string refused = read_file(mesh + ".err");
+  const std::string refused = testing::slurp(mesh + ".err");
   EXPECT_NE(refused.find("x past 100000 m (to 200000)"), std::string::npos) << refused;
   EXPECT_EQ(std::count(refused.begin(), refused.end(), '\n'), 1) << refused;
   EXPECT_FALSE(std::filesystem::exists(mesh + "/octants-1.bt"));
   ASSERT_EQ(WEXITSTATUS(std::system(construct.c_str())), 0);
-  const std::string plan = read_file(mesh + ".out");
+  const std::string plan = testing::slurp(mesh + ".out");
   EXPECT_NE(plan.find("outside    the domain reaches outside the model's box: x past 100000 m"),
             std::string::npos)
       << plan;

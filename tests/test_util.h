@@ -5,6 +5,8 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "schema/status.h"
@@ -17,6 +19,22 @@ inline bool small_scale() {
   return s != nullptr && std::string(s) == "small";
 }
 inline uint64_t scaled(uint64_t full, uint64_t small) { return small_scale() ? small : full; }
+
+// The whole of a file ("" when it cannot be read).
+inline std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// ::testing::TempDir() + name, emptied (removed if there): a database path
+// a test may create, left behind for a look after a failure.
+inline std::string fresh_path(const std::string& name) {
+  const std::string path = ::testing::TempDir() + name;
+  std::filesystem::remove_all(path);
+  return path;
+}
 
 // A fresh, empty directory removed at scope exit.
 class TempDir {

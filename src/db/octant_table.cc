@@ -3,7 +3,19 @@
 #include <cstdio>
 #include <sstream>
 
+#include "storage/btree.h"
+
 namespace weaver {
+
+Status floor_holding(BTree& table, const Octant& o, uint64_t* key, std::byte* payload,
+                     bool* found) {
+  WEAVER_RETURN_IF_ERROR(table.floor(octant_key(o), key, payload, found));
+  if (*found) {
+    const Octant leaf = octant_from_key(*key);
+    *found = leaf == o || octant_is_ancestor(leaf, o);
+  }
+  return Status::Ok();
+}
 
 std::string units_to_metadata(const Units& u) {
   char buf[256];

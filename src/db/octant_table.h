@@ -3,12 +3,24 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 
+#include "schema/octant.h"
+#include "schema/status.h"
+
 namespace weaver {
 
+class BTree;
+
 inline constexpr char kOctantTable[] = "octants";
+
+// The leaf of an octant table that is `o` or holds it: the floor of o's
+// key, when that leaf is o or an ancestor of o; *found false otherwise (o
+// is cut into smaller leaves, or lies in a hole).  payload may be null.
+Status floor_holding(BTree& table, const Octant& o, uint64_t* key, std::byte* payload, bool* found);
 
 // Physical placement of the tick grid: point (x, y, z) in ticks is at
 // origin + tick * (x, y, z) metres.

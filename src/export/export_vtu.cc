@@ -67,9 +67,9 @@ struct Present {
   }
 };
 
-Present present(ExportJob& job) {
-  GeoFrame geo;
-  return {job.mesh.has_material(), job.mesh.has_q(), job.georeferenced(&geo)};
+// Which optional arrays the job's mesh has; *geo its frame when georeferenced.
+Present present(ExportJob& job, GeoFrame* geo) {
+  return {job.mesh.has_material(), job.mesh.has_q(), job.georeferenced(geo)};
 }
 
 // Arrays the mesh does not have (vp, vs, rho without material; qp, qs
@@ -170,8 +170,7 @@ Status write_cells(ExportJob& job, std::vector<Section>& out, Present has) {
 Status write_vtu_file(ExportJob& job, const std::string& path) {
   const uint64_t n = job.node_count(), e = job.element_count();
   GeoFrame geo;
-  job.georeferenced(&geo);
-  const Present has = present(job);
+  const Present has = present(job, &geo);
   const GeoTransform transform(geo);
   const std::vector<Array> arrays = layout(n, e, has);
   const std::string head = header(arrays, n, e, has);
@@ -235,7 +234,8 @@ Status write_pvtu(ExportJob& job) {
     WEAVER_RETURN_IF_ERROR(write_vtu_file(job, stem + "/" + name));
     pieces += "    <Piece Source=\"" + base_name(stem) + "/" + name + "\"/>\n";
   }
-  const Present has = present(job);
+  GeoFrame geo;
+  const Present has = present(job, &geo);
   const std::string index = std::string(kVtkFile) + "PUnstructuredGrid" + kVtkFileEnd +
                             "  <PUnstructuredGrid GhostLevel=\"0\">\n" +
                             declarations(layout(0, 0, has), has, true) + pieces +

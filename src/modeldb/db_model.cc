@@ -149,10 +149,8 @@ void DbModel::focus(const double lo[3], const double hi[3]) const {
   Reader& r = reader();
   if (!r.opened.ok()) return;
   bool clamped = false;
-  const Coord a{pixel_on(0, lo[0], &clamped), pixel_on(1, lo[1], &clamped),
-                pixel_on(2, lo[2], &clamped)};
-  const Coord b{pixel_on(0, hi[0], &clamped), pixel_on(1, hi[1], &clamped),
-                pixel_on(2, hi[2], &clamped)};
+  const Coord a = pixel_of(lo[0], lo[1], lo[2], &clamped);
+  const Coord b = pixel_of(hi[0], hi[1], hi[2], &clamped);
   // On a read error the region stays empty and the table answers (and
   // reports the error) point by point.
   if (!r.region.load(*r.table, a, b, r.table->options().schema.record_size(), region_octants_)
@@ -161,36 +159,43 @@ void DbModel::focus(const double lo[3], const double hi[3]) const {
   }
 }
 
+Coord DbModel::pixel_of(double x, double y, double z, bool* clamped) const {
+  *clamped = false;
+  return {pixel_on(0, x, clamped), pixel_on(1, y, clamped), pixel_on(2, z, clamped)};
+}
+
 Status DbModel::find(Reader& r, double x, double y, double z, ModelHit* hit) const {
-  WEAVER_RETURN_IF_ERROR(r.opened);
   bool clamped = false;
-  const uint32_t t[3] = {pixel_on(0, x, &clamped), pixel_on(1, y, &clamped),
-                         pixel_on(2, z, &clamped)};
-  if (r.region.covers({t[0], t[1], t[2]})) {
-    const int32_t i = r.region.find({t[0], t[1], t[2]});
+  const Coord t = pixel_of(x, y, z, &clamped);
+  return find_pixel(r, t, clamped, x, y, z, hit);
+}
+
+// (x, y, z) name the point in a hole's error.
+Status DbModel::find_pixel(Reader& r, Coord t, bool clamped, double x, double y, double z,
+                           ModelHit* hit) const {
+  WEAVER_RETURN_IF_ERROR(r.opened);
+  hit->clamped = clamped;
+  if (r.region.covers(t)) {
+    const int32_t i = r.region.find(t);
     if (i == ModelRegion::kHole) return hole_at(x, y, z);
     hit->values = r.region.values(i);
     hit->octant = r.region.octant(i);
-    hit->clamped = clamped;
     return Status::Ok();
   }
-  if (t[0] - r.lo.x < r.edge && t[1] - r.lo.y < r.edge && t[2] - r.lo.z < r.edge) {
-    *hit = r.last;
-    hit->clamped = clamped;
-    return Status::Ok();
+  if (t.x - r.lo.x >= r.edge || t.y - r.lo.y >= r.edge || t.z - r.lo.z >= r.edge) {
+    uint64_t key = 0;
+    bool found = false;
+    std::byte payload[sizeof(ModelValues)] = {};
+    WEAVER_RETURN_IF_ERROR(r.table->floor(pixel_key(t), &key, payload, &found));
+    const Octant o = found ? octant_from_key(key) : Octant{};
+    if (!found || !octant_contains_point(o, t)) return hole_at(x, y, z);
+    std::memcpy(r.last.values.data(), payload, r.table->options().schema.record_size());
+    r.last.octant = o;
+    r.lo = octant_corner(o);
+    r.edge = octant_edge(o);
   }
-  uint64_t key = 0;
-  bool found = false;
-  std::byte payload[sizeof(ModelValues)] = {};
-  WEAVER_RETURN_IF_ERROR(r.table->floor(pixel_key({t[0], t[1], t[2]}), &key, payload, &found));
-  const Octant o = found ? octant_from_key(key) : Octant{};
-  if (!found || !octant_contains_point(o, {t[0], t[1], t[2]})) return hole_at(x, y, z);
-  std::memcpy(r.last.values.data(), payload, r.table->options().schema.record_size());
-  r.last.octant = o;
-  r.lo = octant_corner(o);
-  r.edge = octant_edge(o);
-  *hit = r.last;
-  hit->clamped = clamped;
+  hit->values = r.last.values;
+  hit->octant = r.last.octant;
   return Status::Ok();
 }
 
@@ -200,18 +205,24 @@ Status DbModel::lookup(double x, double y, double z, ModelHit* hit) const {
 
 Status DbModel::lookup_batch(const double* xyz, size_t n, ModelHit* hits) const {
   Reader& r = reader();
-  std::vector<std::pair<uint64_t, uint32_t>> order(n);  // (pixel's Morton code, point)
+  struct Ask {
+    uint64_t code;  // the pixel's Morton code: the order answered in
+    uint32_t point;
+    Coord pixel;
+    bool clamped;
+  };
+  std::vector<Ask> order(n);
   for (size_t i = 0; i < n; ++i) {
-    bool clamped = false;
     const double* p = xyz + 3 * i;
-    const Coord c{pixel_on(0, p[0], &clamped), pixel_on(1, p[1], &clamped),
-                  pixel_on(2, p[2], &clamped)};
-    order[i] = {morton_encode(c), static_cast<uint32_t>(i)};
+    Ask& a = order[i];
+    a.pixel = pixel_of(p[0], p[1], p[2], &a.clamped);
+    a.code = morton_encode(a.pixel);
+    a.point = static_cast<uint32_t>(i);
   }
-  std::sort(order.begin(), order.end());
-  for (const auto& [code, i] : order) {
-    const double* p = xyz + 3 * i;
-    WEAVER_RETURN_IF_ERROR(find(r, p[0], p[1], p[2], &hits[i]));
+  std::sort(order.begin(), order.end(), [](const Ask& a, const Ask& b) { return a.code < b.code; });
+  for (const Ask& a : order) {
+    const double* p = xyz + 3 * size_t{a.point};
+    WEAVER_RETURN_IF_ERROR(find_pixel(r, a.pixel, a.clamped, p[0], p[1], p[2], &hits[a.point]));
   }
   return Status::Ok();
 }

@@ -48,6 +48,7 @@ class DbModel final : public VelocityModel {
   // lookup() of n points (xyz: x, y, z of each in turn) into hits[0..n),
   // answered in Z-order so the table's pages are read once each, not once
   // a point: a batch in random order runs as fast as a sorted one.
+  // REQUIRES: n < 2^32.
   Status lookup_batch(const double* xyz, size_t n, ModelHit* hits) const;
 
   // The error for a point outside the model's box, naming it and the box.
@@ -68,7 +69,11 @@ class DbModel final : public VelocityModel {
   Reader& reader() const;
   // The pixel of coordinate m (metres) on axis a, clamped into the model's box.
   uint32_t pixel_on(int a, double m, bool* clamped) const;
+  // The pixel of (x, y, z) metres, clamped into the box (*clamped says so).
+  Coord pixel_of(double x, double y, double z, bool* clamped) const;
   Status find(Reader& r, double x, double y, double z, ModelHit* hit) const;
+  Status find_pixel(Reader& r, Coord t, bool clamped, double x, double y, double z,
+                    ModelHit* hit) const;
   Status hole_at(double x, double y, double z) const;
 
   std::string dir_;

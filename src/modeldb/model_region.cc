@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "db/octant_table.h"
 #include "storage/btree.h"
 #include "storage/btree_cursor.h"
 
@@ -59,45 +60,32 @@ Status ModelRegion::load(BTree& table, Coord lo, Coord hi, size_t record_bytes,
 // floor of its key), or those inside it, by a scan of its subtree.
 Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_bytes,
                               size_t max_octants, bool* full) {
-  const uint64_t key = octant_key(cell);
   std::byte record[sizeof(ModelValues)] = {};
   uint64_t floor_key = 0;
   bool found = false;
-  WEAVER_RETURN_IF_ERROR(table.floor(key, &floor_key, record, &found));
+  WEAVER_RETURN_IF_ERROR(floor_holding(table, cell, &floor_key, record, &found));
   if (found) {
-    const Octant o = octant_from_key(floor_key);
-    if (o == cell || octant_is_ancestor(o, cell)) {
-      // Cells inside one octant come one after another in Z-order.
-      if (keys_.empty() || keys_.back() != floor_key) add(floor_key, record, record_bytes);
-      return Status::Ok();
-    }
+    // Cells inside one octant come one after another in Z-order.
+    if (keys_.empty() || keys_.back() != floor_key) add(floor_key, record, record_bytes);
+    return Status::Ok();
   }
   const uint64_t end = octant_key_subtree_end(cell);
   // A cell reaches past the box by up to its own size: its octants there
   // are skipped, not kept (about half of what the scans read).
-  const bool inside = meets(cell, true);
+  const bool inside = octant_in_box(cell, lo_, hi_);
   BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(table.seek_cursor(key, &c));
+  WEAVER_RETURN_IF_ERROR(table.seek_cursor(octant_key(cell), &c));
   while (c.valid() && c.key() < end) {
     if (keys_.size() == max_octants) {
       *full = true;
       return Status::Ok();
     }
-    if (inside || meets(octant_from_key(c.key()), false)) add(c.key(), c.payload(), record_bytes);
+    if (inside || octant_meets_box(octant_from_key(c.key()), lo_, hi_)) {
+      add(c.key(), c.payload(), record_bytes);
+    }
     WEAVER_RETURN_IF_ERROR(c.next());
   }
   return Status::Ok();
-}
-
-bool ModelRegion::meets(const Octant& o, bool within) const {
-  const uint32_t last = octant_edge(o) - 1;
-  const uint32_t c[3] = {o.x, o.y, o.z}, l[3] = {lo_.x, lo_.y, lo_.z}, h[3] = {hi_.x, hi_.y, hi_.z};
-  for (int a = 0; a < 3; ++a) {
-    const bool ok =
-        within ? c[a] >= l[a] && c[a] + last <= h[a] : c[a] <= h[a] && c[a] + last >= l[a];
-    if (!ok) return false;
-  }
-  return true;
 }
 
 void ModelRegion::add(uint64_t key, const std::byte* record, size_t record_bytes) {

@@ -71,8 +71,6 @@ class ModelRegion {
   Status scan_cell(BTree& table, const Octant& cell, size_t record_bytes, size_t max_octants,
                    bool* full);
   void add(uint64_t key, const std::byte* record, size_t record_bytes);
-  // Whether octant o meets the loaded box (within: lies wholly inside it).
-  bool meets(const Octant& o, bool within) const;
   void build_raster();
 
   bool loaded_ = false;

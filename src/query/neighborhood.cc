@@ -3,6 +3,7 @@
 // nodes that depend on a node.
 #include <algorithm>
 
+#include "db/octant_table.h"
 #include "query/explorer.h"
 
 namespace weaver {
@@ -43,18 +44,14 @@ Status Explorer::visit_across(const Octant& o, Direction d, const Octant& r,
                               std::vector<Neighbor>* out) {
   BTree& t = mesh_->octants();
   const uint64_t key = octant_key(r);
-  // A leaf equal to r or holding it is the floor of r's key.
   uint64_t floor_key = 0;
   bool found = false;
-  WEAVER_RETURN_IF_ERROR(t.floor(key, &floor_key, nullptr, &found));
+  WEAVER_RETURN_IF_ERROR(floor_holding(t, r, &floor_key, nullptr, &found));
   if (found) {
-    const Octant leaf = octant_from_key(floor_key);
-    if (leaf == r || octant_is_ancestor(leaf, r)) {
-      Neighbor n{d, 0, leaf};
-      WEAVER_RETURN_IF_ERROR(t.rank(floor_key, &n.id));
-      out->push_back(n);
-      return Status::Ok();
-    }
+    Neighbor n{d, 0, octant_from_key(floor_key)};
+    WEAVER_RETURN_IF_ERROR(t.rank(floor_key, &n.id));
+    out->push_back(n);
+    return Status::Ok();
   }
   uint64_t first = 0, end = 0;
   WEAVER_RETURN_IF_ERROR(t.rank(key, &first));

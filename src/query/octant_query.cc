@@ -2,20 +2,10 @@
 
 #include <string>
 
+#include "db/octant_table.h"
+
 namespace weaver {
 namespace {
-
-bool intersects(const Octant& o, const TickBox& b) {
-  const uint32_t s = octant_edge(o);
-  return o.x <= b.hi.x && o.x + s > b.lo.x && o.y <= b.hi.y && o.y + s > b.lo.y && o.z <= b.hi.z &&
-         o.z + s > b.lo.z;
-}
-
-bool inside(const Octant& o, const TickBox& b) {
-  const uint32_t s = octant_edge(o) - 1;
-  return o.x >= b.lo.x && o.x + s <= b.hi.x && o.y >= b.lo.y && o.y + s <= b.hi.y &&
-         o.z >= b.lo.z && o.z + s <= b.hi.z;
-}
 
 struct RangeWalk {
   BTree& t;
@@ -26,22 +16,18 @@ struct RangeWalk {
   // Visits octant o, which intersects the box.
   Status visit(const Octant& o) {
     const uint64_t key = octant_key(o);
-    // A leaf equal to o or containing it is the floor of o's key.
     uint64_t floor_key = 0;
     bool found = false;
-    WEAVER_RETURN_IF_ERROR(t.floor(key, &floor_key, nullptr, &found));
-    if (found) {
-      const Octant leaf = octant_from_key(floor_key);
-      if (leaf == o || octant_is_ancestor(leaf, o)) return emit_one(leaf, floor_key);
-    }
+    WEAVER_RETURN_IF_ERROR(floor_holding(t, o, &floor_key, nullptr, &found));
+    if (found) return emit_one(octant_from_key(floor_key), floor_key);
     uint64_t first = 0, end = 0;
     WEAVER_RETURN_IF_ERROR(t.rank(key, &first));
     WEAVER_RETURN_IF_ERROR(t.rank(octant_key_subtree_end(o), &end));
     if (end == first) return Status::Ok();  // no leaves under o
-    if (inside(o, box)) return emit_all(key, first, end);
+    if (octant_in_box(o, box.lo, box.hi)) return emit_all(key, first, end);
     for (int k = 0; k < 8; ++k) {
       const Octant c = octant_child(o, k);
-      if (intersects(c, box)) WEAVER_RETURN_IF_ERROR(visit(c));
+      if (octant_meets_box(c, box.lo, box.hi)) WEAVER_RETURN_IF_ERROR(visit(c));
     }
     return Status::Ok();
   }
