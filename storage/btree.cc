@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "storage/checksum.h"
+#include "storage/shard_set.h"
 
 namespace weaver {
 namespace {
@@ -132,7 +133,13 @@ Status BTree::write_header() {
   return write_fully(*file_, 0, bytes, sizeof bytes);
 }
 
+Status BTree::sharded_write() const {
+  return Status::InvalidArgument(
+      file_->name() + ": a sharded table is read-only ('weaver compact' joins its shards)");
+}
+
 Status BTree::commit() {
+  if (shards_) return sharded_write();
   seal_tail();
   WEAVER_RETURN_IF_ERROR(pool_->flush());
   WEAVER_RETURN_IF_ERROR(write_header());

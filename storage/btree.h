@@ -28,6 +28,8 @@
 
 namespace weaver {
 
+class ShardSet;
+
 class BTree final : public Store {
  public:
   // pool_bytes bounds the tree's memory: its buffer pool, and a 32nd of it
@@ -38,7 +40,15 @@ class BTree final : public Store {
                        std::unique_ptr<BTree>* out);
   // Opens an existing tree, verifying the header.
   static Status open(std::unique_ptr<File> file, uint64_t pool_bytes, std::unique_ptr<BTree>* out);
+  // A read-only tree over shards: B+tree files holding disjoint, increasing
+  // key ranges (storage/shard_set.h), answering every read below as one tree
+  // of all their records would (ranks are global; cursors go on from shard
+  // to shard).  Its options are the first shard's.  Writes are refused.
+  static Status open_sharded(std::vector<std::unique_ptr<BTree>> shards,
+                             std::unique_ptr<BTree>* out);
   ~BTree() override;
+  // The number of shards of a sharded tree; 0 for a tree of one file.
+  size_t shard_count() const;
 
   Status append(uint64_t key, const std::byte* payload) override;
   // Sorted append of n records at once (keys strictly increasing, all greater
@@ -83,13 +93,15 @@ class BTree final : public Store {
   // Leaves in the lookup directory: 0 until it is built, and after a change.
   uint32_t directory_leaves() const { return dir_.size(); }
   uint64_t file_bytes() const {
-    return page::kFileHeaderBytes + uint64_t{page_count_} * options_.page_size;
+    return uint64_t{shard_headers_ == 0 ? 1 : shard_headers_} * page::kFileHeaderBytes +
+           uint64_t{page_count_} * options_.page_size;
   }
   const std::string& file_name() const { return file_->name(); }
   BufferPool& pool() { return *pool_; }
 
  private:
   friend class BTreeCursor;
+  friend class ShardSet;
   using Path = TreePath;
   static constexpr int kMaxHeight = TreePath::kMaxDepth;
   struct Split {  // a new right sibling to hook into the parent
@@ -101,6 +113,8 @@ class BTree final : public Store {
 
   BTree(std::unique_ptr<File> file, const TableOptions& options, uint64_t pool_bytes);
   Status write_header();
+  // The error of every write to a sharded tree.
+  Status sharded_write() const;
   std::string where(uint32_t page_no) const;
 
   // prefetch_bytes: how much of the page to prefetch on a pool hit.
@@ -245,6 +259,12 @@ class BTree final : public Store {
   std::unique_ptr<page::PackedLeafBuilder> edit_;  // packed only: re-packs edited leaves
   bool tail_dirty_ = false;                        // tail_ holds entries its page does not
   page::PackedLeaf reader_;                        // for point lookups
+
+  // A sharded tree (open_sharded) hands every read to its shards; each shard
+  // knows the one after it, where its cursors go on.
+  std::unique_ptr<ShardSet> shards_;
+  BTree* next_shard_ = nullptr;
+  uint32_t shard_headers_ = 0;  // file headers in a sharded tree's files (one a shard)
 
   LeafDirectory dir_;  // empty until built, and after any change
   uint64_t reads_since_change_ = 0;

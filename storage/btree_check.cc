@@ -3,12 +3,14 @@
 #include <vector>
 
 #include "storage/btree.h"
+#include "storage/shard_set.h"
 
 namespace weaver {
 
 using page::PageType;
 
 Status BTree::check_invariants() {
+  if (shards_) return shards_->check_invariants();
   seal_tail();
   if (height_ == 0) {
     if (record_count_ != 0) return Status::Corruption(file_->name() + ": empty tree has records");

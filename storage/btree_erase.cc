@@ -11,6 +11,7 @@ namespace weaver {
 using page::PageType;
 
 Status BTree::erase(uint64_t key) {
+  if (shards_) return sharded_write();
   changed();
   if (options_.packed) return packed_edit(key, nullptr, true, nullptr);
   drop_spine();

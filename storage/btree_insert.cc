@@ -61,6 +61,7 @@ Status BTree::insert_new_root_leaf(uint64_t key, const std::byte* payload) {
 }
 
 Status BTree::put(uint64_t key, const std::byte* payload, bool* replaced) {
+  if (shards_) return sharded_write();
   changed();
   if (options_.packed) return packed_edit(key, payload, false, replaced);
   if (replaced != nullptr) *replaced = false;
@@ -274,6 +275,7 @@ void BTree::bump_spine_counts(int levels, uint64_t delta) {
 }
 
 Status BTree::append_batch(const uint64_t* keys, const std::byte* payloads, size_t n) {
+  if (shards_) return sharded_write();
   changed();
   if (n == 0) return Status::Ok();
   for (size_t i = 1; i < n; ++i) {
@@ -331,6 +333,7 @@ Status BTree::append_batch(const uint64_t* keys, const std::byte* payloads, size
 }
 
 Status BTree::append(uint64_t key, const std::byte* payload) {
+  if (shards_) return sharded_write();
   changed();
   if (height_ == 0) return insert_new_root_leaf(key, payload);
   if (!spine_valid_) WEAVER_RETURN_IF_ERROR(load_spine());

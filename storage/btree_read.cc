@@ -4,6 +4,7 @@
 
 #include "storage/btree.h"
 #include "storage/page_search.h"
+#include "storage/shard_set.h"
 
 namespace weaver {
 
@@ -132,6 +133,7 @@ Status BTree::descend_edge(uint32_t page_no, int level, bool rightmost, Path* pa
 }
 
 Status BTree::get(uint64_t key, std::byte* payload_out, bool* found) {
+  if (shards_) return shards_->get(key, payload_out, found);
   *found = false;
   seal_tail();
   if (height_ == 0) return Status::Ok();
@@ -154,6 +156,7 @@ Status BTree::get(uint64_t key, std::byte* payload_out, bool* found) {
 }
 
 Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, bool* found) {
+  if (shards_) return shards_->floor(key, key_out, payload_out, found);
   *found = false;
   seal_tail();
   if (height_ == 0) return Status::Ok();
@@ -219,6 +222,7 @@ Status BTree::rank(uint64_t key, uint64_t* out) {
 }
 
 Status BTree::rank_exact(uint64_t key, uint64_t* rank, bool* present) {
+  if (shards_) return shards_->rank_exact(key, rank, present);
   *rank = 0;
   *present = false;
   seal_tail();
@@ -243,6 +247,7 @@ Status BTree::rank_exact(uint64_t key, uint64_t* rank, bool* present) {
 
 Status BTree::leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* first_rank,
                         std::vector<std::byte>* payloads) {
+  if (shards_) return shards_->leaf_keys(key, keys, first_rank, payloads);
   keys->clear();
   if (payloads != nullptr) payloads->clear();
   *first_rank = 0;
@@ -255,6 +260,7 @@ Status BTree::leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* fir
 }
 
 Status BTree::select(uint64_t index, uint64_t* key_out, std::byte* payload_out) {
+  if (shards_) return shards_->select(index, key_out, payload_out);
   seal_tail();
   if (index >= record_count_) {
     return Status::InvalidArgument(file_->name() + ": position " + std::to_string(index) +
@@ -287,6 +293,7 @@ Status BTree::seek_keys(uint64_t key, BTreeCursor* c) { return position(key, tru
 Status BTree::seek_cursor(uint64_t key, BTreeCursor* c) { return position(key, false, c); }
 
 Status BTree::position(uint64_t key, bool keys_only, BTreeCursor* c) {
+  if (shards_) return shards_->position(key, keys_only, c);
   seal_tail();
   c->keys_only_ = keys_only;
   c->tree_ = this;
@@ -354,6 +361,8 @@ Status BTreeCursor::next_leaf() {
     valid_ = true;
     return Status::Ok();
   }
+  // The end of a shard: on to the next one's first record.
+  if (t.next_shard_ != nullptr) return t.next_shard_->position(0, keys_only_, this);
   return Status::Ok();
 }
 

@@ -4,6 +4,29 @@
 #include <string>
 
 namespace weaver {
+namespace {
+
+// A sharded tree reads nothing itself: its shards hold the pages.
+class NoFile final : public File {
+ public:
+  explicit NoFile(std::string name) : name_(std::move(name)) {}
+  Status read_at(uint64_t, void*, size_t, size_t*) override { return refuse(); }
+  Status write_at(uint64_t, const void*, size_t, size_t*) override { return refuse(); }
+  Status sync() override { return Status::Ok(); }
+  Status size(uint64_t* out) override { return *out = 0, Status::Ok(); }
+  Status truncate(uint64_t) override { return refuse(); }
+  const std::string& name() const override { return name_; }
+
+ private:
+  Status refuse() const { return Status::InvalidArgument(name_ + ": read through its shards"); }
+  std::string name_;
+};
+
+std::string shard_name(size_t i, const BTree& t) {
+  return "shard " + std::to_string(i) + " (" + t.file_name() + ")";
+}
+
+}  // namespace
 
 Status ShardSet::make(std::vector<std::unique_ptr<BTree>> shards, std::unique_ptr<ShardSet>* out) {
   if (shards.empty()) return Status::InvalidArgument("a sharded table needs a shard");
@@ -11,7 +34,7 @@ Status ShardSet::make(std::vector<std::unique_ptr<BTree>> shards, std::unique_pt
   s->before_.push_back(0);
   for (size_t i = 0; i < shards.size(); ++i) {
     BTree& t = *shards[i];
-    const std::string name = "shard " + std::to_string(i) + " (" + t.file_name() + ")";
+    const std::string name = shard_name(i, t);
     if (t.size() == 0) return Status::Corruption(name + " is empty");
     if (t.payload_size() != shards[0]->payload_size()) {
       return Status::Corruption(name + " has records of another size");
@@ -26,6 +49,7 @@ Status ShardSet::make(std::vector<std::unique_ptr<BTree>> shards, std::unique_pt
     s->last_.push_back(last);
     s->before_.push_back(s->before_.back() + t.size());
   }
+  for (size_t i = 0; i + 1 < shards.size(); ++i) shards[i]->next_shard_ = shards[i + 1].get();
   s->shards_ = std::move(shards);
   *out = std::move(s);
   return Status::Ok();
@@ -69,46 +93,51 @@ Status ShardSet::select(uint64_t index, uint64_t* key_out, std::byte* payload_ou
   return shards_[i]->select(index - before_[i], key_out, payload_out);
 }
 
-// A BTreeCursor in one shard at a time: at a shard's end, the next shard's
-// first record.
-class ShardSet::ShardCursor final : public Cursor {
- public:
-  explicit ShardCursor(ShardSet& set) : set_(set) {}
-
-  // At the first key >= key, from shard i on.
-  Status start(size_t i, uint64_t key) {
-    shard_ = i;
-    WEAVER_RETURN_IF_ERROR(set_.shards_[shard_]->seek_cursor(key, &c_));
-    return settle();
-  }
-  bool valid() const override { return c_.valid(); }
-  uint64_t key() const override { return c_.key(); }
-  const std::byte* payload() const override { return c_.payload(); }
-  Status next() override {
-    WEAVER_RETURN_IF_ERROR(c_.next());
-    return settle();
-  }
-
- private:
-  // Past a shard's last record, on to the next shard's first.
-  Status settle() {
-    while (!c_.valid() && shard_ + 1 < set_.shards_.size()) {
-      ++shard_;
-      WEAVER_RETURN_IF_ERROR(set_.shards_[shard_]->seek_cursor(0, &c_));
-    }
-    return Status::Ok();
-  }
-
-  ShardSet& set_;
-  size_t shard_ = 0;
-  BTreeCursor c_;
-};
-
-Status ShardSet::seek(uint64_t key, std::unique_ptr<Cursor>* out) {
-  auto c = std::make_unique<ShardCursor>(*this);
-  WEAVER_RETURN_IF_ERROR(c->start(static_cast<size_t>(std::max(shard_of(key), 0)), key));
-  *out = std::move(c);
+Status ShardSet::leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* first_rank,
+                           std::vector<std::byte>* payloads) {
+  // Below every shard, the first shard's first leaf is where key would be;
+  // between two shards, the earlier one's last leaf (its ranks end where
+  // the next shard's begin).
+  const size_t i = static_cast<size_t>(std::max(shard_of(key), 0));
+  WEAVER_RETURN_IF_ERROR(shards_[i]->leaf_keys(key, keys, first_rank, payloads));
+  *first_rank += before_[i];
   return Status::Ok();
 }
+
+Status ShardSet::position(uint64_t key, bool keys_only, BTreeCursor* cursor) {
+  BTree& t = *shards_[static_cast<size_t>(std::max(shard_of(key), 0))];
+  return keys_only ? t.seek_keys(key, cursor) : t.seek_cursor(key, cursor);
+}
+
+Status ShardSet::check_invariants() {
+  for (size_t i = 0; i < shards_.size(); ++i) {
+    const Status st = shards_[i]->check_invariants();
+    if (!st.ok()) return Status::Corruption(shard_name(i, *shards_[i]) + ": " + st.message());
+  }
+  return Status::Ok();  // the order between shards was checked by make
+}
+
+Status BTree::open_sharded(std::vector<std::unique_ptr<BTree>> shards,
+                           std::unique_ptr<BTree>* out) {
+  std::unique_ptr<ShardSet> set;
+  WEAVER_RETURN_IF_ERROR(ShardSet::make(std::move(shards), &set));
+  BTree& first = set->shard(0);
+  const std::string name = first.file_name() + " and " + std::to_string(set->shard_count() - 1) +
+                           " more shard" + (set->shard_count() == 2 ? "" : "s");
+  // The smallest pool: the tree itself never reads a page.
+  std::unique_ptr<BTree> t(new BTree(std::make_unique<NoFile>(name), first.options(), 0));
+  for (size_t i = 0; i < set->shard_count(); ++i) {
+    const BTree& s = set->shard(i);
+    t->height_ = std::max(t->height_, s.height());
+    t->page_count_ += s.page_count();
+  }
+  t->record_count_ = set->size();
+  t->shard_headers_ = static_cast<uint32_t>(set->shard_count());
+  t->shards_ = std::move(set);
+  *out = std::move(t);
+  return Status::Ok();
+}
+
+size_t BTree::shard_count() const { return shards_ ? shards_->shard_count() : 0; }
 
 }  // namespace weaver

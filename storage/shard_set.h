@@ -1,12 +1,12 @@
 // A table cut into shards, read as one: B+tree files holding disjoint,
-// increasing key ranges (as MPI ranks will write them, one each: issue 28),
+// increasing key ranges (as MPI ranks write them, one each: issue 28),
 // answering as a single tree of all their records would.  Ranks are global:
 // a record's rank is the count of the shards before its own plus its rank in
 // its shard, so ids stay what they are whatever the cut.
 //
-// The read half of a sharded table, to which BTree will hand its reads when
-// its table is sharded (the stages hold BTree&).  Read-only; not thread-safe
-// (a B+tree serves one thread).
+// The read half of a sharded BTree (BTree::open_sharded), to which the tree
+// hands every read, so that the stages, which hold BTree&, read a sharded
+// table unchanged.  Read-only; not thread-safe (a B+tree serves one thread).
 #pragma once
 
 #include <cstdint>
@@ -25,8 +25,12 @@ class ShardSet {
   static Status make(std::vector<std::unique_ptr<BTree>> shards, std::unique_ptr<ShardSet>* out);
 
   size_t shard_count() const { return shards_.size(); }
+  BTree& shard(size_t i) { return *shards_[i]; }
   uint64_t size() const { return before_.back(); }
   uint32_t payload_size() const { return shards_.front()->payload_size(); }
+  // Each shard's first and last key.
+  uint64_t first_key(size_t i) const { return first_[i]; }
+  uint64_t last_key(size_t i) const { return last_[i]; }
 
   // As BTree's.
   Status get(uint64_t key, std::byte* payload_out, bool* found);
@@ -35,11 +39,16 @@ class ShardSet {
   Status rank_exact(uint64_t key, uint64_t* rank, bool* present);
   // The record of global rank `index`; InvalidArgument past the last.
   Status select(uint64_t index, uint64_t* key_out, std::byte* payload_out);
-  // A cursor at the first key >= key, going on from one shard to the next.
-  Status seek(uint64_t key, std::unique_ptr<Cursor>* out);
+  // The leaf of the shard where key is or would be, first_rank global.
+  Status leaf_keys(uint64_t key, std::vector<uint64_t>* keys, uint64_t* first_rank,
+                   std::vector<std::byte>* payloads);
+  // A cursor at the first key >= key, going on from one shard to the next
+  // (each shard's tree knows the next: BTreeCursor::next_leaf).
+  Status position(uint64_t key, bool keys_only, BTreeCursor* cursor);
+  // Every shard's invariants, and the order between shards.
+  Status check_invariants();
 
  private:
-  class ShardCursor;
   ShardSet() = default;
   // The last shard whose first key is <= key; -1 when key is below them all.
   int shard_of(uint64_t key) const;

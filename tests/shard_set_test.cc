@@ -1,11 +1,13 @@
-// A table cut into shard files answers as the whole table: get, floor,
-// rank, select and cursors, checked against a std::map of the same records
+// A table cut into shard files answers, through BTree::open_sharded, as the
+// whole table: get, floor, rank, select, leaf_keys and both kinds of cursor,
+// checked against a std::map of the same records
 // (the slow, obviously correct reference) for cuts of every kind, including
 // one-record shards and keys between shards, below and above them all.
 #include "storage/shard_set.h"
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <map>
 #include <random>
 
@@ -36,8 +38,8 @@ std::unique_ptr<BTree> write_shard(const std::string& path, Records::const_itera
 }
 
 // The records cut at `cuts` (positions, increasing) into shard files.
-std::unique_ptr<ShardSet> cut(const TempDir& dir, const Records& r, std::vector<size_t> cuts,
-                              bool packed) {
+std::unique_ptr<BTree> cut(const TempDir& dir, const Records& r, std::vector<size_t> cuts,
+                           bool packed) {
   std::vector<std::unique_ptr<BTree>> shards;
   cuts.insert(cuts.begin(), 0);
   cuts.push_back(r.size());
@@ -45,12 +47,20 @@ std::unique_ptr<ShardSet> cut(const TempDir& dir, const Records& r, std::vector<
     auto from = std::next(r.begin(), long(cuts[s])), to = std::next(r.begin(), long(cuts[s + 1]));
     shards.push_back(write_shard(dir.file("s" + std::to_string(s) + ".bt"), from, to, packed));
   }
-  std::unique_ptr<ShardSet> set;
-  EXPECT_OK(ShardSet::make(std::move(shards), &set));
+  std::unique_ptr<BTree> set;
+  EXPECT_OK(BTree::open_sharded(std::move(shards), &set));
   return set;
 }
 
-void check_key(ShardSet& set, const Records& r, uint64_t k) {
+// The records in key order, by rank.
+using Flat = std::vector<std::pair<uint64_t, uint64_t>>;
+
+uint64_t rank_of(const Flat& flat, uint64_t k) {
+  return uint64_t(std::lower_bound(flat.begin(), flat.end(), std::make_pair(k, uint64_t{0})) -
+                  flat.begin());
+}
+
+void check_key(BTree& set, const Records& r, const Flat& flat, uint64_t k) {
   uint64_t v = 0, key = 0, rank = 0;
   bool found = false, present = false;
   ASSERT_OK(set.get(k, reinterpret_cast<std::byte*>(&v), &found));
@@ -66,19 +76,44 @@ void check_key(ShardSet& set, const Records& r, uint64_t k) {
     ASSERT_EQ(v, std::prev(up)->second);
   }
   ASSERT_OK(set.rank_exact(k, &rank, &present));
-  ASSERT_EQ(rank, uint64_t(std::distance(r.begin(), r.lower_bound(k)))) << k;
+  ASSERT_EQ(rank, rank_of(flat, k)) << k;
   ASSERT_EQ(present, r.count(k) == 1);
   std::unique_ptr<Cursor> c;
   ASSERT_OK(set.seek(k, &c));
+  BTreeCursor keys;
+  ASSERT_OK(set.seek_keys(k, &keys));
   auto it = r.lower_bound(k);
   for (int steps = 0; steps < 40 && it != r.end(); ++steps, ++it) {
     ASSERT_TRUE(c->valid()) << k;
     ASSERT_EQ(c->key(), it->first);
     ASSERT_OK(c->next());
+    ASSERT_TRUE(keys.valid()) << k;
+    ASSERT_EQ(keys.key(), it->first);
+    ASSERT_OK(keys.next());
   }
   if (it == r.end()) {
     ASSERT_FALSE(c->valid());
+    ASSERT_FALSE(keys.valid());
   }
+  // The leaf where k is or would be: its keys are the records of their ranks.
+  std::vector<uint64_t> leaf;
+  std::vector<std::byte> vals;
+  uint64_t first = 0;
+  ASSERT_OK(set.leaf_keys(k, &leaf, &first, &vals));
+  ASSERT_FALSE(leaf.empty());
+  ASSERT_EQ(vals.size(), leaf.size() * 8);
+  ASSERT_LE(first + leaf.size(), flat.size());
+  auto at = flat.begin() + long(first);
+  for (size_t i = 0; i < leaf.size(); ++i, ++at) {
+    ASSERT_EQ(leaf[i], at->first) << k;
+    uint64_t v = 0;
+    std::memcpy(&v, vals.data() + 8 * i, 8);
+    ASSERT_EQ(v, at->second);
+  }
+  // ... and k's rank lies within it, or just past it.
+  const uint64_t k_rank = rank_of(flat, k);
+  ASSERT_LE(first, k_rank) << k;
+  ASSERT_LE(k_rank, first + leaf.size()) << k;
 }
 
 TEST(ShardSet, AnswersAsTheWholeTableForEveryCut) {
@@ -86,13 +121,15 @@ TEST(ShardSet, AnswersAsTheWholeTableForEveryCut) {
   Records r;
   while (r.size() < 20000) r[rng() % 1000000 * 16] = rng();
   const size_t n = r.size();
+  const Flat flat(r.begin(), r.end());
   const std::vector<std::vector<size_t>> cuts = {
       {}, {n / 2}, {1, 2, 3}, {n - 1}, {137, 5000, 5001, 19000}, {n / 4, n / 2, 3 * n / 4}};
   for (bool packed : {false, true}) {
     for (const auto& c : cuts) {
       TempDir dir;
-      std::unique_ptr<ShardSet> set = cut(dir, r, c, packed);
+      std::unique_ptr<BTree> set = cut(dir, r, c, packed);
       ASSERT_EQ(set->shard_count(), c.size() + 1);
+      ASSERT_OK(set->check_invariants());
       ASSERT_EQ(set->size(), n);
       // Every record by rank, and by a scan from the start.
       std::unique_ptr<Cursor> all;
@@ -112,12 +149,16 @@ TEST(ShardSet, AnswersAsTheWholeTableForEveryCut) {
       // Keys present, absent, at and around every shard's ends.
       std::vector<uint64_t> keys = {0, 1, ~uint64_t{0}};
       for (size_t p : c) {
-        const uint64_t at = std::next(r.begin(), long(p))->first;
+        const uint64_t at = flat[p].first;
         keys.insert(keys.end(), {at - 1, at, at + 1});
       }
       for (int i = 0; i < 2000; ++i) keys.push_back(rng() % (1000000 * 16 + 100));
-      for (int i = 0; i < 500; ++i) keys.push_back(std::next(r.begin(), long(rng() % n))->first);
-      for (uint64_t k : keys) check_key(*set, r, k);
+      for (int i = 0; i < 500; ++i) keys.push_back(flat[rng() % n].first);
+      for (uint64_t k : keys) check_key(*set, r, flat, k);
+      // Writes are refused, naming the way to a table of one file.
+      const Status st = set->append(~uint64_t{0}, reinterpret_cast<const std::byte*>(&n));
+      ASSERT_FALSE(st.ok());
+      EXPECT_NE(st.message().find("weaver compact"), std::string::npos) << st.message();
     }
   }
 }

@@ -12,6 +12,7 @@
 namespace weaver {
 struct ConstructOptions;
 struct ConstructPlan;
+struct ConstructResult;
 }  // namespace weaver
 
 namespace weaver::cli {
@@ -29,6 +30,7 @@ int cmd_shell(int argc, char** argv);
 int cmd_slice(int argc, char** argv);
 int cmd_verify(int argc, char** argv);
 int cmd_recover(int argc, char** argv);
+int cmd_compact(int argc, char** argv);
 int cmd_model(int argc, char** argv);
 
 // Prints "weaver <command>: <message>" to stderr; returns 1 (2 for usage
@@ -40,9 +42,16 @@ int usage_error(const std::string& command, const std::string& message, const ch
 
 int cmd_mesh(int argc, char** argv);
 
+// `construct`'s command line (cmd_construct's, and weaver-mpi's): DB and
+// the options.  Returns -1 to go on, else the exit status (after --help's
+// text, or a usage error).
+int parse_construct_command(int argc, char** argv, std::string* db, weaver::ConstructOptions* o,
+                            bool* quiet);
 // The construct options and plan printout shared by `construct` and `mesh`.
 Status parse_construct_options(const ParsedArgs& args, weaver::ConstructOptions* o);
 void print_construct_plan(const weaver::ConstructOptions& o, const weaver::ConstructPlan& p);
+// The "constructed ..." line of a finished construct that took secs.
+void print_construct_result(const weaver::ConstructResult& r, double secs);
 // A --model naming a model file (etree:, grid:, layers:, xyz:): imported
 // into DB's model table, printed, and read from there ("db:DB").
 Status import_model_option(const std::string& db, weaver::ConstructOptions* o);

@@ -153,7 +153,8 @@ void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
               p.estimated_elements, p.estimated_disk_bytes / 1e9);
 }
 
-int cmd_construct(int argc, char** argv) {
+int parse_construct_command(int argc, char** argv, std::string* db, ConstructOptions* o,
+                            bool* quiet) {
   ParsedArgs args;
   Status st = parse_args(
       argc, argv, 2,
@@ -163,11 +164,21 @@ int cmd_construct(int argc, char** argv) {
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("construct", "expected one DB", kUsage);
-  ConstructOptions o;
-  st = parse_construct_options(args, &o);
-  if (st.ok()) st = threads_option(args, default_threads(), &o.threads);
+  st = parse_construct_options(args, o);
+  if (st.ok()) st = threads_option(args, default_threads(), &o->threads);
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
-  st = import_model_option(args.positional[0], &o);
+  *db = args.positional[0];
+  *quiet = args.flags.count("quiet") != 0;
+  return -1;
+}
+
+int cmd_construct(int argc, char** argv) {
+  std::string db;
+  ConstructOptions o;
+  bool quiet = false;
+  const int parsed = parse_construct_command(argc, argv, &db, &o, &quiet);
+  if (parsed >= 0) return parsed;
+  Status st = import_model_option(db, &o);
   if (!st.ok()) return report("construct", st);
   ConstructPlan plan;
   st = plan_construct(o, &plan);
@@ -176,20 +187,23 @@ int cmd_construct(int argc, char** argv) {
   print_construct_plan(o, plan);
   std::fflush(stdout);
   const auto t0 = std::chrono::steady_clock::now();
-  ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "construct",
-                    "leaves");
+  ProgressLine line(ProgressLine::style_for_stderr(quiet), "construct", "leaves");
   o.progress = line.fn();
   ConstructResult r;
-  st = construct_octree(args.positional[0], o, &plan, &r);
+  st = construct_octree(db, o, &plan, &r);
   line.finish();
   if (!st.ok()) return report("construct", st);
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  print_construct_result(
+      r, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return 0;
+}
+
+void print_construct_result(const ConstructResult& r, double secs) {
   std::printf(
       "constructed %llu leaves in %.2fs (%.0f leaves/s), edges %g..%g m, deepest level "
       "%d, worst %.2f points per wavelength, %.2f bytes/leaf\n",
       (unsigned long long)r.elements, secs, r.elements / secs, r.smallest_edge_m, r.largest_edge_m,
       finest_level(r.levels), r.worst_ppw, double(r.table_bytes) / r.elements);
-  return 0;
 }
 
 }  // namespace weaver::cli

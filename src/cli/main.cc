@@ -29,6 +29,7 @@ constexpr char kUsage[] =
     "  slice DB          a picture (PNG or SVG) of the mesh cut by a plane\n"
     "  verify DB         check pages, keys and the mesh invariants\n"
     "  recover DB        rebuild a lost or damaged MANIFEST from the table files\n"
+    "  compact DB        join the shards of weaver-mpi's tables into one file each\n"
     "  model import|material  a velocity model as a database (from etree or grid files)\n"
     "\n"
     "Run 'weaver <command> --help' for the arguments of one command.\n";
@@ -97,6 +98,7 @@ int dispatch(int argc, char** argv) {
   if (cmd == "slice") return cmd_slice(argc, argv);
   if (cmd == "verify") return cmd_verify(argc, argv);
   if (cmd == "recover") return cmd_recover(argc, argv);
+  if (cmd == "compact") return cmd_compact(argc, argv);
   if (cmd == "model") return cmd_model(argc, argv);
   std::fprintf(stderr, "weaver: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
   return 2;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <memory>
@@ -68,6 +69,12 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     }
   }
   SubtreeList subtrees(descent, p, subtree_level(o, p));
+  // A parallel run's part: the subtrees whose share of the estimate begins in it.
+  auto ours = [&](const Octant& root) {
+    if (o.shards <= 1) return true;
+    const double f = share.fraction_before(octant_key(root)) * o.shards;
+    return std::min(static_cast<int>(f), o.shards - 1) == o.shard;
+  };
   std::deque<std::unique_ptr<Slot>> in_flight;  // Z-order
   auto add = [&](const Octant& root, bool front) {
     auto slot = std::make_unique<Slot>();
@@ -82,7 +89,9 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
   Status st;
   Octant root;
   while (st.ok()) {
-    while (in_flight.size() < window && subtrees.next(&root)) add(root, false);
+    while (in_flight.size() < window && subtrees.next(&root)) {
+      if (ours(root)) add(root, false);
+    }
     if (in_flight.empty()) break;
     Slot* head = in_flight.front().get();
     if (threads > 1) {
@@ -179,43 +188,87 @@ ConstructMemory::ConstructMemory(MemoryBudget budget) : plan(budget) {
   model = plan.take_budget("model readers", 1, 2);
 }
 
+namespace {
+
+TableOptions octant_table_options(const ConstructOptions& o, const VelocityModel& model) {
+  TableOptions t;
+  t.key_kind = KeyKind::kOctant;
+  t.schema = material_schema(model.has_q());
+  t.packed = o.packed;
+  return t;
+}
+
+// The leaves of o's part (all, or one shard's) into table, and the table's
+// metadata: units, level counts, the model and the rule.
+Status write_octree(const ConstructOptions& o, const ConstructPlan& p, const VelocityModel& model,
+                    const ConstructMemory& memory, BTree& table, ConstructResult* r) {
+  const Descent descent(o, p, model);
+  ZOrderShare share;
+  if (o.progress || o.shards > 1) estimate_construct(o, p, model, &share);
+  WEAVER_RETURN_IF_ERROR(write_subtrees(o, p, descent, memory, share, table, r));
+  Units u;
+  u.tick_m = p.tick_m;
+  u.geo = o.geo.empty() ? model.geo() : o.geo;
+  char model_meta[256];
+  std::snprintf(model_meta, sizeof model_meta, ";model=%s;freq=%.17g;ppw=%.17g;vs_min=%.17g",
+                o.model.c_str(), o.freq, o.ppw, o.vs_min);
+  table.set_metadata(units_to_metadata(u) + levels_to_metadata(r->levels) + model_meta);
+  return Status::Ok();
+}
+
+// The plan, and the model the workers sample (one reader a thread).
+Status plan_and_open(const ConstructOptions& o, const ConstructMemory& memory, ConstructPlan* p,
+                     std::unique_ptr<VelocityModel>* model) {
+  WEAVER_RETURN_IF_ERROR(plan_construct(o, p));
+  return open_velocity_model(o.model, o.grid_file, memory.model, std::max(1, o.threads), model);
+}
+
+}  // namespace
+
 Status construct_octree(const std::string& db_dir, const ConstructOptions& o, ConstructPlan* p,
                         ConstructResult* r) {
   *r = ConstructResult{};
-  WEAVER_RETURN_IF_ERROR(plan_construct(o, p));
   const ConstructMemory memory(o.memory);
   std::unique_ptr<VelocityModel> model;
-  WEAVER_RETURN_IF_ERROR(
-      open_velocity_model(o.model, o.grid_file, memory.model, std::max(1, o.threads), &model));
+  WEAVER_RETURN_IF_ERROR(plan_and_open(o, memory, p, &model));
   ConstructEstimate e;
   e.elements = p->estimated_elements;
   e.disk_bytes = p->estimated_disk_bytes;
   WEAVER_RETURN_IF_ERROR(check_construct_fits(o, e, db_dir));
   std::unique_ptr<Database> db;
   WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, true, &db));
-  TableOptions topt;
-  topt.key_kind = KeyKind::kOctant;
-  topt.schema = material_schema(model->has_q());
-  topt.packed = o.packed;
   std::unique_ptr<BTree> table;
   std::string file;
-  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, memory.table_pool, &table, &file));
-  const Descent descent(o, *p, *model);
-  ZOrderShare share;
-  if (o.progress) estimate_construct(o, *p, *model, &share);
-  Status st = write_subtrees(o, *p, descent, memory, share, *table, r);
-  if (st.ok()) {
-    Units u;
-    u.tick_m = p->tick_m;
-    u.geo = o.geo.empty() ? model->geo() : o.geo;
-    char model_meta[256];
-    std::snprintf(model_meta, sizeof model_meta, ";model=%s;freq=%.17g;ppw=%.17g;vs_min=%.17g",
-                  o.model.c_str(), o.freq, o.ppw, o.vs_min);
-    table->set_metadata(units_to_metadata(u) + levels_to_metadata(r->levels) + model_meta);
-  }
+  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, octant_table_options(o, *model),
+                                          memory.table_pool, &table, &file));
+  const Status st = write_octree(o, *p, *model, memory, *table, r);
   WEAVER_RETURN_IF_ERROR(db->publish(kOctantTable, file, table, st));
   r->table_bytes = table->file_bytes();
   return Status::Ok();
+}
+
+Status construct_shard(const std::string& db_dir, const ConstructOptions& o,
+                       const std::string& file, ConstructPlan* p, ConstructResult* r,
+                       ShardEntry* entry) {
+  *r = ConstructResult{};
+  *entry = ShardEntry{file};
+  const ConstructMemory memory(o.memory);
+  std::unique_ptr<VelocityModel> model;
+  WEAVER_RETURN_IF_ERROR(plan_and_open(o, memory, p, &model));
+  std::unique_ptr<BTree> table;
+  WEAVER_RETURN_IF_ERROR(
+      create_shard_table(db_dir, file, octant_table_options(o, *model), memory.table_pool, &table));
+  Status st = write_octree(o, *p, *model, memory, *table, r);
+  if (st.ok()) st = table->commit();
+  if (st.ok() && table->size() > 0) {
+    entry->records = table->size();
+    st = table->select(0, &entry->first_key, nullptr);
+    if (st.ok()) st = table->select(table->size() - 1, &entry->last_key, nullptr);
+  }
+  r->table_bytes = entry->records > 0 ? table->file_bytes() : 0;
+  table.reset();
+  if (!st.ok() || entry->records == 0) std::remove((db_dir + "/" + file).c_str());
+  return st;
 }
 
 }  // namespace weaver

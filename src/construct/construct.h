@@ -13,6 +13,7 @@
 #include <functional>
 #include <string>
 
+#include "db/database.h"
 #include "db/octant_table.h"
 #include "schema/octant.h"
 #include "schema/status.h"
@@ -47,6 +48,11 @@ struct ConstructOptions {
   // The run goes on to balance and extract (`weaver mesh`): the disk check
   // counts their tables too.
   bool whole_pipeline = false;
+  // One rank's part of a parallel construct (construct_shard): the
+  // subtrees whose estimated Z-order share (construct/estimate.h) begins in
+  // [shard, shard + 1) / shards.  Ranks cut so own contiguous key ranges,
+  // and their shards, in rank order, hold the table a single run writes.
+  int shard = 0, shards = 1;
   // Leaves written, and the fraction of the estimate (construct/estimate.h)
   // that lies before the last of them in Z-order.
   ProgressFn progress;
@@ -90,5 +96,14 @@ struct ConstructResult {
 Status plan_construct(const ConstructOptions& options, ConstructPlan* plan);
 Status construct_octree(const std::string& db_dir, const ConstructOptions& options,
                         ConstructPlan* plan, ConstructResult* result);
+// One rank's shard of a parallel construct (options.shard of options.shards):
+// its leaves written to the new shard file `file` in db_dir
+// (db/database.h's create_shard_table) and synced, its metadata the table's
+// but for its own level counts; *entry describes it for the manifest.  A
+// rank whose part holds no leaf writes no file (entry->records 0).  The
+// caller checks the disk (check_construct_fits) and commits the shards.
+Status construct_shard(const std::string& db_dir, const ConstructOptions& options,
+                       const std::string& file, ConstructPlan* plan, ConstructResult* result,
+                       ShardEntry* entry);
 
 }  // namespace weaver

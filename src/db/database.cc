@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "db/node_table.h"
@@ -37,7 +38,7 @@ bool is_empty_database_dir(const std::string& dir, bool* has_table_files) {
     // A crash while the first manifest was written leaves MANIFEST.tmp.
     if (name == kLock || name == kManifestTmp) continue;
     empty = false;
-    *has_table_files = *has_table_files || is_table_file_name(name);
+    *has_table_files = *has_table_files || is_table_file_name(name) || is_shard_file_name(name);
   }
   return empty;
 }
@@ -81,6 +82,44 @@ std::string table_file_table(const std::string& file) {
   return is_table_file_name(file) ? file.substr(0, file.rfind('-')) : "";
 }
 
+std::string shard_file_name(const std::string& name, uint64_t number, int shard) {
+  return name + "-" + std::to_string(number) + "." + std::to_string(shard) + ".bt";
+}
+
+bool is_shard_file_name(const std::string& file) {
+  // "<name>-<n>.<s>.bt" is a table file name once the ".<s>" is taken out.
+  if (file.size() < 8 || file.compare(file.size() - 3, 3, ".bt") != 0) return false;
+  const size_t dot = file.rfind('.', file.size() - 4);
+  if (dot == std::string::npos || dot + 1 >= file.size() - 3) return false;
+  for (size_t i = dot + 1; i < file.size() - 3; ++i) {
+    if (!std::isdigit(static_cast<unsigned char>(file[i]))) return false;
+  }
+  return is_table_file_name(file.substr(0, dot) + ".bt");
+}
+
+// A shard file's <n>, as table_file_number's.
+uint64_t shard_file_number(const std::string& file) {
+  return table_file_number(file.substr(0, file.rfind('.', file.size() - 4)) + ".bt");
+}
+
+std::vector<std::string> table_value_files(const std::string& value) {
+  std::vector<std::string> files;
+  size_t from = 0;
+  for (size_t comma; (comma = value.find(',', from)) != std::string::npos; from = comma + 1) {
+    files.push_back(value.substr(from, comma - from));
+  }
+  files.push_back(value.substr(from));
+  return files;
+}
+
+Status create_shard_table(const std::string& dir, const std::string& file,
+                          const TableOptions& options, uint64_t pool_bytes,
+                          std::unique_ptr<BTree>* out) {
+  std::unique_ptr<File> f;
+  WEAVER_RETURN_IF_ERROR(open_posix_file(dir + "/" + file, OpenMode::kCreateTruncate, &f));
+  return BTree::create(std::move(f), options, pool_bytes, out);
+}
+
 Database::~Database() {
   for (const auto& [name, fd] : snapshot_fds_) ::close(fd);
   if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
@@ -92,16 +131,21 @@ Status Database::open_snapshot() {
   for (int attempt = 0;; ++attempt) {
     bool missing = false;
     std::pair<std::string, std::string> gone;  // the table whose file was missing
-    for (const auto& [name, file] : tables_) {
-      const int fd = ::open(table_path(name).c_str(), O_RDONLY | O_CLOEXEC);
-      if (fd < 0 && errno == ENOENT) {
-        missing = true;
-        gone = {name, file};
-        break;
+    std::string gone_file;
+    for (const auto& [name, value] : tables_) {
+      for (const std::string& file : table_value_files(value)) {
+        const std::string path = dir_ + "/" + file;
+        const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        if (fd < 0 && errno == ENOENT) {
+          missing = true;
+          gone = {name, value};
+          gone_file = file;
+          break;
+        }
+        if (fd < 0) return Status::IOError("cannot open " + path + ": " + std::strerror(errno));
+        snapshot_fds_[file] = fd;
       }
-      if (fd < 0)
-        return Status::IOError("cannot open " + table_path(name) + ": " + std::strerror(errno));
-      snapshot_fds_[name] = fd;
+      if (missing) break;
     }
     if (!missing) return Status::Ok();
     for (const auto& [name, fd] : snapshot_fds_) ::close(fd);
@@ -112,7 +156,7 @@ Status Database::open_snapshot() {
     // Still named by the newest manifest: deleted, not replaced by a writer.
     const auto now = tables_.find(gone.first);
     if (now != tables_.end() && now->second == gone.second) {
-      return Status::Corruption(dir_ + ": the file " + gone.second + " of table '" + gone.first +
+      return Status::Corruption(dir_ + ": the file " + gone_file + " of table '" + gone.first +
                                 "' is missing (named by MANIFEST)");
     }
   }
@@ -201,7 +245,26 @@ Status Database::read_manifest() {
     std::istringstream fields(line);
     std::string kind, a, b;
     fields >> kind >> a >> b;
-    if (kind != "table" || a.empty() || b.empty()) {
+    if (kind == "shard" && !a.empty() && is_shard_file_name(b)) {
+      ShardEntry e{b};
+      if (!(fields >> e.first_key >> e.last_key >> e.records) || e.records == 0 ||
+          e.first_key > e.last_key) {
+        return Status::Corruption(path + ": bad line '" + line + "'");
+      }
+      auto it = tables_.find(a);
+      if (it != tables_.end() && !shard_files_.count(table_value_files(it->second).back())) {
+        return Status::Corruption(path + ": table '" + a + "' is named twice");
+      }
+      if (it != tables_.end() &&
+          shard_files_[table_value_files(it->second).back()].last_key >= e.first_key) {
+        return Status::Corruption(path + ": the shards of table '" + a + "' are out of order");
+      }
+      tables_[a] += (it == tables_.end() ? "" : ",") + b;
+      shard_files_[b] = e;
+      next_file_number_ = std::max(next_file_number_, shard_file_number(b) + 1);
+      continue;
+    }
+    if (kind != "table" || a.empty() || b.empty() || tables_.count(a)) {
       return Status::Corruption(path + ": bad line '" + line + "'");
     }
     tables_[a] = b;
@@ -210,9 +273,32 @@ Status Database::read_manifest() {
   return Status::Ok();
 }
 
+std::vector<ShardEntry> Database::shards_of(const std::string& name) const {
+  std::vector<ShardEntry> out;
+  const auto it = tables_.find(name);
+  if (it == tables_.end()) return out;
+  for (const std::string& file : table_value_files(it->second)) {
+    const auto e = shard_files_.find(file);
+    if (e == shard_files_.end()) return {};
+    out.push_back(e->second);
+  }
+  return out;
+}
+
 Status Database::write_manifest(const std::map<std::string, std::string>& tables, bool* renamed) {
   std::vector<std::string> lines;
-  for (const auto& [name, file] : tables) lines.push_back("table " + name + " " + file);
+  for (const auto& [name, value] : tables) {
+    const std::vector<std::string> files = table_value_files(value);
+    if (files.size() == 1 && !shard_files_.count(files[0])) {
+      lines.push_back("table " + name + " " + value);
+      continue;
+    }
+    for (const std::string& f : files) {
+      const ShardEntry& e = shard_files_.at(f);
+      lines.push_back("shard " + name + " " + f + " " + std::to_string(e.first_key) + " " +
+                      std::to_string(e.last_key) + " " + std::to_string(e.records));
+    }
+  }
   return write_manifest_file(dir_, kManifest, kManifestHeader, lines, renamed);
 }
 
@@ -222,11 +308,15 @@ Status Database::remove_leftovers() {
     const std::string name = entry.path().filename().string();
     if (name == kManifest || name == kLock) continue;
     bool live = false;
-    for (const auto& [table, file] : tables_) live = live || file == name;
+    for (const auto& [table, value] : tables_) {
+      for (const std::string& file : table_value_files(value)) live = live || file == name;
+    }
+    const bool shard = is_shard_file_name(name);
     const bool ours =
-        name == kManifestTmp || is_table_file_name(name) || name.rfind("tmp-", 0) == 0;
+        name == kManifestTmp || is_table_file_name(name) || shard || name.rfind("tmp-", 0) == 0;
     if (live || !ours) continue;
-    next_file_number_ = std::max(next_file_number_, table_file_number(name) + 1);
+    next_file_number_ = std::max(next_file_number_,
+                                 (shard ? shard_file_number(name) : table_file_number(name)) + 1);
     fs::remove_all(entry.path(), ec);
     cleaned_.push_back(name);
   }
@@ -242,20 +332,50 @@ std::vector<std::string> Database::table_names() const {
 
 std::string Database::table_path(const std::string& name) const {
   auto it = tables_.find(name);
-  return it == tables_.end() ? "" : dir_ + "/" + it->second;
+  return it == tables_.end() ? "" : dir_ + "/" + table_value_files(it->second).front();
+}
+
+Status Database::open_file(const std::string& file, uint64_t pool_bytes,
+                           std::unique_ptr<BTree>* out) const {
+  std::unique_ptr<File> f;
+  const std::string path = dir_ + "/" + file;
+  const auto snap = snapshot_fds_.find(file);
+  if (snap != snapshot_fds_.end()) {
+    WEAVER_RETURN_IF_ERROR(dup_posix_file(snap->second, path, &f));
+  } else {
+    WEAVER_RETURN_IF_ERROR(open_posix_file(path, OpenMode::kReadOnly, &f));
+  }
+  return BTree::open(std::move(f), pool_bytes, out);
+}
+
+// Each shard gets an equal part of the pool (a reader mostly works in one
+// shard at a time, but a cursor and a lookup may sit in two).
+Status Database::open_sharded(const std::string& name, uint64_t pool_bytes,
+                              std::unique_ptr<BTree>* out) const {
+  const std::vector<ShardEntry> shards = shards_of(name);
+  const uint64_t each = std::max<uint64_t>(pool_bytes / shards.size(), 256 << 10);
+  std::vector<std::unique_ptr<BTree>> trees;
+  std::vector<std::string> metadata;
+  for (const ShardEntry& e : shards) {
+    std::unique_ptr<BTree> t;
+    WEAVER_RETURN_IF_ERROR(open_file(e.file, each, &t));
+    if (t->size() != e.records) {
+      return Status::Corruption(dir_ + "/" + e.file + ": holds " + std::to_string(t->size()) +
+                                " records, MANIFEST says " + std::to_string(e.records));
+    }
+    metadata.push_back(t->options().metadata);
+    trees.push_back(std::move(t));
+  }
+  WEAVER_RETURN_IF_ERROR(BTree::open_sharded(std::move(trees), out));
+  (*out)->set_metadata(merge_shard_metadata(metadata));
+  return Status::Ok();
 }
 
 Status Database::open_table(const std::string& name, uint64_t pool_bytes,
                             std::unique_ptr<BTree>* out) const {
   if (!has_table(name)) return Status::NotFound(dir_ + ": no table '" + name + "'");
-  std::unique_ptr<File> f;
-  const auto snap = snapshot_fds_.find(name);
-  if (snap != snapshot_fds_.end()) {
-    WEAVER_RETURN_IF_ERROR(dup_posix_file(snap->second, table_path(name), &f));
-  } else {
-    WEAVER_RETURN_IF_ERROR(open_posix_file(table_path(name), OpenMode::kReadOnly, &f));
-  }
-  return BTree::open(std::move(f), pool_bytes, out);
+  if (!shards_of(name).empty()) return open_sharded(name, pool_bytes, out);
+  return open_file(tables_.at(name), pool_bytes, out);
 }
 
 Status Database::create_table(const std::string& name, const TableOptions& options,
@@ -288,12 +408,27 @@ Status Database::commit(const std::map<std::string, std::string>& table_files) {
   return Status::Ok();
 }
 
+Status Database::commit_shards(const std::string& name, const std::vector<ShardEntry>& shards) {
+  if (shards.empty()) return Status::InvalidArgument("table '" + name + "' has no shard");
+  std::string value;
+  for (const ShardEntry& e : shards) {
+    shard_files_[e.file] = e;
+    value += (value.empty() ? "" : ",") + e.file;
+  }
+  return commit({{name, value}});
+}
+
 Status Database::commit_exactly(const std::map<std::string, std::string>& tables) {
   if (mode_ != Mode::kWrite) return Status::InvalidArgument(dir_ + ": opened read-only");
+  std::set<std::string> kept;
+  for (const auto& [name, value] : tables) {
+    for (const std::string& f : table_value_files(value)) kept.insert(f);
+  }
   std::vector<std::string> replaced;
-  for (const auto& [name, file] : tables_) {
-    const auto it = tables.find(name);
-    if (it == tables.end() || it->second != file) replaced.push_back(file);
+  for (const auto& [name, value] : tables_) {
+    for (const std::string& f : table_value_files(value)) {
+      if (!kept.count(f)) replaced.push_back(f);
+    }
   }
   WEAVER_RETURN_IF_ERROR(sync_path(dir_, true));  // the new files' directory entries
   bool renamed = false;
@@ -319,8 +454,10 @@ Status Database::publish(const std::string& name, const std::string& file,
 }
 
 void Database::abandon(const std::string& file_name) {
-  for (const auto& [name, file] : tables_) {
-    if (file == file_name) return;  // live after all (a commit failed after its rename)
+  for (const auto& [name, value] : tables_) {
+    for (const std::string& file : table_value_files(value)) {
+      if (file == file_name) return;  // live after all (a commit failed after its rename)
+    }
   }
   std::error_code ec;
   fs::remove(dir_ + "/" + file_name, ec);

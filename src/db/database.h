@@ -5,6 +5,7 @@
 //                      "checksum <hex>" over the lines above
 //   DB/LOCK            flock()ed by the one writer
 //   DB/<name>-<n>.bt   table files; only those the manifest names are live
+//   DB/<name>-<n>.<s>.bt  shard s of a sharded table (below)
 //
 // A writer builds new table files beside the live ones and commits them by
 // writing MANIFEST.tmp, syncing it, renaming it over MANIFEST and syncing the
@@ -22,6 +23,16 @@
 // A reader opens every live table file when it opens the database, so it
 // reads one committed state (a snapshot) however many commits and file
 // deletions writers make meanwhile.
+//
+// A sharded table (written by the ranks of weaver-mpi, one shard a rank) is
+// an ordered list of B+tree files holding disjoint, increasing key ranges,
+// named in the MANIFEST by "shard <name> <file> <first key> <last key>
+// <records>" lines in key order.  open_table reads it as one tree
+// (BTree::open_sharded): every reader works on it unchanged.  The ranks
+// write and sync their shard files first; then one writer, holding the
+// lock, commits them all with one manifest (commit_shards), so a rank that
+// fails or dies before that leaves the old state, and its files are
+// leftovers for the next writer.
 #pragma once
 
 #include <map>
@@ -41,6 +52,12 @@ struct RecoverReport {
   std::string manifest_set_aside;      // "MANIFEST.damaged" when there was one
 };
 
+// One shard of a sharded table, as the MANIFEST names it.
+struct ShardEntry {
+  std::string file;
+  uint64_t first_key = 0, last_key = 0, records = 0;
+};
+
 class Database {
  public:
   enum class Mode { kRead, kWrite };
@@ -57,7 +74,16 @@ class Database {
 
   bool has_table(const std::string& name) const { return tables_.count(name) != 0; }
   std::vector<std::string> table_names() const;
+  // A table's file; a sharded table's first shard.
   std::string table_path(const std::string& name) const;
+  // The shards of a sharded table (empty for a table of one file).
+  std::vector<ShardEntry> shards_of(const std::string& name) const;
+  // A table's entry as commit_exactly takes it: its file, or a sharded
+  // table's files joined by ','.
+  std::string table_value(const std::string& name) const {
+    const auto it = tables_.find(name);
+    return it == tables_.end() ? "" : it->second;
+  }
   // Opens a committed table read-only.
   Status open_table(const std::string& name, uint64_t pool_bytes,
                     std::unique_ptr<BTree>* out) const;
@@ -69,6 +95,12 @@ class Database {
   // the live tables, atomically, drops the tables derived from those it
   // replaces (saying so on stderr), and deletes the files they replace.
   Status commit(const std::map<std::string, std::string>& table_files);
+  // Writer only: a file number for the shards of a new table, which the
+  // ranks create with create_shard_table.
+  uint64_t reserve_file_number() { return next_file_number_++; }
+  // Writer only: makes the given shards (each a committed B+tree file, in
+  // key order) table `name`, as commit does.
+  Status commit_shards(const std::string& name, const std::vector<ShardEntry>& shards);
   // Writer only: makes exactly these tables live (recovery).
   Status commit_exactly(const std::map<std::string, std::string>& tables);
   // Writer only: deletes an uncommitted file after a failed build (never a
@@ -95,13 +127,19 @@ class Database {
   Status read_manifest();
   Status write_manifest(const std::map<std::string, std::string>& tables, bool* renamed = nullptr);
   Status remove_leftovers();
+  // One table file, through the reader's snapshot when there is one.
+  Status open_file(const std::string& file, uint64_t pool_bytes, std::unique_ptr<BTree>* out) const;
+  Status open_sharded(const std::string& name, uint64_t pool_bytes,
+                      std::unique_ptr<BTree>* out) const;
 
   std::string dir_;
   Mode mode_;
   int lock_fd_ = -1;
   uint64_t next_file_number_ = 1;
-  std::map<std::string, std::string> tables_;  // name -> file name
-  std::map<std::string, int> snapshot_fds_;    // reader: name -> open descriptor
+  // name -> file name; a sharded table's shard files joined by ','.
+  std::map<std::string, std::string> tables_;
+  std::map<std::string, ShardEntry> shard_files_;  // file -> its shard entry, for the manifest
+  std::map<std::string, int> snapshot_fds_;        // reader: file -> open descriptor
   Status open_snapshot();
   std::vector<std::string> cleaned_;
   std::vector<std::string> dropped_;
@@ -115,5 +153,16 @@ bool is_table_file_name(const std::string& file);
 // The <n> of "<name>-<n>.bt" (0 if none) and the <name>.
 uint64_t table_file_number(const std::string& file);
 std::string table_file_table(const std::string& file);
+// "<name>-<n>.<shard>.bt", shard `shard` of table file number n, and whether
+// a directory entry has that form.
+std::string shard_file_name(const std::string& name, uint64_t number, int shard);
+bool is_shard_file_name(const std::string& file);
+// The files of a tables_ value: one, or a sharded table's shards.
+std::vector<std::string> table_value_files(const std::string& value);
+// Creates shard file `file` in dir outside any Database object: a rank of a
+// parallel writer, whose database rank 0 holds open for writing.
+Status create_shard_table(const std::string& dir, const std::string& file,
+                          const TableOptions& options, uint64_t pool_bytes,
+                          std::unique_ptr<BTree>* out);
 
 }  // namespace weaver

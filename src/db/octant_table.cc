@@ -71,6 +71,23 @@ bool levels_from_metadata(const std::string& metadata, LevelCounts* levels) {
   return true;
 }
 
+std::string merge_shard_metadata(const std::vector<std::string>& shards) {
+  if (shards.empty()) return "";
+  LevelCounts sum{};
+  for (const std::string& m : shards) {
+    LevelCounts l{};
+    if (!levels_from_metadata(m, &l)) return shards.front();  // nothing to sum
+    for (size_t i = 0; i < sum.size(); ++i) sum[i] += l[i];
+  }
+  // The first shard's levels item, in its place, replaced by the sums.
+  const std::string& first = shards.front();
+  const size_t at = first.find(";levels=");
+  if (at == std::string::npos) return first;
+  const size_t end = first.find(';', at + 1);
+  return first.substr(0, at) + levels_to_metadata(sum) +
+         (end == std::string::npos ? "" : first.substr(end));
+}
+
 int finest_level(const LevelCounts& levels) {
   for (int l = static_cast<int>(levels.size()) - 1; l > 0; --l) {
     if (levels[l] > 0) return l;

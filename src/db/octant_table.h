@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "schema/octant.h"
 #include "schema/status.h"
@@ -40,6 +41,12 @@ void for_each_metadata_item(const std::string& metadata,
                             const std::function<void(const std::string&, const std::string&)>& fn);
 // Fills *u from metadata; unknown or missing fields keep their defaults.
 void units_from_metadata(const std::string& metadata, Units* u);
+
+// The metadata of a sharded table (db/database.h) from its shards': the
+// first shard's, with the items that count records ("levels=") summed over
+// the shards, so that it reads as the metadata of one table of all their
+// records would (and 'weaver compact' writes that table byte for byte).
+std::string merge_shard_metadata(const std::vector<std::string>& shards);
 
 // Leaves per level, kept in the metadata by the writer of the table
 // (";levels=n0,n1,...,n20") so that readers need not scan for them.

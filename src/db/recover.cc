@@ -5,7 +5,8 @@
 // whose chosen file is newer (file numbers grow with every file a writer
 // makes, so a derived table older than its source was computed from an
 // earlier version of it).  Files not chosen are renamed "<file>.unused", out
-// of every writer's reach, for the user to inspect or delete.
+// of every writer's reach, for the user to inspect or delete.  Shard files
+// of sharded tables are set aside too: recover does not rebuild those.
 #include <cstdio>
 #include <filesystem>
 
@@ -58,6 +59,14 @@ Status Database::recover(const std::string& dir, RecoverReport* report) {
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
     if (is_table_file_name(name)) files[table_file_table(name)][table_file_number(name)] = name;
+    // Set aside, never deleted: the next writer would remove a shard file
+    // no manifest names.
+    if (is_shard_file_name(name)) {
+      report->set_aside.push_back(
+          name +
+          " (a shard of a sharded table: recover rebuilds tables of one file "
+          "only)");
+    }
   }
   if (ec) return Status::IOError("cannot list " + dir + ": " + ec.message());
   std::map<std::string, std::string> chosen;

@@ -1,0 +1,160 @@
+// weaver-mpi construct: every rank builds its part of the octree (the
+// subtrees whose estimated share of the Z-order falls in its range:
+// ConstructOptions::shard) into a shard file of its own; rank 0, holding the
+// database's writer lock all along, commits the shards in one manifest once
+// every rank has written and synced its file.  Any rank's failure fails the
+// command, naming the rank, and leaves the old database.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+
+#include "cli/cli.h"
+#include "construct/construct.h"
+#include "construct/estimate.h"
+#include "db/database.h"
+#include "mpi/mpi_commands.h"
+
+namespace weaver::mpi {
+namespace {
+
+// What one rank did: its shard, its figures, or its error ("" when ok).
+struct Outcome {
+  ShardEntry shard;
+  ConstructResult result;
+  double seconds = 0;
+  std::string error;
+
+  std::string encode() const {
+    std::ostringstream s;
+    s.precision(17);
+    s << shard.records << ' ' << shard.first_key << ' ' << shard.last_key << ' ' << result.elements
+      << ' ' << result.smallest_edge_m << ' ' << result.largest_edge_m << ' ' << result.worst_ppw
+      << ' ' << result.table_bytes << ' ' << result.subtrees << ' ' << result.subtrees_over << ' '
+      << seconds;
+    for (uint64_t l : result.levels) s << ' ' << l;
+    s << ' ' << shard.file << '\n' << error;
+    return s.str();
+  }
+  static Outcome decode(const std::string& text) {
+    Outcome o;
+    std::istringstream s(text);
+    s >> o.shard.records >> o.shard.first_key >> o.shard.last_key >> o.result.elements >>
+        o.result.smallest_edge_m >> o.result.largest_edge_m >> o.result.worst_ppw >>
+        o.result.table_bytes >> o.result.subtrees >> o.result.subtrees_over >> o.seconds;
+    for (uint64_t& l : o.result.levels) s >> l;
+    s >> o.shard.file;
+    s.ignore(1);
+    std::getline(s, o.error, '\0');
+    return o;
+  }
+};
+
+// The ranks' figures as one run's: sums, and the extremes over ranks with leaves.
+ConstructResult combine(const std::vector<Outcome>& all) {
+  ConstructResult r;
+  bool first = true;
+  for (const Outcome& o : all) {
+    const ConstructResult& x = o.result;
+    r.table_bytes += x.table_bytes;
+    r.subtrees += x.subtrees;
+    r.subtrees_over += x.subtrees_over;
+    for (size_t l = 0; l < r.levels.size(); ++l) r.levels[l] += x.levels[l];
+    if (x.elements == 0) continue;
+    r.smallest_edge_m = first ? x.smallest_edge_m : std::min(r.smallest_edge_m, x.smallest_edge_m);
+    r.largest_edge_m = std::max(r.largest_edge_m, x.largest_edge_m);
+    r.worst_ppw = first ? x.worst_ppw : std::min(r.worst_ppw, x.worst_ppw);
+    r.elements += x.elements;
+    first = false;
+  }
+  return r;
+}
+
+// Rank 0: imports a model file, plans, opens the database for writing and
+// reserves the shards' file number.  The error, or "".
+std::string prepare(const std::string& dir, ConstructOptions* o, ConstructPlan* plan,
+                    std::unique_ptr<Database>* db, uint64_t* number) {
+  Status st = cli::import_model_option(dir, o);
+  if (st.ok()) st = plan_construct(*o, plan);
+  if (!st.ok()) return cli::error_text(st);
+  cli::print_construct_plan(*o, *plan);
+  ConstructEstimate e;
+  e.elements = plan->estimated_elements;
+  e.disk_bytes = plan->estimated_disk_bytes;
+  st = check_construct_fits(*o, e, dir);
+  if (st.ok()) st = Database::open(dir, Database::Mode::kWrite, true, db);
+  if (!st.ok()) return cli::error_text(st);
+  *number = (*db)->reserve_file_number();
+  return "";
+}
+
+// Rank 0: commits the shards, or removes them all after a rank's failure.
+int finish(const Comm& comm, Database& db, const std::vector<Outcome>& all, double seconds) {
+  std::vector<ShardEntry> shards;
+  for (int r = 0; r < comm.size(); ++r) {
+    if (!all[r].error.empty()) {
+      for (const Outcome& o : all) std::remove((db.dir() + "/" + o.shard.file).c_str());
+      std::fprintf(stderr, "weaver-mpi construct: rank %d: %s\n", r, all[r].error.c_str());
+      return 1;
+    }
+    if (all[r].shard.records > 0) shards.push_back(all[r].shard);
+  }
+  const Status st = db.commit_shards(kOctantTable, shards);
+  if (!st.ok()) {
+    for (const ShardEntry& s : shards) db.abandon(s.file);
+    std::fprintf(stderr, "weaver-mpi construct: rank 0: %s\n", cli::error_text(st).c_str());
+    return 1;
+  }
+  for (int r = 0; r < comm.size(); ++r) {
+    std::printf("rank %-4d %llu leaves in %.2fs%s\n", r,
+                static_cast<unsigned long long>(all[r].result.elements), all[r].seconds,
+                all[r].shard.records ? (", " + all[r].shard.file).c_str() : " (no shard)");
+  }
+  const ConstructResult r = combine(all);
+  cli::print_construct_result(r, seconds);
+  std::printf("sharded    table octants in %zu shards of %d ranks ('weaver compact' joins them)\n",
+              shards.size(), comm.size());
+  return 0;
+}
+
+}  // namespace
+
+int construct(const Comm& comm, int argc, char** argv) {
+  std::string dir;
+  ConstructOptions o;
+  bool quiet = false;
+  const int parsed = cli::parse_construct_command(argc, argv, &dir, &o, &quiet);
+  if (parsed >= 0) return parsed;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::unique_ptr<Database> db;
+  ConstructPlan plan;
+  uint64_t number = 0;
+  const std::string failed = comm.rank() == 0 ? prepare(dir, &o, &plan, &db, &number) : "";
+  if (comm.rank() == 0) std::fflush(stdout);
+  if (!comm.all(failed.empty())) {
+    if (comm.rank() == 0) std::fprintf(stderr, "weaver-mpi construct: %s\n", failed.c_str());
+    return 1;
+  }
+  // The model as rank 0 resolved it (a model file imported into DB).
+  o.model = comm.broadcast(o.model);
+  number = comm.broadcast(number);
+  o.shard = comm.rank();
+  o.shards = comm.size();
+  Outcome mine;
+  const Status st = construct_shard(dir, o, shard_file_name(kOctantTable, number, comm.rank()),
+                                    &plan, &mine.result, &mine.shard);
+  mine.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!st.ok()) mine.error = cli::error_text(st);
+  const std::vector<std::string> texts = comm.gather(mine.encode());
+  int code = 0;
+  if (comm.rank() == 0) {
+    std::vector<Outcome> all;
+    for (const std::string& t : texts) all.push_back(Outcome::decode(t));
+    code = finish(comm, *db, all,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return static_cast<int>(comm.broadcast(uint64_t(code)));
+}
+
+}  // namespace weaver::mpi

@@ -1,0 +1,222 @@
+// Sharded tables in a database (db/database.h): written as weaver-mpi's
+// ranks write them (construct_shard per rank, commit_shards by the writer),
+// read by every stage through the same BTree interface, and joined by
+// compact into the very file the single-process run writes.  Each run is
+// checked against the single-process database of the same octree, byte for
+// byte: the tables a stage writes from sharded input, and the compacted ones.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "balance/balance.h"
+#include "construct/construct.h"
+#include "db/compact.h"
+#include "db/database.h"
+#include "db/octant_table.h"
+#include "export/export.h"
+#include "extract/extract.h"
+#include "test_util.h"
+#include "verify/verify.h"
+
+namespace weaver {
+namespace {
+
+using testing::slurp;
+using testing::TempDir;
+
+std::string table_file(const std::string& db, const std::string& table) {
+  std::unique_ptr<Database> d;
+  EXPECT_OK(Database::open(db, Database::Mode::kRead, false, &d));
+  return d->table_path(table);
+}
+
+// Constructs db as `shards` ranks would, one construct_shard a rank, in turn.
+void construct_sharded(const std::string& db, ConstructOptions o, int shards) {
+  std::unique_ptr<Database> writer;
+  ASSERT_OK(Database::open(db, Database::Mode::kWrite, true, &writer));
+  const uint64_t number = writer->reserve_file_number();
+  std::vector<ShardEntry> entries;
+  for (int s = 0; s < shards; ++s) {
+    o.shard = s;
+    o.shards = shards;
+    ConstructPlan plan;
+    ConstructResult r;
+    ShardEntry e;
+    ASSERT_OK(construct_shard(db, o, shard_file_name(kOctantTable, number, s), &plan, &r, &e));
+    if (e.records > 0) entries.push_back(e);
+  }
+  ASSERT_OK(writer->commit_shards(kOctantTable, entries));
+}
+
+// Copies table `name` of src into dst as `shards` shards of about equal
+// counts, each with its own level counts (an octant table) as construct_shard
+// writes them.
+void reshard(const std::string& src, const std::string& dst, const std::string& name, int shards) {
+  std::unique_ptr<Database> from, to;
+  ASSERT_OK(Database::open(src, Database::Mode::kRead, false, &from));
+  ASSERT_OK(Database::open(dst, Database::Mode::kWrite, true, &to));
+  std::unique_ptr<BTree> t;
+  ASSERT_OK(from->open_table(name, 4 << 20, &t));
+  const uint64_t number = to->reserve_file_number();
+  BTreeCursor c;
+  ASSERT_OK(t->seek_cursor(0, &c));
+  std::vector<ShardEntry> entries;
+  for (int s = 0; s < shards && c.valid(); ++s) {
+    const uint64_t n = t->size() * (s + 1) / shards - t->size() * s / shards;
+    ShardEntry e{shard_file_name(name, number, s)};
+    std::unique_ptr<BTree> out;
+    ASSERT_OK(create_shard_table(dst, e.file, t->options(), 1 << 20, &out));
+    LevelCounts levels{};
+    e.first_key = c.key();
+    for (uint64_t i = 0; i < n && c.valid(); ++i) {
+      ASSERT_OK(out->append(c.key(), c.payload()));
+      if (t->options().key_kind == KeyKind::kOctant) ++levels[c.key() & 127];
+      e.last_key = c.key();
+      ASSERT_OK(c.next());
+    }
+    LevelCounts all{};
+    std::string meta = t->options().metadata;
+    if (levels_from_metadata(meta, &all)) {
+      const size_t at = meta.find(";levels="), end = meta.find(';', at + 1);
+      meta = meta.substr(0, at) + levels_to_metadata(levels) +
+             (end == std::string::npos ? "" : meta.substr(end));
+    }
+    out->set_metadata(meta);
+    ASSERT_OK(out->commit());
+    e.records = out->size();
+    entries.push_back(e);
+  }
+  ASSERT_OK(to->commit_shards(name, entries));
+}
+
+void expect_verified(const std::string& db) {
+  VerifyReport report;
+  ASSERT_OK(verify_database(db, VerifyOptions{}, &report));
+  EXPECT_TRUE(report.ok()) << db << ": " << report.problems.front();
+}
+
+ConstructOptions basin(double freq) {
+  ConstructOptions o;
+  o.model = "basin";
+  o.freq = freq;
+  o.domain_m = {100000, 75000, 37500};  // not a cube: 8 x 6 x 3 blocks
+  o.threads = 2;
+  return o;
+}
+
+TEST(ShardedDatabase, ConstructShardsCompactToTheSingleRunsTable) {
+  TempDir dir;
+  const ConstructOptions o = basin(testing::small_scale() ? 0.1 : 0.2);
+  ConstructPlan plan;
+  ConstructResult r;
+  const std::string single = dir.file("single");
+  ASSERT_OK(construct_octree(single, o, &plan, &r));
+  const std::string want = slurp(table_file(single, kOctantTable));
+  // More shards than the estimate has cells to cut at leaves some empty.
+  for (int shards : {1, 2, 3, 4, 7}) {
+    SCOPED_TRACE(shards);
+    const std::string db = dir.file("sharded" + std::to_string(shards));
+    construct_sharded(db, o, shards);
+    std::unique_ptr<Database> d;
+    ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &d));
+    const std::vector<ShardEntry> entries = d->shards_of(kOctantTable);
+    ASSERT_FALSE(entries.empty());
+    if (shards > 1) {
+      EXPECT_GT(entries.size(), 1u);
+    }
+    std::unique_ptr<BTree> t;
+    ASSERT_OK(d->open_table(kOctantTable, 4 << 20, &t));
+    EXPECT_EQ(t->size(), r.elements);
+    d.reset();
+    expect_verified(db);
+    CompactResult cr;
+    ASSERT_OK(compact_database(db, MemoryBudget(), &cr));
+    ASSERT_EQ(cr.tables.size(), 1u);
+    EXPECT_EQ(cr.tables[0].shards, entries.size());
+    ASSERT_EQ(slurp(table_file(db, kOctantTable)), want);
+    // The shard files are gone with the commit.
+    for (const ShardEntry& e : entries) EXPECT_FALSE(std::filesystem::exists(db + "/" + e.file));
+    ASSERT_OK(compact_database(db, MemoryBudget(), &cr));
+    EXPECT_TRUE(cr.tables.empty());
+  }
+}
+
+// Every stage reads sharded tables as it reads one file: balance from sharded
+// leaves, extract from sharded balanced leaves, verify and export over
+// sharded octant and node tables, each writing what it writes from the
+// single database.
+TEST(ShardedDatabase, StagesReadShardedTablesAsOne) {
+  TempDir dir;
+  const std::string single = dir.file("single"), sharded = dir.file("sharded");
+  ConstructPlan plan;
+  ConstructResult r;
+  const ConstructOptions o = basin(0.1);
+  ASSERT_OK(construct_octree(single, o, &plan, &r));
+  construct_sharded(sharded, o, 3);
+  BalanceResult br;
+  ASSERT_OK(balance_octree(single, BalanceOptions{}, &br));
+  ASSERT_OK(balance_octree(sharded, BalanceOptions{}, &br));
+  ASSERT_EQ(slurp(table_file(sharded, kOctantTable)), slurp(table_file(single, kOctantTable)));
+  ExtractResult er;
+  ASSERT_OK(extract_mesh(single, ExtractOptions{}, &er));
+  for (int shards : {2, 5}) {
+    SCOPED_TRACE(shards);
+    const std::string db = dir.file("balanced" + std::to_string(shards));
+    reshard(single, db, kOctantTable, shards);
+    ASSERT_OK(extract_mesh(db, ExtractOptions{}, &er));
+    ASSERT_EQ(slurp(table_file(db, "nodes")), slurp(table_file(single, "nodes")));
+    // Both tables sharded: the mesh check and an export.
+    const std::string both = dir.file("both" + std::to_string(shards));
+    reshard(single, both, kOctantTable, shards);
+    reshard(single, both, "nodes", shards + 1);
+    expect_verified(both);
+    for (const std::string& db_dir : {single, both}) {
+      ExportOptions x;
+      x.format = ExportFormat::kVtu;
+      x.out = db_dir + ".vtu";
+      ExportResult xr;
+      ASSERT_OK(export_mesh(db_dir, x, &xr));
+    }
+    ASSERT_EQ(slurp(both + ".vtu"), slurp(single + ".vtu"));
+  }
+}
+
+TEST(ShardedDatabase, ManifestShardsOutOfOrderOrMiscountedAreCorruption) {
+  TempDir dir;
+  const std::string db = dir.file("db");
+  construct_sharded(db, basin(0.1), 2);
+  const std::string manifest = slurp(db + "/MANIFEST");
+  std::unique_ptr<Database> d;
+  ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &d));
+  std::vector<ShardEntry> e = d->shards_of(kOctantTable);
+  ASSERT_EQ(e.size(), 2u);
+  d.reset();
+  // A miscounted shard: the manifest's count against the file's.
+  {
+    std::unique_ptr<Database> w;
+    ASSERT_OK(Database::open(db, Database::Mode::kWrite, false, &w));
+    e[1].records += 1;
+    ASSERT_OK(w->commit_shards(kOctantTable, e));
+  }
+  ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &d));
+  std::unique_ptr<BTree> t;
+  const Status st = d->open_table(kOctantTable, 1 << 20, &t);
+  ASSERT_FALSE(st.ok());
+  EXPECT_NE(st.message().find(e[1].file), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("MANIFEST says"), std::string::npos) << st.message();
+  d.reset();
+  // Shards listed out of order.
+  {
+    std::unique_ptr<Database> w;
+    ASSERT_OK(Database::open(db, Database::Mode::kWrite, false, &w));
+    e[1].records -= 1;
+    std::swap(e[0], e[1]);
+    ASSERT_OK(w->commit_shards(kOctantTable, e));
+  }
+  const Status open = Database::open(db, Database::Mode::kRead, false, &d);
+  ASSERT_FALSE(open.ok());
+  EXPECT_NE(open.message().find("out of order"), std::string::npos) << open.message();
+}
+
+}  // namespace
+}  // namespace weaver

@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# weaver-mpi under mpirun against the serial weaver (ctest: Tools.MpiConstruct*).
+# For 1 to 4 ranks and MPI's singleton start (no mpirun), on the basin at two
+# frequencies, loh1 and a non-cube basin: the sharded table verifies, serial
+# balance reads it to the serial run's table, and 'weaver compact' joins it to
+# the serial construct's file byte for byte.  Then: more ranks than work,
+# ranks given different arguments, a rank whose write fails and a rank killed
+# at each of its durable steps (the old database stays, byte for byte).
+#
+# usage: check_mpi.sh WEAVER WEAVER_MPI SCRATCH
+set -euo pipefail
+weaver=$1 mpi=$2 tmp=$3
+rm -rf "$tmp" && mkdir -p "$tmp"
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+run() { mpirun --oversubscribe -np "$@"; }
+fail() { echo "FAIL: $*" >&2; exit 1; }
+table_md5() { md5sum "$1"/octants-*.bt | cut -d' ' -f1; }
+# The MANIFEST and the files it names (leftovers of a failed writer aside).
+live_md5() { (cd "$1" && md5sum MANIFEST $(awk '$1 == "table" || $1 == "shard" {print $3}' MANIFEST)); }
+
+check_model() {  # name, construct options...
+  local name=$1; shift
+  local serial=$tmp/$name.serial want balanced
+  "$weaver" construct "$serial" "$@" --quiet >/dev/null
+  want=$(table_md5 "$serial")
+  "$weaver" balance "$serial" --quiet >/dev/null
+  balanced=$(table_md5 "$serial")
+  for np in 0 1 2 3 4; do
+    local db=$tmp/$name.$np
+    if [ "$np" = 0 ]; then
+      "$mpi" construct "$db" "$@" --quiet >"$tmp/out" || fail "$name: singleton construct"
+    else
+      run "$np" "$mpi" construct "$db" "$@" --quiet >"$tmp/out" || fail "$name: -np $np construct"
+    fi
+    grep -q "^sharded " "$tmp/out" || fail "$name -np $np: no summary"
+    "$weaver" verify "$db" >/dev/null || fail "$name -np $np: verify of the sharded table"
+    "$weaver" stat "$db" >/dev/null || fail "$name -np $np: stat"
+    cp -r "$db" "$db.b"
+    "$weaver" balance "$db.b" --quiet >/dev/null
+    [ "$(table_md5 "$db.b")" = "$balanced" ] || fail "$name -np $np: balance from shards differs"
+    "$weaver" compact "$db" >/dev/null
+    [ "$(table_md5 "$db")" = "$want" ] || fail "$name -np $np: compacted table differs"
+    echo "ok  $name at $np ranks (0: singleton): compacts to $want"
+  done
+}
+
+check_model basin02 --model basin --freq 0.2
+check_model basin05 --model basin --freq 0.5 --threads 1
+check_model loh1 --model loh1 --freq 1 --domain 30000,30000,15000
+check_model slab --model basin --freq 0.2 --domain 100000,50000,12500
+
+# More ranks than the work: a tiny octree on 4 ranks, some left empty.
+run 4 "$mpi" construct "$tmp/tiny" --model halfspace --freq 0.02 --domain 25000,25000,25000 --quiet >"$tmp/out"
+"$weaver" construct "$tmp/tiny.serial" --model halfspace --freq 0.02 --domain 25000,25000,25000 --quiet >/dev/null
+grep -q "(no shard)" "$tmp/out" || fail "tiny: expected an empty rank"
+"$weaver" compact "$tmp/tiny" >/dev/null
+[ "$(table_md5 "$tmp/tiny")" = "$(table_md5 "$tmp/tiny.serial")" ] || fail "tiny: compacted table differs"
+echo "ok  more ranks than work"
+
+# Ranks given different arguments: one line, exit 2, nothing written.
+set +e
+mpirun -np 1 "$mpi" construct "$tmp/odd" --model basin --freq 0.2 : \
+       -np 1 "$mpi" construct "$tmp/odd" --model basin --freq 0.3 2>"$tmp/err" >/dev/null
+code=$?
+set -e
+[ "$code" = 2 ] || fail "different arguments: exit $code"
+grep -q "different arguments" "$tmp/err" || fail "different arguments: $(cat "$tmp/err")"
+[ ! -e "$tmp/odd" ] || fail "different arguments: a database was made"
+echo "ok  different arguments refused"
+
+# A rank whose write fails, and a rank killed at each of its durable steps:
+# the command fails (naming the failed rank), and the old database is intact.
+old=$tmp/old
+"$weaver" construct "$old" --model basin --freq 0.1 --quiet >/dev/null
+old_md5=$(live_md5 "$old")
+steps=$(WEAVER_CRASH_AT=0 "$mpi" construct "$tmp/count" --model basin --freq 0.2 --quiet 2>&1 >/dev/null |
+        sed -n 's/^crash steps: //p')
+[ -n "$steps" ] || fail "no step count"
+for step in $(seq 1 "$steps"); do
+  for what in FAIL CRASH; do
+    set +e
+    mpirun -np 1 "$mpi" construct "$old" --model basin --freq 0.2 --quiet : \
+           -np 1 env WEAVER_${what}_AT=$step "$mpi" construct "$old" --model basin --freq 0.2 --quiet \
+           >/dev/null 2>"$tmp/err"
+    code=$?
+    set -e
+    if [ "$code" = 0 ]; then
+      # The step was past the rank's last write: the new state is whole.
+      "$weaver" verify "$old" >/dev/null || fail "$what at $step: new state does not verify"
+      "$weaver" compact "$old" >/dev/null
+      "$weaver" construct "$old" --model basin --freq 0.1 --quiet >/dev/null
+      old_md5=$(live_md5 "$old")
+      continue
+    fi
+    if [ "$what" = FAIL ]; then
+      grep -q "^weaver-mpi construct: rank 1: " "$tmp/err" || fail "FAIL at $step: $(cat "$tmp/err")"
+      # mpirun adds its own banner about the exit status; weaver says one line.
+      [ "$(grep -c '^weaver-mpi' "$tmp/err")" = 1 ] || fail "FAIL at $step: $(cat "$tmp/err")"
+    fi
+    [ "$(live_md5 "$old")" = "$old_md5" ] ||
+      fail "$what at step $step of rank 1: the old database changed"
+    "$weaver" verify "$old" >/dev/null || fail "$what at $step: old database does not verify"
+  done
+done
+echo "ok  a rank failing or killed at each of its $steps durable steps leaves the old database"
