@@ -259,16 +259,7 @@ Status construct_shard(const std::string& db_dir, const ConstructOptions& o,
   WEAVER_RETURN_IF_ERROR(
       create_shard_table(db_dir, file, octant_table_options(o, *model), memory.table_pool, &table));
   Status st = write_octree(o, *p, *model, memory, *table, r);
-  if (st.ok()) st = table->commit();
-  if (st.ok() && table->size() > 0) {
-    entry->records = table->size();
-    st = table->select(0, &entry->first_key, nullptr);
-    if (st.ok()) st = table->select(table->size() - 1, &entry->last_key, nullptr);
-  }
-  r->table_bytes = entry->records > 0 ? table->file_bytes() : 0;
-  table.reset();
-  if (!st.ok() || entry->records == 0) std::remove((db_dir + "/" + file).c_str());
-  return st;
+  return finish_shard(db_dir, table, st, entry, &r->table_bytes);
 }
 
 }  // namespace weaver

@@ -112,6 +112,24 @@ std::vector<std::string> table_value_files(const std::string& value) {
   return files;
 }
 
+Status finish_shard(const std::string& dir, std::unique_ptr<BTree>& table, Status built,
+                    ShardEntry* entry, uint64_t* bytes) {
+  const std::string path = dir + "/" + entry->file;
+  if (built.ok()) built = table->commit();
+  if (built.ok() && table->size() > 0) {
+    entry->records = table->size();
+    built = table->select(0, &entry->first_key, nullptr);
+    if (built.ok()) built = table->select(table->size() - 1, &entry->last_key, nullptr);
+  }
+  *bytes = built.ok() && entry->records > 0 ? table->file_bytes() : 0;
+  table.reset();
+  if (!built.ok() || entry->records == 0) {
+    entry->records = 0;
+    std::remove(path.c_str());
+  }
+  return built;
+}
+
 Status create_shard_table(const std::string& dir, const std::string& file,
                           const TableOptions& options, uint64_t pool_bytes,
                           std::unique_ptr<BTree>* out) {
@@ -367,7 +385,11 @@ Status Database::open_sharded(const std::string& name, uint64_t pool_bytes,
     trees.push_back(std::move(t));
   }
   WEAVER_RETURN_IF_ERROR(BTree::open_sharded(std::move(trees), out));
-  (*out)->set_metadata(merge_shard_metadata(metadata));
+  // An octant shard counts its own leaves per level; the other tables'
+  // shards carry the table's metadata whole (a node shard, its octree's).
+  if ((*out)->options().key_kind == KeyKind::kOctant) {
+    (*out)->set_metadata(merge_shard_metadata(metadata));
+  }
   return Status::Ok();
 }
 

@@ -159,6 +159,12 @@ std::string shard_file_name(const std::string& name, uint64_t number, int shard)
 bool is_shard_file_name(const std::string& file);
 // The files of a tables_ value: one, or a sharded table's shards.
 std::vector<std::string> table_value_files(const std::string& value);
+// Ends the build of a shard file in dir: if `built` is OK, commits (syncs)
+// it and describes it in *entry (first and last key, records) and *bytes;
+// closes it, and deletes it when it failed or holds no record (records 0).
+// Returns the first error.
+Status finish_shard(const std::string& dir, std::unique_ptr<BTree>& table, Status built,
+                    ShardEntry* entry, uint64_t* bytes);
 // Creates shard file `file` in dir outside any Database object: a rank of a
 // parallel writer, whose database rank 0 holds open for writing.
 Status create_shard_table(const std::string& dir, const std::string& file,

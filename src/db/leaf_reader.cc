@@ -4,9 +4,9 @@
 
 namespace weaver {
 
-Status LeafReader::open(BTree& octants) {
+Status LeafReader::open(BTree& octants, uint64_t from) {
   file_ = octants.file_name();
-  WEAVER_RETURN_IF_ERROR(octants.seek_keys(0, &cursor_));
+  WEAVER_RETURN_IF_ERROR(octants.seek_keys(from, &cursor_));
   return cursor_.valid() ? check_current() : Status::Ok();
 }
 

@@ -13,7 +13,8 @@ namespace weaver {
 
 class LeafReader {
  public:
-  Status open(BTree& octants);
+  // At the first leaf whose key is >= from.
+  Status open(BTree& octants, uint64_t from = 0);
   bool valid() const { return cursor_.valid(); }
   uint64_t key() const { return cursor_.key(); }  // REQUIRES: valid()
   Status next();                                  // REQUIRES: valid()

@@ -42,7 +42,7 @@ void for_each_metadata_item(const std::string& metadata,
 // Fills *u from metadata; unknown or missing fields keep their defaults.
 void units_from_metadata(const std::string& metadata, Units* u);
 
-// The metadata of a sharded table (db/database.h) from its shards': the
+// The metadata of a sharded octant table (db/database.h) from its shards': the
 // first shard's, with the items that count records ("levels=") summed over
 // the shards, so that it reads as the metadata of one table of all their
 // records would (and 'weaver compact' writes that table byte for byte).

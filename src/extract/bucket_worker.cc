@@ -31,9 +31,15 @@ uint64_t leaves_end(const std::vector<uint64_t>& leaves) {
 
 }  // namespace
 
+uint64_t BucketReader::end_after(const std::vector<uint64_t>& leaves) const {
+  return cursor_.valid() ? octant_key_morton(cursor_.key()) : leaves_end(leaves);
+}
+
 Status BucketReader::next(BucketTask* task, bool* more) {
-  const bool leaves_left = cursor_.valid() || !carry_.empty();
-  *more = leaves_left || !spills_.empty();
+  const bool leaves_left = at_leaf() || !carry_.empty();
+  // A part before the table's end has no tail: its spills left at the end
+  // are the later parts' (and reached them before: extract_shard).
+  *more = leaves_left || (policy_.stop == UINT64_MAX && !spills_.empty());
   if (!*more) return Status::Ok();
   task->leaf_keys.clear();
   task->incoming.clear();
@@ -58,11 +64,11 @@ Status BucketReader::gather_tail(BucketTask* task) {
 Status BucketReader::gather_aligned(BucketTask* task) {
   const int shift = 3 * (kMaxLevel - policy_.level);
   const uint64_t bucket = octant_key_morton(cursor_.key()) >> shift;
-  while (cursor_.valid() && (octant_key_morton(cursor_.key()) >> shift) == bucket) {
+  while (at_leaf() && (octant_key_morton(cursor_.key()) >> shift) == bucket) {
     task->leaf_keys.push_back(cursor_.key());
     WEAVER_RETURN_IF_ERROR(cursor_.next());
   }
-  task->end = cursor_.valid() ? octant_key_morton(cursor_.key()) : leaves_end(task->leaf_keys);
+  task->end = end_after(task->leaf_keys);
   return Status::Ok();
 }
 
@@ -74,12 +80,12 @@ Status BucketReader::gather_counted(BucketTask* task) {
   leaves.swap(carry_);
   const size_t want = std::max<uint64_t>(policy_.leaves, 1);
   const size_t window = want + std::max<size_t>(want / 4, 1);
-  while (leaves.size() < window && cursor_.valid()) {
+  while (leaves.size() < window && at_leaf()) {
     leaves.push_back(cursor_.key());
     WEAVER_RETURN_IF_ERROR(cursor_.next());
   }
   if (leaves.size() < window) {
-    task->end = leaves_end(leaves);  // the table's last leaves
+    task->end = end_after(leaves);  // the part's (or the table's) last leaves
     return Status::Ok();
   }
   size_t cut = want;
@@ -113,7 +119,13 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
       if (corners[c] >= task.end) run.push_back({corners[c], corner_direction_bit(c)});
     }
   }
-  sort_records(run, packed_, scratch_);
+  sort_and_merge(run, packed_, scratch_);
+  return spills_.add_run(std::vector<SpillRecord>(run.begin(), run.end()));
+}
+
+void sort_and_merge(std::vector<SpillRecord>& run, std::vector<uint64_t>& packed,
+                    std::vector<uint64_t>& scratch) {
+  sort_records(run, packed, scratch);
   size_t kept = 0;
   for (size_t i = 0; i < run.size(); ++i) {
     if (kept > 0 && run[kept - 1].key == run[i].key) {
@@ -122,7 +134,7 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
       run[kept++] = run[i];
     }
   }
-  return spills_.add_run(std::vector<SpillRecord>(run.begin(), run.begin() + kept));
+  run.resize(kept);
 }
 
 namespace {

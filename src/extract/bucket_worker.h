@@ -41,6 +41,13 @@ struct BucketPolicy {
   // before the leaf whose Morton code has the most trailing zeros (so that
   // buckets are nearly aligned subtrees and spill little).
   uint64_t leaves = 1;
+  // The part of the mesh to extract (one rank's, in weaver-mpi): the node
+  // keys [start, stop), from the leaf with key first_leaf (Morton code
+  // start) to the last leaf below stop.  Corners at or past stop are the
+  // next parts' (handed to them beforehand: extract_shard), so a part that
+  // ends before the table does has no tail.
+  uint64_t start = 0, stop = UINT64_MAX;
+  uint64_t first_leaf = 0;
 };
 
 struct BucketTask {
@@ -58,7 +65,7 @@ struct BucketTask {
 class BucketReader {
  public:
   BucketReader(LeafReader& cursor, const BucketPolicy& policy, SpillStore& spills)
-      : cursor_(cursor), policy_(policy), spills_(spills) {}
+      : cursor_(cursor), policy_(policy), spills_(spills), next_start_(policy.start) {}
 
   // The next bucket into *task; false in *more after the last one.
   Status next(BucketTask* task, bool* more);
@@ -70,6 +77,13 @@ class BucketReader {
   // A bucket of the nodes past the last leaf (spilled by the buckets that
   // touch the root's far faces).
   Status gather_tail(BucketTask* task);
+  // Whether the cursor is at a leaf of this part.
+  bool at_leaf() const {
+    return cursor_.valid() && octant_key_morton(cursor_.key()) < policy_.stop;
+  }
+  // Where a bucket whose leaves ran out ends: at the next part's first
+  // leaf, or (the table's end) where the last leaf ends.
+  uint64_t end_after(const std::vector<uint64_t>& leaves) const;
 
   LeafReader& cursor_;
   BucketPolicy policy_;
@@ -87,6 +101,10 @@ void leaf_corner_keys(uint64_t leaf_key, uint64_t out[8]);
 // packed and scratch are working buffers.
 void sort_records(std::vector<SpillRecord>& records, std::vector<uint64_t>& packed,
                   std::vector<uint64_t>& scratch);
+// Sorts records and merges those of one key (their direction bits ORed): a
+// run for SpillStore::add_run.
+void sort_and_merge(std::vector<SpillRecord>& records, std::vector<uint64_t>& packed,
+                    std::vector<uint64_t>& scratch);
 
 class BucketWorker {
  public:

@@ -5,11 +5,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 
 #include "db/database.h"
 #include "db/leaf_reader.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
+#include "extract/bucket_worker.h"
 #include "extract/extract_search.h"
 #include "extract/extract_sort.h"
 #include "extract/node_classifier.h"
@@ -90,17 +92,14 @@ ExtractMemory::ExtractMemory(const ExtractOptions& o) : plan(o.memory) {
   in_flight = plan.take("buckets in flight", 1, 2);
 }
 
-Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
-                    ExtractResult* result) {
-  *result = ExtractResult{};
-  const ExtractMemory memory(options);
-  std::unique_ptr<Database> db;
-  WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, false, &db));
-  std::unique_ptr<BTree> octants;
-  WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, memory.octant_pool, &octants));
+namespace {
+
+// The buckets (into result) and the node table's options, from the leaves.
+Status plan_extract(BTree& octants, const ExtractOptions& options, const ExtractMemory& memory,
+                    ExtractResult* result, TableOptions* topt) {
   if (options.buckets == ExtractOptions::Buckets::kLevel) {
     int max_level = 0;
-    WEAVER_RETURN_IF_ERROR(finest_level_of(*octants, &max_level));
+    WEAVER_RETURN_IF_ERROR(finest_level_of(octants, &max_level));
     result->bucket_level = options.bucket_level >= 0 ? std::min(options.bucket_level, kMaxLevel)
                                                      : bucket_level_for(memory.bucket, max_level);
   } else {
@@ -109,12 +108,26 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
             ? options.bucket_leaves
             : std::clamp<uint64_t>(memory.bucket / kBytesPerLeaf, 1, kMaxBucketLeaves);
   }
-  TableOptions topt;
-  topt.key_kind = KeyKind::kNode;
+  topt->key_kind = KeyKind::kNode;
   std::string error;
-  topt.schema = *RecordSchema::parse(kNodeSchema, &error);
-  topt.metadata = octants->options().metadata;
-  topt.packed = options.packed;
+  topt->schema = *RecordSchema::parse(kNodeSchema, &error);
+  topt->metadata = octants.options().metadata;
+  topt->packed = options.packed;
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
+                    ExtractResult* result) {
+  *result = ExtractResult{};
+  const ExtractMemory memory(options);
+  std::unique_ptr<Database> db;
+  WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, false, &db));
+  std::unique_ptr<BTree> octants;
+  WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, memory.octant_pool, &octants));
+  TableOptions topt;
+  WEAVER_RETURN_IF_ERROR(plan_extract(*octants, options, memory, result, &topt));
   std::unique_ptr<BTree> nodes;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kNodeTable, topt, memory.node_pool, &nodes, &file));
@@ -131,6 +144,91 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
   WEAVER_RETURN_IF_ERROR(db->publish(kNodeTable, file, nodes, st));
   result->node_table_bytes = nodes->file_bytes();
   return Status::Ok();
+}
+
+namespace {
+
+// Where each rank's part begins: its first leaf's key (by count: rank r's
+// leaves are n*r/ranks .. n*(r+1)/ranks - 1) and the first node key it owns
+// (that leaf's Morton code; 0 for rank 0).  A rank without leaves begins
+// at the end (UINT64_MAX), and owns nothing.
+Status cut_parts(BTree& octants, int ranks, std::vector<uint64_t>* first_leaf,
+                 std::vector<uint64_t>* start) {
+  const uint64_t n = octants.size();
+  first_leaf->assign(ranks, UINT64_MAX);
+  start->assign(ranks, UINT64_MAX);
+  for (int r = 0; r < ranks; ++r) {
+    const uint64_t pos = n * uint64_t(r) / uint64_t(ranks);
+    if (pos < n) WEAVER_RETURN_IF_ERROR(octants.select(pos, &(*first_leaf)[r], nullptr));
+    if (pos < n) (*start)[r] = r == 0 ? 0 : octant_key_morton((*first_leaf)[r]);
+  }
+  return Status::Ok();
+}
+
+// The corners of this rank's leaves (from first_leaf, below stop) at or past
+// stop, for the ranks that own them (the last rank whose start is <= the key),
+// sorted and merged per rank.
+Status far_corners(BTree& octants, uint64_t first_leaf, uint64_t stop,
+                   const std::vector<uint64_t>& start,
+                   std::vector<std::vector<SpillRecord>>* outgoing) {
+  outgoing->assign(start.size(), {});
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(octants.seek_keys(first_leaf, &c));
+  uint64_t corners[8];
+  for (; c.valid() && octant_key_morton(c.key()) < stop;) {
+    leaf_corner_keys(c.key(), corners);
+    for (int k = 0; k < 8; ++k) {
+      if (corners[k] < stop) continue;
+      const size_t owner =
+          std::upper_bound(start.begin(), start.end(), corners[k]) - start.begin() - 1;
+      (*outgoing)[owner].push_back({corners[k], corner_direction_bit(k)});
+    }
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  std::vector<uint64_t> packed, scratch;
+  for (auto& records : *outgoing) sort_and_merge(records, packed, scratch);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status extract_shard(const std::string& db_dir, const ExtractOptions& options, int rank, int ranks,
+                     const std::string& file, const CornerExchange& exchange, ExtractResult* result,
+                     ShardEntry* entry) {
+  *result = ExtractResult{};
+  *entry = ShardEntry{file};
+  const ExtractMemory memory(options);
+  std::unique_ptr<Database> db;
+  std::unique_ptr<BTree> octants;
+  std::vector<uint64_t> first_leaf, start;
+  std::vector<std::vector<SpillRecord>> outgoing;
+  ExtractPart part;
+  // Up to the exchange, an error still takes part in it (sending nothing).
+  Status st = Database::open(db_dir, Database::Mode::kRead, false, &db);
+  if (st.ok()) st = db->open_table(kOctantTable, memory.octant_pool, &octants);
+  if (st.ok()) st = cut_parts(*octants, ranks, &first_leaf, &start);
+  if (st.ok()) {
+    part.start = start[rank];
+    part.stop = rank + 1 < ranks ? start[rank + 1] : UINT64_MAX;
+    part.first_leaf = first_leaf[rank];
+    if (part.start < part.stop)
+      st = far_corners(*octants, part.first_leaf, part.stop, start, &outgoing);
+  }
+  if (!st.ok()) outgoing.assign(ranks, {});
+  const Status exchanged = exchange(outgoing, &part.incoming);
+  WEAVER_RETURN_IF_ERROR(st);
+  WEAVER_RETURN_IF_ERROR(exchanged);
+  if (part.start >= part.stop) return Status::Ok();  // owns no node
+  std::vector<uint64_t> packed, scratch;
+  sort_and_merge(part.incoming, packed, scratch);
+  TableOptions topt;
+  WEAVER_RETURN_IF_ERROR(plan_extract(*octants, options, memory, result, &topt));
+  std::unique_ptr<BTree> nodes;
+  WEAVER_RETURN_IF_ERROR(create_shard_table(db_dir, file, topt, memory.node_pool, &nodes));
+  const std::string scratch_dir =
+      db_dir + "/tmp-extract-" + std::to_string(::getpid()) + "-" + std::to_string(rank);
+  st = extract_by_sort(*db, *octants, *nodes, scratch_dir, memory, options, result, &part);
+  return finish_shard(db_dir, nodes, st, entry, &result->node_table_bytes);
 }
 
 }  // namespace weaver

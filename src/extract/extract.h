@@ -22,6 +22,8 @@
 #include <functional>
 #include <string>
 
+#include "db/database.h"
+#include "extract/spill_store.h"
 #include "schema/status.h"
 #include "util/memory_budget.h"
 #include "util/progress.h"
@@ -91,5 +93,27 @@ struct ExtractResult {
 // two offending octants; the database is then left as it was.
 Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
                     ExtractResult* result);
+
+// One rank's part of a parallel extract (weaver-mpi; the sort algorithm).
+// The balanced leaves are cut into `ranks` runs of equal count; rank r owns
+// the node keys from its first leaf's Morton code to the next rank's (the
+// last rank: to the end), so a node's owner follows from its key alone.
+// Every leaf around a node has a Morton code no larger than the node's, so
+// the corners a rank's leaves give to later ranks (those at or past its
+// end: the leaves along its range's far surface) are all a rank needs from
+// the others.  They are sent once, before the buckets run, through
+// `exchange`, a collective every rank calls exactly once (also after an
+// error, with nothing to send): it takes the records for each rank and
+// returns those sent to this one.  Then the rank runs the bucket sort over
+// its own leaves, the received corners waiting in its spill store, and
+// writes its nodes to the new shard file `file` (synced; *entry describes
+// it; records 0 and no file when it owns none).  Leaves of other ranks are
+// read, for the classifier's aggregate hits, from the database itself,
+// which every rank sees.  The caller commits the shards.
+using CornerExchange = std::function<Status(std::vector<std::vector<SpillRecord>>& outgoing,
+                                            std::vector<SpillRecord>* incoming)>;
+Status extract_shard(const std::string& db_dir, const ExtractOptions& options, int rank, int ranks,
+                     const std::string& file, const CornerExchange& exchange, ExtractResult* result,
+                     ShardEntry* entry);
 
 }  // namespace weaver

@@ -61,7 +61,7 @@ Status run_parallel(Database& db, BTree& octants, BTree& nodes, const BucketPoli
     });
   }
   LeafReader c;
-  Status st = c.open(octants);
+  Status st = c.open(octants, policy.first_leaf);
   BucketReader reader(c, policy, spills);
   bool more = true;
   // Read ahead far enough that workers never wait for the writer (8 tasks a

@@ -27,7 +27,7 @@ Status run_serial(BTree& octants, BTree& nodes, const BucketPolicy& policy, Spil
                   const ExtractOptions& options, ExtractResult* result) {
   BucketWorker worker(octants);
   LeafReader c;
-  WEAVER_RETURN_IF_ERROR(c.open(octants));
+  WEAVER_RETURN_IF_ERROR(c.open(octants, policy.first_leaf));
   BucketReader reader(c, policy, spills);
   BucketTask task;
   while (true) {
@@ -43,9 +43,15 @@ Status run_serial(BTree& octants, BTree& nodes, const BucketPolicy& policy, Spil
 
 Status extract_by_sort(Database& db, BTree& octants, BTree& nodes, const std::string& scratch_path,
                        const ExtractMemory& memory, const ExtractOptions& options,
-                       ExtractResult* result) {
-  const BucketPolicy policy{result->bucket_level, result->bucket_leaves};
+                       ExtractResult* result, ExtractPart* part) {
+  BucketPolicy policy{result->bucket_level, result->bucket_leaves};
   SpillStore spills(scratch_path, memory.spill);
+  if (part != nullptr) {
+    policy.start = part->start;
+    policy.stop = part->stop;
+    policy.first_leaf = part->first_leaf;
+    if (!part->incoming.empty()) WEAVER_RETURN_IF_ERROR(spills.add_run(std::move(part->incoming)));
+  }
   const Status st = options.threads > 1
                         ? run_parallel(db, octants, nodes, policy, spills, memory, options, result)
                         : run_serial(octants, nodes, policy, spills, options, result);

@@ -41,6 +41,25 @@ std::vector<std::string> Comm::gather(const std::string& mine) const {
   return out;
 }
 
+std::vector<std::string> Comm::exchange(const std::vector<std::string>& blobs) const {
+  std::vector<int> send_n(size_), send_at(size_), recv_n(size_), recv_at(size_);
+  std::string send;
+  for (int r = 0; r < size_; ++r) {
+    send_at[r] = static_cast<int>(send.size());
+    send_n[r] = static_cast<int>(blobs[r].size());
+    send += blobs[r];
+  }
+  MPI_Alltoall(send_n.data(), 1, MPI_INT, recv_n.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  int total = 0;
+  for (int r = 0; r < size_; ++r) recv_at[r] = total, total += recv_n[r];
+  std::string recv(total, '\0');
+  MPI_Alltoallv(send.data(), send_n.data(), send_at.data(), MPI_CHAR, recv.data(), recv_n.data(),
+                recv_at.data(), MPI_CHAR, MPI_COMM_WORLD);
+  std::vector<std::string> out;
+  for (int r = 0; r < size_; ++r) out.push_back(recv.substr(recv_at[r], recv_n[r]));
+  return out;
+}
+
 bool Comm::all(bool mine) const {
   int v = mine ? 1 : 0, out = 0;
   MPI_Allreduce(&v, &out, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD);

@@ -27,6 +27,9 @@ class Comm {
   std::vector<std::string> gather(const std::string& mine) const;
   // Whether every rank's flag is true, on every rank.
   bool all(bool mine) const;
+  // All to all: blobs[r] goes to rank r; returns what each rank sent here,
+  // in rank order.
+  std::vector<std::string> exchange(const std::vector<std::string>& blobs) const;
 
  private:
   int rank_ = 0, size_ = 1;

@@ -18,8 +18,9 @@ constexpr char kUsage[] =
     "\n"
     "Commands (each takes --help; their options are weaver's):\n"
     "  construct DB      the octree of a velocity model, one shard a rank\n"
+    "  extract DB        the mesh nodes of a balanced octree, one shard a rank\n"
     "\n"
-    "The other commands (balance, extract, query, export, verify, stat, ...) are\n"
+    "The other commands (balance, query, export, verify, stat, ...) are\n"
     "the serial weaver's, and read a sharded database as any other; 'weaver\n"
     "compact DB' joins its shards into the files the serial run writes.\n";
 
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
   }
   const std::string cmd = argv[1];
   if (cmd == "construct") return weaver::mpi::construct(comm, argc, argv);
+  if (cmd == "extract") return weaver::mpi::extract(comm, argc, argv);
   std::fprintf(stderr, "weaver-mpi: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
   return 2;
 }

@@ -7,5 +7,6 @@
 namespace weaver::mpi {
 
 int construct(const Comm& comm, int argc, char** argv);
+int extract(const Comm& comm, int argc, char** argv);
 
 }  // namespace weaver::mpi

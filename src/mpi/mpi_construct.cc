@@ -15,6 +15,7 @@
 #include "construct/estimate.h"
 #include "db/database.h"
 #include "mpi/mpi_commands.h"
+#include "mpi/shards.h"
 
 namespace weaver::mpi {
 namespace {
@@ -92,20 +93,9 @@ std::string prepare(const std::string& dir, ConstructOptions* o, ConstructPlan* 
 // Rank 0: commits the shards, or removes them all after a rank's failure.
 int finish(const Comm& comm, Database& db, const std::vector<Outcome>& all, double seconds) {
   std::vector<ShardEntry> shards;
-  for (int r = 0; r < comm.size(); ++r) {
-    if (!all[r].error.empty()) {
-      for (const Outcome& o : all) std::remove((db.dir() + "/" + o.shard.file).c_str());
-      std::fprintf(stderr, "weaver-mpi construct: rank %d: %s\n", r, all[r].error.c_str());
-      return 1;
-    }
-    if (all[r].shard.records > 0) shards.push_back(all[r].shard);
-  }
-  const Status st = db.commit_shards(kOctantTable, shards);
-  if (!st.ok()) {
-    for (const ShardEntry& s : shards) db.abandon(s.file);
-    std::fprintf(stderr, "weaver-mpi construct: rank 0: %s\n", cli::error_text(st).c_str());
-    return 1;
-  }
+  std::vector<std::string> errors;
+  for (const Outcome& o : all) shards.push_back(o.shard), errors.push_back(o.error);
+  if (const int code = commit_or_fail(db, "construct", kOctantTable, shards, errors)) return code;
   for (int r = 0; r < comm.size(); ++r) {
     std::printf("rank %-4d %llu leaves in %.2fs%s\n", r,
                 static_cast<unsigned long long>(all[r].result.elements), all[r].seconds,
@@ -113,8 +103,8 @@ int finish(const Comm& comm, Database& db, const std::vector<Outcome>& all, doub
   }
   const ConstructResult r = combine(all);
   cli::print_construct_result(r, seconds);
-  std::printf("sharded    table octants in %zu shards of %d ranks ('weaver compact' joins them)\n",
-              shards.size(), comm.size());
+  std::printf("sharded    table octants in shards of %d ranks ('weaver compact' joins them)\n",
+              comm.size());
   return 0;
 }
 
