@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "balance/balance.h"
+#include "balance/balance_shard.h"
 #include "construct/construct.h"
 #include "db/compact.h"
 #include "db/database.h"
@@ -187,28 +188,57 @@ TEST(ShardedDatabase, StagesReadShardedTablesAsOne) {
   }
 }
 
-// The ranks of a parallel extract as threads: each deposits its outgoing
-// corners, waits for all, and takes what the others sent it (MPI_Alltoallv's
-// contract, which weaver-mpi's exchange keeps).
+// A random octree imported into a new database at db: seed, finest
+// level, and a stretch of its leaves cut out (a hole) when `hole`; on a
+// domain of 3 x 2 x 1 blocks of level 2 (not a cube).
+std::string random_octree(const TempDir& dir, const std::string& name, uint64_t seed, int max_level,
+                          bool hole, uint64_t leaves) {
+  GenOptions g;
+  g.seed = seed;
+  g.leaves = leaves;
+  g.max_level = max_level;
+  g.blocks[0] = 3, g.blocks[1] = 2, g.blocks[2] = 1;
+  g.block_level = 2;
+  std::vector<Octant> octants;
+  EXPECT_OK(generate_octree(g, &octants));
+  if (hole)
+    octants.erase(octants.begin() + octants.size() / 4, octants.begin() + octants.size() / 3);
+  const std::string text = dir.file(name + ".txt"), db = dir.file(name);
+  EXPECT_OK(write_octant_text(text, octants, ""));
+  ImportResult ir;
+  EXPECT_OK(import_octants(db, text, ImportOptions{}, &ir));
+  return db;
+}
+
+// The ranks of a parallel stage as threads: in each round, each deposits
+// what it sends to every rank, waits for all, and takes what the others sent
+// it, in rank order (MPI_Alltoallv's contract, which weaver-mpi keeps).
+template <class T>
 class ThreadExchange {
  public:
-  explicit ThreadExchange(int ranks)
-      : boxes_(ranks, std::vector<std::vector<SpillRecord>>(ranks)) {}
-  Status run(int rank, std::vector<std::vector<SpillRecord>>& out, std::vector<SpillRecord>* in) {
+  explicit ThreadExchange(int ranks) : boxes_(ranks, std::vector<T>(ranks)) {}
+  std::vector<T> run(int rank, std::vector<T> out) {
     std::unique_lock<std::mutex> l(m_);
+    const uint64_t round = round_;
     for (size_t to = 0; to < out.size(); ++to) boxes_[to][rank] = std::move(out[to]);
-    if (++arrived_ == int(boxes_.size())) all_.notify_all();
-    all_.wait(l, [&] { return arrived_ == int(boxes_.size()); });
-    in->clear();
-    for (auto& from : boxes_[rank]) in->insert(in->end(), from.begin(), from.end());
-    return Status::Ok();
+    if (++arrived_ == int(boxes_.size())) {
+      arrived_ = 0;
+      ready_ = std::move(boxes_);
+      boxes_.assign(ready_.size(), std::vector<T>(ready_.size()));
+      ++round_;
+      all_.notify_all();
+    } else {
+      all_.wait(l, [&] { return round_ != round; });
+    }
+    return std::move(ready_[rank]);
   }
 
  private:
   std::mutex m_;
   std::condition_variable all_;
-  std::vector<std::vector<std::vector<SpillRecord>>> boxes_;  // [to][from]
+  std::vector<std::vector<T>> boxes_, ready_;  // [to][from]
   int arrived_ = 0;
+  uint64_t round_ = 0;
 };
 
 // Extracts db on `ranks` threads as weaver-mpi's ranks do, and commits the
@@ -217,7 +247,7 @@ void extract_sharded(const std::string& db, int ranks) {
   std::unique_ptr<Database> writer;
   ASSERT_OK(Database::open(db, Database::Mode::kWrite, false, &writer));
   const uint64_t number = writer->reserve_file_number();
-  ThreadExchange exchange(ranks);
+  ThreadExchange<std::vector<SpillRecord>> exchange(ranks);
   std::vector<ShardEntry> entries(ranks);
   std::vector<Status> status(ranks);
   std::vector<std::thread> threads;
@@ -229,7 +259,13 @@ void extract_sharded(const std::string& db, int ranks) {
       o.memory = MemoryBudget(16 << 20);
       status[r] = extract_shard(
           db, o, r, ranks, shard_file_name("nodes", number, r),
-          [&](auto& out, auto* in) { return exchange.run(r, out, in); }, &er, &entries[r]);
+          [&](auto& out, auto* in) {
+            in->clear();
+            for (const auto& from : exchange.run(r, out))
+              in->insert(in->end(), from.begin(), from.end());
+            return Status::Ok();
+          },
+          &er, &entries[r]);
     });
   }
   for (auto& t : threads) t.join();
@@ -253,22 +289,8 @@ TEST(ShardedDatabase, ExtractOnRanksCompactsToTheSerialNodeTable) {
   ASSERT_OK(construct_octree(basin_db, basin(0.1), &plan, &r));
   octrees.push_back(basin_db);
   for (uint64_t seed : {5, 6}) {
-    GenOptions g;
-    g.seed = seed;
-    g.leaves = testing::scaled(20000, 5000);
-    g.max_level = seed == 5 ? 12 : 7;
-    g.blocks[0] = 3, g.blocks[1] = 2, g.blocks[2] = 1;  // not a cube
-    g.block_level = 2;
-    std::vector<Octant> leaves;
-    ASSERT_OK(generate_octree(g, &leaves));
-    if (seed == 6)
-      leaves.erase(leaves.begin() + leaves.size() / 3, leaves.begin() + leaves.size() / 2);
-    const std::string text = dir.file("random" + std::to_string(seed) + ".txt");
-    ASSERT_OK(write_octant_text(text, leaves, ""));
-    ImportResult ir;
-    const std::string db = dir.file("random" + std::to_string(seed));
-    ASSERT_OK(import_octants(db, text, ImportOptions{}, &ir));
-    octrees.push_back(db);
+    octrees.push_back(random_octree(dir, "random" + std::to_string(seed), seed, seed == 5 ? 12 : 7,
+                                    seed == 6, testing::scaled(20000, 5000)));
   }
   for (const std::string& db : octrees) {
     BalanceResult br;
@@ -292,6 +314,83 @@ TEST(ShardedDatabase, ExtractOnRanksCompactsToTheSerialNodeTable) {
       CompactResult cr;
       ASSERT_OK(compact_database(run, MemoryBudget(), &cr));
       ASSERT_TRUE(slurp(table_file(run, "nodes")) == want);
+    }
+  }
+}
+
+// Balances db on `ranks` threads as weaver-mpi's ranks do, and commits the
+// octant shards.
+void balance_sharded(const std::string& db, int ranks) {
+  std::unique_ptr<Database> writer;
+  ASSERT_OK(Database::open(db, Database::Mode::kWrite, false, &writer));
+  const uint64_t number = writer->reserve_file_number();
+  ThreadExchange<std::string> exchange(ranks);
+  std::vector<ShardEntry> entries(ranks);
+  std::vector<Status> status(ranks);
+  std::vector<std::thread> threads;
+  for (int r = 0; r < ranks; ++r) {
+    threads.emplace_back([&, r] {
+      BalanceShardResult br;
+      BalanceOptions o;
+      o.memory = MemoryBudget(16 << 20);
+      status[r] = balance_shard(
+          db, o, r, ranks, shard_file_name(kOctantTable, number, r),
+          [&](const std::vector<std::string>& out, std::vector<std::string>* in) {
+            *in = exchange.run(r, out);
+            return Status::Ok();
+          },
+          &br, &entries[r]);
+    });
+  }
+  for (auto& t : threads) t.join();
+  std::vector<ShardEntry> kept;
+  for (int r = 0; r < ranks; ++r) {
+    ASSERT_OK(status[r]);
+    if (entries[r].records > 0) kept.push_back(entries[r]);
+  }
+  ASSERT_OK(writer->commit_shards(kOctantTable, kept));
+}
+
+// A parallel balance writes, shard by shard, the serial run's balanced
+// table: on the basin (built sharded or not) and on random octrees with
+// holes, deep grading and a non-cube domain, on up to more ranks than some
+// stretches have leaves.
+TEST(ShardedDatabase, BalanceOnRanksCompactsToTheSerialTable) {
+  TempDir dir;
+  std::vector<std::string> octrees;
+  ConstructPlan plan;
+  ConstructResult r;
+  const std::string basin_db = dir.file("basin");
+  ASSERT_OK(construct_octree(basin_db, basin(0.1), &plan, &r));
+  octrees.push_back(basin_db);
+  for (uint64_t seed : {7, 8, 9}) {
+    octrees.push_back(random_octree(dir, "unbalanced" + std::to_string(seed), seed,
+                                    seed == 8 ? 12 : 8, seed != 7, testing::scaled(20000, 4000)));
+  }
+  for (const std::string& db : octrees) {
+    const std::string serial = db + ".serial";
+    std::filesystem::copy(db, serial);
+    BalanceResult br;
+    ASSERT_OK(balance_octree(serial, BalanceOptions{}, &br));
+    const std::string want = slurp(table_file(serial, kOctantTable));
+    for (int ranks : {1, 2, 3, 4, 7}) {
+      SCOPED_TRACE(db + " on " + std::to_string(ranks) + " ranks");
+      const std::string run = db + ".b" + std::to_string(ranks);
+      std::filesystem::remove_all(run);
+      if (db == basin_db && ranks == 3) {
+        construct_sharded(run, basin(0.1), 2);  // sharded input, cut elsewhere
+      } else {
+        std::filesystem::copy(db, run);
+      }
+      balance_sharded(run, ranks);
+      std::unique_ptr<Database> d;
+      ASSERT_OK(Database::open(run, Database::Mode::kRead, false, &d));
+      ASSERT_EQ(d->shards_of(kOctantTable).empty(), false);
+      d.reset();
+      expect_verified(run);
+      CompactResult cr;
+      ASSERT_OK(compact_database(run, MemoryBudget(), &cr));
+      ASSERT_TRUE(slurp(table_file(run, kOctantTable)) == want);
     }
   }
 }

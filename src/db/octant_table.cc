@@ -79,13 +79,15 @@ std::string merge_shard_metadata(const std::vector<std::string>& shards) {
     if (!levels_from_metadata(m, &l)) return shards.front();  // nothing to sum
     for (size_t i = 0; i < sum.size(); ++i) sum[i] += l[i];
   }
-  // The first shard's levels item, in its place, replaced by the sums.
-  const std::string& first = shards.front();
-  const size_t at = first.find(";levels=");
-  if (at == std::string::npos) return first;
-  const size_t end = first.find(';', at + 1);
-  return first.substr(0, at) + levels_to_metadata(sum) +
-         (end == std::string::npos ? "" : first.substr(end));
+  return with_levels(shards.front(), sum);  // the first shard's, with the sums
+}
+
+std::string with_levels(const std::string& metadata, const LevelCounts& levels) {
+  const size_t at = metadata.find(";levels=");
+  if (at == std::string::npos) return metadata + levels_to_metadata(levels);
+  const size_t end = metadata.find(';', at + 1);
+  return metadata.substr(0, at) + levels_to_metadata(levels) +
+         (end == std::string::npos ? "" : metadata.substr(end));
 }
 
 int finest_level(const LevelCounts& levels) {

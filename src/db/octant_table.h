@@ -54,6 +54,9 @@ using LevelCounts = std::array<uint64_t, 21>;
 std::string levels_to_metadata(const LevelCounts& levels);
 // False if the metadata has no (well-formed) level counts.
 bool levels_from_metadata(const std::string& metadata, LevelCounts* levels);
+// metadata with its ";levels=" item replaced by these counts, in its place
+// (appended when it has none).
+std::string with_levels(const std::string& metadata, const LevelCounts& levels);
 // The finest level with leaves (0 if none).
 int finest_level(const LevelCounts& levels);
 

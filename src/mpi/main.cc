@@ -18,9 +18,11 @@ constexpr char kUsage[] =
     "\n"
     "Commands (each takes --help; their options are weaver's):\n"
     "  construct DB      the octree of a velocity model, one shard a rank\n"
+    "  balance DB        2:1 balance the octant table in two message rounds\n"
     "  extract DB        the mesh nodes of a balanced octree, one shard a rank\n"
+    "  mesh DB ...       construct, balance and extract (construct's options)\n"
     "\n"
-    "The other commands (balance, query, export, verify, stat, ...) are\n"
+    "The other commands (query, export, verify, stat, ...) are\n"
     "the serial weaver's, and read a sharded database as any other; 'weaver\n"
     "compact DB' joins its shards into the files the serial run writes.\n";
 
@@ -56,6 +58,8 @@ int main(int argc, char** argv) {
   const std::string cmd = argv[1];
   if (cmd == "construct") return weaver::mpi::construct(comm, argc, argv);
   if (cmd == "extract") return weaver::mpi::extract(comm, argc, argv);
+  if (cmd == "balance") return weaver::mpi::balance(comm, argc, argv);
+  if (cmd == "mesh") return weaver::mpi::mesh(comm, argc, argv);
   std::fprintf(stderr, "weaver-mpi: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
   return 2;
 }

@@ -51,21 +51,6 @@ void decode(const std::string& bytes, std::vector<SpillRecord>* out) {
   }
 }
 
-struct Traffic {
-  uint64_t sent = 0, received = 0;  // bytes of corners
-};
-
-std::string outcome(const ShardEntry& e, const ExtractResult& r, const Traffic& t, double secs,
-                    const std::string& error) {
-  std::ostringstream s;
-  s.precision(17);
-  s << e.file << ' ' << e.records << ' ' << e.first_key << ' ' << e.last_key << ' ' << r.elements
-    << ' ' << r.nodes << ' ' << r.anchored << ' ' << r.edge << ' ' << r.face << ' '
-    << r.node_table_bytes << ' ' << t.sent << ' ' << t.received << ' ' << secs << '\n'
-    << error;
-  return s.str();
-}
-
 }  // namespace
 
 int extract(const Comm& comm, int argc, char** argv) {
@@ -79,82 +64,44 @@ int extract(const Comm& comm, int argc, char** argv) {
   st = cli::memory_option(args, &o.memory);
   if (st.ok()) st = cli::threads_option(args, 1, &o.threads);
   if (!st.ok()) return cli::usage_error("extract", st.message(), kUsage);
-  const std::string dir = args.positional[0];
+  return run_extract(comm, args.positional[0], o);
+}
+
+int run_extract(const Comm& comm, const std::string& dir, const ExtractOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   std::unique_ptr<Database> db;
   uint64_t number = 0;
-  std::string failed;
-  if (comm.rank() == 0) {
-    st = Database::open(dir, Database::Mode::kWrite, false, &db);
-    if (st.ok()) number = db->reserve_file_number();
-    if (!st.ok()) failed = cli::error_text(st);
-  }
-  if (!comm.all(failed.empty())) {
-    if (comm.rank() == 0) std::fprintf(stderr, "weaver-mpi extract: %s\n", failed.c_str());
-    return 1;
-  }
-  number = comm.broadcast(number);
-  Traffic traffic;
+  if (!open_writer(comm, "extract", dir, &db, &number)) return 1;
+  uint64_t sent = 0, received = 0, messages = 0;
   const CornerExchange exchange = [&](std::vector<std::vector<SpillRecord>>& outgoing,
                                       std::vector<SpillRecord>* incoming) {
     std::vector<std::string> blobs;
     for (int r = 0; r < comm.size(); ++r) {
       blobs.push_back(r == comm.rank() ? std::string() : encode(outgoing[r]));
-      traffic.sent += blobs.back().size();
+      sent += blobs.back().size();
+      messages += !blobs.back().empty();
     }
     incoming->clear();
     for (const std::string& b : comm.exchange(blobs)) {
-      traffic.received += b.size();
+      received += b.size();
       decode(b, incoming);
     }
     return Status::Ok();
   };
   ExtractResult r;
   ShardEntry entry;
-  st = extract_shard(dir, o, comm.rank(), comm.size(),
-                     shard_file_name(kNodeTable, number, comm.rank()), exchange, &r, &entry);
+  const Status st =
+      extract_shard(dir, o, comm.rank(), comm.size(),
+                    shard_file_name(kNodeTable, number, comm.rank()), exchange, &r, &entry);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::vector<std::string> texts =
-      comm.gather(outcome(entry, r, traffic, secs, st.ok() ? "" : cli::error_text(st)));
-  int code = 0;
-  if (comm.rank() == 0) {
-    std::vector<ShardEntry> shards;
-    std::vector<std::string> errors;
-    ExtractResult sum;
-    for (int rank = 0; rank < comm.size(); ++rank) {
-      std::istringstream s(texts[rank]);
-      ShardEntry e;
-      ExtractResult x;
-      Traffic t;
-      double rank_secs = 0;
-      s >> e.file >> e.records >> e.first_key >> e.last_key >> x.elements >> x.nodes >>
-          x.anchored >> x.edge >> x.face >> x.node_table_bytes >> t.sent >> t.received >> rank_secs;
-      s.ignore(1);
-      std::string error;
-      std::getline(s, error, '\0');
-      shards.push_back(e);
-      errors.push_back(error);
-      sum.elements += x.elements, sum.nodes += x.nodes, sum.anchored += x.anchored;
-      sum.edge += x.edge, sum.face += x.face;
-      std::printf(
-          "rank %-4d %llu elements, %llu nodes in %.2fs, corners sent %llu B, received "
-          "%llu B, wrote %llu B\n",
-          rank, (unsigned long long)x.elements, (unsigned long long)x.nodes, rank_secs,
-          (unsigned long long)t.sent, (unsigned long long)t.received,
-          (unsigned long long)x.node_table_bytes);
-    }
-    code = commit_or_fail(*db, "extract", kNodeTable, shards, errors);
-    const double all = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (code == 0) {
-      std::printf(
-          "extracted %llu nodes (%llu anchored, %llu edge-dangling, %llu face-dangling) from "
-          "%llu elements in %.2fs on %d ranks\n",
-          (unsigned long long)sum.nodes, (unsigned long long)sum.anchored,
-          (unsigned long long)sum.edge, (unsigned long long)sum.face,
-          (unsigned long long)sum.elements, all, comm.size());
-    }
-  }
-  return static_cast<int>(comm.broadcast(uint64_t(code)));
+  std::ostringstream line;
+  line.precision(3);
+  line << std::fixed << "rank " << comm.rank() << "  " << r.nodes << " nodes of " << r.elements
+       << " elements in " << secs << "s, corners sent " << sent << " B in " << messages
+       << " messages, received " << received << " B, wrote " << r.node_table_bytes
+       << " B, peak RSS " << peak_rss_bytes() << " B";
+  return finish_stage(comm, db.get(), "extract", kNodeTable, entry,
+                      st.ok() ? "" : cli::error_text(st), line.str(), r.nodes, "nodes", t0);
 }
 
 }  // namespace weaver::mpi

@@ -1,10 +1,74 @@
 #include "mpi/shards.h"
 
+#include <sys/resource.h>
+
 #include <cstdio>
+#include <sstream>
 
 #include "cli/cli.h"
 
 namespace weaver::mpi {
+
+bool open_writer(const Comm& comm, const char* command, const std::string& dir,
+                 std::unique_ptr<Database>* db, uint64_t* number) {
+  std::string failed;
+  if (comm.rank() == 0) {
+    const Status st = Database::open(dir, Database::Mode::kWrite, false, db);
+    if (st.ok()) *number = (*db)->reserve_file_number();
+    if (!st.ok()) failed = cli::error_text(st);
+  }
+  if (!comm.all(failed.empty())) {
+    if (comm.rank() == 0) std::fprintf(stderr, "weaver-mpi %s: %s\n", command, failed.c_str());
+    return false;
+  }
+  *number = comm.broadcast(*number);
+  return true;
+}
+
+int finish_stage(const Comm& comm, Database* db, const char* command, const std::string& table,
+                 const ShardEntry& mine, const std::string& error, const std::string& line,
+                 uint64_t count, const char* what, std::chrono::steady_clock::time_point start) {
+  std::ostringstream out;
+  out << mine.file << ' ' << mine.records << ' ' << mine.first_key << ' ' << mine.last_key << ' '
+      << count << '\n'
+      << error << '\x1f' << line;
+  const std::vector<std::string> all = comm.gather(out.str());
+  int code = 0;
+  if (comm.rank() == 0) {
+    std::vector<ShardEntry> shards;
+    std::vector<std::string> errors;
+    uint64_t sum = 0;
+    for (const std::string& text : all) {
+      std::istringstream in(text);
+      ShardEntry e;
+      uint64_t n = 0;
+      in >> e.file >> e.records >> e.first_key >> e.last_key >> n;
+      in.ignore(1);
+      std::string err, rank_line;
+      std::getline(in, err, '\x1f');
+      std::getline(in, rank_line, '\0');
+      shards.push_back(e);
+      errors.push_back(err);
+      sum += n;
+      std::printf("%s\n", rank_line.c_str());
+    }
+    code = commit_or_fail(*db, command, table, shards, errors);
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (code == 0) {
+      std::printf("%s: %llu %s in %.2fs on %d ranks\n", command, (unsigned long long)sum, what,
+                  secs, comm.size());
+    }
+    std::fflush(stdout);
+  }
+  return static_cast<int>(comm.broadcast(uint64_t(code)));
+}
+
+uint64_t peak_rss_bytes() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<uint64_t>(u.ru_maxrss) * 1024;
+}
 
 int commit_or_fail(Database& db, const std::string& command, const std::string& table,
                    const std::vector<ShardEntry>& shards, const std::vector<std::string>& errors) {

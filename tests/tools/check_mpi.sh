@@ -3,7 +3,9 @@
 # For 1 to 4 ranks and MPI's singleton start (no mpirun), on the basin at two
 # frequencies, loh1 and a non-cube basin: the sharded octant table verifies,
 # serial balance reads it to the serial run's table, and 'weaver compact'
-# joins it to the serial construct's file byte for byte; extract on the ranks
+# joins it to the serial construct's file byte for byte; balance on the
+# ranks from the sharded leaves compacts to the serial balance's file;
+# extract on the ranks
 # from the balanced table gives a sharded node table that verifies and
 # compacts to the serial extract's file.  Then: more ranks than work,
 # ranks given different arguments, a rank whose write fails and a rank killed
@@ -16,6 +18,9 @@ rm -rf "$tmp" && mkdir -p "$tmp"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 run() { mpirun --oversubscribe -np "$@"; }
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# on NP COMMAND...: weaver-mpi on NP ranks under mpirun, or alone (MPI's
+# singleton start) for NP = 0.
+on() { local np=$1; shift; if [ "$np" = 0 ]; then "$mpi" "$@"; else run "$np" "$mpi" "$@"; fi; }
 table_md5() { md5sum "$1"/octants-*.bt | cut -d' ' -f1; }
 # The MANIFEST and the files it names (leftovers of a failed writer aside).
 live_md5() { (cd "$1" && md5sum MANIFEST $(awk '$1 == "table" || $1 == "shard" {print $3}' MANIFEST)); }
@@ -32,27 +37,25 @@ check_model() {  # name, construct options...
   nodes=$(md5sum "$serial.x"/nodes-*.bt | cut -d' ' -f1)
   for np in 0 1 2 3 4; do
     local db=$tmp/$name.$np
-    if [ "$np" = 0 ]; then
-      "$mpi" construct "$db" "$@" --quiet >"$tmp/out" || fail "$name: singleton construct"
-    else
-      run "$np" "$mpi" construct "$db" "$@" --quiet >"$tmp/out" || fail "$name: -np $np construct"
-    fi
+    on "$np" construct "$db" "$@" --quiet >"$tmp/out" || fail "$name: -np $np construct"
     grep -q "^sharded " "$tmp/out" || fail "$name -np $np: no summary"
     "$weaver" verify "$db" >/dev/null || fail "$name -np $np: verify of the sharded table"
     "$weaver" stat "$db" >/dev/null || fail "$name -np $np: stat"
     cp -r "$db" "$db.b"
+    cp -r "$db" "$db.mb"
     "$weaver" balance "$db.b" --quiet >/dev/null
     [ "$(table_md5 "$db.b")" = "$balanced" ] || fail "$name -np $np: balance from shards differs"
+    # Balance on the ranks, from the sharded leaves: the serial balance's table.
+    on "$np" balance "$db.mb" --quiet >"$tmp/out" || fail "$name: -np $np balance"
+    "$weaver" verify "$db.mb" >/dev/null || fail "$name -np $np: verify of the balanced shards"
+    "$weaver" compact "$db.mb" >/dev/null
+    [ "$(table_md5 "$db.mb")" = "$balanced" ] || fail "$name -np $np: balance on ranks differs"
     "$weaver" compact "$db" >/dev/null
     [ "$(table_md5 "$db")" = "$want" ] || fail "$name -np $np: compacted table differs"
     # Extract on the ranks from the balanced table: the serial node table.
     local x=$tmp/$name.x$np
     cp -r "$serial" "$x"
-    if [ "$np" = 0 ]; then
-      "$mpi" extract "$x" --quiet >"$tmp/out" || fail "$name: singleton extract"
-    else
-      run "$np" "$mpi" extract "$x" --quiet >"$tmp/out" || fail "$name: -np $np extract"
-    fi
+    on "$np" extract "$x" --quiet >"$tmp/out" || fail "$name: -np $np extract"
     "$weaver" verify "$x" >/dev/null || fail "$name -np $np: verify of the sharded node table"
     "$weaver" compact "$x" >/dev/null
     [ "$(md5sum "$x"/nodes-*.bt | cut -d' ' -f1)" = "$nodes" ] ||
@@ -65,6 +68,20 @@ check_model basin02 --model basin --freq 0.2
 
 check_model loh1 --model loh1 --freq 1 --domain 30000,30000,15000
 check_model slab --model basin --freq 0.2 --domain 100000,50000,12500
+
+# mesh: the three stages on 3 ranks, both tables as the serial mesh's.
+"$weaver" mesh "$tmp/mesh.serial" --model basin --freq 0.2 --quiet >/dev/null
+run 3 "$mpi" mesh "$tmp/mesh" --model basin --freq 0.2 --quiet >"$tmp/out" || fail "mesh -np 3"
+"$weaver" verify "$tmp/mesh" >/dev/null || fail "mesh: verify of the sharded mesh"
+"$weaver" query "$tmp/mesh" locate 50000 50000 1000 >"$tmp/q.sharded"
+"$weaver" compact "$tmp/mesh" >/dev/null
+"$weaver" query "$tmp/mesh" locate 50000 50000 1000 >"$tmp/q.compact"
+cmp -s "$tmp/q.sharded" "$tmp/q.compact" || fail "mesh: query on the shards differs"
+for t in octants nodes; do
+  [ "$(md5sum "$tmp/mesh"/$t-*.bt | cut -d' ' -f1)" = "$(md5sum "$tmp/mesh.serial"/$t-*.bt | cut -d' ' -f1)" ] ||
+    fail "mesh -np 3: table $t differs from the serial mesh's"
+done
+echo "ok  mesh on 3 ranks: both tables as the serial mesh's"
 
 # More ranks than the work: a tiny octree on 4 ranks, some left empty.
 run 4 "$mpi" construct "$tmp/tiny" --model halfspace --freq 0.02 --domain 25000,25000,25000 --quiet >"$tmp/out"

@@ -1,0 +1,264 @@
+#include "balance/balance_shard.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+#include <filesystem>
+
+#include "schema/octant.h"
+
+namespace weaver {
+namespace {
+
+constexpr uint64_t kNone = UINT64_MAX;
+
+// Where each rank's part begins: key[s] is its first leaf's key (rank s's
+// leaves are positions n*s/ranks .. n*(s+1)/ranks - 1), kNone for a rank
+// without leaves and for s = ranks; lo[s] is the Morton code its part of
+// the space begins at (0 for rank 0).
+struct Cut {
+  std::vector<uint64_t> key, lo;
+  // The rank whose part of the space holds Morton code m.
+  size_t owner(uint64_t m) const {
+    return std::upper_bound(lo.begin(), lo.end() - 1, m) - lo.begin() - 1;
+  }
+};
+
+Status cut_parts(BTree& t, int ranks, Cut* cut) {
+  const uint64_t n = t.size();
+  cut->key.assign(ranks + 1, kNone);
+  cut->lo.assign(ranks + 1, kNone);
+  for (int s = 0; s < ranks; ++s) {
+    const uint64_t pos = n * uint64_t(s) / uint64_t(ranks);
+    if (pos < n) WEAVER_RETURN_IF_ERROR(t.select(pos, &cut->key[s], nullptr));
+    if (pos < n) cut->lo[s] = s == 0 ? 0 : octant_key_morton(cut->key[s]);
+  }
+  return Status::Ok();
+}
+
+uint64_t span_of(int level) { return uint64_t{1} << (3 * (kMaxLevel - level)); }
+
+// Whether o's insulation layer lies in the Morton range [lo, hi): the
+// smallest aligned octant holding the layer's bounding box does.
+bool layer_inside(const Octant& o, uint64_t lo, uint64_t hi) {
+  const uint32_t s = octant_edge(o);
+  const uint32_t c[3] = {o.x, o.y, o.z};
+  uint32_t low[3], diff = 0;
+  for (int a = 0; a < 3; ++a) {
+    low[a] = c[a] >= s ? c[a] - s : 0;
+    const uint32_t high = std::min<uint32_t>(c[a] + 2 * s, kRootEdge) - 1;
+    diff |= low[a] ^ high;
+  }
+  const int bits = diff == 0 ? 0 : 32 - std::countl_zero(diff);  // the holder's edge is 2^bits
+  const uint64_t m = morton_encode(low[0], low[1], low[2]) >> (3 * bits) << (3 * bits);
+  return m >= lo && m + (uint64_t{1} << (3 * bits)) <= hi;
+}
+
+// octant_key_neighbour for any level (it takes levels below the finest).
+bool neighbour_key(uint64_t key, Direction d, uint64_t* out) {
+  Octant n;
+  if (!octant_neighbour(octant_from_key(key), d, &n)) return false;
+  *out = octant_key(n);
+  return true;
+}
+
+void put_u64(std::string& out, uint64_t v) { out.append(reinterpret_cast<const char*>(&v), 8); }
+uint64_t get_u64(const char* p) {
+  uint64_t v;
+  std::memcpy(&v, p, 8);
+  return v;
+}
+
+// Round 1: for each other rank, the octants of this rank's leaves'
+// insulation layers that reach into its part of the space, sorted, once each.
+Status insulation_queries(BTree& t, const Cut& cut, int rank,
+                          std::vector<std::vector<uint64_t>>* queries) {
+  queries->assign(cut.key.size() - 1, {});
+  const uint64_t lo = cut.lo[rank], hi = cut.lo[rank + 1];
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(t.seek_keys(cut.key[rank], &c));
+  while (c.valid() && c.key() < cut.key[rank + 1]) {
+    const uint64_t key = c.key();
+    const int level = octant_key_level(key);
+    const uint64_t span = span_of(level);
+    if (layer_inside(octant_from_key(key), lo, hi)) {  // most leaves: nothing to ask
+      WEAVER_RETURN_IF_ERROR(c.next());
+      continue;
+    }
+    for (const Direction d : kAllDirections) {
+      uint64_t n = 0;
+      if (level < kMaxLevel ? !octant_key_neighbour(key, d, &n) : !neighbour_key(key, d, &n)) {
+        continue;
+      }
+      const uint64_t a = octant_key_morton(n);
+      if (a >= lo && a + span <= hi) continue;  // inside this rank's part
+      for (size_t s = cut.owner(a); s <= cut.owner(a + span - 1); ++s) {
+        if (s != size_t(rank)) (*queries)[s].push_back(n);
+      }
+    }
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  for (auto& q : *queries) {
+    std::sort(q.begin(), q.end());
+    q.erase(std::unique(q.begin(), q.end()), q.end());
+  }
+  return Status::Ok();
+}
+
+// Round 2: this rank's leaves that meet the queried octant q (the leaf
+// holding it, or the leaves inside it), as key + payload records.
+Status answer_query(BTree& t, const Cut& cut, int rank, uint64_t q, std::string* out) {
+  const uint64_t first = cut.key[rank], next = cut.key[rank + 1];
+  const uint32_t payload = t.payload_size();
+  std::vector<std::byte> p(payload);
+  uint64_t key = 0;
+  bool found = false;
+  WEAVER_RETURN_IF_ERROR(floor_holding(t, octant_from_key(q), &key, p.data(), &found));
+  if (found && key >= first && key < next && key != q) {
+    put_u64(*out, key);
+    out->append(reinterpret_cast<const char*>(p.data()), payload);
+  }
+  const uint64_t end = octant_key_morton(q) + span_of(octant_key_level(q));
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(t.seek_cursor(std::max(q, first), &c));
+  while (c.valid() && c.key() < next && octant_key_morton(c.key()) < end) {
+    put_u64(*out, c.key());
+    out->append(reinterpret_cast<const char*>(c.payload()), payload);
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  return Status::Ok();
+}
+
+// The leaves that arrived, as (key, payload) records sorted by key.
+struct Layer {
+  std::vector<uint64_t> keys;
+  std::vector<std::byte> payloads;
+};
+
+Layer decode_layer(const std::vector<std::string>& received, uint32_t payload) {
+  std::vector<std::pair<uint64_t, const char*>> recs;
+  for (const std::string& b : received) {
+    for (size_t i = 0; i + 8 + payload <= b.size(); i += 8 + payload) {
+      recs.push_back({get_u64(&b[i]), &b[i + 8]});
+    }
+  }
+  std::sort(recs.begin(), recs.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  Layer l;
+  for (size_t i = 0; i < recs.size(); ++i) {
+    if (i > 0 && recs[i].first == recs[i - 1].first) continue;
+    l.keys.push_back(recs[i].first);
+    const auto* p = reinterpret_cast<const std::byte*>(recs[i].second);
+    l.payloads.insert(l.payloads.end(), p, p + payload);
+  }
+  return l;
+}
+
+// The scratch database: this rank's leaves and the layer, in key order.
+Status write_scratch(BTree& t, const Cut& cut, int rank, const Layer& layer,
+                     const std::string& scratch) {
+  std::unique_ptr<Database> db;
+  WEAVER_RETURN_IF_ERROR(Database::open(scratch, Database::Mode::kWrite, true, &db));
+  std::unique_ptr<BTree> out;
+  std::string file;
+  // Plain pages: the scratch tables are written once and read once.
+  TableOptions scratch_options = t.options();
+  scratch_options.packed = false;
+  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, scratch_options, 4 << 20, &out, &file));
+  const uint32_t payload = t.payload_size();
+  LevelCounts levels{};
+  BTreeCursor c;
+  Status st = t.seek_cursor(cut.key[rank], &c);
+  size_t i = 0;
+  auto mine = [&] { return c.valid() && c.key() < cut.key[rank + 1]; };
+  while (st.ok() && (mine() || i < layer.keys.size())) {
+    if (mine() && (i == layer.keys.size() || c.key() < layer.keys[i])) {
+      ++levels[octant_key_level(c.key())];
+      st = out->append(c.key(), c.payload());
+      if (st.ok()) st = c.next();
+    } else {
+      ++levels[octant_key_level(layer.keys[i])];
+      st = out->append(layer.keys[i], layer.payloads.data() + size_t{payload} * i);
+      ++i;
+    }
+  }
+  if (st.ok()) out->set_metadata(with_levels(t.options().metadata, levels));
+  return db->publish(kOctantTable, file, out, st);
+}
+
+// This rank's leaves of the balanced scratch table into its shard.
+// The shard has the input table's options (its page format), and the
+// balanced table's metadata.
+Status keep_own(const std::string& db_dir, const std::string& scratch, const Cut& cut, int rank,
+                TableOptions options, const std::string& file, BalanceShardResult* r,
+                ShardEntry* entry) {
+  std::unique_ptr<Database> db;
+  WEAVER_RETURN_IF_ERROR(Database::open(scratch, Database::Mode::kRead, false, &db));
+  std::unique_ptr<BTree> balanced, out;
+  WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, 4 << 20, &balanced));
+  WEAVER_RETURN_IF_ERROR(create_shard_table(db_dir, file, options, 4 << 20, &out));
+  LevelCounts& levels = r->balance.levels;
+  BTreeCursor c;
+  Status st = balanced->seek_cursor(cut.key[rank], &c);
+  for (; st.ok() && c.valid() && c.key() < cut.key[rank + 1]; st = c.next()) {
+    ++levels[octant_key_level(c.key())];
+    ++r->balance.output_leaves;
+    st = out->append(c.key(), c.payload());
+    if (!st.ok()) break;
+  }
+  if (st.ok()) out->set_metadata(with_levels(balanced->options().metadata, levels));
+  return finish_shard(db_dir, out, st, entry, &r->table_bytes);
+}
+
+}  // namespace
+
+Status balance_shard(const std::string& db_dir, const BalanceOptions& options, int rank, int ranks,
+                     const std::string& file, const RankExchange& exchange, BalanceShardResult* r,
+                     ShardEntry* entry) {
+  *r = BalanceShardResult{};
+  *entry = ShardEntry{file};
+  std::unique_ptr<Database> db;
+  std::unique_ptr<BTree> t;
+  Cut cut;
+  std::vector<std::vector<uint64_t>> queries;
+  // Up to the exchanges, an error still takes part in them (sending nothing).
+  Status st = Database::open(db_dir, Database::Mode::kRead, false, &db);
+  if (st.ok()) st = db->open_table(kOctantTable, 16 << 20, &t);
+  if (st.ok()) st = cut_parts(*t, ranks, &cut);
+  if (st.ok()) st = insulation_queries(*t, cut, rank, &queries);
+  std::vector<std::string> blobs(ranks), received;
+  for (int s = 0; st.ok() && s < ranks; ++s) {
+    for (uint64_t q : queries[s]) put_u64(blobs[s], q);
+    r->queries_sent += queries[s].size();
+  }
+  Status ex = exchange(blobs, &received);
+  for (int s = 0; s < ranks; ++s) {
+    blobs[s].clear();
+    const std::string& qs = st.ok() && ex.ok() ? received[s] : std::string();
+    for (size_t i = 0; st.ok() && i + 8 <= qs.size(); i += 8) {
+      st = answer_query(*t, cut, rank, get_u64(&qs[i]), &blobs[s]);
+    }
+  }
+  for (const std::string& b : blobs) r->bytes_sent += b.size();
+  const Status ex2 = exchange(st.ok() ? blobs : std::vector<std::string>(ranks), &received);
+  WEAVER_RETURN_IF_ERROR(st);
+  WEAVER_RETURN_IF_ERROR(ex);
+  WEAVER_RETURN_IF_ERROR(ex2);
+  for (const std::string& b : received) r->bytes_received += b.size();
+  if (cut.key[rank] == kNone) return Status::Ok();  // no leaves: no shard
+  const Layer layer = decode_layer(received, t->payload_size());
+  r->layer_received = layer.keys.size();
+  const std::string scratch =
+      db_dir + "/tmp-balance-" + std::to_string(::getpid()) + "-" + std::to_string(rank);
+  st = write_scratch(*t, cut, rank, layer, scratch);
+  BalanceResult scratch_result;
+  if (st.ok()) st = balance_octree(scratch, options, &scratch_result);
+  if (st.ok()) st = keep_own(db_dir, scratch, cut, rank, t->options(), file, r, entry);
+  std::error_code ec;
+  std::filesystem::remove_all(scratch, ec);
+  return st;
+}
+
+}  // namespace weaver
