@@ -132,7 +132,7 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   const std::unique_ptr<VelocityModel> model =
       model_of(topt.metadata, memory.model, std::max(1, o.threads));
   const Status st = write_refinement(*leaves, closure.required(), material_fill(model.get(), topt),
-                                     *out, o.threads, progress.get(), r);
+                                     *out, o.threads, progress.get(), r, o.keep_from, o.keep_to);
   if (st.ok()) out->set_metadata(replace_levels(topt.metadata, r->levels));
   return db->publish(kOctantTable, file, out, st);
 }

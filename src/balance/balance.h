@@ -33,6 +33,10 @@ struct BalanceOptions {
   // Chunks of parents at least this large are shared among the threads
   // (smaller ones cost more to hand out than they take); tests lower it.
   size_t parallel_chunk = size_t{1} << 15;
+  // Only the input leaves with keys in [keep_from, keep_to) (and what they
+  // are split into) are written: one rank's part of a parallel balance,
+  // whose other leaves are its neighbours' (balance_shard.h).
+  uint64_t keep_from = 0, keep_to = UINT64_MAX;
   // Leaves read by the current pass and the fraction done
   // (balance_progress.h); not called by a check.
   ProgressFn progress;

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <bit>
+#include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 
@@ -163,10 +165,7 @@ Status write_scratch(BTree& t, const Cut& cut, int rank, const Layer& layer,
   WEAVER_RETURN_IF_ERROR(Database::open(scratch, Database::Mode::kWrite, true, &db));
   std::unique_ptr<BTree> out;
   std::string file;
-  // Plain pages: the scratch tables are written once and read once.
-  TableOptions scratch_options = t.options();
-  scratch_options.packed = false;
-  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, scratch_options, 4 << 20, &out, &file));
+  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, t.options(), 4 << 20, &out, &file));
   const uint32_t payload = t.payload_size();
   LevelCounts levels{};
   BTreeCursor c;
@@ -188,28 +187,31 @@ Status write_scratch(BTree& t, const Cut& cut, int rank, const Layer& layer,
   return db->publish(kOctantTable, file, out, st);
 }
 
-// This rank's leaves of the balanced scratch table into its shard.
-// The shard has the input table's options (its page format), and the
-// balanced table's metadata.
-Status keep_own(const std::string& db_dir, const std::string& scratch, const Cut& cut, int rank,
-                TableOptions options, const std::string& file, BalanceShardResult* r,
-                ShardEntry* entry) {
-  std::unique_ptr<Database> db;
-  WEAVER_RETURN_IF_ERROR(Database::open(scratch, Database::Mode::kRead, false, &db));
-  std::unique_ptr<BTree> balanced, out;
-  WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, 4 << 20, &balanced));
-  WEAVER_RETURN_IF_ERROR(create_shard_table(db_dir, file, options, 4 << 20, &out));
-  LevelCounts& levels = r->balance.levels;
-  BTreeCursor c;
-  Status st = balanced->seek_cursor(cut.key[rank], &c);
-  for (; st.ok() && c.valid() && c.key() < cut.key[rank + 1]; st = c.next()) {
-    ++levels[octant_key_level(c.key())];
-    ++r->balance.output_leaves;
-    st = out->append(c.key(), c.payload());
-    if (!st.ok()) break;
+// The balanced scratch table, which holds this rank's leaves alone
+// (BalanceOptions::keep_from/keep_to), becomes its shard: renamed into
+// db_dir, then described for the manifest.
+Status adopt_shard(const std::string& db_dir, const std::string& scratch, const std::string& file,
+                   BalanceShardResult* r, ShardEntry* entry) {
+  std::string from;
+  {
+    std::unique_ptr<Database> db;
+    WEAVER_RETURN_IF_ERROR(Database::open(scratch, Database::Mode::kRead, false, &db));
+    from = db->table_path(kOctantTable);
   }
-  if (st.ok()) out->set_metadata(with_levels(balanced->options().metadata, levels));
-  return finish_shard(db_dir, out, st, entry, &r->table_bytes);
+  const std::string to = db_dir + "/" + file;
+  if (std::rename(from.c_str(), to.c_str()) != 0) {
+    return Status::IOError("cannot rename " + from + " to " + to + ": " + std::strerror(errno));
+  }
+  std::unique_ptr<File> f;
+  WEAVER_RETURN_IF_ERROR(open_posix_file(to, OpenMode::kReadOnly, &f));
+  std::unique_ptr<BTree> t;
+  WEAVER_RETURN_IF_ERROR(BTree::open(std::move(f), 1 << 20, &t));
+  levels_from_metadata(t->options().metadata, &r->balance.levels);
+  r->balance.output_leaves = t->size();
+  r->table_bytes = t->file_bytes();
+  entry->records = t->size();
+  WEAVER_RETURN_IF_ERROR(t->select(0, &entry->first_key, nullptr));
+  return t->select(t->size() - 1, &entry->last_key, nullptr);
 }
 
 }  // namespace
@@ -253,9 +255,12 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   const std::string scratch =
       db_dir + "/tmp-balance-" + std::to_string(::getpid()) + "-" + std::to_string(rank);
   st = write_scratch(*t, cut, rank, layer, scratch);
+  BalanceOptions own = options;
+  own.keep_from = cut.key[rank];
+  own.keep_to = cut.key[rank + 1];
   BalanceResult scratch_result;
-  if (st.ok()) st = balance_octree(scratch, options, &scratch_result);
-  if (st.ok()) st = keep_own(db_dir, scratch, cut, rank, t->options(), file, r, entry);
+  if (st.ok()) st = balance_octree(scratch, own, &scratch_result);
+  if (st.ok()) st = adopt_shard(db_dir, scratch, file, r, entry);
   std::error_code ec;
   std::filesystem::remove_all(scratch, ec);
   return st;

@@ -78,13 +78,15 @@ class Completion {
 }  // namespace
 
 Status write_refinement(BTree& leaves, KeyTagSource& required, const FillPayload& fill, BTree& out,
-                        int threads, BalanceProgress* progress, BalanceResult* r) {
+                        int threads, BalanceProgress* progress, BalanceResult* r,
+                        uint64_t keep_from, uint64_t keep_to) {
   uint64_t read = 0;
   Completion completion(out, threads > 1, fill, leaves.payload_size());
   std::vector<std::byte> payload(leaves.payload_size());
   WEAVER_RETURN_IF_ERROR(for_each_leaf(
       leaves, required, [&](const BTreeCursor& c, const std::vector<KeyTag>& inside, bool*) {
         if (progress != nullptr) progress->refined(++read);
+        if (c.key() < keep_from || c.key() >= keep_to) return Status::Ok();
         if (inside.empty()) return completion.copy(c.key(), c.payload(), r);
         ++r->split;
         if (!payload.empty()) std::memcpy(payload.data(), c.payload(), payload.size());

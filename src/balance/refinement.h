@@ -25,7 +25,9 @@ using FillPayload = std::function<void(const Octant& o, std::byte* payload)>;
 // fill may be empty.  Counts go to r: output_leaves, split, levels.  With
 // threads > 1 the output's pages are encoded and written on a thread of
 // their own, beside the reading and splitting.
+// Only the input leaves with keys in [keep_from, keep_to) are written.
 Status write_refinement(BTree& leaves, KeyTagSource& required, const FillPayload& fill, BTree& out,
-                        int threads, BalanceProgress* progress, BalanceResult* r);
+                        int threads, BalanceProgress* progress, BalanceResult* r,
+                        uint64_t keep_from = 0, uint64_t keep_to = UINT64_MAX);
 
 }  // namespace weaver
