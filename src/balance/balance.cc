@@ -125,7 +125,8 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   }
   Closure closure(*leaves, memory, scratch.path, o, progress.get(), r, second_reader.get());
   WEAVER_RETURN_IF_ERROR(closure.build(finest_level_bound(*leaves), true));
-  const TableOptions topt = leaves->options();
+  TableOptions topt = leaves->options();
+  if (o.output_packed >= 0) topt.packed = o.output_packed == 1;
   std::unique_ptr<BTree> out;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, memory.output_pool, &out, &file));

@@ -37,6 +37,11 @@ struct BalanceOptions {
   // are split into) are written: one rank's part of a parallel balance,
   // whose other leaves are its neighbours' (balance_shard.h).
   uint64_t keep_from = 0, keep_to = UINT64_MAX;
+  // The output's page format: as the input's (-1), packed (1) or plain (0).
+  // A parallel balance reads its scratch input from plain pages (its many
+  // aggregate hits along a ragged boundary decode no packed leaves) and
+  // writes its shard packed.
+  int output_packed = -1;
   // Leaves read by the current pass and the fraction done
   // (balance_progress.h); not called by a check.
   ProgressFn progress;

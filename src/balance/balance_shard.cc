@@ -109,29 +109,56 @@ Status insulation_queries(BTree& t, const Cut& cut, int rank,
   return Status::Ok();
 }
 
-// Round 2: this rank's leaves that meet the queried octant q (the leaf
-// holding it, or the leaves inside it), as key + payload records.
-Status answer_query(BTree& t, const Cut& cut, int rank, uint64_t q, std::string* out) {
-  const uint64_t first = cut.key[rank], next = cut.key[rank + 1];
-  const uint32_t payload = t.payload_size();
-  std::vector<std::byte> p(payload);
-  uint64_t key = 0;
-  bool found = false;
-  WEAVER_RETURN_IF_ERROR(floor_holding(t, octant_from_key(q), &key, p.data(), &found));
-  if (found && key >= first && key < next && key != q) {
+// Round 2: this rank's leaves that meet the queried octants (the leaf
+// holding one, or the leaves inside it), as key + payload records.  The
+// queries come sorted, so one cursor goes forward through them, and a cell
+// inside one answered already (the layers of neighbouring leaves overlap)
+// or held by a leaf sent already adds nothing.
+class Answerer {
+ public:
+  Answerer(BTree& t, uint64_t first, uint64_t next)
+      : t_(t), first_(first), next_(next), payload_(t.payload_size()), p_(payload_) {}
+
+  Status answer(uint64_t q, std::string* out) {
+    const uint64_t begin = octant_key_morton(q), end = begin + span_of(octant_key_level(q));
+    if (begin >= done_begin_ && end <= done_end_) return Status::Ok();  // inside the last cell
+    if (!(begin >= held_begin_ && begin < held_end_)) {
+      uint64_t key = 0;
+      bool found = false;
+      WEAVER_RETURN_IF_ERROR(floor_holding(t_, octant_from_key(q), &key, p_.data(), &found));
+      if (found && key != q) {
+        held_begin_ = octant_key_morton(key);
+        held_end_ = held_begin_ + span_of(octant_key_level(key));
+        if (key >= first_ && key < next_) add(key, p_.data(), out);
+      }
+    }
+    const uint64_t target = std::max(q, first_);
+    uint64_t last = 0;
+    if (!c_.valid() || (c_.key() < target && !c_.skip_in_leaf(target - 1, &last))) {
+      WEAVER_RETURN_IF_ERROR(t_.seek_cursor(target, &c_));
+    }
+    while (c_.valid() && c_.key() < next_ && octant_key_morton(c_.key()) < end) {
+      add(c_.key(), c_.payload(), out);
+      WEAVER_RETURN_IF_ERROR(c_.next());
+    }
+    done_begin_ = begin, done_end_ = end;
+    return Status::Ok();
+  }
+
+ private:
+  void add(uint64_t key, const std::byte* payload, std::string* out) {
     put_u64(*out, key);
-    out->append(reinterpret_cast<const char*>(p.data()), payload);
+    out->append(reinterpret_cast<const char*>(payload), payload_);
   }
-  const uint64_t end = octant_key_morton(q) + span_of(octant_key_level(q));
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(t.seek_cursor(std::max(q, first), &c));
-  while (c.valid() && c.key() < next && octant_key_morton(c.key()) < end) {
-    put_u64(*out, c.key());
-    out->append(reinterpret_cast<const char*>(c.payload()), payload);
-    WEAVER_RETURN_IF_ERROR(c.next());
-  }
-  return Status::Ok();
-}
+
+  BTree& t_;
+  const uint64_t first_, next_;
+  const uint32_t payload_;
+  std::vector<std::byte> p_;
+  BTreeCursor c_;
+  uint64_t done_begin_ = 1, done_end_ = 0;  // the last cell answered (Morton range)
+  uint64_t held_begin_ = 1, held_end_ = 0;  // the last leaf found holding a cell
+};
 
 // The leaves that arrived, as (key, payload) records sorted by key.
 struct Layer {
@@ -165,7 +192,9 @@ Status write_scratch(BTree& t, const Cut& cut, int rank, const Layer& layer,
   WEAVER_RETURN_IF_ERROR(Database::open(scratch, Database::Mode::kWrite, true, &db));
   std::unique_ptr<BTree> out;
   std::string file;
-  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, t.options(), 4 << 20, &out, &file));
+  TableOptions plain = t.options();
+  plain.packed = false;  // see BalanceOptions::output_packed
+  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, plain, 4 << 20, &out, &file));
   const uint32_t payload = t.payload_size();
   LevelCounts levels{};
   BTreeCursor c;
@@ -239,8 +268,10 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   for (int s = 0; s < ranks; ++s) {
     blobs[s].clear();
     const std::string& qs = st.ok() && ex.ok() ? received[s] : std::string();
+    if (qs.empty()) continue;
+    Answerer answers(*t, cut.key[rank], cut.key[rank + 1]);
     for (size_t i = 0; st.ok() && i + 8 <= qs.size(); i += 8) {
-      st = answer_query(*t, cut, rank, get_u64(&qs[i]), &blobs[s]);
+      st = answers.answer(get_u64(&qs[i]), &blobs[s]);
     }
   }
   for (const std::string& b : blobs) r->bytes_sent += b.size();
@@ -258,6 +289,7 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   BalanceOptions own = options;
   own.keep_from = cut.key[rank];
   own.keep_to = cut.key[rank + 1];
+  own.output_packed = t->options().packed ? 1 : 0;
   BalanceResult scratch_result;
   if (st.ok()) st = balance_octree(scratch, own, &scratch_result);
   if (st.ok()) st = adopt_shard(db_dir, scratch, file, r, entry);
