@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "schema/octant.h"
+#include "util/varint.h"
 
 namespace weaver {
 namespace {
@@ -261,17 +262,23 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   if (st.ok()) st = insulation_queries(*t, cut, rank, &queries);
   std::vector<std::string> blobs(ranks), received;
   for (int s = 0; st.ok() && s < ranks; ++s) {
-    for (uint64_t q : queries[s]) put_u64(blobs[s], q);
+    uint64_t last = 0;  // sorted: varint deltas
+    for (uint64_t q : queries[s]) append_key_delta(blobs[s], &last, q);
     r->queries_sent += queries[s].size();
   }
+  for (const std::string& b : blobs) r->bytes_sent += b.size();
   Status ex = exchange(blobs, &received);
+  for (const std::string& b : received) r->bytes_received += b.size();
   for (int s = 0; s < ranks; ++s) {
     blobs[s].clear();
     const std::string& qs = st.ok() && ex.ok() ? received[s] : std::string();
     if (qs.empty()) continue;
     Answerer answers(*t, cut.key[rank], cut.key[rank + 1]);
-    for (size_t i = 0; st.ok() && i + 8 <= qs.size(); i += 8) {
-      st = answers.answer(get_u64(&qs[i]), &blobs[s]);
+    size_t pos = 0;
+    uint64_t q = 0, last = 0;
+    while (st.ok() && pos < qs.size()) {
+      if (!read_key_delta(qs, &pos, &last, &q)) st = Status::Corruption("a query cut short");
+      if (st.ok()) st = answers.answer(q, &blobs[s]);
     }
   }
   for (const std::string& b : blobs) r->bytes_sent += b.size();

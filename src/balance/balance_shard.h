@@ -35,11 +35,11 @@ using RankExchange = std::function<Status(const std::vector<std::string>& blobs,
                                           std::vector<std::string>* received)>;
 
 struct BalanceShardResult {
-  BalanceResult balance;        // of the rank's own leaves
-  uint64_t queries_sent = 0;    // insulation octants asked of other ranks
-  uint64_t layer_received = 0;  // their leaves that arrived
-  uint64_t bytes_sent = 0, bytes_received = 0;
-  uint64_t table_bytes = 0;  // the shard written
+  BalanceResult balance;                        // of the rank's own leaves
+  uint64_t queries_sent = 0;                    // insulation octants asked of other ranks
+  uint64_t layer_received = 0;                  // their leaves that arrived
+  uint64_t bytes_sent = 0, bytes_received = 0;  // both rounds
+  uint64_t table_bytes = 0;                     // the shard written
 };
 
 // Writes rank `rank`'s shard of the balanced octant table of db_dir into the

@@ -12,6 +12,7 @@
 #include "extract/extract.h"
 #include "mpi/mpi_commands.h"
 #include "mpi/shards.h"
+#include "util/varint.h"
 
 namespace weaver::mpi {
 namespace {
@@ -32,21 +33,24 @@ constexpr char kUsage[] =
     "  --threads N      worker threads a rank (default 1)\n"
     "  --plain          plain leaf pages instead of packed ones\n";
 
-// Each rank's records for every rank, as bytes, and back.
+// Each rank's records for every rank, as bytes (keys as varint deltas:
+// they come sorted, one a key; then the direction bits), and back.
 std::string encode(const std::vector<SpillRecord>& records) {
-  std::string out(records.size() * 9, '\0');
-  for (size_t i = 0; i < records.size(); ++i) {
-    std::memcpy(&out[9 * i], &records[i].key, 8);
-    out[9 * i + 8] = static_cast<char>(records[i].mask);
+  std::string out;
+  uint64_t last = 0;
+  for (const SpillRecord& r : records) {
+    append_key_delta(out, &last, r.key);
+    out.push_back(static_cast<char>(r.mask));
   }
   return out;
 }
 
 void decode(const std::string& bytes, std::vector<SpillRecord>* out) {
-  for (size_t i = 0; i + 9 <= bytes.size(); i += 9) {
-    SpillRecord r;
-    std::memcpy(&r.key, &bytes[i], 8);
-    r.mask = static_cast<uint8_t>(bytes[i + 8]);
+  size_t pos = 0;
+  uint64_t last = 0;
+  SpillRecord r;
+  while (pos < bytes.size() && read_key_delta(bytes, &pos, &last, &r.key) && pos < bytes.size()) {
+    r.mask = static_cast<uint8_t>(bytes[pos++]);
     out->push_back(r);
   }
 }
