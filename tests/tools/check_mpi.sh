@@ -115,38 +115,48 @@ grep -q "different arguments" "$tmp/err" || fail "different arguments: $(cat "$t
 [ ! -e "$tmp/odd" ] || fail "different arguments: a database was made"
 echo "ok  different arguments refused"
 
-# A rank whose write fails, and a rank killed at each of its durable steps:
-# the command fails (naming the failed rank), and the old database is intact.
-old=$tmp/old
-"$weaver" construct "$old" --model basin --freq 0.1 --quiet >/dev/null
-old_md5=$(live_md5 "$old")
-steps=$(WEAVER_CRASH_AT=0 "$mpi" construct "$tmp/count" --model basin --freq 0.2 --quiet 2>&1 >/dev/null |
-        sed -n 's/^crash steps: //p')
-[ -n "$steps" ] || fail "no step count"
-for step in $(seq 1 "$steps"); do
-  for what in FAIL CRASH; do
-    set +e
-    mpirun -np 1 "$mpi" construct "$old" --model basin --freq 0.2 --quiet : \
-           -np 1 env WEAVER_${what}_AT=$step "$mpi" construct "$old" --model basin --freq 0.2 --quiet \
-           >/dev/null 2>"$tmp/err"
-    code=$?
-    set -e
-    if [ "$code" = 0 ]; then
-      # The step was past the rank's last write: the new state is whole.
-      "$weaver" verify "$old" >/dev/null || fail "$what at $step: new state does not verify"
-      "$weaver" compact "$old" >/dev/null
-      "$weaver" construct "$old" --model basin --freq 0.1 --quiet >/dev/null
+# A rank whose write fails, and a rank killed at each of its durable steps, in
+# each stage: the command fails (naming the failed rank), and the old
+# database is intact, byte for byte.
+faults() {  # stage, the database before it (copied fresh for every try), stage options...
+  local stage=$1 base=$2; shift 2
+  local old=$tmp/old steps code
+  rm -rf "$tmp/count" && cp -r "$base" "$tmp/count"
+  steps=$(WEAVER_CRASH_AT=0 "$mpi" "$stage" "$tmp/count" "$@" --quiet 2>&1 >/dev/null |
+          sed -n 's/^crash steps: //p')
+  [ -n "$steps" ] || fail "$stage: no step count"
+  for step in $(seq 1 "$steps"); do
+    for what in FAIL CRASH; do
+      rm -rf "$old" && cp -r "$base" "$old"
+      local old_md5
       old_md5=$(live_md5 "$old")
-      continue
-    fi
-    if [ "$what" = FAIL ]; then
-      grep -q "^weaver-mpi construct: rank 1: " "$tmp/err" || fail "FAIL at $step: $(cat "$tmp/err")"
-      # mpirun adds its own banner about the exit status; weaver says one line.
-      [ "$(grep -c '^weaver-mpi' "$tmp/err")" = 1 ] || fail "FAIL at $step: $(cat "$tmp/err")"
-    fi
-    [ "$(live_md5 "$old")" = "$old_md5" ] ||
-      fail "$what at step $step of rank 1: the old database changed"
-    "$weaver" verify "$old" >/dev/null || fail "$what at $step: old database does not verify"
+      set +e
+      mpirun -np 1 "$mpi" "$stage" "$old" "$@" --quiet : \
+             -np 1 env WEAVER_${what}_AT=$step "$mpi" "$stage" "$old" "$@" --quiet \
+             >/dev/null 2>"$tmp/err"
+      code=$?
+      set -e
+      if [ "$code" = 0 ]; then
+        # The step was past the rank's last write: the new state is whole.
+        "$weaver" verify "$old" >/dev/null || fail "$stage $what at $step: new state does not verify"
+        continue
+      fi
+      if [ "$what" = FAIL ]; then
+        grep -q "^weaver-mpi $stage: rank 1: " "$tmp/err" ||
+          fail "$stage FAIL at $step: $(cat "$tmp/err")"
+        # mpirun adds its own banner about the exit status; weaver says one line.
+        [ "$(grep -c '^weaver-mpi' "$tmp/err")" = 1 ] || fail "$stage FAIL at $step: $(cat "$tmp/err")"
+      fi
+      [ "$(live_md5 "$old")" = "$old_md5" ] ||
+        fail "$stage: $what at step $step of rank 1: the old database changed"
+      "$weaver" verify "$old" >/dev/null || fail "$stage $what at $step: old database does not verify"
+    done
   done
-done
-echo "ok  a rank failing or killed at each of its $steps durable steps leaves the old database"
+  echo "ok  $stage: rank 1 failing or killed at each of its $steps durable steps leaves the old database"
+}
+"$weaver" construct "$tmp/f.built" --model basin --freq 0.1 --quiet >/dev/null
+faults construct "$tmp/f.built" --model basin --freq 0.2
+faults balance "$tmp/f.built"
+cp -r "$tmp/f.built" "$tmp/f.balanced"
+"$weaver" balance "$tmp/f.balanced" --quiet >/dev/null
+faults extract "$tmp/f.balanced"
