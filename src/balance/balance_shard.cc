@@ -67,13 +67,6 @@ bool neighbour_key(uint64_t key, Direction d, uint64_t* out) {
   return true;
 }
 
-void put_u64(std::string& out, uint64_t v) { out.append(reinterpret_cast<const char*>(&v), 8); }
-uint64_t get_u64(const char* p) {
-  uint64_t v;
-  std::memcpy(&v, p, 8);
-  return v;
-}
-
 // Round 1: for each other rank, the octants of this rank's leaves'
 // insulation layers that reach into its part of the space, sorted, once each.
 Status insulation_queries(BTree& t, const Cut& cut, int rank,
@@ -111,35 +104,35 @@ Status insulation_queries(BTree& t, const Cut& cut, int rank,
 }
 
 // Round 2: this rank's leaves that meet the queried octants (the leaf
-// holding one, or the leaves inside it), as key + payload records.  The
+// holding one, or the leaves inside it): their keys alone (a layer leaf
+// only shapes the balance; its material never reaches the rank's output).  The
 // queries come sorted, so one cursor goes forward through them, and a cell
 // inside one answered already (the layers of neighbouring leaves overlap)
 // or held by a leaf sent already adds nothing.
 class Answerer {
  public:
-  Answerer(BTree& t, uint64_t first, uint64_t next)
-      : t_(t), first_(first), next_(next), payload_(t.payload_size()), p_(payload_) {}
+  Answerer(BTree& t, uint64_t first, uint64_t next) : t_(t), first_(first), next_(next) {}
 
-  Status answer(uint64_t q, std::string* out) {
+  Status answer(uint64_t q, std::vector<uint64_t>* out) {
     const uint64_t begin = octant_key_morton(q), end = begin + span_of(octant_key_level(q));
     if (begin >= done_begin_ && end <= done_end_) return Status::Ok();  // inside the last cell
     if (!(begin >= held_begin_ && begin < held_end_)) {
       uint64_t key = 0;
       bool found = false;
-      WEAVER_RETURN_IF_ERROR(floor_holding(t_, octant_from_key(q), &key, p_.data(), &found));
+      WEAVER_RETURN_IF_ERROR(floor_holding(t_, octant_from_key(q), &key, nullptr, &found));
       if (found && key != q) {
         held_begin_ = octant_key_morton(key);
         held_end_ = held_begin_ + span_of(octant_key_level(key));
-        if (key >= first_ && key < next_) add(key, p_.data(), out);
+        if (key >= first_ && key < next_) out->push_back(key);
       }
     }
     const uint64_t target = std::max(q, first_);
     uint64_t last = 0;
     if (!c_.valid() || (c_.key() < target && !c_.skip_in_leaf(target - 1, &last))) {
-      WEAVER_RETURN_IF_ERROR(t_.seek_cursor(target, &c_));
+      WEAVER_RETURN_IF_ERROR(t_.seek_keys(target, &c_));
     }
     while (c_.valid() && c_.key() < next_ && octant_key_morton(c_.key()) < end) {
-      add(c_.key(), c_.payload(), out);
+      out->push_back(c_.key());
       WEAVER_RETURN_IF_ERROR(c_.next());
     }
     done_begin_ = begin, done_end_ = end;
@@ -147,15 +140,8 @@ class Answerer {
   }
 
  private:
-  void add(uint64_t key, const std::byte* payload, std::string* out) {
-    put_u64(*out, key);
-    out->append(reinterpret_cast<const char*>(payload), payload_);
-  }
-
   BTree& t_;
   const uint64_t first_, next_;
-  const uint32_t payload_;
-  std::vector<std::byte> p_;
   BTreeCursor c_;
   uint64_t done_begin_ = 1, done_end_ = 0;  // the last cell answered (Morton range)
   uint64_t held_begin_ = 1, held_end_ = 0;  // the last leaf found holding a cell
@@ -167,23 +153,21 @@ struct Layer {
   std::vector<std::byte> payloads;
 };
 
-Layer decode_layer(const std::vector<std::string>& received, uint32_t payload) {
-  std::vector<std::pair<uint64_t, const char*>> recs;
+// The layer's leaves, from every rank's sorted keys (varint deltas), with
+// zero payloads.
+Status decode_layer(const std::vector<std::string>& received, uint32_t payload, Layer* l) {
   for (const std::string& b : received) {
-    for (size_t i = 0; i + 8 + payload <= b.size(); i += 8 + payload) {
-      recs.push_back({get_u64(&b[i]), &b[i + 8]});
+    size_t pos = 0;
+    uint64_t last = 0, key = 0;
+    while (pos < b.size()) {
+      if (!read_key_delta(b, &pos, &last, &key)) return Status::Corruption("a layer cut short");
+      l->keys.push_back(key);
     }
   }
-  std::sort(recs.begin(), recs.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
-  Layer l;
-  for (size_t i = 0; i < recs.size(); ++i) {
-    if (i > 0 && recs[i].first == recs[i - 1].first) continue;
-    l.keys.push_back(recs[i].first);
-    const auto* p = reinterpret_cast<const std::byte*>(recs[i].second);
-    l.payloads.insert(l.payloads.end(), p, p + payload);
-  }
-  return l;
+  std::sort(l->keys.begin(), l->keys.end());
+  l->keys.erase(std::unique(l->keys.begin(), l->keys.end()), l->keys.end());
+  l->payloads.assign(l->keys.size() * payload, std::byte{0});
+  return Status::Ok();
 }
 
 // The scratch database: this rank's leaves and the layer, in key order.
@@ -274,12 +258,17 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
     const std::string& qs = st.ok() && ex.ok() ? received[s] : std::string();
     if (qs.empty()) continue;
     Answerer answers(*t, cut.key[rank], cut.key[rank + 1]);
+    std::vector<uint64_t> keys;
     size_t pos = 0;
     uint64_t q = 0, last = 0;
     while (st.ok() && pos < qs.size()) {
       if (!read_key_delta(qs, &pos, &last, &q)) st = Status::Corruption("a query cut short");
-      if (st.ok()) st = answers.answer(q, &blobs[s]);
+      if (st.ok()) st = answers.answer(q, &keys);
     }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    last = 0;
+    for (uint64_t k : keys) append_key_delta(blobs[s], &last, k);
   }
   for (const std::string& b : blobs) r->bytes_sent += b.size();
   const Status ex2 = exchange(st.ok() ? blobs : std::vector<std::string>(ranks), &received);
@@ -288,7 +277,8 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   WEAVER_RETURN_IF_ERROR(ex2);
   for (const std::string& b : received) r->bytes_received += b.size();
   if (cut.key[rank] == kNone) return Status::Ok();  // no leaves: no shard
-  Layer layer = decode_layer(received, t->payload_size());
+  Layer layer;
+  WEAVER_RETURN_IF_ERROR(decode_layer(received, t->payload_size(), &layer));
   received = {}, blobs = {}, queries = {};  // the scratch balance gets the memory back
   r->layer_received = layer.keys.size();
   const std::string scratch =
