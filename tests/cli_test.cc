@@ -20,8 +20,9 @@ using testing::run;
 TEST(Cli, EveryCommandHasHelp) {
   const CommandRun top = run("--help");
   EXPECT_EQ(top.code, 0);
-  for (const char* cmd : {"generate", "import", "construct", "balance", "mesh", "extract", "export",
-                          "stat", "query", "shell", "slice", "partition", "verify", "recover"}) {
+  for (const char* cmd :
+       {"generate", "import", "construct", "balance", "mesh", "extract", "export", "stat", "query",
+        "shell", "slice", "partition", "verify", "recover", "compact"}) {
     EXPECT_NE(top.out.find(cmd), std::string::npos);
     const CommandRun r = run(std::string(cmd) + " --help");
     EXPECT_EQ(r.code, 0) << cmd;
@@ -30,9 +31,9 @@ TEST(Cli, EveryCommandHasHelp) {
 }
 
 TEST(Cli, UsageErrorsAreOneLineWithStatus2) {
-  for (const char* args :
-       {"frobnicate", "import", "import db --octants x --memory lots", "query db locate 1 2",
-        "query db locate 1 2 -3", "stat --bogus db", "generate f --kind fancy"}) {
+  for (const char* args : {"frobnicate", "import", "import db --octants x --memory lots",
+                           "query db locate 1 2", "query db locate 1 2 -3", "stat --bogus db",
+                           "generate f --kind fancy", "compact", "compact db --memory lots"}) {
     const CommandRun r = run(args);
     EXPECT_EQ(r.code, 2) << args;
     if (std::string(args) != "frobnicate") {
@@ -77,6 +78,23 @@ TEST(Cli, DataErrorsAreOneLineWithStatus1) {
   const CommandRun q = run("query " + d.file("nothing") + " locate 1 2 3");
   EXPECT_EQ(q.code, 1);
   EXPECT_EQ(lines(q.err), 1) << q.err;
+}
+
+// compact: a database without shards is left as it is; a missing one is a
+// one-line error.  (Joining shards is checked in sharded_db_test.cc and,
+// under mpirun, tools/check_mpi.sh.)
+TEST(Cli, CompactLeavesTablesOfOneFileAlone) {
+  testing::TempDir d;
+  ASSERT_EQ(run("generate " + d.file("o.txt") + " --kind uniform --level 2").code, 0);
+  ASSERT_EQ(run("import " + d.file("db") + " --octants " + d.file("o.txt")).code, 0);
+  const std::string before = testing::slurp(d.file("db") + "/MANIFEST");
+  const CommandRun c = run("compact " + d.file("db"));
+  EXPECT_EQ(c.code, 0) << c.err;
+  EXPECT_NE(c.out.find("has no sharded tables"), std::string::npos) << c.out;
+  EXPECT_EQ(testing::slurp(d.file("db") + "/MANIFEST"), before);
+  const CommandRun missing = run("compact " + d.file("nothing"));
+  EXPECT_EQ(missing.code, 1);
+  EXPECT_EQ(lines(missing.err), 1) << missing.err;
 }
 
 TEST(Cli, MeshRunsThePipelineAndBalanceCheckAgrees) {
