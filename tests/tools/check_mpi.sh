@@ -64,6 +64,19 @@ check_model() {  # name, construct options...
   done
 }
 
+# Every command has --help; an unknown one is a usage error (exit 2).
+"$mpi" --help >"$tmp/out" || fail "weaver-mpi --help"
+for cmd in construct balance extract mesh; do
+  grep -q "^  $cmd " "$tmp/out" || fail "weaver-mpi --help does not name $cmd"
+  "$mpi" "$cmd" --help | grep -q "usage:" || fail "weaver-mpi $cmd --help"
+done
+set +e
+"$mpi" frobnicate >/dev/null 2>&1
+code=$?
+set -e
+[ "$code" = 2 ] || fail "weaver-mpi frobnicate: exit $code"
+echo "ok  --help and usage errors"
+
 check_model basin02 --model basin --freq 0.2
 
 check_model loh1 --model loh1 --freq 1 --domain 30000,30000,15000
