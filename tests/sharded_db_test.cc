@@ -81,14 +81,8 @@ void reshard(const std::string& src, const std::string& dst, const std::string& 
       e.last_key = c.key();
       ASSERT_OK(c.next());
     }
-    LevelCounts all{};
-    std::string meta = t->options().metadata;
-    if (t->options().key_kind == KeyKind::kOctant && levels_from_metadata(meta, &all)) {
-      const size_t at = meta.find(";levels="), end = meta.find(';', at + 1);
-      meta = meta.substr(0, at) + levels_to_metadata(levels) +
-             (end == std::string::npos ? "" : meta.substr(end));
-    }
-    out->set_metadata(meta);
+    const std::string& meta = t->options().metadata;
+    out->set_metadata(t->options().key_kind == KeyKind::kOctant ? with_levels(meta, levels) : meta);
     ASSERT_OK(out->commit());
     e.records = out->size();
     entries.push_back(e);

@@ -17,10 +17,8 @@ namespace {
 
 constexpr uint64_t kNone = UINT64_MAX;
 
-// Where each rank's part begins: key[s] is its first leaf's key (rank s's
-// leaves are positions n*s/ranks .. n*(s+1)/ranks - 1), kNone for a rank
-// without leaves and for s = ranks; lo[s] is the Morton code its part of
-// the space begins at (0 for rank 0).
+// Where each rank's part begins (cut_equal_runs): key[s] its first leaf's
+// key, lo[s] the Morton code its part of the space begins at.
 struct Cut {
   std::vector<uint64_t> key, lo;
   // The rank whose part of the space holds Morton code m.
@@ -28,18 +26,6 @@ struct Cut {
     return std::upper_bound(lo.begin(), lo.end() - 1, m) - lo.begin() - 1;
   }
 };
-
-Status cut_parts(BTree& t, int ranks, Cut* cut) {
-  const uint64_t n = t.size();
-  cut->key.assign(ranks + 1, kNone);
-  cut->lo.assign(ranks + 1, kNone);
-  for (int s = 0; s < ranks; ++s) {
-    const uint64_t pos = n * uint64_t(s) / uint64_t(ranks);
-    if (pos < n) WEAVER_RETURN_IF_ERROR(t.select(pos, &cut->key[s], nullptr));
-    if (pos < n) cut->lo[s] = s == 0 ? 0 : octant_key_morton(cut->key[s]);
-  }
-  return Status::Ok();
-}
 
 uint64_t span_of(int level) { return uint64_t{1} << (3 * (kMaxLevel - level)); }
 
@@ -242,7 +228,7 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   // Up to the exchanges, an error still takes part in them (sending nothing).
   Status st = Database::open(db_dir, Database::Mode::kRead, false, &db);
   if (st.ok()) st = db->open_table(kOctantTable, 16 << 20, &t);
-  if (st.ok()) st = cut_parts(*t, ranks, &cut);
+  if (st.ok()) st = cut_equal_runs(*t, ranks, &cut.key, &cut.lo);
   if (st.ok()) st = insulation_queries(*t, cut, rank, &queries);
   std::vector<std::string> blobs(ranks), received;
   for (int s = 0; st.ok() && s < ranks; ++s) {

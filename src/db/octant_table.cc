@@ -17,6 +17,20 @@ Status floor_holding(BTree& table, const Octant& o, uint64_t* key, std::byte* pa
   return Status::Ok();
 }
 
+Status cut_equal_runs(BTree& table, int ranks, std::vector<uint64_t>* first_leaf,
+                      std::vector<uint64_t>* start) {
+  const uint64_t n = table.size();
+  first_leaf->assign(ranks + 1, UINT64_MAX);
+  start->assign(ranks + 1, UINT64_MAX);
+  for (int r = 0; r < ranks; ++r) {
+    const uint64_t pos = n * uint64_t(r) / uint64_t(ranks);
+    if (pos >= n) break;
+    WEAVER_RETURN_IF_ERROR(table.select(pos, &(*first_leaf)[r], nullptr));
+    (*start)[r] = r == 0 ? 0 : octant_key_morton((*first_leaf)[r]);
+  }
+  return Status::Ok();
+}
+
 std::string units_to_metadata(const Units& u) {
   char buf[256];
   std::snprintf(buf, sizeof buf, "tick_m=%.17g;origin_m=%.17g,%.17g,%.17g", u.tick_m, u.origin_m[0],

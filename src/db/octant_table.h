@@ -23,6 +23,14 @@ inline constexpr char kOctantTable[] = "octants";
 // is cut into smaller leaves, or lies in a hole).  payload may be null.
 Status floor_holding(BTree& table, const Octant& o, uint64_t* key, std::byte* payload, bool* found);
 
+// The table cut into `ranks` runs of equal count, the parts of a parallel
+// stage (rank r's leaves are positions n*r/ranks .. n*(r+1)/ranks - 1):
+// first_leaf[r] is its first leaf's key, start[r] the Morton code its part
+// of space begins at (0 for rank 0); UINT64_MAX for a rank without leaves
+// and for r = ranks (each gets ranks + 1 entries).
+Status cut_equal_runs(BTree& table, int ranks, std::vector<uint64_t>* first_leaf,
+                      std::vector<uint64_t>* start);
+
 // Physical placement of the tick grid: point (x, y, z) in ticks is at
 // origin + tick * (x, y, z) metres.
 struct Units {

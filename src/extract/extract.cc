@@ -148,30 +148,13 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
 
 namespace {
 
-// Where each rank's part begins: its first leaf's key (by count: rank r's
-// leaves are n*r/ranks .. n*(r+1)/ranks - 1) and the first node key it owns
-// (that leaf's Morton code; 0 for rank 0).  A rank without leaves begins
-// at the end (UINT64_MAX), and owns nothing.
-Status cut_parts(BTree& octants, int ranks, std::vector<uint64_t>* first_leaf,
-                 std::vector<uint64_t>* start) {
-  const uint64_t n = octants.size();
-  first_leaf->assign(ranks, UINT64_MAX);
-  start->assign(ranks, UINT64_MAX);
-  for (int r = 0; r < ranks; ++r) {
-    const uint64_t pos = n * uint64_t(r) / uint64_t(ranks);
-    if (pos < n) WEAVER_RETURN_IF_ERROR(octants.select(pos, &(*first_leaf)[r], nullptr));
-    if (pos < n) (*start)[r] = r == 0 ? 0 : octant_key_morton((*first_leaf)[r]);
-  }
-  return Status::Ok();
-}
-
 // The corners of this rank's leaves (from first_leaf, below stop) at or past
 // stop, for the ranks that own them (the last rank whose start is <= the key),
 // sorted and merged per rank.
 Status far_corners(BTree& octants, uint64_t first_leaf, uint64_t stop,
                    const std::vector<uint64_t>& start,
                    std::vector<std::vector<SpillRecord>>* outgoing) {
-  outgoing->assign(start.size(), {});
+  outgoing->assign(start.size() - 1, {});  // start has a last entry for the end
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(octants.seek_keys(first_leaf, &c));
   uint64_t corners[8];
@@ -206,10 +189,10 @@ Status extract_shard(const std::string& db_dir, const ExtractOptions& options, i
   // Up to the exchange, an error still takes part in it (sending nothing).
   Status st = Database::open(db_dir, Database::Mode::kRead, false, &db);
   if (st.ok()) st = db->open_table(kOctantTable, memory.octant_pool, &octants);
-  if (st.ok()) st = cut_parts(*octants, ranks, &first_leaf, &start);
+  if (st.ok()) st = cut_equal_runs(*octants, ranks, &first_leaf, &start);
   if (st.ok()) {
     part.start = start[rank];
-    part.stop = rank + 1 < ranks ? start[rank + 1] : UINT64_MAX;
+    part.stop = start[rank + 1];
     part.first_leaf = first_leaf[rank];
     if (part.start < part.stop)
       st = far_corners(*octants, part.first_leaf, part.stop, start, &outgoing);
