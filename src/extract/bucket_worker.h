@@ -48,6 +48,9 @@ struct BucketPolicy {
   // ends before the table does has no tail.
   uint64_t start = 0, stop = UINT64_MAX;
   uint64_t first_leaf = 0;
+  // A part's nodes may lack the direction bits of other parts' leaves
+  // (NodeClassifier::allow_partial_masks).
+  bool partial_masks = false;
 };
 
 struct BucketTask {
@@ -108,7 +111,9 @@ void sort_and_merge(std::vector<SpillRecord>& records, std::vector<uint64_t>& pa
 
 class BucketWorker {
  public:
-  explicit BucketWorker(BTree& octants) : classifier_(octants) {}
+  BucketWorker(BTree& octants, const BucketPolicy& policy) : classifier_(octants) {
+    if (policy.partial_masks) classifier_.allow_partial_masks();
+  }
   Status run(BucketTask& task);
 
  private:

@@ -148,6 +148,29 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
 
 namespace {
 
+// Drops the records whose node is a leaf's anchor (its corner 0): that leaf
+// is in the rank that owns the node (a leaf's rank is the one whose range
+// holds its anchor), which so finds the node itself, and with partial masks
+// (NodeClassifier::allow_partial_masks) needs no bits from other ranks.  What
+// stays are the nodes no leaf of the owner has as its anchor: on the far
+// faces of the domain or dangling on a coarser leaf of the owner.
+Status drop_anchoring_corners(BTree& octants, std::vector<SpillRecord>* records) {
+  constexpr uint64_t kFarSide = uint64_t{7} << (3 * kMaxLevel);  // past the root on some axis
+  size_t kept = 0;
+  for (const SpillRecord& r : *records) {
+    bool anchors = false;
+    if ((r.key & kFarSide) == 0) {
+      uint64_t key = 0;
+      bool hit = false;
+      WEAVER_RETURN_IF_ERROR(octants.floor(pixel_key_of_morton(r.key), &key, nullptr, &hit));
+      anchors = hit && octant_key_morton(key) == r.key;
+    }
+    if (!anchors) (*records)[kept++] = r;
+  }
+  records->resize(kept);
+  return Status::Ok();
+}
+
 // The corners of this rank's leaves (from first_leaf, below stop) at or past
 // stop, for the ranks that own them (the last rank whose start is <= the key),
 // sorted and merged per rank.
@@ -169,7 +192,10 @@ Status far_corners(BTree& octants, uint64_t first_leaf, uint64_t stop,
     WEAVER_RETURN_IF_ERROR(c.next());
   }
   std::vector<uint64_t> packed, scratch;
-  for (auto& records : *outgoing) sort_and_merge(records, packed, scratch);
+  for (auto& records : *outgoing) {
+    sort_and_merge(records, packed, scratch);
+    WEAVER_RETURN_IF_ERROR(drop_anchoring_corners(octants, &records));
+  }
   return Status::Ok();
 }
 

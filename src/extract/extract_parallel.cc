@@ -53,7 +53,7 @@ Status run_parallel(Database& db, BTree& octants, BTree& nodes, const BucketPoli
   std::vector<std::thread> workers;
   for (int i = 0; i < n; ++i) {
     workers.emplace_back([&, i] {
-      BucketWorker worker(*handles[i]);
+      BucketWorker worker(*handles[i], policy);
       while (BucketTask* t = queue.pop()) {
         t->status = worker.run(*t);
         queue.finish(t);

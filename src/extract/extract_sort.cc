@@ -25,7 +25,7 @@ namespace {
 // One thread: read, extract and write each bucket in turn.
 Status run_serial(BTree& octants, BTree& nodes, const BucketPolicy& policy, SpillStore& spills,
                   const ExtractOptions& options, ExtractResult* result) {
-  BucketWorker worker(octants);
+  BucketWorker worker(octants, policy);
   LeafReader c;
   WEAVER_RETURN_IF_ERROR(c.open(octants, policy.first_leaf));
   BucketReader reader(c, policy, spills);
@@ -50,6 +50,7 @@ Status extract_by_sort(Database& db, BTree& octants, BTree& nodes, const std::st
     policy.start = part->start;
     policy.stop = part->stop;
     policy.first_leaf = part->first_leaf;
+    policy.partial_masks = true;
     if (!part->incoming.empty()) WEAVER_RETURN_IF_ERROR(spills.add_run(std::move(part->incoming)));
   }
   const Status st = options.threads > 1

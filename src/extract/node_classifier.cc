@@ -127,6 +127,10 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
     NodeKind here = NodeKind::kAnchored;
     uint8_t covered = 0;
     WEAVER_RETURN_IF_ERROR(kind_on(n, *leaf, mask, &here, &covered));
+    if (here == NodeKind::kAnchored) {  // a corner of the leaf: partial masks only
+      settled |= covered;
+      continue;
+    }
     if (*kind != NodeKind::kAnchored && here != *kind) return unbalanced(n, *leaf, mask);
     *kind = here;
     settled |= covered;
@@ -134,9 +138,12 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
   return Status::Ok();
 }
 
-// Node n lies on the closure of `leaf` but is not its corner: its kind, and
-// the cells around n the leaf covers (on an axis where n is strictly inside
-// the leaf, both sides; elsewhere the side the leaf is on).
+// Node n lies on the closure of `leaf`: its kind, and the cells around n the
+// leaf covers (on an axis where n is strictly inside the leaf, both sides;
+// elsewhere the side the leaf is on).  n is a corner of the leaf (kind
+// anchored, one cell covered) only where masks may be partial; with whole
+// masks every leaf that has n as a corner set its bit, so finding one here
+// means octants overlap.
 Status NodeClassifier::kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind,
                                uint8_t* covered) {
   const uint32_t e = octant_edge(leaf), half = e / 2;
@@ -151,6 +158,11 @@ Status NodeClassifier::kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKi
     } else {
       cells &= c[a] == lo[a] ? plus_side : static_cast<uint8_t>(~plus_side);
     }
+  }
+  if (inside == 0 && partial_masks_) {
+    *kind = NodeKind::kAnchored;
+    *covered = cells;
+    return Status::Ok();
   }
   if (inside == 0 || inside == 3) {
     return Status::Corruption("node (" + std::to_string(n.x) + " " + std::to_string(n.y) + " " +

@@ -41,6 +41,11 @@ class NodeClassifier {
 
   Status classify(uint64_t key, uint8_t mask, NodeKind* kind);
 
+  // Masks may lack the bits of leaves that have the node as a corner (a
+  // rank's part in extract_shard: its nodes' corners in other ranks' leaves
+  // are not all sent); the missing cells are then looked up like empty ones.
+  void allow_partial_masks() { partial_masks_ = true; }
+
  private:
   // pm is the Morton code of the pixel in `direction` (0..7) of a node.
   // *leaf points into recent_: valid until the next call.
@@ -51,6 +56,7 @@ class NodeClassifier {
   Status unbalanced(Coord n, const Octant& coarse, uint8_t mask);
 
   BTree& octants_;
+  bool partial_masks_ = false;
   const std::vector<uint64_t>* leaf_keys_ = nullptr;
   uint64_t local_start_ = 0, local_end_ = 0;
   // The local range cut into equal slots of 2^slot_shift_ Morton codes, one for
