@@ -13,6 +13,7 @@ namespace weaver {
 struct ConstructOptions;
 struct ConstructPlan;
 struct ConstructResult;
+struct ExportOptions;
 }  // namespace weaver
 
 namespace weaver::cli {
@@ -50,6 +51,8 @@ int parse_construct_command(int argc, char** argv, std::string* db, weaver::Cons
 // The construct options and plan printout shared by `construct` and `mesh`.
 Status parse_construct_options(const ParsedArgs& args, weaver::ConstructOptions* o);
 void print_construct_plan(const weaver::ConstructOptions& o, const weaver::ConstructPlan& p);
+// `export`'s options (weaver export's, and weaver-mpi's), DB aside.
+Status parse_export_options(const ParsedArgs& args, weaver::ExportOptions* o);
 // The "constructed ..." line of a finished construct that took secs.
 void print_construct_result(const weaver::ConstructResult& r, double secs);
 // A --model naming a model file (etree:, grid:, layers:, xyz:): imported

@@ -59,6 +59,61 @@ constexpr char kUsage[] =
 
 }  // namespace
 
+Status parse_export_options(const ParsedArgs& args, ExportOptions* o) {
+  auto values = args.values;
+  Status st;
+  o->nodes_path = values.count("nodes") ? values["nodes"] : "";
+  o->elements_path = values.count("elements") ? values["elements"] : "";
+  o->out = values.count("out") ? values["out"] : "";
+  const bool csv_files = !o->nodes_path.empty() || !o->elements_path.empty();
+  if (values.count("format")) {
+    if (!export_format_from_name(values["format"], &o->format)) {
+      return Status::InvalidArgument("unknown --format '" + values["format"] + "'");
+    }
+  } else if (!csv_files) {
+    return Status::InvalidArgument("give --format FORMAT --out PATH (or --nodes/--elements)");
+  }
+  if (csv_files && (o->format != ExportFormat::kCsv || !o->out.empty())) {
+    return Status::InvalidArgument("--nodes/--elements are csv files: not with --out");
+  }
+  if (!csv_files && o->out.empty()) return Status::InvalidArgument("--out PATH is missing");
+  if (values.count("units")) {
+    const std::string& u = values["units"];
+    if (u != "m" && u != "ticks") {
+      return Status::InvalidArgument("--units is m or ticks, not '" + u + "'");
+    }
+    o->units = u == "m" ? ExportUnits::kMetres : ExportUnits::kTicks;
+  }
+  if (values.count("box")) {
+    std::vector<double> box;
+    st = parse_double_list(values["box"], "--box", 6, &box);
+    if (!st.ok()) return st;
+    std::copy(box.begin(), box.end(), o->box);
+    o->has_box = true;
+  }
+  if (values.count("parts")) {
+    uint64_t parts = 0;
+    st = parse_count(values["parts"], "--parts", &parts);
+    if (st.ok() && (parts < 1 || parts > 100000)) {
+      st = Status::InvalidArgument("--parts must be 1 to 100000");
+    }
+    if (!st.ok()) return st;
+    o->parts = uint32_t(parts);
+  }
+  const ExportFormat f = o->format;
+  if (o->has_box && f != ExportFormat::kVtu && f != ExportFormat::kPvtu && f != ExportFormat::kMsh &&
+      f != ExportFormat::kRaw) {
+    return Status::InvalidArgument("--box works with vtu, pvtu, msh and raw");
+  }
+  if (o->parts > 1 && f != ExportFormat::kPvtu && f != ExportFormat::kRaw) {
+    return Status::InvalidArgument("--parts works with pvtu and raw");
+  }
+  if (o->parts > 1 && o->has_box && f == ExportFormat::kRaw) {
+    return Status::InvalidArgument("raw takes --box or --parts, not both");
+  }
+  return memory_option(args, &o->memory);
+}
+
 int cmd_export(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(argc, argv, 2,
@@ -68,56 +123,7 @@ int cmd_export(int argc, char** argv) {
   if (!st.ok()) return usage_error("export", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("export", "expected one DB", kUsage);
   ExportOptions o;
-  o.nodes_path = args.values.count("nodes") ? args.values["nodes"] : "";
-  o.elements_path = args.values.count("elements") ? args.values["elements"] : "";
-  o.out = args.values.count("out") ? args.values["out"] : "";
-  const bool csv_files = !o.nodes_path.empty() || !o.elements_path.empty();
-  if (args.values.count("format")) {
-    if (!export_format_from_name(args.values["format"], &o.format)) {
-      return usage_error("export", "unknown --format '" + args.values["format"] + "'", kUsage);
-    }
-  } else if (!csv_files) {
-    return usage_error("export", "give --format FORMAT --out PATH (or --nodes/--elements)", kUsage);
-  }
-  if (csv_files && (o.format != ExportFormat::kCsv || !o.out.empty())) {
-    return usage_error("export", "--nodes/--elements are csv files: not with --out", kUsage);
-  }
-  if (!csv_files && o.out.empty()) return usage_error("export", "--out PATH is missing", kUsage);
-  if (args.values.count("units")) {
-    const std::string& u = args.values["units"];
-    if (u != "m" && u != "ticks") {
-      return usage_error("export", "--units is m or ticks, not '" + u + "'", kUsage);
-    }
-    o.units = u == "m" ? ExportUnits::kMetres : ExportUnits::kTicks;
-  }
-  if (args.values.count("box")) {
-    std::vector<double> box;
-    st = parse_double_list(args.values["box"], "--box", 6, &box);
-    if (!st.ok()) return usage_error("export", st.message(), kUsage);
-    std::copy(box.begin(), box.end(), o.box);
-    o.has_box = true;
-  }
-  if (args.values.count("parts")) {
-    uint64_t parts = 0;
-    st = parse_count(args.values["parts"], "--parts", &parts);
-    if (st.ok() && (parts < 1 || parts > 100000)) {
-      st = Status::InvalidArgument("--parts must be 1 to 100000");
-    }
-    if (!st.ok()) return usage_error("export", st.message(), kUsage);
-    o.parts = uint32_t(parts);
-  }
-  const ExportFormat f = o.format;
-  if (o.has_box && f != ExportFormat::kVtu && f != ExportFormat::kPvtu && f != ExportFormat::kMsh &&
-      f != ExportFormat::kRaw) {
-    return usage_error("export", "--box works with vtu, pvtu, msh and raw", kUsage);
-  }
-  if (o.parts > 1 && f != ExportFormat::kPvtu && f != ExportFormat::kRaw) {
-    return usage_error("export", "--parts works with pvtu and raw", kUsage);
-  }
-  if (o.parts > 1 && o.has_box && f == ExportFormat::kRaw) {
-    return usage_error("export", "raw takes --box or --parts, not both", kUsage);
-  }
-  st = memory_option(args, &o.memory);
+  st = parse_export_options(args, &o);
   if (!st.ok()) return usage_error("export", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   ExportResult r;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <functional>
 #include <memory>
 
 #include "export/writers.h"
@@ -152,8 +154,9 @@ Status ExportJob::box_selection(Selection* s) const {
   return Status::Ok();
 }
 
-Status export_mesh(const std::string& db_dir, const ExportOptions& options, ExportResult* result) {
-  *result = ExportResult{};
+namespace {
+
+Status check_options(const ExportOptions& options) {
   const ExportFormat f = options.format;
   if (options.has_box &&
       (f == ExportFormat::kCsv || f == ExportFormat::kMetis || f == ExportFormat::kMetisMesh)) {
@@ -166,22 +169,76 @@ Status export_mesh(const std::string& db_dir, const ExportOptions& options, Expo
   if (options.parts > 1 && options.has_box && f == ExportFormat::kRaw) {
     return Status::InvalidArgument("raw takes --box or --parts, not both");
   }
+  return Status::Ok();
+}
+
+// Opens db_dir's mesh and runs fn on a job of the whole of it.
+Status with_job(const std::string& db_dir, const ExportOptions& options, ExportResult* result,
+                const std::function<Status(ExportJob&)>& fn) {
+  *result = ExportResult{};
+  WEAVER_RETURN_IF_ERROR(check_options(options));
   const ExportMemory memory(options.memory);
   std::unique_ptr<Mesh> mesh;
   WEAVER_RETURN_IF_ERROR(Mesh::open(db_dir, memory.octant_pool, memory.node_pool, &mesh));
   ExportJob job(*mesh, options, std::max<size_t>(memory.buffers / 12, 4096), memory.scratch,
                 result);
   WEAVER_RETURN_IF_ERROR(job.select(Selection{}, false, ""));
-  switch (options.format) {
-    case ExportFormat::kCsv: return write_csv(job);
-    case ExportFormat::kVtu: return write_vtu(job);
-    case ExportFormat::kPvtu: return write_pvtu(job);
-    case ExportFormat::kMsh: return write_msh(job);
-    case ExportFormat::kMetis: return write_metis_graph(job);
-    case ExportFormat::kMetisMesh: return write_metis_mesh(job);
-    case ExportFormat::kRaw: return write_raw(job);
+  return fn(job);
+}
+
+Status check_one_part_format(const ExportOptions& options) {
+  if (options.format == ExportFormat::kRaw || options.format == ExportFormat::kPvtu) {
+    return check_options(options);
   }
-  return Status::InvalidArgument("unknown export format");
+  return Status::InvalidArgument("one part at a time is for raw and pvtu");
+}
+
+}  // namespace
+
+Status export_mesh(const std::string& db_dir, const ExportOptions& options, ExportResult* result) {
+  return with_job(db_dir, options, result, [](ExportJob& job) {
+    switch (job.options.format) {
+      case ExportFormat::kCsv: return write_csv(job);
+      case ExportFormat::kVtu: return write_vtu(job);
+      case ExportFormat::kPvtu: return write_pvtu(job);
+      case ExportFormat::kMsh: return write_msh(job);
+      case ExportFormat::kMetis: return write_metis_graph(job);
+      case ExportFormat::kMetisMesh: return write_metis_mesh(job);
+      case ExportFormat::kRaw: return write_raw(job);
+    }
+    return Status::InvalidArgument("unknown export format");
+  });
+}
+
+Status export_parts_begin(const ExportOptions& options) {
+  WEAVER_RETURN_IF_ERROR(check_one_part_format(options));
+  if (options.format == ExportFormat::kPvtu) return start_pvtu_parts(options);
+  std::string tmp;
+  return start_export_dir(options.out, &tmp);
+}
+
+Status export_one_part(const std::string& db_dir, const ExportOptions& options, uint32_t part,
+                       ExportResult* result) {
+  WEAVER_RETURN_IF_ERROR(check_one_part_format(options));
+  if (part >= options.parts) return Status::InvalidArgument("no part " + std::to_string(part));
+  return with_job(db_dir, options, result, [part](ExportJob& job) {
+    return job.options.format == ExportFormat::kPvtu ? write_pvtu_one_part(job, part)
+                                                      : write_raw_one_part(job, part);
+  });
+}
+
+Status export_parts_end(const std::string& db_dir, const ExportOptions& options, bool written,
+                        ExportResult* result) {
+  WEAVER_RETURN_IF_ERROR(check_one_part_format(options));
+  const Status st = with_job(db_dir, options, result, [written](ExportJob& job) {
+    return job.options.format == ExportFormat::kPvtu ? finish_pvtu_parts(job, written)
+                                                      : finish_raw_parts(job, written);
+  });
+  if (!st.ok() && options.format == ExportFormat::kRaw) {  // the mesh did not open
+    std::error_code ec;
+    std::filesystem::remove_all(options.out + ".tmp", ec);
+  }
+  return st;
 }
 
 }  // namespace weaver

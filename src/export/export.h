@@ -73,4 +73,18 @@ struct ExportResult {
 
 Status export_mesh(const std::string& db_dir, const ExportOptions& options, ExportResult* result);
 
+// raw and pvtu with --parts N written a part at a time by separate writers
+// (weaver-mpi export: one a rank), into the same files export_mesh writes:
+// export_parts_begin once (raw: makes OUT.tmp; pvtu: the pieces' directory),
+// then export_one_part for each part, in any process and order, then
+// export_parts_end once, told whether every part was written (raw: writes
+// parts.json and renames OUT.tmp to OUT, or removes OUT.tmp; pvtu: writes the
+// index last, or leaves it unwritten).  A part's shared nodes are found from
+// its own elements and their neighbours (SharedNodes::build_part).
+Status export_parts_begin(const ExportOptions& options);
+Status export_one_part(const std::string& db_dir, const ExportOptions& options, uint32_t part,
+                       ExportResult* result);
+Status export_parts_end(const std::string& db_dir, const ExportOptions& options, bool written,
+                        ExportResult* result);
+
 }  // namespace weaver

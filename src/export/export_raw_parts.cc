@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <vector>
 
 #include "export/shared_nodes.h"
@@ -38,23 +39,7 @@ std::string parts_json(const ExportJob& job, const std::string& method) {
   return s + "]\n}\n";
 }
 
-Status write_parts(ExportJob& job, const std::string& tmp) {
-  PartMap map;
-  std::vector<PartRun> ranges;
-  std::string method;
-  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
-  SharedNodes shared;
-  WEAVER_RETURN_IF_ERROR(shared.build(job.mesh, map, tmp + "/scratch", job.scratch_bytes));
-  job.plan(job.mesh.node_count() + job.mesh.element_count());
-  for (uint32_t p = 0; p < job.options.parts; ++p) {
-    Selection s = part_selection(job, map, ranges, p);
-    const std::string dir = tmp + "/" + part_dir(p);
-    if (::mkdir(dir.c_str(), 0755) != 0) {
-      return Status::IOError("cannot create directory " + dir + ": " + std::strerror(errno));
-    }
-    WEAVER_RETURN_IF_ERROR(job.select(s, true, dir + "/scratch"));
-    WEAVER_RETURN_IF_ERROR(write_raw_files(job, dir, &shared));
-  }
+Status write_parts_json(ExportJob& job, const std::string& tmp, const std::string& method) {
   const std::string text = parts_json(job, method);
   OutputFile f(tmp + "/parts.json");
   WEAVER_RETURN_IF_ERROR(f.open());
@@ -62,16 +47,82 @@ Status write_parts(ExportJob& job, const std::string& tmp) {
   return f.finish();
 }
 
+// Part p's directory in tmp, its shared nodes in `shared`.
+Status write_part(ExportJob& job, const Selection& s, const std::string& tmp, SharedNodes* shared) {
+  const std::string dir = tmp + "/" + part_dir(s.part);
+  if (::mkdir(dir.c_str(), 0755) != 0) {
+    return Status::IOError("cannot create directory " + dir + ": " + std::strerror(errno));
+  }
+  WEAVER_RETURN_IF_ERROR(job.select(s, true, dir + "/scratch"));
+  return write_raw_files(job, dir, shared);
+}
+
+Status write_parts(ExportJob& job, const std::string& tmp) {
+  PartMap map;
+  std::vector<PartRun> ranges;
+  std::string method;
+  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
+  {
+    SharedNodes shared;
+    WEAVER_RETURN_IF_ERROR(shared.build(job.mesh, map, tmp + "/scratch", job.scratch_bytes));
+    job.plan(job.mesh.node_count() + job.mesh.element_count());
+    for (uint32_t p = 0; p < job.options.parts; ++p) {
+      WEAVER_RETURN_IF_ERROR(write_part(job, part_selection(job, map, ranges, p), tmp, &shared));
+    }
+  }
+  std::error_code ec;  // the sorts' directory, empty now: not part of the output
+  std::filesystem::remove_all(tmp + "/scratch", ec);
+  return write_parts_json(job, tmp, method);
+}
+
+Status check_part_count(const ExportJob& job) {
+  if (job.options.parts <= job.mesh.element_count()) return Status::Ok();
+  return Status::InvalidArgument(std::to_string(job.options.parts) + " parts for " +
+                                 std::to_string(job.mesh.element_count()) + " elements");
+}
+
 }  // namespace
 
 Status write_raw_parts(ExportJob& job) {
-  if (job.options.parts > job.mesh.element_count()) {
-    return Status::InvalidArgument(std::to_string(job.options.parts) + " parts for " +
-                                   std::to_string(job.mesh.element_count()) + " elements");
-  }
+  WEAVER_RETURN_IF_ERROR(check_part_count(job));
   std::string tmp;
   WEAVER_RETURN_IF_ERROR(start_export_dir(job.options.out, &tmp));
   return finish_export_dir(job, tmp, job.options.out, write_parts(job, tmp));
+}
+
+Status write_raw_one_part(ExportJob& job, uint32_t p) {
+  WEAVER_RETURN_IF_ERROR(check_part_count(job));
+  PartMap map;
+  std::vector<PartRun> ranges;
+  std::string method;
+  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
+  const Selection s = part_selection(job, map, ranges, p);
+  const std::string tmp = job.options.out + ".tmp";  // made by export_parts_begin
+  const std::string scratch = tmp + "/scratch-" + std::to_string(p);
+  SharedNodes shared;
+  Status st = shared.build_part(job.mesh, map, s, scratch, job.scratch_bytes);
+  if (st.ok()) {
+    job.plan(job.mesh.node_count() / job.options.parts + job.mesh.element_count() / job.options.parts);
+    st = write_part(job, s, tmp, &shared);
+  }
+  std::error_code ec;
+  std::filesystem::remove_all(scratch, ec);
+  return st;
+}
+
+Status finish_raw_parts(ExportJob& job, bool written) {
+  const std::string tmp = job.options.out + ".tmp";
+  if (!written) {  // the parts written go; the writer of the failed one reports it
+    std::error_code ec;
+    std::filesystem::remove_all(tmp, ec);
+    return Status::Ok();
+  }
+  PartMap map;
+  std::vector<PartRun> ranges;
+  std::string method;
+  Status st = export_parts(job, &map, &ranges, &method);
+  if (st.ok()) st = write_parts_json(job, tmp, method);
+  return finish_export_dir(job, tmp, job.options.out, st);
 }
 
 }  // namespace weaver

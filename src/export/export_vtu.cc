@@ -211,28 +211,41 @@ Status write_vtu(ExportJob& job) {
   return write_vtu_file(job, job.options.out);
 }
 
-Status write_pvtu(ExportJob& job) {
-  const std::string& out = job.options.out;
+namespace {
+
+// STEM of OUT = STEM.pvtu: the pieces go in the directory STEM/.
+std::string pvtu_stem(const std::string& out) {
   const bool suffix = out.size() > 5 && out.compare(out.size() - 5, 5, ".pvtu") == 0;
-  const std::string stem = suffix ? out.substr(0, out.size() - 5) : out;
+  return suffix ? out.substr(0, out.size() - 5) : out;
+}
+
+std::string piece_name(const std::string& stem, uint32_t p) {
+  return base_name(stem) + "/" + base_name(stem) + "_" + std::to_string(p) + ".vtu";
+}
+
+Status make_stem_dir(const std::string& stem) {
   if (::mkdir(stem.c_str(), 0755) != 0 && errno != EEXIST) {
     return Status::IOError("cannot create directory " + stem + ": " + std::strerror(errno));
   }
-  job.plan(job.mesh.node_count() + job.mesh.element_count());
-  PartMap map;
-  std::vector<PartRun> ranges;
-  std::string method;
-  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
-  Selection box;
-  if (job.options.has_box) WEAVER_RETURN_IF_ERROR(job.box_selection(&box));
+  return Status::Ok();
+}
+
+// Piece p of the parts (within the box, if any).
+Status write_piece(ExportJob& job, const PartMap& map, const std::vector<PartRun>& ranges,
+                   const Selection& box, uint32_t p) {
+  Selection s = part_selection(job, map, ranges, p);
+  s.has_box = box.has_box, s.lo = box.lo, s.hi = box.hi;
+  WEAVER_RETURN_IF_ERROR(job.select(s, false, job.options.out + ".scratch-" + std::to_string(p)));
+  const std::string stem = pvtu_stem(job.options.out);
+  return write_vtu_file(job, stem + "/" + base_name(piece_name(stem, p)));
+}
+
+// The index ParaView opens, naming every piece: written last.
+Status write_pvtu_index(ExportJob& job) {
+  const std::string stem = pvtu_stem(job.options.out);
   std::string pieces;
   for (uint32_t p = 0; p < job.options.parts; ++p) {
-    Selection s = part_selection(job, map, ranges, p);
-    s.has_box = box.has_box, s.lo = box.lo, s.hi = box.hi;
-    WEAVER_RETURN_IF_ERROR(job.select(s, false, out + ".scratch"));
-    const std::string name = base_name(stem) + "_" + std::to_string(p) + ".vtu";
-    WEAVER_RETURN_IF_ERROR(write_vtu_file(job, stem + "/" + name));
-    pieces += "    <Piece Source=\"" + base_name(stem) + "/" + name + "\"/>\n";
+    pieces += "    <Piece Source=\"" + piece_name(stem, p) + "\"/>\n";
   }
   GeoFrame geo;
   const Present has = present(job, &geo);
@@ -240,11 +253,48 @@ Status write_pvtu(ExportJob& job) {
                             "  <PUnstructuredGrid GhostLevel=\"0\">\n" +
                             declarations(layout(0, 0, has), has, true) + pieces +
                             "  </PUnstructuredGrid>\n</VTKFile>\n";
-  OutputFile file(out);
+  OutputFile file(job.options.out);
   WEAVER_RETURN_IF_ERROR(file.open());
   WEAVER_RETURN_IF_ERROR(file.write_at(0, index.data(), index.size()));
   job.result->bytes += index.size();
   return file.finish();
+}
+
+}  // namespace
+
+Status write_pvtu(ExportJob& job) {
+  WEAVER_RETURN_IF_ERROR(make_stem_dir(pvtu_stem(job.options.out)));
+  job.plan(job.mesh.node_count() + job.mesh.element_count());
+  PartMap map;
+  std::vector<PartRun> ranges;
+  std::string method;
+  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
+  Selection box;
+  if (job.options.has_box) WEAVER_RETURN_IF_ERROR(job.box_selection(&box));
+  for (uint32_t p = 0; p < job.options.parts; ++p) {
+    WEAVER_RETURN_IF_ERROR(write_piece(job, map, ranges, box, p));
+  }
+  return write_pvtu_index(job);
+}
+
+Status start_pvtu_parts(const ExportOptions& options) {
+  return make_stem_dir(pvtu_stem(options.out));
+}
+
+Status write_pvtu_one_part(ExportJob& job, uint32_t p) {
+  job.plan((job.mesh.node_count() + job.mesh.element_count()) / job.options.parts);
+  PartMap map;
+  std::vector<PartRun> ranges;
+  std::string method;
+  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
+  Selection box;
+  if (job.options.has_box) WEAVER_RETURN_IF_ERROR(job.box_selection(&box));
+  return write_piece(job, map, ranges, box, p);
+}
+
+Status finish_pvtu_parts(ExportJob& job, bool written) {
+  if (!written) return Status::Ok();  // the pieces written stay; no index names them
+  return write_pvtu_index(job);
 }
 
 }  // namespace weaver

@@ -118,5 +118,11 @@ Status start_export_dir(const std::string& out, std::string* tmp);
 Status finish_export_dir(ExportJob& job, const std::string& tmp, const std::string& out,
                          Status written);
 Status write_raw_parts(ExportJob& job);
+// export_one_part and export_parts_end of export.h, per format.
+Status write_raw_one_part(ExportJob& job, uint32_t p);
+Status finish_raw_parts(ExportJob& job, bool written);
+Status start_pvtu_parts(const ExportOptions& options);
+Status write_pvtu_one_part(ExportJob& job, uint32_t p);
+Status finish_pvtu_parts(ExportJob& job, bool written);
 
 }  // namespace weaver

@@ -14,6 +14,7 @@ int construct(const Comm& comm, int argc, char** argv);
 int extract(const Comm& comm, int argc, char** argv);
 int balance(const Comm& comm, int argc, char** argv);
 int mesh(const Comm& comm, int argc, char** argv);
+int export_parts(const Comm& comm, int argc, char** argv);
 // The stages on an open command line's options (weaver-mpi mesh runs all three).
 int run_balance(const Comm& comm, const std::string& dir, const BalanceOptions& options);
 int run_extract(const Comm& comm, const std::string& dir, const ExtractOptions& options);

@@ -7,7 +7,8 @@
 # ranks from the sharded leaves compacts to the serial balance's file;
 # extract on the ranks
 # from the balanced table gives a sharded node table that verifies and
-# compacts to the serial extract's file.  Then: more ranks than work,
+# compacts to the serial extract's file.  Export of raw and pvtu parts, one
+# a rank, as the serial export's files.  Then: more ranks than work,
 # ranks given different arguments, a rank whose write fails and a rank killed
 # at each of its durable steps (the old database stays, byte for byte).
 #
@@ -66,7 +67,7 @@ check_model() {  # name, construct options...
 
 # Every command has --help; an unknown one is a usage error (exit 2).
 "$mpi" --help >"$tmp/out" || fail "weaver-mpi --help"
-for cmd in construct balance extract mesh; do
+for cmd in construct balance extract mesh export; do
   grep -q "^  $cmd " "$tmp/out" || fail "weaver-mpi --help does not name $cmd"
   "$mpi" "$cmd" --help | grep -q "usage:" || fail "weaver-mpi $cmd --help"
 done
@@ -86,6 +87,44 @@ check_model slab --model basin --freq 0.2 --domain 100000,50000,12500
 "$weaver" mesh "$tmp/mesh.serial" --model basin --freq 0.2 --quiet >/dev/null
 run 3 "$mpi" mesh "$tmp/mesh" --model basin --freq 0.2 --quiet >"$tmp/out" || fail "mesh -np 3"
 "$weaver" verify "$tmp/mesh" >/dev/null || fail "mesh: verify of the sharded mesh"
+# Export on the ranks, one part a rank, from the shards: the serial export's
+# files, byte for byte (raw parts by element runs and by a stored graph
+# partition; pvtu pieces within a box).
+export_parts() {  # name, np, db, serial db, suffix, export options...
+  local name=$1 np=$2 db=$3 serial=$4 ext=$5; shift 5
+  "$weaver" export "$serial" "$@" --parts "$np" --out "$tmp/$name.serial$ext" --quiet >/dev/null
+  run "$np" "$mpi" export "$db" "$@" --out "$tmp/$name.mpi$ext" >"$tmp/out" || fail "export $name"
+  grep -q "^export: $np parts" "$tmp/out" || fail "export $name: no summary"
+}
+export_parts raw 3 "$tmp/mesh" "$tmp/mesh.serial" "" --format raw
+diff -r "$tmp/raw.serial" "$tmp/raw.mpi" >/dev/null || fail "export raw on 3 ranks differs"
+export_parts pvtu 3 "$tmp/mesh" "$tmp/mesh.serial" .pvtu --format pvtu --box 0,0,0,60000,40000,20000
+for p in 0 1 2; do
+  cmp -s "$tmp/pvtu.serial/pvtu.serial_$p.vtu" "$tmp/pvtu.mpi/pvtu.mpi_$p.vtu" ||
+    fail "export pvtu piece $p on 3 ranks differs"
+done
+[ "$(grep -c '<Piece' "$tmp/pvtu.mpi.pvtu")" = 3 ] || fail "export pvtu: the index lacks pieces"
+cp -r "$tmp/mesh.serial" "$tmp/mesh.graph"
+"$weaver" partition "$tmp/mesh.graph" --parts 2 --method graph --quiet >/dev/null
+export_parts graph 2 "$tmp/mesh.graph" "$tmp/mesh.graph" "" --format raw
+diff -r "$tmp/graph.serial" "$tmp/graph.mpi" >/dev/null || fail "export raw by graph parts differs"
+grep -q '"method": "graph"' "$tmp/graph.mpi/parts.json" || fail "export: graph parts not used"
+set +e
+run 3 "$mpi" export "$tmp/mesh" --format raw --parts 4 --out "$tmp/bad" >/dev/null 2>"$tmp/err"
+code=$?
+set -e
+[ "$code" = 2 ] && grep -q "number of ranks" "$tmp/err" || fail "export --parts 4 on 3: exit $code"
+# A rank whose write fails: one line naming it, exit 1, no output left.
+set +e
+mpirun -np 1 "$mpi" export "$tmp/mesh" --format raw --out "$tmp/bad" : \
+       -np 1 env WEAVER_FAIL_AT=1 "$mpi" export "$tmp/mesh" --format raw --out "$tmp/bad" \
+       >/dev/null 2>"$tmp/err"
+code=$?
+set -e
+[ "$code" = 1 ] && grep -q "^weaver-mpi export: rank 1: " "$tmp/err" ||
+  fail "export with rank 1 failing: exit $code: $(cat "$tmp/err")"
+[ ! -e "$tmp/bad" ] && [ ! -e "$tmp/bad.tmp" ] || fail "export with rank 1 failing left files"
+echo "ok  export raw and pvtu, one part a rank, as the serial export's files"
 # The readers on the shards answer as on the compacted tables.
 readers() {  # suffix
   "$weaver" query "$tmp/mesh" locate 50000 50000 1000 >"$tmp/q.$1"
