@@ -72,9 +72,9 @@ void expect_same_parts(const std::string& db, ExportOptions o, const testing::Te
 std::vector<std::vector<Octant>> octrees() {
   std::vector<std::vector<Octant>> out;
   for (uint64_t seed = 1; seed <= uint64_t(testing::scaled(3, 1)); ++seed) {
-    out.push_back(testing::random_balanced(seed, 3, 2, 1, 2, 400, 8));              // non-cube
-    out.push_back(reference::balance(testing::random_holed(seed, 400, 7, 0.7)));   // holes
-    out.push_back(testing::random_balanced(seed + 10, 1, 1, 1, 0, 150, 11));        // deep
+    out.push_back(testing::random_balanced(seed, 3, 2, 1, 2, 400, 8));            // non-cube
+    out.push_back(reference::balance(testing::random_holed(seed, 400, 7, 0.7)));  // holes
+    out.push_back(testing::random_balanced(seed + 10, 1, 1, 1, 0, 150, 11));      // deep
   }
   return out;
 }

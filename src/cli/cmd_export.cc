@@ -101,8 +101,8 @@ Status parse_export_options(const ParsedArgs& args, ExportOptions* o) {
     o->parts = uint32_t(parts);
   }
   const ExportFormat f = o->format;
-  if (o->has_box && f != ExportFormat::kVtu && f != ExportFormat::kPvtu && f != ExportFormat::kMsh &&
-      f != ExportFormat::kRaw) {
+  if (o->has_box && f != ExportFormat::kVtu && f != ExportFormat::kPvtu &&
+      f != ExportFormat::kMsh && f != ExportFormat::kRaw) {
     return Status::InvalidArgument("--box works with vtu, pvtu, msh and raw");
   }
   if (o->parts > 1 && f != ExportFormat::kPvtu && f != ExportFormat::kRaw) {

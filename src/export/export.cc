@@ -223,7 +223,7 @@ Status export_one_part(const std::string& db_dir, const ExportOptions& options, 
   if (part >= options.parts) return Status::InvalidArgument("no part " + std::to_string(part));
   return with_job(db_dir, options, result, [part](ExportJob& job) {
     return job.options.format == ExportFormat::kPvtu ? write_pvtu_one_part(job, part)
-                                                      : write_raw_one_part(job, part);
+                                                     : write_raw_one_part(job, part);
   });
 }
 
@@ -232,7 +232,7 @@ Status export_parts_end(const std::string& db_dir, const ExportOptions& options,
   WEAVER_RETURN_IF_ERROR(check_one_part_format(options));
   const Status st = with_job(db_dir, options, result, [written](ExportJob& job) {
     return job.options.format == ExportFormat::kPvtu ? finish_pvtu_parts(job, written)
-                                                      : finish_raw_parts(job, written);
+                                                     : finish_raw_parts(job, written);
   });
   if (!st.ok() && options.format == ExportFormat::kRaw) {  // the mesh did not open
     std::error_code ec;

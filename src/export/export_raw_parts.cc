@@ -102,7 +102,8 @@ Status write_raw_one_part(ExportJob& job, uint32_t p) {
   SharedNodes shared;
   Status st = shared.build_part(job.mesh, map, s, scratch, job.scratch_bytes);
   if (st.ok()) {
-    job.plan(job.mesh.node_count() / job.options.parts + job.mesh.element_count() / job.options.parts);
+    job.plan(job.mesh.node_count() / job.options.parts +
+             job.mesh.element_count() / job.options.parts);
     st = write_part(job, s, tmp, &shared);
   }
   std::error_code ec;

@@ -65,8 +65,7 @@ Status anchor_morton(Mesh& mesh, uint64_t id, uint64_t* m) {
 // The leaf holding pixel pm and its part (null if none): one of the last
 // found, if it holds pm (the corners of neighbouring elements ask for the
 // same few leaves), else from the octant table.
-Status SharedNodes::leaf_at(Mesh& mesh, const PartMap& parts, uint64_t pm,
-                            const KnownLeaf** out) {
+Status SharedNodes::leaf_at(Mesh& mesh, const PartMap& parts, uint64_t pm, const KnownLeaf** out) {
   *out = nullptr;
   for (const KnownLeaf& k : known_) {
     if (k.valid && ((k.morton ^ pm) >> k.span_bits) == 0) return *out = &k, Status::Ok();

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "mesh/mesh_reader.h"
 #include "export/selection.h"
+#include "mesh/mesh_reader.h"
 #include "mesh/part_map.h"
 #include "sort/external_sort.h"
 
@@ -50,8 +50,8 @@ class SharedNodes {
   std::array<KnownLeaf, 32> known_;
   size_t next_known_ = 0;
   // The parts other than `part` of the leaves that have node c as a corner.
-  Status other_parts_at(Mesh& mesh, const PartMap& parts, uint32_t part, Coord c,
-                        uint64_t run_lo, uint64_t run_hi, std::vector<uint32_t>* others);
+  Status other_parts_at(Mesh& mesh, const PartMap& parts, uint32_t part, Coord c, uint64_t run_lo,
+                        uint64_t run_hi, std::vector<uint32_t>* others);
   std::vector<uint64_t> counts_;
   std::unique_ptr<ExternalSorter> by_part_;
 };
