@@ -9,8 +9,9 @@
 # from the balanced table gives a sharded node table that verifies and
 # compacts to the serial extract's file.  Export of raw and pvtu parts, one
 # a rank, as the serial export's files.  Then: more ranks than work,
-# ranks given different arguments, a rank whose write fails and a rank killed
-# at each of its durable steps (the old database stays, byte for byte).
+# ranks given different arguments, a rank killed at each of its durable steps
+# and one whose write fails at three of them (the old database stays, byte for
+# byte).
 #
 # usage: check_mpi.sh WEAVER WEAVER_MPI SCRATCH
 set -euo pipefail
@@ -178,7 +179,13 @@ faults() {  # stage, the database before it (copied fresh for every try), stage 
           sed -n 's/^crash steps: //p')
   [ -n "$steps" ] || fail "$stage: no step count"
   for step in $(seq 1 "$steps"); do
-    for what in FAIL CRASH; do
+    # Killed at every step; a failed write (an error, handled as any other)
+    # at the first, middle and last, to keep CI short.
+    local kinds=CRASH
+    if [ "$step" = 1 ] || [ "$step" = $(( (steps + 1) / 2 )) ] || [ "$step" = "$steps" ]; then
+      kinds="FAIL CRASH"
+    fi
+    for what in $kinds; do
       rm -rf "$old" && cp -r "$base" "$old"
       local old_md5
       old_md5=$(live_md5 "$old")
@@ -204,7 +211,7 @@ faults() {  # stage, the database before it (copied fresh for every try), stage 
       "$weaver" verify "$old" >/dev/null || fail "$stage $what at $step: old database does not verify"
     done
   done
-  echo "ok  $stage: rank 1 failing or killed at each of its $steps durable steps leaves the old database"
+  echo "ok  $stage: rank 1 killed at each of its $steps durable steps (failing at 3) leaves the old database"
 }
 "$weaver" construct "$tmp/f.built" --model basin --freq 0.1 --quiet >/dev/null
 faults construct "$tmp/f.built" --model basin --freq 0.2
