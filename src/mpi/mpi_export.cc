@@ -28,7 +28,8 @@ constexpr char kUsage[] =
     "('weaver partition') when it has N parts, else N runs of element ids of\n"
     "equal count.  A part's shared nodes are found from its own elements and\n"
     "the leaves around them, not from the whole mesh.  DB and PATH must be on a\n"
-    "file system every rank sees.  The other options are weaver export's.\n"
+    "file system every rank sees.  On one rank (no mpirun) it writes what\n"
+    "'weaver export' does with --parts 1.  The other options are weaver export's.\n"
     "\n"
     "  --parts N        the number of ranks (the default; another N is refused)\n"
     "  --memory BYTES   each rank's budget (default 256M), cut as weaver export's\n";
@@ -59,6 +60,24 @@ int finish(const Comm& comm, const std::string& db, const ExportOptions& o,
   return 0;
 }
 
+// One rank (weaver-mpi without mpirun): what 'weaver export --parts 1' writes
+// (for raw, one export in PATH, not a part directory).
+int export_alone(const std::string& db, const ExportOptions& o,
+                 std::chrono::steady_clock::time_point t0) {
+  ExportResult r;
+  const Status st = export_mesh(db, o, &r);
+  if (!st.ok()) {
+    std::fprintf(stderr, "weaver-mpi export: rank 0: %s\n", cli::error_text(st).c_str());
+    return 1;
+  }
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("rank 0  part of %llu nodes and %llu elements, wrote %llu B, peak RSS %llu B\n",
+              (unsigned long long)r.nodes, (unsigned long long)r.elements,
+              (unsigned long long)r.bytes, (unsigned long long)peak_rss_bytes());
+  std::printf("export: 1 parts in %.2fs on 1 ranks\n", secs);
+  return 0;
+}
+
 }  // namespace
 
 int export_parts(const Comm& comm, int argc, char** argv) {
@@ -82,6 +101,7 @@ int export_parts(const Comm& comm, int argc, char** argv) {
   }
   const std::string& db = args.positional[0];
   const auto t0 = std::chrono::steady_clock::now();
+  if (comm.size() == 1) return export_alone(db, o, t0);
   st = comm.rank() == 0 ? export_parts_begin(o) : Status::Ok();
   const std::string begun = comm.broadcast(st.ok() ? std::string() : cli::error_text(st));
   if (!begun.empty()) {
