@@ -6,7 +6,10 @@
 //                       element_global_id, every dangling constraint of its
 //                       nodes, and shared_nodes / shared_parts: the (local node,
 //                       other part) pairs of the nodes other parts also use
-// The parts are those of export_parts (writers.h).
+// The parts are those of export_parts (writers.h).  Written all in one pass
+// (write_raw_parts: shared nodes from every element), or one part at a time
+// into OUT.tmp made beforehand (write_raw_one_part, finish_raw_parts: a part's
+// shared nodes from its own elements), as weaver-mpi export does on its ranks.
 #include <sys/stat.h>
 
 #include <cerrno>
