@@ -28,7 +28,9 @@ class Comm {
   // Whether every rank's flag is true, on every rank.
   bool all(bool mine) const;
   // All to all: blobs[r] goes to rank r; returns what each rank sent here,
-  // in rank order.
+  // in rank order.  Of any size: sent in rounds of at most 1 GB / ranks a
+  // peer, as MPI's int counts and offsets need.  (gather and the string
+  // broadcast carry status lines and command lines: one message each.)
   std::vector<std::string> exchange(const std::vector<std::string>& blobs) const;
 
  private:
