@@ -101,7 +101,11 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
 // Every leaf around a node has a Morton code no larger than the node's, so
 // the corners a rank's leaves give to later ranks (those at or past its
 // end: the leaves along its range's far surface) are all a rank needs from
-// the others.  They are sent once, before the buckets run, through
+// the others; and of those only the ones that anchor no leaf (dangling, or
+// on the domain's far faces): the owner finds the others as its own leaves'
+// anchors, and settles the cells of other ranks' leaves around them by
+// lookups (NodeClassifier::allow_partial_masks).  They are sent once, before
+// the buckets run, through
 // `exchange`, a collective every rank calls exactly once (also after an
 // error, with nothing to send): it takes the records for each rank and
 // returns those sent to this one.  Then the rank runs the bucket sort over
