@@ -9,9 +9,9 @@
 # from the balanced table gives a sharded node table that verifies and
 # compacts to the serial extract's file.  Export of raw and pvtu parts, one
 # a rank, as the serial export's files.  Then: more ranks than work,
-# ranks given different arguments, a rank killed at each of its durable steps
-# and one whose write fails at three of them (the old database stays, byte for
-# byte).
+# ranks given different arguments, a database some rank cannot see, a rank
+# killed at each of its durable steps and one whose write fails at three of
+# them (the old database stays, byte for byte).
 #
 # usage: check_mpi.sh WEAVER WEAVER_MPI SCRATCH
 set -euo pipefail
@@ -187,6 +187,20 @@ set -e
 grep -q "different arguments" "$tmp/err" || fail "different arguments: $(cat "$tmp/err")"
 [ ! -e "$tmp/odd" ] || fail "different arguments: a database was made"
 echo "ok  different arguments refused"
+
+# A database some rank cannot see (the same relative path, from another
+# working directory): one line naming that rank and its file, exit 1.
+mkdir -p "$tmp/seen" "$tmp/unseen"
+set +e
+mpirun -np 1 --wdir "$tmp/seen" "$mpi" construct db --model basin --freq 0.1 --quiet : \
+       -np 1 --wdir "$tmp/unseen" "$mpi" construct db --model basin --freq 0.1 --quiet \
+       >/dev/null 2>"$tmp/err"
+code=$?
+set -e
+[ "$code" = 1 ] && grep -q "^weaver-mpi construct: rank 1: .*db/octants-" "$tmp/err" ||
+  fail "a database rank 1 cannot see: exit $code: $(cat "$tmp/err")"
+[ "$(grep -c '^weaver-mpi' "$tmp/err")" = 1 ] || fail "unseen database: $(cat "$tmp/err")"
+echo "ok  a database some rank cannot see: one line naming the rank"
 
 # A rank whose write fails, and a rank killed at each of its durable steps, in
 # each stage: the command fails (naming the failed rank), and the old
