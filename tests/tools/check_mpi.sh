@@ -15,7 +15,7 @@
 #
 # usage: check_mpi.sh WEAVER WEAVER_MPI SCRATCH
 set -euo pipefail
-weaver=$1 mpi=$2 tmp=$3
+weaver=$(realpath "$1") mpi=$(realpath "$2") tmp=$3  # absolute: some ranks start elsewhere
 rm -rf "$tmp" && mkdir -p "$tmp"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 # One host: shared memory and loopback only.  mpirun starts in 0.22 s instead
