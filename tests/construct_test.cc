@@ -272,10 +272,26 @@ TEST(Construct, ResolvesDomainsIntoBlocksAndRejectsBadOptions) {
   EXPECT_EQ(p.block_level, 3);
   EXPECT_EQ(p.blocks, (std::array<uint32_t, 3>{8, 8, 3}));
   EXPECT_FALSE(p.rounded_up);
-  o.domain_m = {1000, 333, 10};
+  // Not a power of two of blocks along the longest side: 40 x 32 x 15 blocks
+  // of 2.5 km in a root of 64 (160 km), the domain exactly.
+  o.domain_m = {100000, 80000, 37500};
+  ASSERT_OK(plan_construct(o, &p));
+  EXPECT_FALSE(p.rounded_up);
+  EXPECT_EQ(p.block_level, 6);
+  EXPECT_EQ(p.blocks, (std::array<uint32_t, 3>{40, 32, 15}));
+  EXPECT_DOUBLE_EQ(p.root_edge_m, 160000);
+  EXPECT_EQ(p.domain_m, o.domain_m);
+  // No whole number of blocks up to 1024 along the longest side: rounded up
+  // to blocks of 1/128 of it, each side by less than one block.
+  o.domain_m = {1000, 333.3, 10};
   ASSERT_OK(plan_construct(o, &p));
   EXPECT_TRUE(p.rounded_up);
-  EXPECT_GE(p.domain_m[1], 333);
+  EXPECT_EQ(p.block_level, 7);
+  EXPECT_DOUBLE_EQ(p.root_edge_m, 1000);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_GE(p.domain_m[a], o.domain_m[a]);
+    EXPECT_LT(p.domain_m[a], o.domain_m[a] + 1000.0 / 128);
+  }
   o = ConstructOptions{};
   o.freq = 0;
   EXPECT_TRUE(plan_construct(o, &p).is_invalid_argument());

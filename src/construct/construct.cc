@@ -1,6 +1,7 @@
 #include "construct/construct.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -22,6 +23,8 @@ namespace {
 
 // The deepest block level tried when fitting the domain: 2^10 blocks a side.
 constexpr int kMaxBlockLevel = 10;
+// The blocks of a domain that no blocks tile exactly (rounded up to them).
+constexpr int kRoundedBlockLevel = 7;
 // Subtrees are cut so that the estimate puts about this many leaves in
 // each: enough to keep a thread busy for a while, few enough to balance.
 constexpr double kLeavesPerSubtree = 4096;
@@ -124,6 +127,28 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
   return st;
 }
 
+// The coarsest blocks that tile the domain exactly: the fewest, n, along its
+// longest side such that every side is a whole number of blocks of edge
+// longest / n.  The root holds the next power of two of them (level: its
+// exponent), so it is the longest side when n is a power of two (100 x 100 x
+// 37.5 km: 8 x 8 x 3 blocks of 12.5 km) and longer otherwise (100 x 80 x 37.5
+// km: 40 x 32 x 15 blocks of 2.5 km in a root of 64, 160 km).  False when no n
+// up to 2^kMaxBlockLevel does.
+bool exact_blocks(const std::array<double, 3>& domain, int* level, double* block) {
+  const double longest = std::max({domain[0], domain[1], domain[2]});
+  for (uint32_t n = 1; n <= (1u << kMaxBlockLevel); ++n) {
+    const double b = longest / n;
+    bool whole = true;
+    for (double l : domain) whole = whole && std::abs(l / b - std::round(l / b)) < 1e-9;
+    if (whole) {
+      *block = b;
+      *level = std::bit_width(n - 1);  // 2^level >= n
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
@@ -137,22 +162,18 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
   if (o.min_level < 0 || o.max_level > kMaxLevel || o.min_level > o.max_level) {
     return Status::InvalidArgument("levels must satisfy 0 <= min level <= max level <= 20");
   }
-  p->root_edge_m = std::max({o.domain_m[0], o.domain_m[1], o.domain_m[2]});
-  p->tick_m = p->root_edge_m / kRootEdge;
-  // The coarsest block level at which every side is a whole number of blocks.
-  p->block_level = kMaxBlockLevel;
-  p->rounded_up = true;
-  for (int b = 0; b <= kMaxBlockLevel; ++b) {
-    const double block = p->root_edge_m / (1 << b);
-    bool whole = true;
-    for (double l : o.domain_m) whole = whole && std::abs(l / block - std::round(l / block)) < 1e-9;
-    if (whole) {
-      p->block_level = b;
-      p->rounded_up = false;
-      break;
-    }
+  const double longest = std::max({o.domain_m[0], o.domain_m[1], o.domain_m[2]});
+  double block = 0;
+  p->rounded_up = !exact_blocks(o.domain_m, &p->block_level, &block);
+  if (p->rounded_up) {
+    // Blocks of 1/128 of the longest side: each side grows by less than 0.8%
+    // of it, and there are at most 2M blocks (finer ones, such as 1/1024,
+    // planned up to 10^9 of them, most of them leaves at any frequency).
+    p->block_level = kRoundedBlockLevel;
+    block = longest / (1 << kRoundedBlockLevel);
   }
-  const double block = p->root_edge_m / (1 << p->block_level);
+  p->root_edge_m = block * (1 << p->block_level);
+  p->tick_m = p->root_edge_m / kRootEdge;
   for (int a = 0; a < 3; ++a) {
     p->blocks[a] = static_cast<uint32_t>(std::ceil(o.domain_m[a] / block - 1e-9));
     p->domain_m[a] = p->blocks[a] * block;

@@ -76,7 +76,7 @@ struct ConstructPlan {
   int block_level = 0;
   std::array<uint32_t, 3> blocks = {1, 1, 1};
   std::array<double, 3> domain_m = {0, 0, 0};  // as covered by the blocks
-  bool rounded_up = false;        // the domain was not a union of blocks up to level 10
+  bool rounded_up = false;        // no blocks tiled the domain exactly: rounded up to them
   std::string model;              // the model's description
   std::string outside;            // where the domain reaches past the model's box ("": nowhere)
   double estimated_elements = 0;  // from a coarse sampling (construct/estimate.h)
