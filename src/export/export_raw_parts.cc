@@ -61,21 +61,19 @@ Status write_part(ExportJob& job, const Selection& s, const std::string& tmp, Sh
 }
 
 Status write_parts(ExportJob& job, const std::string& tmp) {
-  PartMap map;
-  std::vector<PartRun> ranges;
-  std::string method;
-  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
+  Parts parts;
+  WEAVER_RETURN_IF_ERROR(export_parts(job, &parts));
   {
     SharedNodes shared;
-    WEAVER_RETURN_IF_ERROR(shared.build(job.mesh, map, tmp + "/scratch", job.scratch_bytes));
+    WEAVER_RETURN_IF_ERROR(shared.build(job.mesh, parts.map, tmp + "/scratch", job.scratch_bytes));
     job.plan(job.mesh.node_count() + job.mesh.element_count());
     for (uint32_t p = 0; p < job.options.parts; ++p) {
-      WEAVER_RETURN_IF_ERROR(write_part(job, part_selection(job, map, ranges, p), tmp, &shared));
+      WEAVER_RETURN_IF_ERROR(write_part(job, part_selection(job, parts, p), tmp, &shared));
     }
   }
   std::error_code ec;  // the sorts' directory, empty now: not part of the output
   std::filesystem::remove_all(tmp + "/scratch", ec);
-  return write_parts_json(job, tmp, method);
+  return write_parts_json(job, tmp, parts.method);
 }
 
 Status check_part_count(const ExportJob& job) {
@@ -95,15 +93,13 @@ Status write_raw_parts(ExportJob& job) {
 
 Status write_raw_one_part(ExportJob& job, uint32_t p) {
   WEAVER_RETURN_IF_ERROR(check_part_count(job));
-  PartMap map;
-  std::vector<PartRun> ranges;
-  std::string method;
-  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
-  const Selection s = part_selection(job, map, ranges, p);
+  Parts parts;
+  WEAVER_RETURN_IF_ERROR(export_parts(job, &parts));
+  const Selection s = part_selection(job, parts, p);
   const std::string tmp = job.options.out + ".tmp";  // made by export_parts_begin
   const std::string scratch = tmp + "/scratch-" + std::to_string(p);
   SharedNodes shared;
-  Status st = shared.build_part(job.mesh, map, s, scratch, job.scratch_bytes);
+  Status st = shared.build_part(job.mesh, parts.map, s, scratch, job.scratch_bytes);
   if (st.ok()) {
     job.plan(job.mesh.node_count() / job.options.parts +
              job.mesh.element_count() / job.options.parts);
@@ -121,11 +117,9 @@ Status finish_raw_parts(ExportJob& job, bool written) {
     std::filesystem::remove_all(tmp, ec);
     return Status::Ok();
   }
-  PartMap map;
-  std::vector<PartRun> ranges;
-  std::string method;
-  Status st = export_parts(job, &map, &ranges, &method);
-  if (st.ok()) st = write_parts_json(job, tmp, method);
+  Parts parts;
+  Status st = export_parts(job, &parts);
+  if (st.ok()) st = write_parts_json(job, tmp, parts.method);
   return finish_export_dir(job, tmp, job.options.out, st);
 }
 

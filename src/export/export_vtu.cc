@@ -230,10 +230,15 @@ Status make_stem_dir(const std::string& stem) {
   return Status::Ok();
 }
 
+// The parts of the pieces, and the box they are cut to (if any).
+Status plan_pieces(ExportJob& job, Parts* parts, Selection* box) {
+  WEAVER_RETURN_IF_ERROR(export_parts(job, parts));
+  return job.options.has_box ? job.box_selection(box) : Status::Ok();
+}
+
 // Piece p of the parts (within the box, if any).
-Status write_piece(ExportJob& job, const PartMap& map, const std::vector<PartRun>& ranges,
-                   const Selection& box, uint32_t p) {
-  Selection s = part_selection(job, map, ranges, p);
+Status write_piece(ExportJob& job, const Parts& parts, const Selection& box, uint32_t p) {
+  Selection s = part_selection(job, parts, p);
   s.has_box = box.has_box, s.lo = box.lo, s.hi = box.hi;
   WEAVER_RETURN_IF_ERROR(job.select(s, false, job.options.out + ".scratch-" + std::to_string(p)));
   const std::string stem = pvtu_stem(job.options.out);
@@ -265,14 +270,11 @@ Status write_pvtu_index(ExportJob& job) {
 Status write_pvtu(ExportJob& job) {
   WEAVER_RETURN_IF_ERROR(make_stem_dir(pvtu_stem(job.options.out)));
   job.plan(job.mesh.node_count() + job.mesh.element_count());
-  PartMap map;
-  std::vector<PartRun> ranges;
-  std::string method;
-  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
+  Parts parts;
   Selection box;
-  if (job.options.has_box) WEAVER_RETURN_IF_ERROR(job.box_selection(&box));
+  WEAVER_RETURN_IF_ERROR(plan_pieces(job, &parts, &box));
   for (uint32_t p = 0; p < job.options.parts; ++p) {
-    WEAVER_RETURN_IF_ERROR(write_piece(job, map, ranges, box, p));
+    WEAVER_RETURN_IF_ERROR(write_piece(job, parts, box, p));
   }
   return write_pvtu_index(job);
 }
@@ -283,13 +285,10 @@ Status start_pvtu_parts(const ExportOptions& options) {
 
 Status write_pvtu_one_part(ExportJob& job, uint32_t p) {
   job.plan((job.mesh.node_count() + job.mesh.element_count()) / job.options.parts);
-  PartMap map;
-  std::vector<PartRun> ranges;
-  std::string method;
-  WEAVER_RETURN_IF_ERROR(export_parts(job, &map, &ranges, &method));
+  Parts parts;
   Selection box;
-  if (job.options.has_box) WEAVER_RETURN_IF_ERROR(job.box_selection(&box));
-  return write_piece(job, map, ranges, box, p);
+  WEAVER_RETURN_IF_ERROR(plan_pieces(job, &parts, &box));
+  return write_piece(job, parts, box, p);
 }
 
 Status finish_pvtu_parts(ExportJob& job, bool written) {

@@ -88,9 +88,21 @@ Status for_each_element(ExportJob& job, bool with_nodes,
 // method says which.
 Status export_parts(ExportJob& job, PartMap* map, std::vector<PartRun>* ranges,
                     std::string* method);
+// export_parts' answer in one value, for the writers that take it whole.
+struct Parts {
+  PartMap map;
+  std::vector<PartRun> ranges;
+  std::string method;
+};
+inline Status export_parts(ExportJob& job, Parts* parts) {
+  return export_parts(job, &parts->map, &parts->ranges, &parts->method);
+}
 // The selection of part p (and only its range, when parts are ranges).
 Selection part_selection(const ExportJob& job, const PartMap& map,
                          const std::vector<PartRun>& ranges, uint32_t p);
+inline Selection part_selection(const ExportJob& job, const Parts& parts, uint32_t p) {
+  return part_selection(job, parts.map, parts.ranges, p);
+}
 
 // Ends a text file written as one section: flushes, counts its bytes, and
 // renames it into place.
