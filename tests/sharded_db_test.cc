@@ -22,14 +22,17 @@
 #include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
+#include "sample_octrees.h"
 #include "test_util.h"
 #include "verify/verify.h"
 
 namespace weaver {
 namespace {
 
+using testing::random_octree;
 using testing::slurp;
 using testing::TempDir;
+using testing::two_family_octree;
 
 std::string table_file(const std::string& db, const std::string& table) {
   std::unique_ptr<Database> d;
@@ -182,28 +185,6 @@ TEST(ShardedDatabase, StagesReadShardedTablesAsOne) {
   }
 }
 
-// A random octree imported into a new database at db: seed, finest
-// level, and a stretch of its leaves cut out (a hole) when `hole`; on a
-// domain of 3 x 2 x 1 blocks of level 2 (not a cube).
-std::string random_octree(const TempDir& dir, const std::string& name, uint64_t seed, int max_level,
-                          bool hole, uint64_t leaves) {
-  GenOptions g;
-  g.seed = seed;
-  g.leaves = leaves;
-  g.max_level = max_level;
-  g.blocks[0] = 3, g.blocks[1] = 2, g.blocks[2] = 1;
-  g.block_level = 2;
-  std::vector<Octant> octants;
-  EXPECT_OK(generate_octree(g, &octants));
-  if (hole)
-    octants.erase(octants.begin() + octants.size() / 4, octants.begin() + octants.size() / 3);
-  const std::string text = dir.file(name + ".txt"), db = dir.file(name);
-  EXPECT_OK(write_octant_text(text, octants, ""));
-  ImportResult ir;
-  EXPECT_OK(import_octants(db, text, ImportOptions{}, &ir));
-  return db;
-}
-
 // The ranks of a parallel stage as threads: in each round, each deposits
 // what it sends to every rank, waits for all, and takes what the others sent
 // it, in rank order (MPI_Alltoallv's contract, which weaver-mpi keeps).
@@ -286,6 +267,7 @@ TEST(ShardedDatabase, ExtractOnRanksCompactsToTheSerialNodeTable) {
     octrees.push_back(random_octree(dir, "random" + std::to_string(seed), seed, seed == 5 ? 12 : 7,
                                     seed == 6, testing::scaled(20000, 5000)));
   }
+  octrees.push_back(two_family_octree(dir, "families"));
   for (const std::string& db : octrees) {
     BalanceResult br;
     ASSERT_OK(balance_octree(db, BalanceOptions{}, &br));
@@ -361,6 +343,7 @@ TEST(ShardedDatabase, BalanceOnRanksCompactsToTheSerialTable) {
     octrees.push_back(random_octree(dir, "unbalanced" + std::to_string(seed), seed,
                                     seed == 8 ? 12 : 8, seed != 7, testing::scaled(20000, 4000)));
   }
+  octrees.push_back(two_family_octree(dir, "families"));
   for (const std::string& db : octrees) {
     const std::string serial = db + ".serial";
     std::filesystem::copy(db, serial);

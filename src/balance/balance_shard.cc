@@ -15,8 +15,6 @@
 namespace weaver {
 namespace {
 
-constexpr uint64_t kNone = UINT64_MAX;
-
 // Where each rank's part begins (cut_equal_runs): key[s] its first leaf's
 // key, lo[s] the Morton code its part of the space begins at.
 struct Cut {
@@ -262,7 +260,7 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   WEAVER_RETURN_IF_ERROR(ex);
   WEAVER_RETURN_IF_ERROR(ex2);
   for (const std::string& b : received) r->bytes_received += b.size();
-  if (cut.key[rank] == kNone) return Status::Ok();  // no leaves: no shard
+  if (cut.key[rank] == cut.key[rank + 1]) return Status::Ok();  // no leaves: no shard
   Layer layer;
   WEAVER_RETURN_IF_ERROR(decode_layer(received, t->payload_size(), &layer));
   received = {}, blobs = {}, queries = {};  // the scratch balance gets the memory back

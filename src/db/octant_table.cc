@@ -17,13 +17,41 @@ Status floor_holding(BTree& table, const Octant& o, uint64_t* key, std::byte* pa
   return Status::Ok();
 }
 
+namespace {
+
+// Whether leaves a and b are siblings: children of one parent.
+bool octant_keys_are_siblings(uint64_t a, uint64_t b) {
+  const int level = octant_key_level(a);
+  if (level == 0 || level != octant_key_level(b)) return false;
+  const int parent_bits = 3 * (kMaxLevel - level + 1);
+  return octant_key_morton(a) >> parent_bits == octant_key_morton(b) >> parent_bits;
+}
+
+// The first position at or after pos that starts no later sibling of the
+// leaf before it (at most 7 steps), or n.
+Status family_boundary(BTree& table, uint64_t n, uint64_t* pos) {
+  if (*pos == 0 || *pos >= n) return Status::Ok();
+  uint64_t before = 0, key = 0;
+  WEAVER_RETURN_IF_ERROR(table.select(*pos - 1, &before, nullptr));
+  while (*pos < n) {
+    WEAVER_RETURN_IF_ERROR(table.select(*pos, &key, nullptr));
+    if (!octant_keys_are_siblings(before, key)) break;
+    before = key;
+    ++*pos;
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status cut_equal_runs(BTree& table, int ranks, std::vector<uint64_t>* first_leaf,
                       std::vector<uint64_t>* start) {
   const uint64_t n = table.size();
   first_leaf->assign(ranks + 1, UINT64_MAX);
   start->assign(ranks + 1, UINT64_MAX);
   for (int r = 0; r < ranks; ++r) {
-    const uint64_t pos = n * uint64_t(r) / uint64_t(ranks);
+    uint64_t pos = n * uint64_t(r) / uint64_t(ranks);
+    WEAVER_RETURN_IF_ERROR(family_boundary(table, n, &pos));
     if (pos >= n) break;
     WEAVER_RETURN_IF_ERROR(table.select(pos, &(*first_leaf)[r], nullptr));
     (*start)[r] = r == 0 ? 0 : octant_key_morton((*first_leaf)[r]);

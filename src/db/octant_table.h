@@ -24,10 +24,15 @@ inline constexpr char kOctantTable[] = "octants";
 Status floor_holding(BTree& table, const Octant& o, uint64_t* key, std::byte* payload, bool* found);
 
 // The table cut into `ranks` runs of equal count, the parts of a parallel
-// stage (rank r's leaves are positions n*r/ranks .. n*(r+1)/ranks - 1):
-// first_leaf[r] is its first leaf's key, start[r] the Morton code its part
-// of space begins at (0 for rank 0); UINT64_MAX for a rank without leaves
-// and for r = ranks (each gets ranks + 1 entries).
+// stage: rank r's leaves begin at position n*r/ranks, moved forward (by at
+// most 7) so that no cut falls between two siblings: a family of leaves
+// stays with one rank, so that it could be coarsened there (the rule of
+// p4est_partition_for_coarsening in cburstedde/p4est, which moves a cut to
+// the nearest boundary of a whole family; here forward).  first_leaf[r] is
+// its first leaf's key, start[r] the Morton code its part of space begins at
+// (0 for rank 0); UINT64_MAX for a rank without leaves at the end and for
+// r = ranks (each gets ranks + 1 entries).  A rank whose run is empty before
+// another's has first_leaf[r] == first_leaf[r + 1].
 Status cut_equal_runs(BTree& table, int ranks, std::vector<uint64_t>* first_leaf,
                       std::vector<uint64_t>* start);
 
