@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets (preset "fuzz": clang, ASan + UBSan) and runs
+# Builds the libFuzzer targets (in the "debug" preset's build: clang, ASan +
+# UBSan; the "fuzz" build preset builds them alone) and runs
 # each for SECONDS / (number of targets), starting from its seed corpus in
 # fuzz/corpus/<target>/ (never written: new inputs go to a scratch copy).
 # A crash, leak, timeout or sanitizer report stops with a non-zero status
-# and leaves the input in build/fuzz/artifacts/.  Prints one line per target:
+# and leaves the input in build/debug/fuzz/artifacts/.  Prints one line per target:
 # executions, coverage (libFuzzer's "cov" edges) and the corpus size.
 #   fuzz/run.sh SECONDS [TARGET...]
 set -euo pipefail
@@ -15,17 +16,18 @@ if [ ${#targets[@]} -eq 0 ]; then
   targets=(octant_text grid_model manifest btree_file packed_leaf lsm_run_list record_schema options
            etree_file layer_table xyz_grid)
 fi
-cmake --preset fuzz >/dev/null && cmake --build --preset fuzz >/dev/null
+cmake --preset debug >/dev/null && cmake --build --preset fuzz >/dev/null
+out=build/debug/fuzz
 per=$(( total / ${#targets[@]} )); [ "$per" -ge 1 ] || per=1
-mkdir -p build/fuzz/artifacts build/fuzz/logs
+mkdir -p $out/artifacts $out/logs
 status=0
 for t in "${targets[@]}"; do
-  work=build/fuzz/work/$t
+  work=$out/work/$t
   rm -rf "$work" && mkdir -p "$work" && cp -r "fuzz/corpus/$t/." "$work/"
-  log=build/fuzz/logs/$t.log
+  log=$out/logs/$t.log
   if ! ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-       "build/fuzz/fuzz/${t}_fuzz" "$work" -max_total_time="$per" -timeout=10 -rss_limit_mb=2048 \
-       -max_len=65536 -artifact_prefix="build/fuzz/artifacts/$t-" -print_final_stats=1 >"$log" 2>&1; then
+       "$out/${t}_fuzz" "$work" -max_total_time="$per" -timeout=10 -rss_limit_mb=2048 \
+       -max_len=65536 -artifact_prefix="$out/artifacts/$t-" -print_final_stats=1 >"$log" 2>&1; then
     echo "$t: FAILED (see $log)"; tail -30 "$log"; status=1; continue
   fi
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)

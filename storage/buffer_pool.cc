@@ -178,7 +178,7 @@ Status BufferPool::read_page(uint32_t page_no, Frame* f) {
     if (st.is_corruption()) return Status::Corruption(where + ": file is truncated");
     return Status::IOError(where + ": " + st.message());
   }
-  if (kChecksumsEnforced &&
+  if (checksums_enforced() &&
       page::load32(f->data + page::kPgChecksum) != checksum32(f->data + 4, page_size_ - 4)) {
     return Status::Corruption(where + ": checksum mismatch");
   }

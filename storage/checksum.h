@@ -12,15 +12,12 @@ namespace weaver {
 
 uint32_t checksum32(const void* data, size_t n);
 
-// Whether readers compare stored checksums.  Always, except in the fuzzing
-// build (fuzz/, clang defines FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION there
-// by our CMake option), where a mismatch would stop every mutated input at
-// the checksum and the decoders behind it would never be exercised.
-constexpr bool kChecksumsEnforced =
-#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
-    false;
-#else
-    true;
-#endif
+// Whether readers compare stored checksums: always (storage/checksum_policy.cc),
+// except in the libFuzzer targets, which link fuzz/checksums_off.cc's
+// definition instead (a mismatch would stop every mutated input at the
+// checksum, and the decoders behind it would never be exercised).  A link-time
+// choice, so that the tests and the fuzz targets share one instrumented build
+// of the libraries and the product can never turn the checks off.
+bool checksums_enforced();
 
 }  // namespace weaver

@@ -69,7 +69,7 @@ Status read_manifest_file(const std::string& path, const std::string& header,
   body = line + "\n";
   while (std::getline(in, line)) {
     if (line.rfind("checksum ", 0) == 0) {
-      if (kChecksumsEnforced && line.substr(9) != hex32(checksum32(body.data(), body.size()))) {
+      if (checksums_enforced() && line.substr(9) != hex32(checksum32(body.data(), body.size()))) {
         return Status::Corruption(path + ": checksum mismatch");
       }
       if (in.peek() != std::char_traits<char>::eof()) {

@@ -11,7 +11,7 @@
 namespace weaver {
 namespace {
 
-uint64_t bytes_of(const std::string& text) {
+uint64_t parsed_size(const std::string& text) {
   uint64_t v = 0;
   const Status st = parse_bytes(text, "--memory", &v);
   EXPECT_TRUE(st.ok()) << text << ": " << st.message();
@@ -26,17 +26,17 @@ uint64_t count_of(const std::string& text) {
 }
 
 TEST(ArgsTest, SizesArePowersOf1024WithOptionalBOrIB) {
-  EXPECT_EQ(bytes_of("1048576"), 1048576u);
-  EXPECT_EQ(bytes_of("512K"), 512u << 10);
-  EXPECT_EQ(bytes_of("256M"), 256u << 20);
-  EXPECT_EQ(bytes_of("256m"), 256u << 20);
-  EXPECT_EQ(bytes_of("2G"), 2ull << 30);
-  EXPECT_EQ(bytes_of("2GB"), 2ull << 30);
-  EXPECT_EQ(bytes_of("2GiB"), 2ull << 30);
-  EXPECT_EQ(bytes_of("3T"), 3ull << 40);
-  EXPECT_EQ(bytes_of("1.5M"), 3u << 19);
-  EXPECT_EQ(bytes_of("100B"), 100u);
-  EXPECT_EQ(bytes_of("15999999T"), 15999999ull << 40);  // just below 2^64
+  EXPECT_EQ(parsed_size("1048576"), 1048576u);
+  EXPECT_EQ(parsed_size("512K"), 512u << 10);
+  EXPECT_EQ(parsed_size("256M"), 256u << 20);
+  EXPECT_EQ(parsed_size("256m"), 256u << 20);
+  EXPECT_EQ(parsed_size("2G"), 2ull << 30);
+  EXPECT_EQ(parsed_size("2GB"), 2ull << 30);
+  EXPECT_EQ(parsed_size("2GiB"), 2ull << 30);
+  EXPECT_EQ(parsed_size("3T"), 3ull << 40);
+  EXPECT_EQ(parsed_size("1.5M"), 3u << 19);
+  EXPECT_EQ(parsed_size("100B"), 100u);
+  EXPECT_EQ(parsed_size("15999999T"), 15999999ull << 40);  // just below 2^64
 }
 
 TEST(ArgsTest, BadOrHugeSizesAreRefusedNamingTheOption) {

@@ -16,7 +16,7 @@
 namespace weaver {
 namespace {
 
-constexpr uint32_t kPage = 4096;
+constexpr uint32_t kPoolPage = 4096;
 
 std::unique_ptr<File> new_file(const testing::TempDir& dir) {
   std::unique_ptr<File> f;
@@ -49,13 +49,13 @@ TEST(BufferPoolTest, ThePoolStaysWithinItsBudgetAboveAFloor) {
   testing::TempDir dir;
   auto file = new_file(dir);
   for (const uint64_t budget : {1ull << 20, 3ull << 20, 64ull << 20}) {
-    const BufferPool pool(file.get(), kPage, budget);
+    const BufferPool pool(file.get(), kPoolPage, budget);
     EXPECT_LE(pool.memory_bytes(), budget);
     EXPECT_GE(pool.memory_bytes(), budget * 9 / 10);  // and uses it
     EXPECT_GT(pool.frame_count(), BufferPool::kMinFrames);
   }
   for (const uint64_t tiny : {0ull, 4096ull, 300ull << 10}) {
-    EXPECT_EQ(BufferPool(file.get(), kPage, tiny).frame_count(), BufferPool::kMinFrames);
+    EXPECT_EQ(BufferPool(file.get(), kPoolPage, tiny).frame_count(), BufferPool::kMinFrames);
   }
 }
 
@@ -64,14 +64,14 @@ TEST(BufferPoolTest, EvictedDirtyPagesAreWrittenBackAndReadAgain) {
   auto file = new_file(dir);
   const uint32_t pages = 5 * BufferPool::kMinFrames;  // five times what fits
   {
-    BufferPool pool(file.get(), kPage, 0);
+    BufferPool pool(file.get(), kPoolPage, 0);
     fill(pool, pages, 1);
     EXPECT_GE(pool.stats().pages_written, pages - pool.frame_count());
     expect_stamps(pool, pages, 1);  // evicted pages come back from the file
     EXPECT_GT(pool.stats().misses, 0u);
     ASSERT_OK(pool.flush());
   }
-  BufferPool fresh(file.get(), kPage, 0);  // nothing cached: all from disk
+  BufferPool fresh(file.get(), kPoolPage, 0);  // nothing cached: all from disk
   expect_stamps(fresh, pages, 1);
   EXPECT_EQ(fresh.stats().pages_read, pages);
 }
@@ -82,7 +82,7 @@ TEST(BufferPoolTest, EvictedDirtyPagesAreWrittenBackAndReadAgain) {
 TEST(BufferPoolTest, PagesAreFoundOnBothSidesOfTheDirectMap) {
   testing::TempDir dir;
   auto file = new_file(dir);
-  BufferPool pool(file.get(), kPage, 0);
+  BufferPool pool(file.get(), kPoolPage, 0);
   const uint32_t mapped = 4 * static_cast<uint32_t>(pool.frame_count());
   std::vector<uint32_t> pages;
   for (uint32_t p = 1; p <= 20; ++p) pages.push_back(p);
@@ -130,7 +130,7 @@ TEST(BufferPoolTest, PagesAreFoundOnBothSidesOfTheDirectMap) {
 TEST(BufferPoolTest, PinnedPagesAreNeverEvicted) {
   testing::TempDir dir;
   auto file = new_file(dir);
-  BufferPool pool(file.get(), kPage, 0);
+  BufferPool pool(file.get(), kPoolPage, 0);
   const uint32_t n = static_cast<uint32_t>(pool.frame_count());
   std::vector<Frame*> pinned;
   for (uint32_t p = 1; p <= n; ++p) {
@@ -160,7 +160,7 @@ TEST(BufferPoolTest, PinnedPagesAreNeverEvicted) {
 TEST(BufferPoolTest, ARecycledPageIsTheNextVictim) {
   testing::TempDir dir;
   auto file = new_file(dir);
-  BufferPool pool(file.get(), kPage, 0);
+  BufferPool pool(file.get(), kPoolPage, 0);
   const uint32_t n = static_cast<uint32_t>(pool.frame_count());
   fill(pool, n, 3);
   Frame* f = nullptr;
@@ -178,24 +178,24 @@ TEST(BufferPoolTest, ReadsAreVerified) {
   testing::TempDir dir;
   auto file = new_file(dir);
   {
-    BufferPool pool(file.get(), kPage, 0);
+    BufferPool pool(file.get(), kPoolPage, 0);
     fill(pool, 3, 4);
     ASSERT_OK(pool.flush());
   }
   // Page 2 gets page 3's bytes (a misdirected write): caught by number.
-  std::vector<std::byte> buf(kPage);
-  ASSERT_OK(read_fully(*file, page::page_offset(3, kPage), buf.data(), kPage));
-  ASSERT_OK(write_fully(*file, page::page_offset(2, kPage), buf.data(), kPage));
+  std::vector<std::byte> buf(kPoolPage);
+  ASSERT_OK(read_fully(*file, page::page_offset(3, kPoolPage), buf.data(), kPoolPage));
+  ASSERT_OK(write_fully(*file, page::page_offset(2, kPoolPage), buf.data(), kPoolPage));
   // Page 1 gets a flipped bit: caught by the checksum.
-  ASSERT_OK(read_fully(*file, page::page_offset(1, kPage), buf.data(), kPage));
+  ASSERT_OK(read_fully(*file, page::page_offset(1, kPoolPage), buf.data(), kPoolPage));
   buf[100] ^= std::byte{4};
-  ASSERT_OK(write_fully(*file, page::page_offset(1, kPage), buf.data(), kPage));
-  BufferPool pool(file.get(), kPage, 0);
+  ASSERT_OK(write_fully(*file, page::page_offset(1, kPoolPage), buf.data(), kPoolPage));
+  BufferPool pool(file.get(), kPoolPage, 0);
   Frame* f = nullptr;
   Status st = pool.fetch(2, &f);
   EXPECT_TRUE(st.is_corruption());
   EXPECT_NE(st.message().find("holds the content of page 3"), std::string::npos) << st.message();
-  if (kChecksumsEnforced) {
+  if (checksums_enforced()) {
     st = pool.fetch(1, &f);
     EXPECT_NE(st.message().find("checksum mismatch"), std::string::npos) << st.message();
   }

@@ -225,7 +225,6 @@ TEST_F(ExtractTest, GradedAroundASphereWithManyBucketsAndSpillFiles) {
     o.buckets = ExtractOptions::Buckets::kLevel;
     o.bucket_level = bucket_level;
     o.memory = MemoryBudget(1 << 14);  // a tiny cap: spills go through files
-    ExtractResult r;
     ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
   }
   for (uint64_t bucket_leaves : {7, 100, 5000}) {

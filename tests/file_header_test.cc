@@ -122,7 +122,7 @@ TEST(FileHeaderTest, TheCodecRefusesEachDamagedFieldByName) {
     EXPECT_NE(st.message().find(d.message), std::string::npos) << d.field << ": " << st.message();
     EXPECT_NE(st.message().find("t.bt"), std::string::npos) << d.field;
   }
-  if (kChecksumsEnforced) {
+  if (checksums_enforced()) {
     Bytes b = encode(h);
     b[page::kHdrRecordCount] ^= std::byte{1};  // not resealed
     page::FileHeader out;

@@ -1,4 +1,4 @@
-// verify's LeafWindow against the B+tree it reads: floors and gets, with
+// verify's RecentPages against the B+tree it reads: floors and gets, with
 // payloads, over plain and packed tables of many pages, for keys asked in
 // runs near each other (as verify asks them), far apart, between pages,
 // below the first key and past the last.
@@ -34,7 +34,7 @@ std::unique_ptr<BTree> table_of(const std::string& path, bool packed,
   return t;
 }
 
-TEST(LeafWindow, AnswersAsTheTreeDoes) {
+TEST(RecentPages, AnswersAsTheTreeDoes) {
   testing::TempDir dir;
   std::mt19937_64 rng(23);
   for (const bool packed : {false, true}) {
@@ -42,7 +42,7 @@ TEST(LeafWindow, AnswersAsTheTreeDoes) {
     uint64_t k = 1000;
     for (int i = 0; i < 60000; ++i) keys.push_back(k += 1 + rng() % (rng() % 50 == 0 ? 5000 : 9));
     auto t = table_of(dir.file(packed ? "packed" : "plain"), packed, keys);
-    LeafWindow window(*t, true);
+    RecentPages window(*t, true);
     uint64_t q = keys[0];
     int hits = 0;
     for (int i = 0; i < 300000; ++i) {

@@ -58,7 +58,7 @@ TEST(ManifestFileTest, DamagedFilesAreCorruptionNamingWhatIsWrong) {
       {"", "unknown format", false},
   };
   for (const Case& c : cases) {
-    if (c.needs_checksums && !kChecksumsEnforced) continue;
+    if (c.needs_checksums && !checksums_enforced()) continue;
     spit(dir.file("M"), c.bytes);
     std::vector<std::string> lines;
     const Status st = read_manifest_file(dir.file("M"), "hdr 1", &lines);

@@ -21,7 +21,9 @@
 namespace weaver {
 namespace {
 
-std::string fresh(const std::string& name) { return testing::fresh_path("model_sources_" + name); }
+std::string fresh_db(const std::string& name) {
+  return testing::fresh_path("model_sources_" + name);
+}
 
 std::string write_text(const std::string& name, const std::string& text) {
   const std::string path = ::testing::TempDir() + "model_sources_" + name;
@@ -69,7 +71,7 @@ TEST(ModelSources, LayersAnswerTheLayerAtEachDepthAnywhereAcross) {
     const std::string file = write_text("layers.txt", text);
     LayerTable table;
     ASSERT_TRUE(read_layer_table(file, &table).ok());
-    const std::string db = fresh("layers");
+    const std::string db = fresh_db("layers");
     const Status st = import_from(db, "layers:" + file);
     ASSERT_TRUE(st.ok()) << st.to_string();
     std::unique_ptr<DbModel> m;
@@ -107,7 +109,7 @@ TEST(ModelSources, LayersAnswerTheLayerAtEachDepthAnywhereAcross) {
 // model material does; other queries are refused in one line.
 TEST(ModelSources, QueryAnswersMaterialFromAModelDatabase) {
   const std::string file = write_text("query_layers.txt", kHadleyKanamori);
-  const std::string db = fresh("query_layers");
+  const std::string db = fresh_db("query_layers");
   ASSERT_TRUE(import_from(db, "layers:" + file).ok());
   uint64_t rss = 0;
   const std::string q =
@@ -143,7 +145,7 @@ TEST(ModelSources, BadLayerTablesAreRefusedNamingTheLine) {
   };
   for (const auto& [text, error] : cases) {
     const std::string file = write_text("bad_layers.txt", text);
-    const std::string db = fresh("bad_layers");
+    const std::string db = fresh_db("bad_layers");
     const Status st = import_from(db, "layers:" + file);
     ASSERT_FALSE(st.ok()) << text;
     EXPECT_NE(st.message().find(file + error), std::string::npos) << st.message();
@@ -208,13 +210,13 @@ TEST(ModelSources, XyzInAnyOrderImportsAsItsGridDoes) {
   const XyzCase c = make_grid();
   const std::string grid = ::testing::TempDir() + "model_sources.grid";
   ASSERT_TRUE(write_grid_model(grid, c.g, c.values).ok());
-  const std::string from_grid = fresh("xyz_as_grid");
+  const std::string from_grid = fresh_db("xyz_as_grid");
   ASSERT_TRUE(import_from(from_grid, "grid:" + grid).ok());
   const auto want = table_records(from_grid);
   ASSERT_EQ(want.size(), c.values.size());
   for (uint64_t seed : {1, 2}) {
     const std::string file = write_text("grid.xyz", xyz_text(c, seed));
-    const std::string db = fresh("xyz");
+    const std::string db = fresh_db("xyz");
     const Status st = import_from(db, "xyz:" + file);
     ASSERT_TRUE(st.ok()) << st.to_string();
     EXPECT_EQ(table_records(db), want);
@@ -239,7 +241,7 @@ TEST(ModelSources, BadXyzFilesAreRefusedNamingWhatIsWrong) {
   };
   for (const auto& [text, error] : cases) {
     const std::string file = write_text("bad.xyz", text);
-    const std::string db = fresh("bad_xyz");
+    const std::string db = fresh_db("bad_xyz");
     const Status st = import_from(db, "xyz:" + file);
     ASSERT_FALSE(st.ok()) << error;
     EXPECT_NE(st.message().find(error), std::string::npos) << st.message();
@@ -257,7 +259,7 @@ TEST(ModelSources, ConstructImportsAModelFileIntoItsDatabase) {
   const std::string etree = std::string(WEAVER_SOURCE_DIR) + "/tests/data/etree/cmu.e";
   const std::string layers = write_text("construct_layers.txt", kHadleyKanamori);
   for (const std::string& from : {"etree:" + etree, "layers:" + layers}) {
-    const std::string db = fresh("construct_from_file");
+    const std::string db = fresh_db("construct_from_file");
     uint64_t rss = 0;
     const std::string out =
         bench::run_program({WEAVER_BINARY, "mesh", db, "--model", from, "--freq", "0.1", "--domain",
@@ -294,7 +296,7 @@ TEST(ModelSources, ConstructImportsAModelFileIntoItsDatabase) {
     EXPECT_GT(leaves, 8u) << from;
   }
   const std::string bad = write_text("construct_bad_layers.txt", "0 1 1 1\n5 1 -1 1\n");
-  const std::string db = fresh("construct_bad");
+  const std::string db = fresh_db("construct_bad");
   const std::string cmd = std::string(WEAVER_BINARY) + " construct " + db +
                           " --model layers:" + bad + " --freq 0.1 --quiet 2>" + db + ".err";
   EXPECT_EQ(WEXITSTATUS(std::system(cmd.c_str())), 1);
@@ -310,7 +312,7 @@ TEST(ModelSources, ConstructImportsAModelFileIntoItsDatabase) {
 // what it alone would get, outside the model's box too (clamped, and said).
 TEST(ModelSources, BatchLookupsAnswerAsSingleOnesInAnyOrder) {
   const std::string etree = std::string(WEAVER_SOURCE_DIR) + "/tests/data/etree/cmu.e";
-  const std::string db = fresh("batch");
+  const std::string db = fresh_db("batch");
   ASSERT_TRUE(import_from(db, "etree:" + etree).ok());
   std::unique_ptr<DbModel> m;
   ASSERT_TRUE(DbModel::open(db, MemoryBudget(), 1, &m).ok());
@@ -339,7 +341,7 @@ TEST(ModelSources, BatchLookupsAnswerAsSingleOnesInAnyOrder) {
 // (the default, said once) or are refused in one line, naming them.
 TEST(ModelSources, OutsideTheModelIsClampedAndSaidOrRefused) {
   const std::string etree = std::string(WEAVER_SOURCE_DIR) + "/tests/data/etree/cmu.e";
-  const std::string db = fresh("outside");
+  const std::string db = fresh_db("outside");
   ASSERT_TRUE(import_from(db, "etree:" + etree).ok());
   const std::string points = write_text("outside_points.txt", "10 10 10\n150000 5 5\n-1 2 3\n");
   const std::string base = std::string(WEAVER_BINARY) + " model material " + db + " --points " +
@@ -357,7 +359,7 @@ TEST(ModelSources, OutsideTheModelIsClampedAndSaidOrRefused) {
             std::string::npos)
       << err;
   // construct over a domain twice the model's width.
-  const std::string mesh = fresh("outside_mesh");
+  const std::string mesh = fresh_db("outside_mesh");
   const std::string construct =
       std::string(WEAVER_BINARY) + " construct " + mesh + " --model db:" + db +
       " --freq 0.05 --domain 200000,100000,50000 --quiet >" + mesh + ".out 2>" + mesh + ".err";
@@ -377,7 +379,7 @@ TEST(ModelSources, OutsideTheModelIsClampedAndSaidOrRefused) {
 // and in the column formats, single points and batches.
 TEST(ModelSources, QueriesOnAMeshWithQGiveQpAndQs) {
   const std::string table = write_text("q_layers.txt", kHadleyKanamori);
-  const std::string db = fresh("q_mesh");
+  const std::string db = fresh_db("q_mesh");
   uint64_t rss = 0;
   ASSERT_NE(bench::run_program({WEAVER_BINARY, "mesh", db, "--model", "layers:" + table, "--freq",
                                 "0.1", "--domain", "64000,64000,48000", "--quiet"},

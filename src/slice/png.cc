@@ -171,10 +171,11 @@ std::string encode_png(const Image& image,
   const uint8_t* rgb = image.rgb().data();
   for (int y = 0; y < image.height(); ++y) {
     const uint8_t* row = rgb + size_t(y) * stride;
+    const uint8_t* above = y > 0 ? row - stride : nullptr;
     size_t sub_zeros = 0, up_zeros = 0;
     for (size_t i = 0; i < stride; ++i) {
       sub[i] = uint8_t(row[i] - (i >= 3 ? row[i - 3] : 0));
-      up[i] = uint8_t(row[i] - (y > 0 ? row[i - stride] : 0));
+      up[i] = uint8_t(row[i] - (above ? above[i] : 0));
       sub_zeros += sub[i] == 0, up_zeros += up[i] == 0;
     }
     const bool use_up = up_zeros > sub_zeros;

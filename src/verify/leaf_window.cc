@@ -4,7 +4,7 @@
 
 namespace weaver {
 
-Status LeafWindow::page_for(uint64_t key, Page** page) {
+Status RecentPages::page_for(uint64_t key, Page** page) {
   *page = nullptr;
   const auto covers = [key](const Page& p) {
     return !p.keys.empty() && p.keys.front() <= key && key <= p.covers_to;
@@ -41,7 +41,7 @@ Status LeafWindow::page_for(uint64_t key, Page** page) {
   return Status::Ok();
 }
 
-Status LeafWindow::floor(uint64_t key, uint64_t* out, bool* found) {
+Status RecentPages::floor(uint64_t key, uint64_t* out, bool* found) {
   Page* p = nullptr;
   WEAVER_RETURN_IF_ERROR(page_for(key, &p));
   if (p == nullptr) return table_.floor(key, out, nullptr, found);
@@ -51,7 +51,7 @@ Status LeafWindow::floor(uint64_t key, uint64_t* out, bool* found) {
   return Status::Ok();
 }
 
-Status LeafWindow::get(uint64_t key, const std::byte** payload, bool* found) {
+Status RecentPages::get(uint64_t key, const std::byte** payload, bool* found) {
   *found = false;
   Page* p = nullptr;
   WEAVER_RETURN_IF_ERROR(page_for(key, &p));

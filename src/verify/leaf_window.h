@@ -1,4 +1,5 @@
-// The last few leaf pages of a table, decoded, for verify's lookups.
+// The last few leaf pages of a table, decoded, for verify's lookups (not
+// query/leaf_window.h's LeafWindow, which serves batches of sorted keys).
 //
 // The mesh check asks, for every node, for the leaves around it and for the
 // node's anchors: billions of floors and gets at 2 Hz, nearly all of them in
@@ -16,10 +17,10 @@
 
 namespace weaver {
 
-class LeafWindow {
+class RecentPages {
  public:
   // with_payloads: get() hands out payloads (floor() never does).
-  LeafWindow(BTree& table, bool with_payloads) : table_(table), payloads_(with_payloads) {}
+  RecentPages(BTree& table, bool with_payloads) : table_(table), payloads_(with_payloads) {}
 
   // The greatest key <= key, as BTree::floor.
   Status floor(uint64_t key, uint64_t* out, bool* found);

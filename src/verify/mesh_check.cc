@@ -46,7 +46,7 @@ class LeafFinder {
     uint64_t key = 1, end = 0;  // [key, end): the keys of the leaf's pixels; empty at first
     Octant leaf{};
   };
-  LeafWindow octants_;
+  RecentPages octants_;
   std::array<Recent, 16> recent_{};
   size_t next_ = 0;
 };
@@ -141,7 +141,7 @@ class NodeChecker {
   }
 
   LeafFinder finder_;
-  LeafWindow nodes_;
+  RecentPages nodes_;
   Problems& problems_;
   VerifyReport* report_;
 };
