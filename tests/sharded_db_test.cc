@@ -193,6 +193,7 @@ class ThreadExchange {
  public:
   explicit ThreadExchange(int ranks) : boxes_(ranks, std::vector<T>(ranks)) {}
   std::vector<T> run(int rank, std::vector<T> out) {
+    EXPECT_EQ(out.size(), boxes_.size()) << "rank " << rank << " must send to every rank";
     std::unique_lock<std::mutex> l(m_);
     const uint64_t round = round_;
     for (size_t to = 0; to < out.size(); ++to) boxes_[to][rank] = std::move(out[to]);

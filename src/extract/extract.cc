@@ -210,7 +210,7 @@ Status extract_shard(const std::string& db_dir, const ExtractOptions& options, i
   std::unique_ptr<Database> db;
   std::unique_ptr<BTree> octants;
   std::vector<uint64_t> first_leaf, start;
-  std::vector<std::vector<SpillRecord>> outgoing;
+  std::vector<std::vector<SpillRecord>> outgoing(ranks);  // none from a rank without leaves
   ExtractPart part;
   // Up to the exchange, an error still takes part in it (sending nothing).
   Status st = Database::open(db_dir, Database::Mode::kRead, false, &db);

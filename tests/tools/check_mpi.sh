@@ -175,6 +175,15 @@ run 4 "$mpi" construct "$tmp/tiny" --model halfspace --freq 0.02 --domain 25000,
 grep -q "(no shard)" "$tmp/out" || fail "tiny: expected an empty rank"
 "$weaver" compact "$tmp/tiny" >/dev/null
 [ "$(table_md5 "$tmp/tiny")" = "$(table_md5 "$tmp/tiny.serial")" ] || fail "tiny: compacted table differs"
+# Balance and extract on the same 4 ranks (one family of leaves: one rank
+# takes it all), to the serial tables.
+run 4 "$mpi" balance "$tmp/tiny" --quiet >/dev/null || fail "tiny: balance on 4 ranks"
+run 4 "$mpi" extract "$tmp/tiny" --quiet >/dev/null || fail "tiny: extract on 4 ranks"
+"$weaver" balance "$tmp/tiny.serial" --quiet >/dev/null
+"$weaver" extract "$tmp/tiny.serial" --quiet >/dev/null
+"$weaver" compact "$tmp/tiny" >/dev/null
+[ "$(md5sum "$tmp/tiny"/nodes-*.bt | cut -d' ' -f1)" = "$(md5sum "$tmp/tiny.serial"/nodes-*.bt | cut -d' ' -f1)" ] ||
+  fail "tiny: the node table differs"
 echo "ok  more ranks than work"
 
 # Ranks given different arguments: one line, exit 2, nothing written.
