@@ -33,7 +33,8 @@ Status decode_file_header(const std::byte* in, const std::string& name, FileHead
   if (std::memcmp(in + kHdrMagic, kMagic, sizeof kMagic) != 0) {
     return Status::Corruption(name + ": not a weaver B+tree file (bad magic)");
   }
-  if (checksums_enforced() && load32(in + kHdrChecksum) != checksum32(in + 4, kFileHeaderBytes - 4)) {
+  if (checksums_enforced() &&
+      load32(in + kHdrChecksum) != checksum32(in + 4, kFileHeaderBytes - 4)) {
     return Status::Corruption(name + ": header checksum mismatch");
   }
   const uint32_t version = load32(in + kHdrVersion);
