@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # weaver-mpi under mpirun against the serial weaver (ctest: Tools.Mpi*).
 # For 1 to 4 ranks and MPI's singleton start (no mpirun), on the basin at
-# 0.2 and 0.5 Hz, loh1 and a non-cube basin: the sharded octant table verifies,
-# serial balance reads it to the serial run's table, and 'weaver compact'
-# joins it to the serial construct's file byte for byte; balance on the
+# 0.2 and 0.5 Hz, loh1, a non-cube basin and a model database: the sharded
+# octant table verifies, serial balance reads it to the serial run's table,
+# and 'weaver compact' joins it to the serial construct's file byte for byte; balance on the
 # ranks from the sharded leaves compacts to the serial balance's file;
 # extract on the ranks
 # from the balanced table gives a sharded node table that verifies and
@@ -89,6 +89,11 @@ ranks="1 2 3 4" check_model basin05 --model basin --freq 0.5
 
 check_model loh1 --model loh1 --freq 1 --domain 30000,30000,15000
 check_model slab --model basin --freq 0.2 --domain 100000,50000,12500
+# A user's own model: a 1-D layered table imported into a model database,
+# which every rank samples (weaver model import, then --model db:).
+printf '0 1800 1000 2000\n500 4000 2300 2400\n3000 6000 3464 2700\n' >"$tmp/layers.txt"
+"$weaver" model import "$tmp/layers.db" --from "layers:$tmp/layers.txt" >/dev/null
+ranks="2 3" check_model layers --model "db:$tmp/layers.db" --freq 0.3 --domain 20000,20000,10000
 
 # mesh: the three stages on 3 ranks, both tables as the serial mesh's.
 "$weaver" mesh "$tmp/mesh.serial" --model basin --freq 0.2 --quiet >/dev/null
