@@ -3,15 +3,15 @@
 # For 1 to 4 ranks and MPI's singleton start (no mpirun), on the basin at
 # 0.2 and 0.5 Hz, loh1, a non-cube basin and a model database: the sharded
 # octant table verifies, serial balance reads it to the serial run's table,
-# and 'weaver compact' joins it to the serial construct's file byte for byte; balance on the
-# ranks from the sharded leaves compacts to the serial balance's file;
-# extract on the ranks
-# from the balanced table gives a sharded node table that verifies and
-# compacts to the serial extract's file.  Export of raw and pvtu parts, one
-# a rank, as the serial export's files.  Then: more ranks than work,
-# ranks given different arguments, a database some rank cannot see, a rank
-# killed at each of its durable steps and one whose write fails at three of
-# them (the old database stays, byte for byte).
+# and 'weaver compact' joins it to the serial construct's file byte for
+# byte; balance on the ranks from the sharded leaves compacts to the serial
+# balance's file; extract on the ranks from the balanced table gives a
+# sharded node table that verifies and compacts to the serial extract's
+# file.  Export of raw and pvtu parts, one a rank, as the serial export's
+# files.  Then: more ranks than work (balance and extract too), ranks given
+# different arguments, a database some rank cannot see, a rank killed at
+# each of its durable steps and one whose write fails at three of them (the
+# old database stays, byte for byte).
 #
 # usage: check_mpi.sh WEAVER WEAVER_MPI SCRATCH
 set -euo pipefail
