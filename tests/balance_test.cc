@@ -17,6 +17,7 @@
 #include "import/octant_text.h"
 #include "model/velocity_model.h"
 #include "reference/reference_mesh.h"
+#include "sample_octrees.h"
 #include "test_mesh.h"
 #include "test_octrees.h"
 #include "test_util.h"
@@ -77,17 +78,8 @@ class BalanceTest : public ::testing::Test {
     return db;
   }
   std::vector<Octant> table(const std::string& db) {
-    std::unique_ptr<Database> d;
-    std::unique_ptr<BTree> t;
-    EXPECT_OK(Database::open(db, Database::Mode::kRead, false, &d));
-    EXPECT_OK(d->open_table(kOctantTable, 1 << 20, &t));
     std::vector<Octant> out;
-    BTreeCursor c;
-    EXPECT_OK(t->seek_cursor(0, &c));
-    while (c.valid()) {
-      out.push_back(octant_from_key(c.key()));
-      EXPECT_OK(c.next());
-    }
+    for (uint64_t key : testing::octant_table_keys(db)) out.push_back(octant_from_key(key));
     return out;
   }
   // Checks, balances and checks again one octree, against the reference;

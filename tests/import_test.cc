@@ -8,6 +8,7 @@
 #include "db/database.h"
 #include "gen/octree_gen.h"
 #include "import/octant_text.h"
+#include "sample_octrees.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -26,20 +27,7 @@ class ImportTest : public ::testing::Test {
     return import_octants(db_path(), text_path, o, &result_);
   }
   std::string db_path() const { return dir_.file("db"); }
-  std::vector<uint64_t> table_keys() {
-    std::unique_ptr<Database> db;
-    std::unique_ptr<BTree> t;
-    EXPECT_OK(Database::open(db_path(), Database::Mode::kRead, false, &db));
-    EXPECT_OK(db->open_table(kOctantTable, 1 << 20, &t));
-    std::vector<uint64_t> keys;
-    BTreeCursor c;
-    EXPECT_OK(t->seek_cursor(0, &c));
-    while (c.valid()) {
-      keys.push_back(c.key());
-      EXPECT_OK(c.next());
-    }
-    return keys;
-  }
+  std::vector<uint64_t> table_keys() { return testing::octant_table_keys(db_path()); }
   std::vector<std::string> db_files() const {
     std::vector<std::string> names;
     for (auto& e : std::filesystem::directory_iterator(db_path())) {

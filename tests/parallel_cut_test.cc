@@ -50,13 +50,7 @@ TEST(CutEqualRuns, RunsBeginWhereNoFamilyIsSplitAsTheReferenceFinds) {
     ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &d));
     std::unique_ptr<BTree> t;
     ASSERT_OK(d->open_table(kOctantTable, 1 << 20, &t));
-    std::vector<uint64_t> keys;
-    BTreeCursor c;
-    ASSERT_OK(t->seek_cursor(0, &c));
-    while (c.valid()) {
-      keys.push_back(c.key());
-      ASSERT_OK(c.next());
-    }
+    const std::vector<uint64_t> keys = testing::octant_table_keys(db);
     uint64_t moved = 0;
     for (int ranks : {1, 2, 3, 4, 7, 8, 9, 16, 100, 5000}) {
       SCOPED_TRACE("octree " + std::to_string(i) + " on " + std::to_string(ranks) + " ranks");

@@ -1,14 +1,17 @@
-// Octrees imported into test databases, shared by the tests of the
-// parallel stages (sharded_db_test.cc, parallel_cut_test.cc).
+// Octrees imported into test databases and read back, shared by the tests
+// of import and of the parallel stages.
 #pragma once
 
 #include <string>
 #include <vector>
 
+#include "db/database.h"
+#include "db/octant_table.h"
 #include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
 #include "schema/octant.h"
+#include "storage/btree.h"
 #include "test_util.h"
 
 namespace weaver::testing {
@@ -52,6 +55,22 @@ inline std::string two_family_octree(const TempDir& dir, const std::string& name
     for (int j = 0; k == 1 && j < 8; ++j) octants.push_back(octant_child(child, j));
   }
   return imported_octree(dir, name, octants);
+}
+
+// Every key of db's octant table, in order.
+inline std::vector<uint64_t> octant_table_keys(const std::string& db) {
+  std::unique_ptr<Database> d;
+  std::unique_ptr<BTree> t;
+  EXPECT_OK(Database::open(db, Database::Mode::kRead, false, &d));
+  EXPECT_OK(d->open_table(kOctantTable, 1 << 20, &t));
+  std::vector<uint64_t> keys;
+  BTreeCursor c;
+  EXPECT_OK(t->seek_cursor(0, &c));
+  while (c.valid()) {
+    keys.push_back(c.key());
+    EXPECT_OK(c.next());
+  }
+  return keys;
 }
 
 }  // namespace weaver::testing
