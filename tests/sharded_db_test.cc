@@ -217,14 +217,12 @@ class ThreadExchange {
   uint64_t round_ = 0;
 };
 
-// Extracts db on `ranks` threads as weaver-mpi's ranks do, and commits the
-// node shards.
-void extract_sharded(const std::string& db, int ranks) {
-  std::unique_ptr<Database> writer;
-  ASSERT_OK(Database::open(db, Database::Mode::kWrite, false, &writer));
-  const uint64_t number = writer->reserve_file_number();
-  ThreadExchange<std::vector<SpillRecord>> exchange(ranks);
-  std::vector<ShardEntry> entries(ranks);
+// Extracts db on `ranks` threads as weaver-mpi's ranks do: each rank's
+// status, and its shard in *entries.
+std::vector<Status> extract_on_ranks(const std::string& db, int ranks, uint64_t number,
+                                     std::vector<ShardEntry>* entries) {
+  ThreadExchange<std::string> exchange(ranks);
+  entries->assign(ranks, ShardEntry{});
   std::vector<Status> status(ranks);
   std::vector<std::thread> threads;
   for (int r = 0; r < ranks; ++r) {
@@ -233,18 +231,27 @@ void extract_sharded(const std::string& db, int ranks) {
       ExtractOptions o;
       o.bucket_leaves = 500;  // many buckets a rank
       o.memory = MemoryBudget(16 << 20);
+      ShardExchangeCounts x;
       status[r] = extract_shard(
           db, o, r, ranks, shard_file_name("nodes", number, r),
-          [&](auto& out, auto* in) {
-            in->clear();
-            for (const auto& from : exchange.run(r, out))
-              in->insert(in->end(), from.begin(), from.end());
+          [&](const std::vector<std::string>& out, std::vector<std::string>* in) {
+            *in = exchange.run(r, out);
             return Status::Ok();
           },
-          &er, &entries[r]);
+          &er, &(*entries)[r], &x);
     });
   }
   for (auto& t : threads) t.join();
+  return status;
+}
+
+// Extracts db on `ranks` threads and commits the node shards.
+void extract_sharded(const std::string& db, int ranks) {
+  std::unique_ptr<Database> writer;
+  ASSERT_OK(Database::open(db, Database::Mode::kWrite, false, &writer));
+  std::vector<ShardEntry> entries;
+  const std::vector<Status> status =
+      extract_on_ranks(db, ranks, writer->reserve_file_number(), &entries);
   std::vector<ShardEntry> kept;
   for (int r = 0; r < ranks; ++r) {
     ASSERT_OK(status[r]);
@@ -292,6 +299,40 @@ TEST(ShardedDatabase, ExtractOnRanksCompactsToTheSerialNodeTable) {
       ASSERT_OK(compact_database(run, MemoryBudget(), &cr));
       ASSERT_TRUE(slurp(table_file(run, "nodes")) == want);
     }
+  }
+}
+
+// An octree that is not 2:1 balanced where earlier ranks' coarse leaves meet
+// later ranks' fine ones (the root's last child cut two levels finer than
+// its siblings): some rank refuses it, naming the unbalanced pair, as the
+// serial extract does.  On 9 and 71 ranks the coarse children are all
+// before the fine ones' ranks, which own the nodes between them and see
+// the coarse leaves only in their ghost layers.
+TEST(ShardedDatabase, ExtractOnRanksRefusesAnOctreeUnbalancedAcrossRanks) {
+  TempDir dir;
+  std::vector<Octant> octants;
+  for (int k = 0; k < 8; ++k) {
+    const Octant child = octant_child(octant_root(), k);
+    if (k != 7) octants.push_back(child);
+    for (int j = 0; k == 7 && j < 8; ++j) {
+      for (int i = 0; i < 8; ++i) octants.push_back(octant_child(octant_child(child, j), i));
+    }
+  }
+  const std::string db = testing::imported_octree(dir, "steep", octants);
+  ExtractResult er;
+  const Status serial = extract_mesh(db, ExtractOptions{}, &er);
+  ASSERT_FALSE(serial.ok());
+  EXPECT_NE(serial.message().find("not 2:1 balanced"), std::string::npos) << serial.message();
+  for (int ranks : {2, 3, 5, 9, 71}) {
+    SCOPED_TRACE(std::to_string(ranks) + " ranks");
+    std::vector<ShardEntry> entries;
+    int refused = 0;
+    for (const Status& st : extract_on_ranks(db, ranks, 1000 + ranks, &entries)) {
+      if (st.ok()) continue;
+      EXPECT_NE(st.message().find("not 2:1 balanced"), std::string::npos) << st.message();
+      ++refused;
+    }
+    EXPECT_GT(refused, 0);
   }
 }
 

@@ -10,7 +10,7 @@
 #include <filesystem>
 
 #include "schema/octant.h"
-#include "util/varint.h"
+#include "util/octant_key_stream.h"
 
 namespace weaver {
 namespace {
@@ -137,16 +137,11 @@ struct Layer {
   std::vector<std::byte> payloads;
 };
 
-// The layer's leaves, from every rank's sorted keys (varint deltas), with
-// zero payloads.
+// The layer's leaves, from every rank's sorted keys
+// (util/octant_key_stream.h), with zero payloads.
 Status decode_layer(const std::vector<std::string>& received, uint32_t payload, Layer* l) {
   for (const std::string& b : received) {
-    size_t pos = 0;
-    uint64_t last = 0, key = 0;
-    while (pos < b.size()) {
-      if (!read_key_delta(b, &pos, &last, &key)) return Status::Corruption("a layer cut short");
-      l->keys.push_back(key);
-    }
+    if (!decode_octant_keys(b, &l->keys)) return Status::Corruption("a layer cut short");
   }
   std::sort(l->keys.begin(), l->keys.end());
   l->keys.erase(std::unique(l->keys.begin(), l->keys.end()), l->keys.end());
@@ -230,8 +225,7 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   if (st.ok()) st = insulation_queries(*t, cut, rank, &queries);
   std::vector<std::string> blobs(ranks), received;
   for (int s = 0; st.ok() && s < ranks; ++s) {
-    uint64_t last = 0;  // sorted: varint deltas
-    for (uint64_t q : queries[s]) append_key_delta(blobs[s], &last, q);
+    blobs[s] = encode_octant_keys(queries[s]);
     r->queries_sent += queries[s].size();
   }
   for (const std::string& b : blobs) r->bytes_sent += b.size();
@@ -246,13 +240,12 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
     size_t pos = 0;
     uint64_t q = 0, last = 0;
     while (st.ok() && pos < qs.size()) {
-      if (!read_key_delta(qs, &pos, &last, &q)) st = Status::Corruption("a query cut short");
+      if (!read_octant_key(qs, &pos, &last, &q)) st = Status::Corruption("a query cut short");
       if (st.ok()) st = answers.answer(q, &keys);
     }
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-    last = 0;
-    for (uint64_t k : keys) append_key_delta(blobs[s], &last, k);
+    blobs[s] = encode_octant_keys(keys);
   }
   for (const std::string& b : blobs) r->bytes_sent += b.size();
   const Status ex2 = exchange(st.ok() ? blobs : std::vector<std::string>(ranks), &received);

@@ -19,20 +19,14 @@
 // The shards, in rank order, are the table the serial balance writes.
 #pragma once
 
-#include <functional>
 #include <string>
 #include <vector>
 
 #include "balance/balance.h"
 #include "db/database.h"
+#include "util/rank_exchange.h"
 
 namespace weaver {
-
-// All to all, collective: blobs[s] goes to rank s; returns what each rank
-// sent to this one, in rank order.  Every rank calls it the same number of
-// times, also after an error (with nothing to send).
-using RankExchange = std::function<Status(const std::vector<std::string>& blobs,
-                                          std::vector<std::string>* received)>;
 
 struct BalanceShardResult {
   BalanceResult balance;                        // of the rank's own leaves

@@ -44,13 +44,13 @@ struct BucketPolicy {
   // The part of the mesh to extract (one rank's, in weaver-mpi): the node
   // keys [start, stop), from the leaf with key first_leaf (Morton code
   // start) to the last leaf below stop.  Corners at or past stop are the
-  // next parts' (handed to them beforehand: extract_shard), so a part that
-  // ends before the table does has no tail.
+  // next parts' (whose ghost layers hold the leaves: extract_shard), so a
+  // part that ends before the table does has no tail.
   uint64_t start = 0, stop = UINT64_MAX;
   uint64_t first_leaf = 0;
-  // A part's nodes may lack the direction bits of other parts' leaves
-  // (NodeClassifier::allow_partial_masks).
-  bool partial_masks = false;
+  // A part's ghost layer (ghost_layer.h): the leaves of earlier parts
+  // around its nodes, sorted; their corners reach it as spills beforehand.
+  const std::vector<uint64_t>* ghosts = nullptr;
 };
 
 struct BucketTask {
@@ -112,7 +112,7 @@ void sort_and_merge(std::vector<SpillRecord>& records, std::vector<uint64_t>& pa
 class BucketWorker {
  public:
   BucketWorker(BTree& octants, const BucketPolicy& policy) : classifier_(octants) {
-    if (policy.partial_masks) classifier_.allow_partial_masks();
+    if (policy.ghosts != nullptr) classifier_.set_ghosts(policy.ghosts, policy.start);
   }
   Status run(BucketTask& task);
 

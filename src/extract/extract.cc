@@ -14,9 +14,11 @@
 #include "extract/bucket_worker.h"
 #include "extract/extract_search.h"
 #include "extract/extract_sort.h"
+#include "extract/ghost_layer.h"
 #include "extract/node_classifier.h"
 #include "schema/node.h"
 #include "schema/octant.h"
+#include "util/octant_key_stream.h"
 
 namespace weaver {
 namespace {
@@ -148,69 +150,44 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
 
 namespace {
 
-// Drops the records whose node is a leaf's anchor (its corner 0): that leaf
-// is in the rank that owns the node (a leaf's rank is the one whose range
-// holds its anchor), which so finds the node itself, and with partial masks
-// (NodeClassifier::allow_partial_masks) needs no bits from other ranks.  What
-// stays are the nodes no leaf of the owner has as its anchor: on the far
-// faces of the domain or dangling on a coarser leaf of the owner.
-Status drop_anchoring_corners(BTree& octants, std::vector<SpillRecord>* records) {
-  constexpr uint64_t kFarSide = uint64_t{7} << (3 * kMaxLevel);  // past the root on some axis
-  size_t kept = 0;
-  for (const SpillRecord& r : *records) {
-    bool anchors = false;
-    if ((r.key & kFarSide) == 0) {
-      uint64_t key = 0;
-      bool hit = false;
-      WEAVER_RETURN_IF_ERROR(octants.floor(pixel_key_of_morton(r.key), &key, nullptr, &hit));
-      anchors = hit && octant_key_morton(key) == r.key;
-    }
-    if (!anchors) (*records)[kept++] = r;
+// Sends this rank's ghosts to the ranks that need them and takes its own
+// (after an error, sends nothing but still takes part).
+Status exchange_ghosts(BTree* octants, const ExtractPart& part, const std::vector<uint64_t>& start,
+                       int rank, const RankExchange& exchange, Status st,
+                       std::vector<uint64_t>* ghosts, ShardExchangeCounts* counts) {
+  std::vector<std::vector<uint64_t>> outgoing(start.size() - 1);
+  if (st.ok() && part.start < part.stop)
+    st = ghost_leaves(*octants, part.first_leaf, part.stop, start, rank, &outgoing);
+  std::vector<std::string> blobs(outgoing.size()), received;
+  for (size_t s = 0; st.ok() && s < outgoing.size(); ++s) {
+    blobs[s] = encode_octant_keys(outgoing[s]);
+    counts->ghosts_sent += outgoing[s].size();
+    counts->bytes_sent += blobs[s].size();
   }
-  records->resize(kept);
-  return Status::Ok();
-}
-
-// The corners of this rank's leaves (from first_leaf, below stop) at or past
-// stop, for the ranks that own them (the last rank whose start is <= the key),
-// sorted and merged per rank.
-Status far_corners(BTree& octants, uint64_t first_leaf, uint64_t stop,
-                   const std::vector<uint64_t>& start,
-                   std::vector<std::vector<SpillRecord>>* outgoing) {
-  outgoing->assign(start.size() - 1, {});  // start has a last entry for the end
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(octants.seek_keys(first_leaf, &c));
-  uint64_t corners[8];
-  for (; c.valid() && octant_key_morton(c.key()) < stop;) {
-    leaf_corner_keys(c.key(), corners);
-    for (int k = 0; k < 8; ++k) {
-      if (corners[k] < stop) continue;
-      const size_t owner =
-          std::upper_bound(start.begin(), start.end(), corners[k]) - start.begin() - 1;
-      (*outgoing)[owner].push_back({corners[k], corner_direction_bit(k)});
-    }
-    WEAVER_RETURN_IF_ERROR(c.next());
+  if (!st.ok()) blobs.assign(outgoing.size(), std::string());
+  const Status exchanged = exchange(blobs, &received);
+  WEAVER_RETURN_IF_ERROR(st);
+  WEAVER_RETURN_IF_ERROR(exchanged);
+  for (const std::string& b : received) {  // earlier ranks first: sorted
+    counts->bytes_received += b.size();
+    if (!decode_octant_keys(b, ghosts)) return Status::Corruption("a ghost layer cut short");
   }
-  std::vector<uint64_t> packed, scratch;
-  for (auto& records : *outgoing) {
-    sort_and_merge(records, packed, scratch);
-    WEAVER_RETURN_IF_ERROR(drop_anchoring_corners(octants, &records));
-  }
+  counts->ghosts_received = ghosts->size();
   return Status::Ok();
 }
 
 }  // namespace
 
 Status extract_shard(const std::string& db_dir, const ExtractOptions& options, int rank, int ranks,
-                     const std::string& file, const CornerExchange& exchange, ExtractResult* result,
-                     ShardEntry* entry) {
+                     const std::string& file, const RankExchange& exchange, ExtractResult* result,
+                     ShardEntry* entry, ShardExchangeCounts* counts) {
   *result = ExtractResult{};
   *entry = ShardEntry{file};
+  *counts = ShardExchangeCounts{};
   const ExtractMemory memory(options);
   std::unique_ptr<Database> db;
   std::unique_ptr<BTree> octants;
-  std::vector<uint64_t> first_leaf, start;
-  std::vector<std::vector<SpillRecord>> outgoing(ranks);  // none from a rank without leaves
+  std::vector<uint64_t> first_leaf, start(ranks + 1, UINT64_MAX);
   ExtractPart part;
   // Up to the exchange, an error still takes part in it (sending nothing).
   Status st = Database::open(db_dir, Database::Mode::kRead, false, &db);
@@ -220,16 +197,11 @@ Status extract_shard(const std::string& db_dir, const ExtractOptions& options, i
     part.start = start[rank];
     part.stop = start[rank + 1];
     part.first_leaf = first_leaf[rank];
-    if (part.start < part.stop)
-      st = far_corners(*octants, part.first_leaf, part.stop, start, &outgoing);
   }
-  if (!st.ok()) outgoing.assign(ranks, {});
-  const Status exchanged = exchange(outgoing, &part.incoming);
-  WEAVER_RETURN_IF_ERROR(st);
-  WEAVER_RETURN_IF_ERROR(exchanged);
+  WEAVER_RETURN_IF_ERROR(
+      exchange_ghosts(octants.get(), part, start, rank, exchange, st, &part.ghosts, counts));
   if (part.start >= part.stop) return Status::Ok();  // owns no node
-  std::vector<uint64_t> packed, scratch;
-  sort_and_merge(part.incoming, packed, scratch);
+  ghost_corners(part.ghosts, part.start, part.stop, &part.incoming);
   TableOptions topt;
   WEAVER_RETURN_IF_ERROR(plan_extract(*octants, options, memory, result, &topt));
   std::unique_ptr<BTree> nodes;

@@ -27,6 +27,7 @@
 #include "schema/status.h"
 #include "util/memory_budget.h"
 #include "util/progress.h"
+#include "util/rank_exchange.h"
 
 namespace weaver {
 
@@ -99,25 +100,23 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
 // the node keys from its first leaf's Morton code to the next rank's (the
 // last rank: to the end), so a node's owner follows from its key alone.
 // Every leaf around a node has a Morton code no larger than the node's, so
-// the corners a rank's leaves give to later ranks (those at or past its
-// end: the leaves along its range's far surface) are all a rank needs from
-// the others; and of those only the ones that anchor no leaf (dangling, or
-// on the domain's far faces): the owner finds the others as its own leaves'
-// anchors, and settles the cells of other ranks' leaves around them by
-// lookups (NodeClassifier::allow_partial_masks).  They are sent once, before
-// the buckets run, through
-// `exchange`, a collective every rank calls exactly once (also after an
-// error, with nothing to send): it takes the records for each rank and
-// returns those sent to this one.  Then the rank runs the bucket sort over
-// its own leaves, the received corners waiting in its spill store, and
-// writes its nodes to the new shard file `file` (synced; *entry describes
-// it; records 0 and no file when it owns none).  Leaves of other ranks are
-// read, for the classifier's aggregate hits, from the database itself,
-// which every rank sees.  The caller commits the shards.
-using CornerExchange = std::function<Status(std::vector<std::vector<SpillRecord>>& outgoing,
-                                            std::vector<SpillRecord>* incoming)>;
+// the leaves around a rank's nodes are its own and the ghost layer: the
+// leaves of earlier ranks whose far faces reach into its range
+// (ghost_layer.h).  Each rank sends its leaves to the ranks whose ghosts
+// they are, once, before any bucket runs, through `exchange` (a collective
+// every rank calls exactly once, also after an error, with nothing to send).
+// Then it runs the bucket sort over its own leaves, the ghosts' corners in
+// its range waiting in its spill store and the ghosts answering the
+// classifier's lookups before its range, and writes its nodes to the new
+// shard file `file` (synced; *entry describes it; records 0 and no file when
+// it owns none).  A rank reads only its own run of leaves from the database
+// (and the shards' counts, for the cut).  The caller commits the shards.
+struct ShardExchangeCounts {
+  uint64_t ghosts_sent = 0, ghosts_received = 0;  // leaves
+  uint64_t bytes_sent = 0, bytes_received = 0;
+};
 Status extract_shard(const std::string& db_dir, const ExtractOptions& options, int rank, int ranks,
-                     const std::string& file, const CornerExchange& exchange, ExtractResult* result,
-                     ShardEntry* entry);
+                     const std::string& file, const RankExchange& exchange, ExtractResult* result,
+                     ShardEntry* entry, ShardExchangeCounts* counts);
 
 }  // namespace weaver

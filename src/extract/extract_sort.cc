@@ -50,7 +50,7 @@ Status extract_by_sort(Database& db, BTree& octants, BTree& nodes, const std::st
     policy.start = part->start;
     policy.stop = part->stop;
     policy.first_leaf = part->first_leaf;
-    policy.partial_masks = true;
+    policy.ghosts = &part->ghosts;
     if (!part->incoming.empty()) WEAVER_RETURN_IF_ERROR(spills.add_run(std::move(part->incoming)));
   }
   const Status st = options.threads > 1

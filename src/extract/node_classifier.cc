@@ -73,7 +73,8 @@ const uint64_t* NodeClassifier::local_floor(uint64_t pm, uint64_t pk) const {
 // The leaf holding pixel p, if any: one of the last found in each direction
 // if it holds p (the nodes come in Z-order, and the nodes along a coarse
 // leaf's face or edge all ask for it in the same direction), else the active bucket's leaves if p
-// is in its range (no other leaf can hold it), else the octant table.  Works on Morton codes: a
+// is in its range (no other leaf can hold it), else the ghosts if p is before
+// a rank's part, else the octant table.  Works on Morton codes: a
 // leaf holds p iff p's code is in its subtree's code range.
 // The leaf is handed out where it is kept, not copied.
 Status NodeClassifier::leaf_at(uint64_t pm, int direction, const Octant** leaf, bool* found) {
@@ -93,6 +94,10 @@ Status NodeClassifier::leaf_at(uint64_t pm, int direction, const Octant** leaf, 
   uint64_t key = 0;
   if (leaf_keys_ != nullptr && pm >= local_start_ && pm < local_end_) {
     const uint64_t* floor = local_floor(pm, pk);
+    if (floor == nullptr || !holds_p(*floor)) return Status::Ok();
+    key = *floor;
+  } else if (ghosts_ != nullptr && pm < ghosts_below_) {
+    const uint64_t* floor = last_at_most(ghosts_->data(), ghosts_->size(), pk);
     if (floor == nullptr || !holds_p(*floor)) return Status::Ok();
     key = *floor;
   } else {
@@ -127,10 +132,6 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
     NodeKind here = NodeKind::kAnchored;
     uint8_t covered = 0;
     WEAVER_RETURN_IF_ERROR(kind_on(n, *leaf, mask, &here, &covered));
-    if (here == NodeKind::kAnchored) {  // a corner of the leaf: partial masks only
-      settled |= covered;
-      continue;
-    }
     if (*kind != NodeKind::kAnchored && here != *kind) return unbalanced(n, *leaf, mask);
     *kind = here;
     settled |= covered;
@@ -140,10 +141,8 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
 
 // Node n lies on the closure of `leaf`: its kind, and the cells around n the
 // leaf covers (on an axis where n is strictly inside the leaf, both sides;
-// elsewhere the side the leaf is on).  n is a corner of the leaf (kind
-// anchored, one cell covered) only where masks may be partial; with whole
-// masks every leaf that has n as a corner set its bit, so finding one here
-// means octants overlap.
+// elsewhere the side the leaf is on).  Every leaf that has n as a corner set
+// its bit in the mask, so finding one here means octants overlap.
 Status NodeClassifier::kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind,
                                uint8_t* covered) {
   const uint32_t e = octant_edge(leaf), half = e / 2;
@@ -158,11 +157,6 @@ Status NodeClassifier::kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKi
     } else {
       cells &= c[a] == lo[a] ? plus_side : static_cast<uint8_t>(~plus_side);
     }
-  }
-  if (inside == 0 && partial_masks_) {
-    *kind = NodeKind::kAnchored;
-    *covered = cells;
-    return Status::Ok();
   }
   if (inside == 0 || inside == 3) {
     return Status::Corruption("node (" + std::to_string(n.x) + " " + std::to_string(n.y) + " " +

@@ -41,10 +41,13 @@ class NodeClassifier {
 
   Status classify(uint64_t key, uint8_t mask, NodeKind* kind);
 
-  // Masks may lack the bits of leaves that have the node as a corner (a
-  // rank's part in extract_shard: its nodes' corners in other ranks' leaves
-  // are not all sent); the missing cells are then looked up like empty ones.
-  void allow_partial_masks() { partial_masks_ = true; }
+  // A rank's part in extract_shard: pixels whose Morton code is below
+  // `below` (the part's first node key) are looked up among the ghosts
+  // (sorted leaf keys of earlier ranks, ghost_layer.h), not in the table.
+  void set_ghosts(const std::vector<uint64_t>* ghosts, uint64_t below) {
+    ghosts_ = ghosts;
+    ghosts_below_ = below;
+  }
 
  private:
   // pm is the Morton code of the pixel in `direction` (0..7) of a node.
@@ -56,7 +59,8 @@ class NodeClassifier {
   Status unbalanced(Coord n, const Octant& coarse, uint8_t mask);
 
   BTree& octants_;
-  bool partial_masks_ = false;
+  const std::vector<uint64_t>* ghosts_ = nullptr;
+  uint64_t ghosts_below_ = 0;
   const std::vector<uint64_t>* leaf_keys_ = nullptr;
   uint64_t local_start_ = 0, local_end_ = 0;
   // The local range cut into equal slots of 2^slot_shift_ Morton codes, one for

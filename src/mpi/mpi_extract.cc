@@ -1,7 +1,8 @@
 // weaver-mpi extract: the node table of a balanced octree, one shard a rank
 // (extract/extract.h, extract_shard: equal counts of leaves a rank, node
-// ownership by key, the corners crossing into later ranks exchanged once),
-// committed by rank 0, which holds the database's writer lock throughout.
+// ownership by key, a ghost layer of the leaves around its nodes exchanged
+// once), committed by rank 0, which holds the database's writer lock
+// throughout.
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -12,7 +13,6 @@
 #include "extract/extract.h"
 #include "mpi/mpi_commands.h"
 #include "mpi/shards.h"
-#include "util/varint.h"
 
 namespace weaver::mpi {
 namespace {
@@ -23,39 +23,15 @@ constexpr char kUsage[] =
     "The mesh nodes of the balanced octree in DB's octant table (sharded or not),\n"
     "as 'weaver extract --algorithm sort' finds them, written as a node table of\n"
     "one shard a rank: rank r takes the r-th of N equal runs of leaves and owns\n"
-    "the node keys from its first leaf's Morton code to the next rank's.  The\n"
-    "corners its leaves give to later ranks that those ranks cannot find from\n"
-    "their own leaves (dangling ones and those on the domain's far faces) are\n"
-    "sent to them once, before any bucket runs; leaves of other ranks that a\n"
-    "node's classification needs are\n"
-    "read from DB, which every rank must see (a shared file system).  'weaver\n"
-    "compact DB' joins the shards into the file the serial extract writes.\n"
+    "the node keys from its first leaf's Morton code to the next rank's.  Before\n"
+    "any bucket runs, each rank sends once, to each later rank, its leaves whose\n"
+    "far faces reach into that rank's keys (the ghost layer); of the leaves a\n"
+    "rank then reads from DB only its own run.  'weaver compact DB' joins the\n"
+    "shards into the file the serial extract writes.\n"
     "\n"
     "  --memory BYTES   each rank's budget (default 256M), cut as weaver extract's\n"
     "  --threads N      worker threads a rank (default 1)\n"
     "  --plain          plain leaf pages instead of packed ones\n";
-
-// Each rank's records for every rank, as bytes (keys as varint deltas:
-// they come sorted, one a key; then the direction bits), and back.
-std::string encode(const std::vector<SpillRecord>& records) {
-  std::string out;
-  uint64_t last = 0;
-  for (const SpillRecord& r : records) {
-    append_key_delta(out, &last, r.key);
-    out.push_back(static_cast<char>(r.mask));
-  }
-  return out;
-}
-
-void decode(const std::string& bytes, std::vector<SpillRecord>* out) {
-  size_t pos = 0;
-  uint64_t last = 0;
-  SpillRecord r;
-  while (pos < bytes.size() && read_key_delta(bytes, &pos, &last, &r.key) && pos < bytes.size()) {
-    r.mask = static_cast<uint8_t>(bytes[pos++]);
-    out->push_back(r);
-  }
-}
 
 }  // namespace
 
@@ -78,33 +54,26 @@ int run_extract(const Comm& comm, const std::string& dir, const ExtractOptions& 
   std::unique_ptr<Database> db;
   uint64_t number = 0;
   if (!open_writer(comm, "extract", dir, &db, &number)) return 1;
-  uint64_t sent = 0, received = 0, messages = 0;
-  const CornerExchange exchange = [&](std::vector<std::vector<SpillRecord>>& outgoing,
-                                      std::vector<SpillRecord>* incoming) {
-    std::vector<std::string> blobs;
-    for (int r = 0; r < comm.size(); ++r) {
-      blobs.push_back(r == comm.rank() ? std::string() : encode(outgoing[r]));
-      sent += blobs.back().size();
-      messages += !blobs.back().empty();
-    }
-    incoming->clear();
-    for (const std::string& b : comm.exchange(blobs)) {
-      received += b.size();
-      decode(b, incoming);
-    }
+  uint64_t messages = 0;
+  const RankExchange exchange = [&](const std::vector<std::string>& blobs,
+                                    std::vector<std::string>* received) {
+    *received = comm.exchange(blobs);
+    for (int r = 0; r < comm.size(); ++r) messages += r != comm.rank() && !blobs[r].empty();
     return Status::Ok();
   };
   ExtractResult r;
   ShardEntry entry;
+  ShardExchangeCounts x;
   const Status st =
       extract_shard(dir, o, comm.rank(), comm.size(),
-                    shard_file_name(kNodeTable, number, comm.rank()), exchange, &r, &entry);
+                    shard_file_name(kNodeTable, number, comm.rank()), exchange, &r, &entry, &x);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::ostringstream line;
   line.precision(3);
   line << std::fixed << "rank " << comm.rank() << "  " << r.nodes << " nodes of " << r.elements
-       << " elements in " << secs << "s, corners sent " << sent << " B in " << messages
-       << " messages, received " << received << " B, wrote " << r.node_table_bytes
+       << " elements in " << secs << "s, ghost layer of " << x.ghosts_received << " leaves (gave "
+       << x.ghosts_sent << "), sent " << x.bytes_sent << " B in " << messages
+       << " messages, received " << x.bytes_received << " B, wrote " << r.node_table_bytes
        << " B, peak RSS " << peak_rss_bytes() << " B";
   return finish_stage(comm, db.get(), "extract", kNodeTable, entry,
                       st.ok() ? "" : cli::error_text(st), line.str(), r.nodes, "nodes", t0);

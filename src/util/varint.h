@@ -1,7 +1,6 @@
-// Increasing 64-bit keys as LEB128 varints of their differences: the wire
-// form of the keys weaver-mpi's ranks exchange (a rank's corners and
-// insulation octants are sorted and close together, so 2 or 3 bytes each
-// instead of 8).
+// LEB128 varints: unsigned integers in 7-bit groups, low first, the high bit
+// of each byte set when another follows (the wire form of the octant keys
+// weaver-mpi's ranks exchange: util/octant_key_stream.h).
 #pragma once
 
 #include <cstdint>
@@ -27,18 +26,6 @@ inline bool read_varint(const std::string& in, size_t* pos, uint64_t* v) {
     if (b < 0x80) return true;
   }
   return false;
-}
-
-// A key after `last` (the first after 0): its difference.
-inline void append_key_delta(std::string& out, uint64_t* last, uint64_t key) {
-  append_varint(out, key - *last);
-  *last = key;
-}
-inline bool read_key_delta(const std::string& in, size_t* pos, uint64_t* last, uint64_t* key) {
-  uint64_t d = 0;
-  if (!read_varint(in, pos, &d)) return false;
-  *key = *last += d;
-  return true;
 }
 
 }  // namespace weaver
