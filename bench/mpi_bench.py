@@ -6,7 +6,7 @@ extract) by `weaver STAGE --threads T` and by `mpirun -np N weaver-mpi STAGE`
 (one thread a rank), each a fresh process, --repeat times.  Prints one JSON
 object per run, then a table of medians: wall time per stage and in all, the
 ratio MPI / threads, and per rank: time, records, bytes and messages sent and
-received (the exchanged corners and insulation layers), bytes written, and
+received (the exchanged ghost and insulation layers), bytes written, and
 their ratio, and peak RSS.
 
     python3 bench/mpi_bench.py --np 2 --threads 2 --freq 1 --repeat 3
