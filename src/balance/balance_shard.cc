@@ -176,7 +176,12 @@ Status write_scratch(BTree& t, const Cut& cut, int rank, const Layer& layer,
       ++i;
     }
   }
-  if (st.ok()) out->set_metadata(with_levels(t.options().metadata, levels));
+  // The balance keeps the items it does not count, so its output (this
+  // rank's shard) carries the place.
+  if (st.ok()) {
+    out->set_metadata(with_shard_place(with_levels(t.options().metadata, levels),
+                                       shard_place_among(cut.key, rank)));
+  }
   return db->publish(kOctantTable, file, out, st);
 }
 

@@ -12,10 +12,13 @@ constexpr char kUsage[] =
     "Rebuilds the MANIFEST of database DB when it is missing or damaged (a\n"
     "damaged one is kept as MANIFEST.damaged), from the table files themselves:\n"
     "every '<table>-<n>.bt' file is checked page by page, and per table the\n"
-    "newest file that checks out becomes the live table.  A table older than\n"
-    "the table it derives from (nodes older than octants) is left out.  Files\n"
-    "not used are renamed '<file>.unused', never deleted.  Refuses a database\n"
-    "whose MANIFEST is intact.  Run 'weaver verify DB' afterwards.\n";
+    "newest file that checks out becomes the live table.  The shard files of\n"
+    "a sharded table ('<table>-<n>.<rank>.bt', from weaver-mpi) count as one\n"
+    "version only when all of its shards are there (each keeps its place among\n"
+    "them).  A table older than the table it derives from (nodes older than\n"
+    "octants) is left out.  Files not used are renamed '<file>.unused', never\n"
+    "deleted.  Refuses a database whose MANIFEST is intact.  Run 'weaver verify\n"
+    "DB' afterwards.\n";
 
 }  // namespace
 

@@ -48,6 +48,29 @@ int subtree_level(const ConstructOptions& o, const ConstructPlan& p) {
   return level;
 }
 
+// A parallel run's part: the subtrees whose share of the estimate begins in
+// it.
+int rank_of_subtree(const ConstructOptions& o, const ZOrderShare& share, const Octant& root) {
+  if (o.shards <= 1) return 0;
+  const double f = share.fraction_before(octant_key(root)) * o.shards;
+  return std::min(static_cast<int>(f), o.shards - 1);
+}
+
+// Where o.shard's file lies among the shards: the ranks given a subtree
+// write one each (a subtree has a leaf at least).
+ShardPlace place_of_shard(const ConstructOptions& o, const ConstructPlan& p, const Descent& descent,
+                          const ZOrderShare& share) {
+  std::vector<bool> has(o.shards, false);
+  SubtreeList subtrees(descent, p, subtree_level(o, p));
+  for (Octant root; subtrees.next(&root);) has[rank_of_subtree(o, share, root)] = true;
+  ShardPlace place{0, 0};
+  for (int s = 0; s < o.shards; ++s) {
+    place.k += has[s] && s < o.shard;
+    place.of += has[s];
+  }
+  return place;
+}
+
 // Visits the domain's subtrees on o.threads workers (or on this thread for
 // one) and appends their leaves in Z-order.  A subtree with more leaves
 // than the cap is visited again as its 8 children, so memory stays bounded
@@ -72,12 +95,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     }
   }
   SubtreeList subtrees(descent, p, subtree_level(o, p));
-  // A parallel run's part: the subtrees whose share of the estimate begins in it.
-  auto ours = [&](const Octant& root) {
-    if (o.shards <= 1) return true;
-    const double f = share.fraction_before(octant_key(root)) * o.shards;
-    return std::min(static_cast<int>(f), o.shards - 1) == o.shard;
-  };
+  auto ours = [&](const Octant& root) { return rank_of_subtree(o, share, root) == o.shard; };
   std::deque<std::unique_ptr<Slot>> in_flight;  // Z-order
   auto add = [&](const Octant& root, bool front) {
     auto slot = std::make_unique<Slot>();
@@ -222,10 +240,12 @@ TableOptions octant_table_options(const ConstructOptions& o, const VelocityModel
 // The leaves of o's part (all, or one shard's) into table, and the table's
 // metadata: units, level counts, the model and the rule.
 Status write_octree(const ConstructOptions& o, const ConstructPlan& p, const VelocityModel& model,
-                    const ConstructMemory& memory, BTree& table, ConstructResult* r) {
+                    const ConstructMemory& memory, BTree& table, ConstructResult* r,
+                    ShardPlace* place = nullptr) {
   const Descent descent(o, p, model);
   ZOrderShare share;
   if (o.progress || o.shards > 1) estimate_construct(o, p, model, &share);
+  if (place != nullptr) *place = place_of_shard(o, p, descent, share);
   WEAVER_RETURN_IF_ERROR(write_subtrees(o, p, descent, memory, share, table, r));
   Units u;
   u.tick_m = p.tick_m;
@@ -279,8 +299,9 @@ Status construct_shard(const std::string& db_dir, const ConstructOptions& o,
   std::unique_ptr<BTree> table;
   WEAVER_RETURN_IF_ERROR(
       create_shard_table(db_dir, file, octant_table_options(o, *model), memory.table_pool, &table));
-  Status st = write_octree(o, *p, *model, memory, *table, r);
-  return finish_shard(db_dir, table, st, entry, &r->table_bytes);
+  ShardPlace place;
+  Status st = write_octree(o, *p, *model, memory, *table, r, &place);
+  return finish_shard(db_dir, table, st, place, entry, &r->table_bytes);
 }
 
 }  // namespace weaver

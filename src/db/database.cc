@@ -112,9 +112,45 @@ std::vector<std::string> table_value_files(const std::string& value) {
   return files;
 }
 
+ShardPlace shard_place_among(const std::vector<uint64_t>& begin, int rank) {
+  ShardPlace place{0, 0};
+  for (size_t s = 0; s + 1 < begin.size(); ++s) {
+    if (begin[s] >= begin[s + 1]) continue;
+    if (static_cast<int>(s) < rank) ++place.k;
+    ++place.of;
+  }
+  return place;
+}
+
+std::string without_shard_place(const std::string& metadata) {
+  const size_t at = metadata.find(";shard=");
+  if (at == std::string::npos) return metadata;
+  const size_t end = metadata.find(';', at + 1);
+  return metadata.substr(0, at) + (end == std::string::npos ? "" : metadata.substr(end));
+}
+
+std::string with_shard_place(const std::string& metadata, ShardPlace place) {
+  return without_shard_place(metadata) + ";shard=" + std::to_string(place.k) + "/" +
+         std::to_string(place.of);
+}
+
+bool shard_place_of(const std::string& metadata, ShardPlace* place) {
+  const size_t at = metadata.find(";shard=");
+  if (at == std::string::npos) return false;
+  int k = -1, of = -1, used = 0;
+  const std::string item = metadata.substr(at + 7, metadata.find(';', at + 1) - at - 7);
+  if (std::sscanf(item.c_str(), "%d/%d%n", &k, &of, &used) != 2 ||
+      used != static_cast<int>(item.size()) || k < 0 || k >= of) {
+    return false;
+  }
+  *place = ShardPlace{k, of};
+  return true;
+}
+
 Status finish_shard(const std::string& dir, std::unique_ptr<BTree>& table, Status built,
-                    ShardEntry* entry, uint64_t* bytes) {
+                    ShardPlace place, ShardEntry* entry, uint64_t* bytes) {
   const std::string path = dir + "/" + entry->file;
+  table->set_metadata(with_shard_place(table->options().metadata, place));
   if (built.ok()) built = table->commit();
   if (built.ok() && table->size() > 0) {
     entry->records = table->size();
@@ -387,9 +423,11 @@ Status Database::open_sharded(const std::string& name, uint64_t pool_bytes,
   WEAVER_RETURN_IF_ERROR(BTree::open_sharded(std::move(trees), out));
   // An octant shard counts its own leaves per level; the other tables'
   // shards carry the table's metadata whole (a node shard, its octree's).
-  if ((*out)->options().key_kind == KeyKind::kOctant) {
-    (*out)->set_metadata(merge_shard_metadata(metadata));
-  }
+  // Their places are theirs alone.
+  for (std::string& m : metadata) m = without_shard_place(m);
+  (*out)->set_metadata((*out)->options().key_kind == KeyKind::kOctant
+                           ? merge_shard_metadata(metadata)
+                           : metadata.front());
   return Status::Ok();
 }
 

@@ -159,12 +159,26 @@ std::string shard_file_name(const std::string& name, uint64_t number, int shard)
 bool is_shard_file_name(const std::string& file);
 // The files of a tables_ value: one, or a sharded table's shards.
 std::vector<std::string> table_value_files(const std::string& value);
-// Ends the build of a shard file in dir: if `built` is OK, commits (syncs)
-// it and describes it in *entry (first and last key, records) and *bytes;
-// closes it, and deletes it when it failed or holds no record (records 0).
-// Returns the first error.
+// A shard file's place among its table's: the k-th of K files (the ranks
+// that write none not counted), kept in its metadata (";shard=k/K") so that
+// `weaver recover` can tell a whole set of shards from one that lost a file.
+// A sharded table's readers, and so `weaver compact`, do not see the item.
+struct ShardPlace {
+  int k = 0, of = 1;
+};
+// The place of rank `rank` among the ranks whose runs [begin[s], begin[s+1])
+// are not empty (begin has an entry past the last rank's).
+ShardPlace shard_place_among(const std::vector<uint64_t>& begin, int rank);
+std::string with_shard_place(const std::string& metadata, ShardPlace place);
+std::string without_shard_place(const std::string& metadata);
+// False when the metadata has no well-formed place.
+bool shard_place_of(const std::string& metadata, ShardPlace* place);
+// Ends the build of a shard file in dir: if `built` is OK, records its place
+// in its metadata, commits (syncs) it and describes it in *entry (first and
+// last key, records) and *bytes; closes it, and deletes it when it failed or
+// holds no record (records 0).  Returns the first error.
 Status finish_shard(const std::string& dir, std::unique_ptr<BTree>& table, Status built,
-                    ShardEntry* entry, uint64_t* bytes);
+                    ShardPlace place, ShardEntry* entry, uint64_t* bytes);
 // Creates shard file `file` in dir outside any Database object: a rank of a
 // parallel writer, whose database rank 0 holds open for writing.
 Status create_shard_table(const std::string& dir, const std::string& file,

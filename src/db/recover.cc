@@ -4,11 +4,16 @@
 // newest file that checks out is chosen, unless the table derives from one
 // whose chosen file is newer (file numbers grow with every file a writer
 // makes, so a derived table older than its source was computed from an
-// earlier version of it).  Files not chosen are renamed "<file>.unused", out
-// of every writer's reach, for the user to inspect or delete.  Shard files
-// of sharded tables are set aside too: recover does not rebuild those.
+// earlier version of it).  A sharded table's files ("<name>-<n>.<rank>.bt",
+// written by the ranks of one weaver-mpi stage) count as one version of it
+// when each checks out and their places (";shard=k/K" in each one's
+// metadata) show all K of them there, in key order.  Files not chosen are
+// renamed "<file>.unused", out of every writer's reach, for the user to
+// inspect or delete.
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <map>
 
 #include "db/database.h"
 #include "db/node_table.h"
@@ -21,7 +26,9 @@ namespace {
 namespace fs = std::filesystem;
 
 // Opens and checks one table file; the reason it is unusable otherwise.
-Status check_table_file(const std::string& path, const std::string& table, uint64_t* records) {
+// *entry gets its records and first and last key, *metadata its metadata.
+Status check_table_file(const std::string& path, const std::string& table, ShardEntry* entry,
+                        std::string* metadata) {
   std::unique_ptr<File> f;
   WEAVER_RETURN_IF_ERROR(open_posix_file(path, OpenMode::kReadOnly, &f));
   std::unique_ptr<BTree> t;
@@ -32,8 +39,76 @@ Status check_table_file(const std::string& path, const std::string& table, uint6
     return Status::Corruption(path + ": its header's key kind does not fit table '" + table + "'");
   }
   WEAVER_RETURN_IF_ERROR(t->check_invariants());
-  *records = t->size();
+  entry->records = t->size();
+  *metadata = t->options().metadata;
+  if (t->size() == 0) return Status::Ok();
+  WEAVER_RETURN_IF_ERROR(t->select(0, &entry->first_key, nullptr));
+  return t->select(t->size() - 1, &entry->last_key, nullptr);
+}
+
+// One version of a table: a file, or the shard files of one stage by rank.
+struct Version {
+  std::string file;                   // one file
+  std::map<int, std::string> shards;  // or these, by rank
+  std::vector<ShardEntry> entries;    // the shards checked, in rank order
+  uint64_t records = 0;
+  std::vector<std::string> files() const {  // every file of the version
+    if (shards.empty()) return {file};
+    std::vector<std::string> out;
+    for (const auto& [rank, f] : shards) out.push_back(f);
+    return out;
+  }
+};
+
+// Checks every file of v; for shards, that they are all there (places 0..K-1
+// in rank order) and hold increasing keys.  The reason v is unusable
+// otherwise.
+Status check_version(const std::string& dir, const std::string& table, Version* v) {
+  std::string metadata;
+  if (v->shards.empty()) {
+    ShardEntry e;
+    WEAVER_RETURN_IF_ERROR(check_table_file(dir + "/" + v->file, table, &e, &metadata));
+    v->records = e.records;
+    return Status::Ok();
+  }
+  int expected = -1;
+  for (const auto& [rank, file] : v->shards) {
+    ShardEntry e{file};
+    WEAVER_RETURN_IF_ERROR(check_table_file(dir + "/" + file, table, &e, &metadata));
+    ShardPlace place;
+    if (!shard_place_of(metadata, &place)) {
+      return Status::Corruption(file + ": no place among its table's shards in its metadata");
+    }
+    const int k = static_cast<int>(v->entries.size());
+    if (place.k != k || (expected >= 0 && place.of != expected)) {
+      return Status::Corruption(file + " is shard " + std::to_string(place.k) + " of " +
+                                std::to_string(place.of) + ", but " + std::to_string(k) +
+                                " of its set are before it: a shard is missing");
+    }
+    if (e.records == 0 || (k > 0 && v->entries.back().last_key >= e.first_key)) {
+      return Status::Corruption(file + ": empty, or its keys overlap the shard before it");
+    }
+    expected = place.of;
+    v->entries.push_back(e);
+    v->records += e.records;
+  }
+  if (static_cast<int>(v->entries.size()) != expected) {
+    return Status::Corruption("the set of " + v->shards.begin()->second + " has " +
+                              std::to_string(v->entries.size()) + " of its " +
+                              std::to_string(expected) + " shards: the last are missing");
+  }
   return Status::Ok();
+}
+
+// The rank of a shard file "<name>-<n>.<rank>.bt".
+int shard_file_rank(const std::string& name) {
+  const size_t dot = name.rfind('.', name.size() - 4);
+  return std::atoi(name.substr(dot + 1, name.size() - 3 - dot - 1).c_str());
+}
+
+// The table a shard file belongs to, "<name>" of "<name>-<n>.<rank>.bt".
+std::string shard_file_table(const std::string& name) {
+  return table_file_table(name.substr(0, name.rfind('.', name.size() - 4)) + ".bt");
 }
 
 }  // namespace
@@ -54,48 +129,55 @@ Status Database::recover(const std::string& dir, RecoverReport* report) {
     if (ec) return Status::IOError("cannot rename " + manifest + ": " + ec.message());
     db->tables_.clear();
   }
-  // Candidates: every table file, newest first per table.
-  std::map<std::string, std::map<uint64_t, std::string>, std::less<>> files;
+  // Candidates: every table file and every set of shard files, newest
+  // first per table.
+  std::map<std::string, std::map<uint64_t, Version>, std::less<>> versions;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
-    if (is_table_file_name(name)) files[table_file_table(name)][table_file_number(name)] = name;
-    // Set aside, never deleted: the next writer would remove a shard file
-    // no manifest names.
+    if (is_table_file_name(name))
+      versions[table_file_table(name)][table_file_number(name)].file = name;
     if (is_shard_file_name(name)) {
-      report->set_aside.push_back(
-          name +
-          " (a shard of a sharded table: recover rebuilds tables of one file "
-          "only)");
+      versions[shard_file_table(name)][shard_file_number(name)].shards[shard_file_rank(name)] =
+          name;
     }
   }
   if (ec) return Status::IOError("cannot list " + dir + ": " + ec.message());
-  std::map<std::string, std::string> chosen;
+  std::map<std::string, std::string> chosen;  // table -> manifest value
   std::map<std::string, uint64_t> chosen_number;
-  for (const auto& [table, by_number] : files) {
+  for (auto& [table, by_number] : versions) {
     for (auto it = by_number.rbegin(); it != by_number.rend(); ++it) {
-      uint64_t records = 0;
-      const Status st = check_table_file(dir + "/" + it->second, table, &records);
-      if (!st.ok()) {
-        report->set_aside.push_back(it->second + " (" + st.message() + ")");
-        continue;
-      }
-      if (chosen.count(table)) {
-        report->set_aside.push_back(it->second + " (an older version of '" + table + "')");
-        continue;
-      }
-      chosen[table] = it->second;
-      chosen_number[table] = it->first;
-      report->tables.push_back(table + " from " + it->second + " (" + std::to_string(records) +
-                               " records)");
+      Version& v = it->second;
       db->next_file_number_ = std::max(db->next_file_number_, it->first + 1);
+      if (!v.file.empty()) {  // one number, one writer: shards beside a file are strays
+        for (const auto& [rank, f] : v.shards) {
+          report->set_aside.push_back(f + " (a shard beside " + v.file + ", of the same number)");
+        }
+        v.shards.clear();
+      }
+      const Status st = check_version(dir, table, &v);
+      const std::vector<std::string> files = v.files();
+      if (!st.ok() || chosen.count(table)) {
+        const std::string why = st.ok() ? "an older version of '" + table + "'" : st.message();
+        for (const std::string& f : files) report->set_aside.push_back(f + " (" + why + ")");
+        continue;
+      }
+      std::string value;
+      for (const std::string& f : files) value += (value.empty() ? "" : ",") + f;
+      for (const ShardEntry& e : v.entries) db->shard_files_[e.file] = e;
+      chosen[table] = value;
+      chosen_number[table] = it->first;
+      report->tables.push_back(
+          table + " from " + value + " (" + std::to_string(v.records) + " records" +
+          (v.shards.empty() ? "" : ", " + std::to_string(files.size()) + " shards") + ")");
     }
   }
   for (auto it = chosen.begin(); it != chosen.end();) {
     const std::string source = table_source(it->first);
     if (!source.empty() &&
         (!chosen.count(source) || chosen_number[source] > chosen_number[it->first])) {
-      report->set_aside.push_back(it->second + " (older than the table '" + source +
-                                  "' it derives from)");
+      for (const std::string& f : table_value_files(it->second)) {
+        report->set_aside.push_back(f + " (older than the table '" + source + "' it derives from)");
+      }
       it = chosen.erase(it);
     } else {
       ++it;

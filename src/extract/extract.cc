@@ -201,7 +201,6 @@ Status extract_shard(const std::string& db_dir, const ExtractOptions& options, i
   WEAVER_RETURN_IF_ERROR(
       exchange_ghosts(octants.get(), part, start, rank, exchange, st, &part.ghosts, counts));
   if (part.start >= part.stop) return Status::Ok();  // owns no node
-  ghost_corners(part.ghosts, part.start, part.stop, &part.incoming);
   TableOptions topt;
   WEAVER_RETURN_IF_ERROR(plan_extract(*octants, options, memory, result, &topt));
   std::unique_ptr<BTree> nodes;
@@ -209,7 +208,8 @@ Status extract_shard(const std::string& db_dir, const ExtractOptions& options, i
   const std::string scratch_dir =
       db_dir + "/tmp-extract-" + std::to_string(::getpid()) + "-" + std::to_string(rank);
   st = extract_by_sort(*db, *octants, *nodes, scratch_dir, memory, options, result, &part);
-  return finish_shard(db_dir, nodes, st, entry, &result->node_table_bytes);
+  return finish_shard(db_dir, nodes, st, shard_place_among(start, rank), entry,
+                      &result->node_table_bytes);
 }
 
 }  // namespace weaver

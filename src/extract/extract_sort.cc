@@ -18,6 +18,7 @@
 #include "db/leaf_reader.h"
 #include "extract/bucket_worker.h"
 #include "extract/extract_parallel.h"
+#include "extract/ghost_layer.h"
 
 namespace weaver {
 namespace {
@@ -51,7 +52,7 @@ Status extract_by_sort(Database& db, BTree& octants, BTree& nodes, const std::st
     policy.stop = part->stop;
     policy.first_leaf = part->first_leaf;
     policy.ghosts = &part->ghosts;
-    if (!part->incoming.empty()) WEAVER_RETURN_IF_ERROR(spills.add_run(std::move(part->incoming)));
+    WEAVER_RETURN_IF_ERROR(spill_ghost_corners(part->ghosts, part->start, part->stop, spills));
   }
   const Status st = options.threads > 1
                         ? run_parallel(db, octants, nodes, policy, spills, memory, options, result)

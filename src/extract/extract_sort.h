@@ -17,12 +17,12 @@ class Database;
 // Appends the nodes of the octree in `octants` to `nodes` (empty), in buckets
 // of level result->bucket_level (if >= 0) or of about result->bucket_leaves
 // leaves; spill files go under scratch_path.
-// A part (BucketPolicy: start, stop, first_leaf, ghosts; incoming: the
-// ghosts' corners in the part) restricts it to one rank's nodes.
+// A part (BucketPolicy: start, stop, first_leaf, ghosts, whose corners in
+// the part wait in the spill store from the start) restricts it to one
+// rank's nodes.
 struct ExtractPart {
   uint64_t start = 0, stop = UINT64_MAX, first_leaf = 0;
-  std::vector<uint64_t> ghosts;       // sorted leaf keys of earlier parts
-  std::vector<SpillRecord> incoming;  // sorted, one record a key
+  std::vector<uint64_t> ghosts;  // sorted leaf keys of earlier parts
 };
 Status extract_by_sort(Database& db, BTree& octants, BTree& nodes, const std::string& scratch_path,
                        const ExtractMemory& memory, const ExtractOptions& options,

@@ -54,19 +54,25 @@ Status ghost_leaves(BTree& octants, uint64_t first_leaf, uint64_t stop,
   return Status::Ok();
 }
 
-void ghost_corners(const std::vector<uint64_t>& ghosts, uint64_t start, uint64_t stop,
-                   std::vector<SpillRecord>* records) {
-  records->clear();
-  uint64_t corners[8];
-  for (uint64_t key : ghosts) {
-    leaf_corner_keys(key, corners);
-    for (int k = 0; k < 8; ++k) {
-      if (corners[k] >= start && corners[k] < stop)
-        records->push_back({corners[k], corner_direction_bit(k)});
-    }
-  }
+Status spill_ghost_corners(const std::vector<uint64_t>& ghosts, uint64_t start, uint64_t stop,
+                           SpillStore& spills) {
+  constexpr size_t kGhostsARun = size_t{1} << 15;  // 256K records at most, 4 MB
+  std::vector<SpillRecord> run;
   std::vector<uint64_t> packed, scratch;
-  sort_and_merge(*records, packed, scratch);
+  uint64_t corners[8];
+  for (size_t from = 0; from < ghosts.size(); from += kGhostsARun) {
+    run.clear();
+    for (size_t i = from; i < std::min(ghosts.size(), from + kGhostsARun); ++i) {
+      leaf_corner_keys(ghosts[i], corners);
+      for (int k = 0; k < 8; ++k) {
+        if (corners[k] >= start && corners[k] < stop)
+          run.push_back({corners[k], corner_direction_bit(k)});
+      }
+    }
+    sort_and_merge(run, packed, scratch);
+    WEAVER_RETURN_IF_ERROR(spills.add_run(std::vector<SpillRecord>(run.begin(), run.end())));
+  }
+  return Status::Ok();
 }
 
 }  // namespace weaver

@@ -33,9 +33,12 @@ Status ghost_leaves(BTree& octants, uint64_t first_leaf, uint64_t stop,
                     const std::vector<uint64_t>& start, int rank,
                     std::vector<std::vector<uint64_t>>* outgoing);
 
-// The direction bits the ghosts give the nodes in [start, stop): one record
-// per corner there, sorted, one record a key.
-void ghost_corners(const std::vector<uint64_t>& ghosts, uint64_t start, uint64_t stop,
-                   std::vector<SpillRecord>* records);
+// The direction bits the ghosts give the nodes in [start, stop), as runs of
+// the spill store (each sorted, one record a key; a key may recur across
+// runs).  A run at a time, so that the ghosts' corners cost no more memory
+// than the store's cap allows: the last rank's layer holds every leaf on the
+// root's far faces.
+Status spill_ghost_corners(const std::vector<uint64_t>& ghosts, uint64_t start, uint64_t stop,
+                           SpillStore& spills);
 
 }  // namespace weaver
