@@ -9,9 +9,10 @@
 # sharded node table that verifies and compacts to the serial extract's
 # file.  Export of raw and pvtu parts, one a rank, as the serial export's
 # files.  Then: more ranks than work (balance and extract too), ranks given
-# different arguments, a database some rank cannot see, a rank killed at
-# each of its durable steps and one whose write fails at three of them (the
-# old database stays, byte for byte).
+# different arguments, a database some rank cannot see, a sharded mesh that
+# lost its MANIFEST (weaver recover), a rank killed at each of its durable
+# steps and one whose write fails at three of them (the old database stays,
+# byte for byte).
 #
 # usage: check_mpi.sh WEAVER WEAVER_MPI SCRATCH
 set -euo pipefail
@@ -99,6 +100,17 @@ ranks="2 3" check_model layers --model "db:$tmp/layers.db" --freq 0.3 --domain 2
 "$weaver" mesh "$tmp/mesh.serial" --model basin --freq 0.2 --quiet >/dev/null
 run 3 "$mpi" mesh "$tmp/mesh" --model basin --freq 0.2 --quiet >"$tmp/out" || fail "mesh -np 3"
 "$weaver" verify "$tmp/mesh" >/dev/null || fail "mesh: verify of the sharded mesh"
+# A lost MANIFEST: weaver recover rebuilds both sharded tables from the
+# ranks' files, and they compact to the serial mesh's.
+cp -r "$tmp/mesh" "$tmp/mesh.lost" && rm "$tmp/mesh.lost/MANIFEST"
+"$weaver" recover "$tmp/mesh.lost" >"$tmp/out" || fail "recover of the sharded mesh"
+[ "$(grep -c 'shards)$' "$tmp/out")" = 2 ] || fail "recover: not both tables from shards"
+"$weaver" compact "$tmp/mesh.lost" >/dev/null
+for t in octants nodes; do
+  [ "$(md5sum "$tmp/mesh.lost"/$t-*.bt | cut -d' ' -f1)" = \
+    "$(md5sum "$tmp/mesh.serial"/$t-*.bt | cut -d' ' -f1)" ] || fail "recover: $t differ"
+done
+echo "ok  recover of a sharded mesh"
 # Export on the ranks, one part a rank, from the shards: the serial export's
 # files, byte for byte (raw parts by element runs and by a stored graph
 # partition; pvtu pieces within a box).
