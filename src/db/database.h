@@ -157,6 +157,8 @@ std::string table_file_table(const std::string& file);
 // a directory entry has that form.
 std::string shard_file_name(const std::string& name, uint64_t number, int shard);
 bool is_shard_file_name(const std::string& file);
+// A shard file's <n>, as table_file_number's.
+uint64_t shard_file_number(const std::string& file);
 // The files of a tables_ value: one, or a sharded table's shards.
 std::vector<std::string> table_value_files(const std::string& value);
 // A shard file's place among its table's: the k-th of K files (the ranks
