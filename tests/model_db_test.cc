@@ -263,8 +263,12 @@ TEST(ModelDb, ConstructSamplesTheModelDatabaseOnOneAndTwoThreads) {
     std::unique_ptr<Cursor> c;
     ASSERT_TRUE(t->seek(0, &c).ok());
     int fine = 0;
-    for (; c->valid(); (void)c->next()) {
+    // Every leaf; under the sanitizers every 16th (the threads' races are in
+    // the construct, not in this check, which took 47 of TSan's 63 s).
+    const uint64_t stride = testing::scaled(1, 16);
+    for (uint64_t i = 0; c->valid(); (void)c->next(), ++i) {
       const Octant o8 = octant_from_key(c->key());
+      if (i % stride != 0) continue;
       const double e = octant_edge(o8) * p.tick_m;
       float leaf[3];
       std::memcpy(leaf, c->payload(), 12);
