@@ -20,9 +20,7 @@ namespace {
 struct Cut {
   std::vector<uint64_t> key, lo;
   // The rank whose part of the space holds Morton code m.
-  size_t owner(uint64_t m) const {
-    return std::upper_bound(lo.begin(), lo.end() - 1, m) - lo.begin() - 1;
-  }
+  size_t owner(uint64_t m) const { return rank_holding(lo, m); }
 };
 
 uint64_t span_of(int level) { return uint64_t{1} << (3 * (kMaxLevel - level)); }

@@ -63,12 +63,7 @@ ShardPlace place_of_shard(const ConstructOptions& o, const ConstructPlan& p, con
   std::vector<bool> has(o.shards, false);
   SubtreeList subtrees(descent, p, subtree_level(o, p));
   for (Octant root; subtrees.next(&root);) has[rank_of_subtree(o, share, root)] = true;
-  ShardPlace place{0, 0};
-  for (int s = 0; s < o.shards; ++s) {
-    place.k += has[s] && s < o.shard;
-    place.of += has[s];
-  }
-  return place;
+  return shard_place_among(has, o.shard);
 }
 
 // Visits the domain's subtrees on o.threads workers (or on this thread for

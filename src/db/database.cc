@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -97,9 +98,22 @@ bool is_shard_file_name(const std::string& file) {
   return is_table_file_name(file.substr(0, dot) + ".bt");
 }
 
-// A shard file's <n>, as table_file_number's.
+// A shard file without its ".<s>": the name of a table file.
+static std::string shard_file_unsharded(const std::string& file) {
+  return file.substr(0, file.rfind('.', file.size() - 4)) + ".bt";
+}
+
 uint64_t shard_file_number(const std::string& file) {
-  return table_file_number(file.substr(0, file.rfind('.', file.size() - 4)) + ".bt");
+  return table_file_number(shard_file_unsharded(file));
+}
+
+std::string shard_file_table(const std::string& file) {
+  return table_file_table(shard_file_unsharded(file));
+}
+
+int shard_file_shard(const std::string& file) {
+  const size_t dot = file.rfind('.', file.size() - 4);
+  return std::atoi(file.substr(dot + 1, file.size() - 3 - dot - 1).c_str());
 }
 
 std::vector<std::string> table_value_files(const std::string& value) {
@@ -112,14 +126,19 @@ std::vector<std::string> table_value_files(const std::string& value) {
   return files;
 }
 
-ShardPlace shard_place_among(const std::vector<uint64_t>& begin, int rank) {
+ShardPlace shard_place_among(const std::vector<bool>& writes, int rank) {
   ShardPlace place{0, 0};
-  for (size_t s = 0; s + 1 < begin.size(); ++s) {
-    if (begin[s] >= begin[s + 1]) continue;
-    if (static_cast<int>(s) < rank) ++place.k;
-    ++place.of;
+  for (size_t s = 0; s < writes.size(); ++s) {
+    place.k += writes[s] && static_cast<int>(s) < rank;
+    place.of += writes[s];
   }
   return place;
+}
+
+ShardPlace shard_place_among(const std::vector<uint64_t>& begin, int rank) {
+  std::vector<bool> writes;
+  for (size_t s = 0; s + 1 < begin.size(); ++s) writes.push_back(begin[s] < begin[s + 1]);
+  return shard_place_among(writes, rank);
 }
 
 std::string without_shard_place(const std::string& metadata) {

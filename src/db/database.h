@@ -157,8 +157,10 @@ std::string table_file_table(const std::string& file);
 // a directory entry has that form.
 std::string shard_file_name(const std::string& name, uint64_t number, int shard);
 bool is_shard_file_name(const std::string& file);
-// A shard file's <n>, as table_file_number's.
+// A shard file's <n>, <shard> and <name>.  REQUIRES: is_shard_file_name.
 uint64_t shard_file_number(const std::string& file);
+int shard_file_shard(const std::string& file);
+std::string shard_file_table(const std::string& file);
 // The files of a tables_ value: one, or a sharded table's shards.
 std::vector<std::string> table_value_files(const std::string& value);
 // A shard file's place among its table's: the k-th of K files (the ranks
@@ -168,8 +170,10 @@ std::vector<std::string> table_value_files(const std::string& value);
 struct ShardPlace {
   int k = 0, of = 1;
 };
-// The place of rank `rank` among the ranks whose runs [begin[s], begin[s+1])
-// are not empty (begin has an entry past the last rank's).
+// The place of rank `rank` among the ranks that write a file (writes[s]),
+// and among the ranks whose runs [begin[s], begin[s+1]) are not empty
+// (begin has an entry past the last rank's).
+ShardPlace shard_place_among(const std::vector<bool>& writes, int rank);
 ShardPlace shard_place_among(const std::vector<uint64_t>& begin, int rank);
 std::string with_shard_place(const std::string& metadata, ShardPlace place);
 std::string without_shard_place(const std::string& metadata);

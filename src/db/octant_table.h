@@ -2,6 +2,7 @@
 // physical units kept in its metadata.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -35,6 +36,12 @@ Status floor_holding(BTree& table, const Octant& o, uint64_t* key, std::byte* pa
 // another's has first_leaf[r] == first_leaf[r + 1].
 Status cut_equal_runs(BTree& table, int ranks, std::vector<uint64_t>* first_leaf,
                       std::vector<uint64_t>* start);
+// The rank whose part of space holds Morton code m: the last r with
+// start[r] <= m (ranks without leaves, whose start equals the next one's,
+// are passed over).  start as cut_equal_runs gives it.
+inline size_t rank_holding(const std::vector<uint64_t>& start, uint64_t m) {
+  return std::upper_bound(start.begin(), start.end(), m) - start.begin() - 1;
+}
 
 // Physical placement of the tick grid: point (x, y, z) in ticks is at
 // origin + tick * (x, y, z) metres.

@@ -11,7 +11,6 @@
 // renamed "<file>.unused", out of every writer's reach, for the user to
 // inspect or delete.
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <map>
 
@@ -100,17 +99,6 @@ Status check_version(const std::string& dir, const std::string& table, Version* 
   return Status::Ok();
 }
 
-// The rank of a shard file "<name>-<n>.<rank>.bt".
-int shard_file_rank(const std::string& name) {
-  const size_t dot = name.rfind('.', name.size() - 4);
-  return std::atoi(name.substr(dot + 1, name.size() - 3 - dot - 1).c_str());
-}
-
-// The table a shard file belongs to, "<name>" of "<name>-<n>.<rank>.bt".
-std::string shard_file_table(const std::string& name) {
-  return table_file_table(name.substr(0, name.rfind('.', name.size() - 4)) + ".bt");
-}
-
 }  // namespace
 
 Status Database::recover(const std::string& dir, RecoverReport* report) {
@@ -137,7 +125,7 @@ Status Database::recover(const std::string& dir, RecoverReport* report) {
     if (is_table_file_name(name))
       versions[table_file_table(name)][table_file_number(name)].file = name;
     if (is_shard_file_name(name)) {
-      versions[shard_file_table(name)][shard_file_number(name)].shards[shard_file_rank(name)] =
+      versions[shard_file_table(name)][shard_file_number(name)].shards[shard_file_shard(name)] =
           name;
     }
   }

@@ -2,18 +2,13 @@
 
 #include <algorithm>
 
+#include "db/octant_table.h"
 #include "extract/bucket_worker.h"
 #include "schema/octant.h"
 #include "util/octant_key_stream.h"
 
 namespace weaver {
 namespace {
-
-// The rank whose node keys hold `key`: the last whose start is <= key.
-// Ranks without leaves have start equal to the next rank's and are skipped.
-size_t owner_of(const std::vector<uint64_t>& start, uint64_t key) {
-  return std::upper_bound(start.begin(), start.end(), key) - start.begin() - 1;
-}
 
 // Adds key to the lists of ranks [from, to] other than `rank` (each list
 // once: a leaf meets a rank through several neighbours).
@@ -48,7 +43,8 @@ Status ghost_leaves(BTree& octants, uint64_t first_leaf, uint64_t stop,
         if ((d >> a) & 1) box = morton_step(box, a, bit);
       }
       if (box + span - 1 < stop) continue;
-      send_to(key, owner_of(start, box), owner_of(start, box + span - 1), start, rank, outgoing);
+      send_to(key, rank_holding(start, box), rank_holding(start, box + span - 1), start, rank,
+              outgoing);
     }
   }
   return Status::Ok();
