@@ -9,7 +9,7 @@
 #include <map>
 #include <random>
 
-#include "balance/parent_asks.h"
+#include "util/parent_asks.h"
 #include "construct/construct.h"
 #include "db/database.h"
 #include "gen/octree_gen.h"

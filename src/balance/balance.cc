@@ -54,19 +54,6 @@ FillPayload material_fill(const VelocityModel* model, const TableOptions& table)
   };
 }
 
-std::string replace_levels(const std::string& metadata, const LevelCounts& levels) {
-  std::string out;
-  size_t start = 0;
-  while (start <= metadata.size()) {  // drop the old ";levels=..." item
-    size_t end = metadata.find(';', start);
-    if (end == std::string::npos) end = metadata.size();
-    const std::string item = metadata.substr(start, end - start);
-    if (!item.empty() && item.rfind("levels=", 0) != 0) out += (out.empty() ? "" : ";") + item;
-    start = end + 1;
-  }
-  return out + levels_to_metadata(levels);
-}
-
 }  // namespace
 
 BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
@@ -134,7 +121,7 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
       model_of(topt.metadata, memory.model, std::max(1, o.threads));
   const Status st = write_refinement(*leaves, closure.required(), material_fill(model.get(), topt),
                                      *out, o.threads, progress.get(), r, o.keep_from, o.keep_to);
-  if (st.ok()) out->set_metadata(replace_levels(topt.metadata, r->levels));
+  if (st.ok()) out->set_metadata(with_levels(topt.metadata, r->levels));
   return db->publish(kOctantTable, file, out, st);
 }
 

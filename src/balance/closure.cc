@@ -5,7 +5,7 @@
 #include <bit>
 #include <filesystem>
 
-#include "balance/parent_asks.h"
+#include "util/parent_asks.h"
 #include "schema/octant.h"
 #include "sort/external_sort.h"
 #include "util/key_set.h"

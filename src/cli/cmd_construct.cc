@@ -1,5 +1,6 @@
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -18,12 +19,15 @@ constexpr char kUsage[] =
     "                           [--max-level L] [--max-elements N] [--memory BYTES]\n"
     "                           [--threads N] [--origin-geo LON,LAT [--azimuth DEG]\n"
     "                           [--utm-zone Z]] [--outside clamp|error] [--plain]\n"
-    "                           [--quiet]\n"
+    "                           [--unbalanced] [--quiet]\n"
     "\n"
     "Builds the octant table of DB from a velocity model: every leaf satisfies\n"
     "edge <= Vs_min / (F * N), Vs_min being the least Vs of the model over 27\n"
     "sample points of the leaf (corners, edge midpoints, face centres, centre),\n"
-    "and no leaf is finer than needed.  Leaves carry Vp, Vs and density (and Qp,\n"
+    "and no leaf is finer than needed; then the octree is 2:1 balanced (face and\n"
+    "edge), each subtree in memory as it is descended: the table is the one\n"
+    "'weaver construct --unbalanced' then 'weaver balance' write.  New leaves\n"
+    "of the balance carry their own material.  Leaves carry Vp, Vs and density (and Qp,\n"
     "Qs where the model has them) at their centre.  The domain (metres; x, y\n"
     "horizontal, z depth) is made a union of blocks: 100000,100000,37500 is\n"
     "8 x 8 x 3 blocks of level 3; 100000,80000,37500 is 40 x 32 x 15 blocks of\n"
@@ -60,6 +64,8 @@ constexpr char kUsage[] =
     "                     and the leaves of subtrees visited ahead of the writer\n"
     "  --plain            write plain leaf pages (default: packed, where keys are\n"
     "                     delta-coded and payload fields stored column-wise)\n"
+    "  --unbalanced       write the descent's leaves unbalanced (for 'weaver\n"
+    "                     balance', or to compare)\n"
     "  --quiet            no progress line on stderr (default: one that updates\n"
     "                     itself on a terminal, a line every 10 s otherwise; its\n"
     "                     percent is the share of the printed estimate that lies\n"
@@ -105,6 +111,7 @@ Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
   };
   if (!args.values.count("model")) return Status::InvalidArgument("--model NAME is required");
   o->packed = !args.flags.count("plain");
+  o->balanced = !args.flags.count("unbalanced");
   o->model = args.values.at("model");
   if (args.values.count("grid")) o->grid_file = args.values.at("grid");
   WEAVER_RETURN_IF_ERROR(number("freq", &o->freq));
@@ -162,7 +169,7 @@ int parse_construct_command(int argc, char** argv, std::string* db, ConstructOpt
       argc, argv, 2,
       {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level", "memory",
        "max-elements", "threads", "origin-geo", "azimuth", "utm-zone", "outside"},
-      {"plain", "quiet"}, &args);
+      {"plain", "quiet", "unbalanced"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("construct", "expected one DB", kUsage);
@@ -206,6 +213,12 @@ void print_construct_result(const ConstructResult& r, double secs) {
       "%d, worst %.2f points per wavelength, %.2f bytes/leaf\n",
       (unsigned long long)r.elements, secs, r.elements / secs, r.smallest_edge_m, r.largest_edge_m,
       finest_level(r.levels), r.worst_ppw, double(r.table_bytes) / r.elements);
+  if (r.elements > r.descended) {
+    std::printf("balanced   %llu leaves descended, %llu made by splits; %llu leaves around "
+                "the subtrees descended again to balance them (%.1f%%)\n",
+                (unsigned long long)r.descended, (unsigned long long)(r.elements - r.descended),
+                (unsigned long long)r.neighbours, 100.0 * r.neighbours / std::max<uint64_t>(1, r.descended));
+  }
 }
 
 }  // namespace weaver::cli

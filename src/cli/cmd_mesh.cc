@@ -20,10 +20,11 @@ constexpr char kUsage[] =
     "                      [--min-level L] [--max-level L] [--grid FILE] [--threads N]\n"
     "                      [--max-elements N] [--memory BYTES] [--origin-geo LON,LAT\n"
     "                      [--azimuth DEG] [--utm-zone Z]] [--outside clamp|error]\n"
-    "                      [--plain] [--quiet]\n"
+    "                      [--plain] [--unbalanced] [--quiet]\n"
     "\n"
-    "The whole pipeline: construct the octree from the model, 2:1 balance it, extract\n"
-    "the mesh.  Prints a line per stage (count, rate, time, peak memory), then the\n"
+    "The whole pipeline: construct the octree from the model, 2:1 balanced as it is\n"
+    "descended, and extract the mesh (--unbalanced: construct, then 'weaver balance',\n"
+    "then extract, as before).  Prints a line per stage (count, rate, time, peak memory), then the\n"
     "mesh summary (elements, nodes, dangling nodes, as in the paper's Figure 11) and\n"
     "its quality: elements per level, smallest and largest edge, and the fewest\n"
     "points per wavelength at any element.  Options as for 'weaver construct';\n"
@@ -74,7 +75,7 @@ int cmd_mesh(int argc, char** argv) {
       argc, argv, 2,
       {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level", "memory",
        "threads", "max-elements", "origin-geo", "azimuth", "utm-zone", "outside"},
-      {"plain", "quiet"}, &args);
+      {"plain", "quiet", "unbalanced"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("mesh", "expected one DB", kUsage);
@@ -111,18 +112,22 @@ int cmd_mesh(int argc, char** argv) {
   if (!st.ok()) return report("mesh", st);
   stage_line("construct", cr.elements, "leaves", s1.seconds());
 
-  reset_peak();
-  Stage s2;
-  BalanceOptions bo;
-  bo.memory = co.memory;
-  bo.threads = eo.threads;
-  ProgressLine balance_line(style, "balance", "leaves");
-  bo.progress = balance_line.fn();
-  BalanceResult br;
-  st = balance_octree(db, bo, &br);
-  balance_line.finish();
-  if (!st.ok()) return report_after("balance", st, "construct committed the octant table");
-  stage_line("balance", br.output_leaves, "leaves", s2.seconds());
+  LevelCounts levels = cr.levels;
+  if (!co.balanced) {
+    reset_peak();
+    Stage s2;
+    BalanceOptions bo;
+    bo.memory = co.memory;
+    bo.threads = eo.threads;
+    ProgressLine balance_line(style, "balance", "leaves");
+    bo.progress = balance_line.fn();
+    BalanceResult br;
+    st = balance_octree(db, bo, &br);
+    balance_line.finish();
+    if (!st.ok()) return report_after("balance", st, "construct committed the octant table");
+    stage_line("balance", br.output_leaves, "leaves", s2.seconds());
+    levels = br.levels;
+  }
 
   reset_peak();
   Stage s3;
@@ -132,7 +137,7 @@ int cmd_mesh(int argc, char** argv) {
   st = extract_mesh(db, eo, &er);
   extract_line.finish();
   if (!st.ok()) {
-    return report_after("extract", st, "construct and balance committed the balanced octant table");
+    return report_after("extract", st, "construct committed the balanced octant table");
   }
   stage_line("extract", er.nodes, "nodes", s3.seconds());
 
@@ -147,11 +152,11 @@ int cmd_mesh(int argc, char** argv) {
   int finest = 0, coarsest = kMaxLevel;
   std::printf("  elements per level (edge):\n");
   for (int l = 0; l <= kMaxLevel; ++l) {
-    if (br.levels[l] == 0) continue;
+    if (levels[l] == 0) continue;
     finest = std::max(finest, l);
     coarsest = std::min(coarsest, l);
     std::printf("    level %2d (%9.2f m)  %llu\n", l, plan.root_edge_m / (1 << l),
-                (unsigned long long)br.levels[l]);
+                (unsigned long long)levels[l]);
   }
   std::printf("  edges %.2f m .. %.2f m; at least %.2f points per wavelength everywhere\n",
               plan.root_edge_m / (1 << finest), plan.root_edge_m / (1 << coarsest), cr.worst_ppw);

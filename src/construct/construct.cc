@@ -12,6 +12,7 @@
 
 #include "construct/descent.h"
 #include "construct/estimate.h"
+#include "construct/subtree_balance.h"
 #include "db/database.h"
 #include "model/velocity_model.h"
 #include "modeldb/open_model.h"
@@ -35,7 +36,33 @@ constexpr size_t kSubtreesPerThread = 8;
 struct Slot {
   Octant root;
   SubtreeLeaves leaves;
-  bool done = false;  // set by the worker (WorkQueue)
+  uint64_t descended = 0;  // leaves before the balance
+  bool done = false;       // set by the worker (WorkQueue)
+};
+
+// New leaves take the model's material at their centre where weaver balance
+// would (it opens the model the table names; a grid file it cannot name),
+// else their parent's: the balanced table is the one balance writes.
+bool fills_material(const ConstructOptions& o) { return o.model != "grid"; }
+
+// A worker's visit of one subtree: the descent, then (balanced) its balance
+// against the leaves around it.  An overflowing subtree is left as it is.
+class SubtreeVisitor {
+ public:
+  SubtreeVisitor(const ConstructOptions& o, const Descent& d, size_t cap)
+      : descent_(d), cap_(cap), balanced_(o.balanced), balancer_(d, fills_material(o)) {}
+  void visit(Slot* s) {
+    descent_.visit_subtree(s->root, cap_, &s->leaves);
+    s->descended = s->leaves.keys.size();
+    if (balanced_ && !s->leaves.overflow) balancer_.balance(s->root, &s->leaves);
+  }
+  uint64_t neighbours() const { return balancer_.neighbours_collected(); }
+
+ private:
+  const Descent& descent_;
+  size_t cap_;
+  bool balanced_;
+  SubtreeBalancer balancer_;
 };
 
 // The level of the subtrees: as many levels below the blocks as put about
@@ -79,11 +106,15 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
       memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64, uint64_t{1} << 16);
   WorkQueue<Slot> queue;
   std::vector<std::thread> workers;
+  std::vector<std::unique_ptr<SubtreeVisitor>> visitors;
+  for (int i = 0; i < threads; ++i) {
+    visitors.push_back(std::make_unique<SubtreeVisitor>(o, descent, cap));
+  }
   if (threads > 1) {
     for (int i = 0; i < threads; ++i) {
-      workers.emplace_back([&] {
+      workers.emplace_back([&, i] {
         while (Slot* s = queue.pop()) {
-          descent.visit_subtree(s->root, cap, &s->leaves);
+          visitors[i]->visit(s);
           queue.finish(s);
         }
       });
@@ -113,7 +144,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     if (threads > 1) {
       queue.wait_done(head);
     } else {
-      descent.visit_subtree(head->root, cap, &head->leaves);
+      visitors[0]->visit(head);
     }
     ++r->subtrees;
     if (head->leaves.overflow) {
@@ -126,6 +157,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     const SubtreeLeaves& leaves = head->leaves;
     st = out.append_batch(leaves.keys.data(), leaves.payloads.data(), leaves.keys.size());
     leaves.add_to(r);
+    r->descended += head->descended;
     if (o.progress && !leaves.keys.empty()) {
       o.progress(r->elements, share.fraction_before(leaves.keys.back()));
     }
@@ -137,6 +169,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     queue.stop();
     for (auto& w : workers) w.join();
   }
+  for (const auto& v : visitors) r->neighbours += v->neighbours();
   return st;
 }
 

@@ -4,8 +4,10 @@
 // (corners, edge midpoints, face centres and centre), raised to at least
 // --vs-min; and no leaf is finer than needed (its parent breaks the rule).
 // Leaves come from depth-first descents of subtrees in Z-order (on worker
-// threads, descent.h) and are written by sorted append, each with the
-// material at its centre; memory does not grow with the mesh.
+// threads, descent.h), each subtree 2:1 balanced in memory against the
+// leaves around it (subtree_balance.h, unless --unbalanced), and are written
+// by sorted append, each with the material at its centre; memory does not
+// grow with the mesh.
 #pragma once
 
 #include <array>
@@ -41,6 +43,11 @@ struct ConstructOptions {
   int threads = 1;
   // Packed leaf pages (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
+  // Write the minimal face+edge 2:1 balanced refinement of the octree
+  // (subtree_balance.h): the table `weaver balance` would write from the
+  // unbalanced one.  False (--unbalanced) writes the descent's leaves as
+  // they are.
+  bool balanced = true;
   // Refuse to start when the estimated octree (construct/estimate.h) has
   // more leaves than this, or needs more disk than is free.  5G is ~4x the
   // paper's 2 Hz mesh.
@@ -91,6 +98,9 @@ struct ConstructResult {
   uint64_t table_bytes = 0;
   uint64_t subtrees = 0;       // visited by the workers (descent.h), and of those
   uint64_t subtrees_over = 0;  // the ones past the leaf cap, visited again as 8 children
+  // Balanced: the descent's leaves before the balance split some, and the
+  // leaves outside the subtrees descended again to balance them against.
+  uint64_t descended = 0, neighbours = 0;
 };
 
 Status plan_construct(const ConstructOptions& options, ConstructPlan* plan);

@@ -103,16 +103,20 @@ bool Descent::visit(const Octant& o, const float* samples, size_t cap, SubtreeLe
   return true;
 }
 
-void Descent::emit(const Octant& o, double edge_m, double vs, SubtreeLeaves* out) const {
-  const double t = p_.tick_m, half = edge_m / 2;
+void Descent::material(const Octant& o, std::byte* out) const {
+  // As weaver balance computes a new leaf's centre: its tables are the same.
+  const double t = p_.tick_m, half = octant_edge(o) * t / 2;
   const Material m = model_.at(o.x * t + half, o.y * t + half, o.z * t + half);
-  out->keys.push_back(octant_key(o));
   const float f[5] = {m.vp, m.vs, m.rho, m.qp, m.qs};
   static_assert(sizeof f == kMaxPayloadBytes);
-  const size_t bytes = model_.has_q() ? 20 : 12;  // material_schema's record
+  std::memcpy(out, f, payload_bytes());
+}
+
+void Descent::emit(const Octant& o, double edge_m, double vs, SubtreeLeaves* out) const {
+  out->keys.push_back(octant_key(o));
   const size_t at = out->payloads.size();
-  out->payloads.resize(at + bytes);
-  std::memcpy(out->payloads.data() + at, f, bytes);
+  out->payloads.resize(at + payload_bytes());
+  material(o, out->payloads.data() + at);
   ++out->levels[o.level];
   const double ppw = vs / (o_.freq * edge_m);
   if (out->elements == 0 || edge_m < out->smallest_edge_m) out->smallest_edge_m = edge_m;

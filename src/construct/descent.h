@@ -46,6 +46,12 @@ class Descent {
   bool splits(const Octant& o) const;
   // The leaves of o's subtree into *out; stops, with out->overflow, past cap.
   void visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const;
+  // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as
+  // f32), payload_bytes() of them into out.
+  void material(const Octant& o, std::byte* out) const;
+  size_t payload_bytes() const { return model_.has_q() ? 20 : 12; }  // material_schema's record
+  const ConstructPlan& plan() const { return p_; }
+  const VelocityModel& model() const { return model_; }
 
  private:
   // Vs at o's n x n x n lattice (n = 3: its 27 sample points).

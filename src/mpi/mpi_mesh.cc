@@ -1,5 +1,6 @@
-// weaver-mpi mesh: construct, balance and extract on the ranks, each stage
-// a sharded table (the three commands' own code, one after the other).
+// weaver-mpi mesh: construct (balanced as it descends) and extract on the
+// ranks, each stage a sharded table (the commands' own code, one after the
+// other); with --unbalanced, balance between them.
 #include <cstdio>
 
 #include "cli/cli.h"
@@ -18,10 +19,12 @@ int mesh(const Comm& comm, int argc, char** argv) {
   ConstructOptions o;
   bool quiet = false;
   cli::parse_construct_command(argc, argv, &dir, &o, &quiet);
-  BalanceOptions b;
-  b.memory = o.memory;
-  b.threads = o.threads;
-  if (const int c = run_balance(comm, dir, b)) return c;
+  if (!o.balanced) {
+    BalanceOptions b;
+    b.memory = o.memory;
+    b.threads = o.threads;
+    if (const int c = run_balance(comm, dir, b)) return c;
+  }
   ExtractOptions x;
   x.memory = o.memory;
   x.threads = o.threads;

@@ -1,0 +1,72 @@
+// An open-addressing map from octant keys to what the local balance of a
+// subtree knows of them (subtree_balance.h): a leaf of the input, an
+// inner octant of it (an ancestor of leaves), or an octant the balance
+// creates inside a leaf.  The kind rides in bits 5 and 6 of the slot, which
+// no octant key uses (its level slot is below 28), so a slot is 8 bytes.
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <vector>
+
+namespace weaver {
+
+class OctantMap {
+ public:
+  enum Kind : uint64_t { kAbsent = 0, kLeaf = 1, kInner = 2, kCreated = 3 };
+
+  // Empties the map and makes room for `keys` keys (a load of at most a
+  // half; it grows past that).
+  void reset(size_t keys) {
+    count_ = 0;
+    const size_t slots = std::bit_ceil(std::max<size_t>(64, 2 * keys));
+    if (slots_.size() != slots) {
+      slots_.assign(slots, kEmpty);
+    } else {
+      std::fill(slots_.begin(), slots_.end(), kEmpty);
+    }
+    shift_ = 64 - std::countr_zero(slots);
+  }
+
+  Kind find(uint64_t key) const {
+    const uint64_t s = slots_[probe(key)];
+    return s == kEmpty ? kAbsent : static_cast<Kind>((s & kKindBits) >> kKindShift);
+  }
+  // Adds key as `kind` unless it is present; true if it was added.
+  bool add(uint64_t key, Kind kind) {
+    uint64_t& s = slots_[probe(key)];
+    if (s != kEmpty) return false;
+    s = key | (uint64_t{kind} << kKindShift);
+    if (++count_ * 2 > slots_.size()) grow();
+    return true;
+  }
+
+ private:
+  static constexpr uint64_t kEmpty = ~uint64_t{0};
+  static constexpr int kKindShift = 5;
+  static constexpr uint64_t kKindBits = uint64_t{3} << kKindShift;
+
+  // The slot holding key, or the empty slot where it would go.
+  size_t probe(uint64_t key) const {
+    const size_t mask = slots_.size() - 1;
+    size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ULL) >> shift_);
+    while (slots_[i] != kEmpty && (slots_[i] & ~kKindBits) != key) i = (i + 1) & mask;
+    return i;
+  }
+
+  void grow() {
+    std::vector<uint64_t> old(2 * slots_.size(), kEmpty);
+    old.swap(slots_);
+    shift_ -= 1;
+    for (uint64_t s : old) {
+      if (s != kEmpty) slots_[probe(s & ~kKindBits)] = s;
+    }
+  }
+
+  std::vector<uint64_t> slots_;
+  size_t count_ = 0;
+  int shift_ = 64;
+};
+
+}  // namespace weaver

@@ -1,0 +1,219 @@
+#include "construct/subtree_balance.h"
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+
+#include "util/parent_asks.h"
+
+namespace weaver {
+namespace {
+
+// Whether octant x meets the half-open box [lo, hi) with some volume.
+bool meets(const Octant& x, const int64_t lo[3], const int64_t hi[3]) {
+  const int64_t e = octant_edge(x);
+  const int64_t c[3] = {x.x, x.y, x.z};
+  for (int a = 0; a < 3; ++a) {
+    if (c[a] >= hi[a] || c[a] + e <= lo[a]) return false;
+  }
+  return true;
+}
+
+bool inside(const Octant& x, const Octant& root) {
+  return x.level >= root.level && octant_ancestor(x, root.level) == root;
+}
+
+}  // namespace
+
+SubtreeBalancer::SubtreeBalancer(const Descent& descent, bool fill_material)
+    : descent_(descent), fill_(fill_material) {}
+
+void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
+  if (leaves->keys.empty()) return;
+  grow_box(root, *leaves);
+  local_.clear();
+  const ConstructPlan& p = descent_.plan();
+  // The blocks the grown box meets, each descended again where it meets it.
+  const int64_t block = octant_edge(p.block_level);
+  int64_t first[3], last[3];
+  for (int a = 0; a < 3; ++a) {
+    first[a] = std::max<int64_t>(0, box_lo_[a] / block);
+    last[a] = std::min<int64_t>(p.blocks[a], (box_hi_[a] + block - 1) / block);
+  }
+  const double lo_m[3] = {box_lo_[0] * p.tick_m, box_lo_[1] * p.tick_m, box_lo_[2] * p.tick_m};
+  const double hi_m[3] = {box_hi_[0] * p.tick_m, box_hi_[1] * p.tick_m, box_hi_[2] * p.tick_m};
+  descent_.model().focus(lo_m, hi_m);
+  for (int64_t k = first[2]; k < last[2]; ++k)
+    for (int64_t j = first[1]; j < last[1]; ++j)
+      for (int64_t i = first[0]; i < last[0]; ++i) {
+        collect({uint32_t(i * block), uint32_t(j * block), uint32_t(k * block),
+                 uint8_t(p.block_level)},
+                root);
+      }
+  collected_ += local_.size();
+  local_.insert(local_.end(), leaves->keys.begin(), leaves->keys.end());
+  std::sort(local_.begin(), local_.end());
+  ripple();
+  refine(root, leaves);
+}
+
+// The subtree's box grown on each side by the edge of the largest own leaf
+// touching that side, within the domain.
+void SubtreeBalancer::grow_box(const Octant& root, const SubtreeLeaves& leaves) {
+  const int64_t r_lo[3] = {root.x, root.y, root.z};
+  const int64_t r_edge = octant_edge(root);
+  int64_t grow_lo[3] = {0, 0, 0}, grow_hi[3] = {0, 0, 0};
+  for (uint64_t key : leaves.keys) {
+    const Octant o = octant_from_key(key);
+    const int64_t e = octant_edge(o), c[3] = {o.x, o.y, o.z};
+    for (int a = 0; a < 3; ++a) {
+      if (c[a] == r_lo[a]) grow_lo[a] = std::max(grow_lo[a], e);
+      if (c[a] + e == r_lo[a] + r_edge) grow_hi[a] = std::max(grow_hi[a], e);
+    }
+  }
+  const ConstructPlan& p = descent_.plan();
+  for (int a = 0; a < 3; ++a) {
+    const int64_t domain_end = int64_t{p.blocks[a]} * octant_edge(p.block_level);
+    box_lo_[a] = std::max<int64_t>(0, r_lo[a] - grow_lo[a]);
+    box_hi_[a] = std::min<int64_t>(domain_end, r_lo[a] + r_edge + grow_hi[a]);
+  }
+}
+
+// The input leaves under x that meet the grown box, outside root, into
+// local_.  x's ancestors split (it is a block or a child of a split).
+void SubtreeBalancer::collect(const Octant& x, const Octant& root) {
+  if (!meets(x, box_lo_, box_hi_) || inside(x, root)) return;
+  // An ancestor of root splits: root is a subtree of the descent.
+  if (inside(root, x) || descent_.splits(x)) {
+    for (int c = 0; c < 8; ++c) collect(octant_child(x, c), root);
+    return;
+  }
+  local_.push_back(octant_key(x));
+}
+
+// Every local leaf, and its ancestors as inner octants, into the map; each
+// leaf's ask into asks_ of its level (the leaves of one parent merged: they
+// come one after another among the leaves of their level).
+void SubtreeBalancer::add_local(uint64_t key) {
+  map_.add(key, OctantMap::kLeaf);
+  const int level = octant_key_level(key);
+  if (level == 0) return;
+  const uint64_t parent = octant_key_parent(key);
+  const unsigned bit = 1u << octant_key_child_id(key);
+  std::vector<Ask>& asks = asks_[level];
+  if (!asks.empty() && asks.back().parent == parent) {
+    asks.back().children |= bit;
+  } else {
+    asks.push_back({parent, bit});
+  }
+  for (uint64_t q = parent; map_.add(q, OctantMap::kInner) && octant_key_level(q) > 0;) {
+    q = octant_key_parent(q);
+  }
+}
+
+// The created octants (strictly inside a local leaf, required by the
+// balance), into created_ in key order.
+void SubtreeBalancer::ripple() {
+  map_.reset(local_.size() + local_.size() / 4 + 64);
+  created_.clear();
+  int finest = 0;
+  for (uint64_t key : local_) {
+    add_local(key);
+    finest = std::max(finest, octant_key_level(key));
+  }
+  for (int l = finest; l >= 1; --l) ask_level(l);
+  std::sort(created_.begin(), created_.end());
+}
+
+// The asks of level l's parents: each neighbour one level coarser that is
+// strictly inside a leaf (its nearest octant in the map, going up, is a
+// leaf or created) is created, and its parent asks in turn at level l - 1.
+// A neighbour whose nearest octant is inner lies where no local leaf is.
+void SubtreeBalancer::ask_level(int l) {
+  std::vector<Ask>& asks = asks_[l];
+  if (unsorted_[l]) {
+    std::sort(asks.begin(), asks.end(), [](const Ask& a, const Ask& b) { return a.parent < b.parent; });
+    size_t n = 0;
+    for (const Ask& a : asks) {
+      if (n > 0 && asks[n - 1].parent == a.parent) {
+        asks[n - 1].children |= a.children;
+      } else {
+        asks[n++] = a;
+      }
+    }
+    asks.resize(n);
+    unsorted_[l] = false;
+  }
+  for (const Ask& a : asks) {
+    for (uint32_t bits = parent_asks::kTouchedBy[a.children]; bits != 0; bits &= bits - 1) {
+      uint64_t nb = 0;
+      if (!octant_key_neighbour(a.parent, kFaceAndEdgeDirections[std::countr_zero(bits)], &nb)) {
+        continue;
+      }
+      if (map_.find(nb) != OctantMap::kAbsent) continue;  // resolved, or created already
+      OctantMap::Kind above = OctantMap::kAbsent;
+      for (uint64_t q = nb; above == OctantMap::kAbsent;) {
+        q = octant_key_parent(q);
+        above = map_.find(q);
+      }
+      if (above == OctantMap::kInner) continue;
+      map_.add(nb, OctantMap::kCreated);
+      created_.push_back(nb);
+      if (l - 1 > 0) {
+        asks_[l - 1].push_back({octant_key_parent(nb), 255});
+        unsorted_[l - 1] = true;
+      }
+    }
+  }
+  asks.clear();
+}
+
+// Each own leaf split just enough to resolve the created octants inside it.
+void SubtreeBalancer::refine(const Octant& root, SubtreeLeaves* leaves) {
+  out_.clear();
+  const size_t bytes = descent_.payload_bytes();
+  size_t pos = std::lower_bound(created_.begin(), created_.end(), octant_key(root)) -
+               created_.begin();
+  for (size_t i = 0; i < leaves->keys.size(); ++i) {
+    const uint64_t key = leaves->keys[i];
+    const std::byte* payload = leaves->payloads.data() + i * bytes;
+    while (pos < created_.size() && created_[pos] <= key) ++pos;
+    if (pos == created_.size() || created_[pos] >= octant_key_subtree_end(key)) {
+      out_.keys.push_back(key);
+      out_.payloads.insert(out_.payloads.end(), payload, payload + bytes);
+      ++out_.levels[octant_key_level(key)];
+      continue;
+    }
+    for (int c = 0; c < 8; ++c) split(octant_child(octant_from_key(key), c), payload, &pos, &out_);
+  }
+  out_.elements = out_.keys.size();
+  int coarsest = 0;
+  while (out_.levels[coarsest] == 0) ++coarsest;
+  leaves->keys.swap(out_.keys);
+  leaves->payloads.swap(out_.payloads);
+  leaves->levels = out_.levels;
+  leaves->elements = out_.elements;
+  leaves->largest_edge_m = octant_edge(coarsest) * descent_.plan().tick_m;
+}
+
+// o, a new octant, is a leaf unless something created lies strictly inside it.
+void SubtreeBalancer::split(const Octant& o, const std::byte* parent_payload, size_t* pos,
+                            SubtreeLeaves* out) {
+  const uint64_t key = octant_key(o), end = octant_key_subtree_end(key);
+  while (*pos < created_.size() && created_[*pos] <= key) ++*pos;
+  if (*pos < created_.size() && created_[*pos] < end) {
+    for (int c = 0; c < 8; ++c) split(octant_child(o, c), parent_payload, pos, out);
+    return;
+  }
+  const size_t bytes = descent_.payload_bytes(), at = out->payloads.size();
+  out->keys.push_back(key);
+  out->payloads.resize(at + bytes);
+  if (fill_) {
+    descent_.material(o, out->payloads.data() + at);
+  } else {
+    std::memcpy(out->payloads.data() + at, parent_payload, bytes);
+  }
+  ++out->levels[o.level];
+}
+
+}  // namespace weaver

@@ -1,0 +1,83 @@
+// The 2:1 balance of one subtree of construct's descent, in memory, while
+// its leaves are hot: construct writes the balanced octree directly, the
+// same table that `construct --unbalanced` then `weaver balance` write.
+//
+// Which leaves outside the subtree can refine a leaf o inside it?  Balance
+// refines o only through a chain of required octants c(m+1), ..., c(k-1)
+// that starts at an input leaf q = c(k) of level k and ends inside o (level
+// m), each c(j) a face or edge neighbour of P(j), the parent of c(j+1), each
+// but the last made by splitting an input leaf (balance/closure.h).  P(j)
+// touches c(j) and has its edge E(j), so c(j+1) lies in c(j) grown by E(j)
+// on every side, and q in o grown by E(m+1) + ... + E(k-1) < E(m): the
+// insulation layer of Isaac, Burstedde and Ghattas's parallel balance (the
+// 3 x 3 x 3 block of o-sized octants around o; balance_shard.h).  So o's
+// refinement depends only on the input leaves that meet that open block,
+// and the block leaves the subtree only where o touches its boundary.  The
+// balancer
+//   1. grows the subtree's box, side by side, by the edge of the largest
+//      leaf touching that side, and collects the input leaves outside the
+//      subtree that meet it, by descending the model again (the descent is
+//      a function of the octant: no table is read);
+//   2. ripples the requirements of these and the subtree's own leaves from
+//      fine to coarse (a leaf asks for the octants one level coarser that
+//      it touches; an octant made by a split, for all of its parent's face
+//      and edge neighbours), keeping the octants that lie strictly inside
+//      a leaf: the ones the balance creates;
+//   3. splits each own leaf just enough to resolve what was created inside
+//      it.  A new leaf takes the model's material at its centre (or its
+//      parent's, where weaver balance would keep the parent's).
+// Any extra leaf collected only adds requirements the whole octree has too,
+// so the result is exact; the tests compare it with weaver balance.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "construct/descent.h"
+#include "construct/octant_map.h"
+#include "schema/octant.h"
+
+namespace weaver {
+
+class SubtreeBalancer {
+ public:
+  // fill_material: new leaves take the model's material at their centre;
+  // else a copy of the leaf they split.
+  SubtreeBalancer(const Descent& descent, bool fill_material);
+
+  // Replaces *leaves (root's subtree, in key order, as visit_subtree gives
+  // them) with their refinement in the balanced octree; levels and
+  // elements follow, the edge and ppw figures of the descent stay.
+  void balance(const Octant& root, SubtreeLeaves* leaves);
+
+  // Leaves outside the subtrees collected, summed over the calls.
+  uint64_t neighbours_collected() const { return collected_; }
+
+ private:
+  struct Ask {
+    uint64_t parent;
+    unsigned children;  // a bit for each child that asks (255: all)
+  };
+
+  void grow_box(const Octant& root, const SubtreeLeaves& leaves);
+  void collect(const Octant& x, const Octant& root);
+  void add_local(uint64_t key);
+  void ripple();
+  void ask_level(int level);
+  void refine(const Octant& root, SubtreeLeaves* leaves);
+  void split(const Octant& o, const std::byte* parent_payload, size_t* pos, SubtreeLeaves* out);
+
+  const Descent& descent_;
+  const bool fill_;
+  int64_t box_lo_[3] = {}, box_hi_[3] = {};  // the grown box, ticks, half-open
+  std::vector<uint64_t> local_;  // the subtree's leaves and the ones collected, in key order
+  OctantMap map_;
+  std::array<std::vector<Ask>, kMaxLevel + 1> asks_;  // by the level of the children
+  std::array<bool, kMaxLevel + 1> unsorted_{};        // created octants added to asks_
+  std::vector<uint64_t> created_;
+  SubtreeLeaves out_;
+  uint64_t collected_ = 0;
+};
+
+}  // namespace weaver
