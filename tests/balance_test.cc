@@ -192,6 +192,7 @@ TEST(BalanceThreads, AnyThreadCountWritesTheSameTable) {
   testing::TempDir dir;
   ConstructOptions co;
   co.model = "basin";
+  co.balanced = false;
   co.freq = testing::small_scale() ? 0.1 : 0.2;
   ConstructPlan plan;
   ConstructResult cr;
@@ -251,6 +252,7 @@ TEST(BalanceThreads, AnyThreadCountWritesTheSameTable) {
 TEST_F(BalanceTest, NewLeavesTakeTheModelsMaterialAtTheirCentre) {
   ConstructOptions co;
   co.model = "basin";
+  co.balanced = false;
   co.freq = 0.1;
   ConstructPlan plan;
   ConstructResult cr;

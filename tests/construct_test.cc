@@ -175,6 +175,7 @@ TEST(Construct, EveryLeafMeetsTheRuleAndNoneIsFinerThanNeeded) {
                         Case{"basin", 0.3, {100000, 50000, 37500}, 600}}) {
     testing::TempDir dir;
     ConstructOptions o;
+    o.balanced = false;  // the descent's own leaves
     o.model = c.model;
     o.freq = c.freq;
     o.domain_m = c.domain;

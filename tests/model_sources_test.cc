@@ -265,7 +265,7 @@ TEST(ModelSources, ConstructImportsAModelFileIntoItsDatabase) {
         bench::run_program({WEAVER_BINARY, "mesh", db, "--model", from, "--freq", "0.1", "--domain",
                             "40000,40000,20000", "--threads", "2", "--quiet"},
                            &rss);
-    ASSERT_NE(out.find("balance"), std::string::npos) << out;
+    ASSERT_NE(out.find("balanced   "), std::string::npos) << out;
     ASSERT_NE(out.find("imported   " + from), std::string::npos) << out;
     ASSERT_NE(out.find("elements per level"), std::string::npos) << out;
     std::unique_ptr<DbModel> m;

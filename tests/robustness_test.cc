@@ -226,7 +226,7 @@ TEST_F(Robustness, RunawaySizesAreRefusedBeforeWriting) {
 
 TEST_F(Robustness, MeshSaysWhichStagesCommittedWhenALaterOneFails) {
   // Count the durable steps of a whole mesh run, then fail one near the end
-  // (in extract) and one in the middle (in balance, after construct).
+  // (in extract, after construct).
   const std::string args = "mesh DB --model basin --freq 0.05 --domain 20000,20000,10000";
   auto with = [&](const std::string& db) { return std::string(args).replace(5, 2, db); };
   const CommandRun count = run(with(dir_.file("count")), "WEAVER_CRASH_AT=0 ");
@@ -237,7 +237,8 @@ TEST_F(Robustness, MeshSaysWhichStagesCommittedWhenALaterOneFails) {
   EXPECT_EQ(late.code, 1);
   EXPECT_EQ(lines(late.err), 1) << late.err;
   EXPECT_NE(late.err.find("extract failed"), std::string::npos) << late.err;
-  EXPECT_NE(late.err.find("construct and balance committed"), std::string::npos) << late.err;
+  EXPECT_NE(late.err.find("construct committed the balanced octant table"), std::string::npos)
+      << late.err;
   expect_verifies(dir_.file("late"));
 }
 

@@ -55,6 +55,8 @@ void print_construct_plan(const weaver::ConstructOptions& o, const weaver::Const
 Status parse_export_options(const ParsedArgs& args, weaver::ExportOptions* o);
 // The "constructed ..." line of a finished construct that took secs.
 void print_construct_result(const weaver::ConstructResult& r, double secs);
+// The balanced construct's figures (nothing for --unbalanced).
+void print_construct_balance(const weaver::ConstructResult& r);
 // A --model naming a model file (etree:, grid:, layers:, xyz:): imported
 // into DB's model table, printed, and read from there ("db:DB").
 Status import_model_option(const std::string& db, weaver::ConstructOptions* o);

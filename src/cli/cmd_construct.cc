@@ -213,12 +213,16 @@ void print_construct_result(const ConstructResult& r, double secs) {
       "%d, worst %.2f points per wavelength, %.2f bytes/leaf\n",
       (unsigned long long)r.elements, secs, r.elements / secs, r.smallest_edge_m, r.largest_edge_m,
       finest_level(r.levels), r.worst_ppw, double(r.table_bytes) / r.elements);
-  if (r.elements > r.descended) {
-    std::printf("balanced   %llu leaves descended, %llu made by splits; %llu leaves around "
-                "the subtrees descended again to balance them (%.1f%%)\n",
-                (unsigned long long)r.descended, (unsigned long long)(r.elements - r.descended),
-                (unsigned long long)r.neighbours, 100.0 * r.neighbours / std::max<uint64_t>(1, r.descended));
-  }
+  print_construct_balance(r);
+}
+
+void print_construct_balance(const ConstructResult& r) {
+  if (r.descended == 0) return;  // unbalanced
+  std::printf("balanced   %llu leaves descended, %llu more made by the balance's splits; %llu "
+              "leaves around the subtrees descended again (%.1f%%)\n",
+              (unsigned long long)r.descended, (unsigned long long)(r.elements - r.descended),
+              (unsigned long long)r.neighbours,
+              100.0 * r.neighbours / std::max<uint64_t>(1, r.descended));
 }
 
 }  // namespace weaver::cli

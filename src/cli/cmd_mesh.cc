@@ -111,6 +111,7 @@ int cmd_mesh(int argc, char** argv) {
   construct_line.finish();
   if (!st.ok()) return report("mesh", st);
   stage_line("construct", cr.elements, "leaves", s1.seconds());
+  print_construct_balance(cr);
 
   LevelCounts levels = cr.levels;
   if (!co.balanced) {

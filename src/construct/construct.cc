@@ -28,7 +28,10 @@ constexpr int kMaxBlockLevel = 10;
 constexpr int kRoundedBlockLevel = 7;
 // Subtrees are cut so that the estimate puts about this many leaves in
 // each: enough to keep a thread busy for a while, few enough to balance.
+// A balanced construct descends again the leaves around each subtree, a
+// share that falls as the subtree grows: it takes 8 times as many.
 constexpr double kLeavesPerSubtree = 4096;
+constexpr double kLeavesPerBalancedSubtree = 8 * kLeavesPerSubtree;
 // Subtrees in flight per thread: workers run ahead of the writer.
 constexpr size_t kSubtreesPerThread = 8;
 
@@ -53,8 +56,9 @@ class SubtreeVisitor {
       : descent_(d), cap_(cap), balanced_(o.balanced), balancer_(d, fills_material(o)) {}
   void visit(Slot* s) {
     descent_.visit_subtree(s->root, cap_, &s->leaves);
+    if (!balanced_ || s->leaves.overflow) return;
     s->descended = s->leaves.keys.size();
-    if (balanced_ && !s->leaves.overflow) balancer_.balance(s->root, &s->leaves);
+    balancer_.balance(s->root, &s->leaves);
   }
   uint64_t neighbours() const { return balancer_.neighbours_collected(); }
 
@@ -71,7 +75,8 @@ int subtree_level(const ConstructOptions& o, const ConstructPlan& p) {
   const double blocks = double(p.blocks[0]) * p.blocks[1] * p.blocks[2];
   double per_subtree = p.estimated_elements / blocks;
   int level = p.block_level;
-  while (level < o.max_level && per_subtree > kLeavesPerSubtree) per_subtree /= 8, ++level;
+  const double target = o.balanced ? kLeavesPerBalancedSubtree : kLeavesPerSubtree;
+  while (level < o.max_level && per_subtree > target) per_subtree /= 8, ++level;
   return level;
 }
 

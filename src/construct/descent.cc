@@ -86,21 +86,27 @@ void Descent::visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) con
 bool Descent::visit(const Octant& o, const float* samples, size_t cap, SubtreeLeaves* out) const {
   const double vs = vs_min_of(samples);
   if (splits(o, vs)) {
-    float fine[125], child[27];
-    lattice(o, 5, fine);
+    float children[8][27];
+    children_samples(o, children);
     for (int c = 0; c < 8; ++c) {
-      const int cx = 2 * (c & 1), cy = (c & 2), cz = (c & 4) / 2;
-      for (int k = 0; k < 3; ++k)
-        for (int j = 0; j < 3; ++j)
-          for (int i = 0; i < 3; ++i)
-            child[(k * 3 + j) * 3 + i] = fine[((cz + k) * 5 + cy + j) * 5 + cx + i];
-      if (!visit(octant_child(o, c), child, cap, out)) return false;
+      if (!visit(octant_child(o, c), children[c], cap, out)) return false;
     }
     return true;
   }
   if (out->elements == cap) return false;
   emit(o, octant_edge(o) * p_.tick_m, vs, out);
   return true;
+}
+
+void Descent::children_samples(const Octant& o, float (*out)[27]) const {
+  float fine[125];
+  lattice(o, 5, fine);
+  for (int c = 0; c < 8; ++c) {
+    const int cx = 2 * (c & 1), cy = (c & 2), cz = (c & 4) / 2;
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) out[c][(k * 3 + j) * 3 + i] = fine[((cz + k) * 5 + cy + j) * 5 + cx + i];
+  }
 }
 
 void Descent::material(const Octant& o, std::byte* out) const {

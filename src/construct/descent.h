@@ -44,6 +44,15 @@ class Descent {
 
   // Whether the descent splits o (rather than writing it as a leaf).
   bool splits(const Octant& o) const;
+  // The same from o's 27 samples (sample_points, or children_samples of
+  // its parent), as the descent decides it.
+  bool splits_sampled(const Octant& o, const float* samples) const {
+    return splits(o, vs_min_of(samples));
+  }
+  // Vs at o's 27 sample points (corners, edge midpoints, face centres, centre).
+  void sample_points(const Octant& o, float* out) const { lattice(o, 3, out); }
+  // The 27 samples of each of o's children, from o's 5 x 5 x 5 lattice.
+  void children_samples(const Octant& o, float (*out)[27]) const;
   // The leaves of o's subtree into *out; stops, with out->overflow, past cap.
   void visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const;
   // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as

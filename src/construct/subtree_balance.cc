@@ -1,6 +1,7 @@
 #include "construct/subtree_balance.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cstring>
 
@@ -19,6 +20,24 @@ bool meets(const Octant& x, const int64_t lo[3], const int64_t hi[3]) {
   return true;
 }
 
+// By child position: the face and edge directions (a bit each, as in
+// kFaceAndEdgeDirections) whose neighbour lies outside the parent.
+constexpr std::array<uint32_t, 8> leaving_parent_table() {
+  std::array<uint32_t, 8> t{};
+  for (int c = 0; c < 8; ++c) {
+    for (size_t i = 0; i < kFaceAndEdgeDirections.size(); ++i) {
+      const Direction d = kFaceAndEdgeDirections[i];
+      const int step[3] = {d.dx, d.dy, d.dz};
+      for (int a = 0; a < 3; ++a) {
+        const bool far = (c >> a) & 1;
+        if ((step[a] > 0 && far) || (step[a] < 0 && !far)) t[c] |= 1u << i;
+      }
+    }
+  }
+  return t;
+}
+constexpr std::array<uint32_t, 8> kLeavingParent = leaving_parent_table();
+
 bool inside(const Octant& x, const Octant& root) {
   return x.level >= root.level && octant_ancestor(x, root.level) == root;
 }
@@ -31,7 +50,6 @@ SubtreeBalancer::SubtreeBalancer(const Descent& descent, bool fill_material)
 void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
   if (leaves->keys.empty()) return;
   grow_box(root, *leaves);
-  local_.clear();
   const ConstructPlan& p = descent_.plan();
   // The blocks the grown box meets, each descended again where it meets it.
   const int64_t block = octant_edge(p.block_level);
@@ -43,16 +61,23 @@ void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
   const double lo_m[3] = {box_lo_[0] * p.tick_m, box_lo_[1] * p.tick_m, box_lo_[2] * p.tick_m};
   const double hi_m[3] = {box_hi_[0] * p.tick_m, box_hi_[1] * p.tick_m, box_hi_[2] * p.tick_m};
   descent_.model().focus(lo_m, hi_m);
+  blocks_.clear();
   for (int64_t k = first[2]; k < last[2]; ++k)
     for (int64_t j = first[1]; j < last[1]; ++j)
       for (int64_t i = first[0]; i < last[0]; ++i) {
-        collect({uint32_t(i * block), uint32_t(j * block), uint32_t(k * block),
-                 uint8_t(p.block_level)},
-                root);
+        blocks_.push_back({uint32_t(i * block), uint32_t(j * block), uint32_t(k * block),
+                           uint8_t(p.block_level)});
       }
-  collected_ += local_.size();
-  local_.insert(local_.end(), leaves->keys.begin(), leaves->keys.end());
-  std::sort(local_.begin(), local_.end());
+  std::sort(blocks_.begin(), blocks_.end(),
+            [](const Octant& a, const Octant& b) { return octant_key(a) < octant_key(b); });
+  collected_.clear();
+  for (const Octant& b : blocks_) {
+    if (wanted(b, root)) collect(b, nullptr, root);
+  }
+  collected_count_ += collected_.size();
+  local_.resize(collected_.size() + leaves->keys.size());
+  std::merge(collected_.begin(), collected_.end(), leaves->keys.begin(), leaves->keys.end(),
+             local_.begin());
   ripple();
   refine(root, leaves);
 }
@@ -79,16 +104,35 @@ void SubtreeBalancer::grow_box(const Octant& root, const SubtreeLeaves& leaves) 
   }
 }
 
+bool SubtreeBalancer::wanted(const Octant& x, const Octant& root) const {
+  return meets(x, box_lo_, box_hi_) && !inside(x, root);
+}
+
 // The input leaves under x that meet the grown box, outside root, into
-// local_.  x's ancestors split (it is a block or a child of a split).
-void SubtreeBalancer::collect(const Octant& x, const Octant& root) {
-  if (!meets(x, box_lo_, box_hi_) || inside(x, root)) return;
-  // An ancestor of root splits: root is a subtree of the descent.
-  if (inside(root, x) || descent_.splits(x)) {
-    for (int c = 0; c < 8; ++c) collect(octant_child(x, c), root);
+// collected_ in key order.  x's ancestors split (it is a block or a child
+// of a split); samples are its 27 (or null: x samples them itself).  A
+// split hands its children their samples from its 5 x 5 x 5 lattice when
+// most of them are wanted (125 points for 8 x 27), else each takes its own.
+void SubtreeBalancer::collect(const Octant& x, const float* samples, const Octant& root) {
+  bool split = inside(root, x);  // an ancestor of root splits: root is a subtree of the descent
+  if (!split) {
+    float own[27];
+    if (samples == nullptr) descent_.sample_points(x, own), samples = own;
+    split = descent_.splits_sampled(x, samples);
+  }
+  if (!split) {
+    collected_.push_back(octant_key(x));
     return;
   }
-  local_.push_back(octant_key(x));
+  bool want[8];
+  int wanted_children = 0;
+  for (int c = 0; c < 8; ++c) wanted_children += want[c] = wanted(octant_child(x, c), root);
+  float children[8][27];
+  const bool shared = wanted_children >= 5;
+  if (shared) descent_.children_samples(x, children);
+  for (int c = 0; c < 8; ++c) {
+    if (want[c]) collect(octant_child(x, c), shared ? children[c] : nullptr, root);
+  }
 }
 
 // Every local leaf, and its ancestors as inner octants, into the map; each
@@ -104,7 +148,7 @@ void SubtreeBalancer::add_local(uint64_t key) {
   if (!asks.empty() && asks.back().parent == parent) {
     asks.back().children |= bit;
   } else {
-    asks.push_back({parent, bit});
+    asks.push_back({parent, bit, false});
   }
   for (uint64_t q = parent; map_.add(q, OctantMap::kInner) && octant_key_level(q) > 0;) {
     q = octant_key_parent(q);
@@ -137,6 +181,7 @@ void SubtreeBalancer::ask_level(int l) {
     for (const Ask& a : asks) {
       if (n > 0 && asks[n - 1].parent == a.parent) {
         asks[n - 1].children |= a.children;
+        asks[n - 1].created |= a.created;
       } else {
         asks[n++] = a;
       }
@@ -145,7 +190,12 @@ void SubtreeBalancer::ask_level(int l) {
     unsorted_[l] = false;
   }
   for (const Ask& a : asks) {
-    for (uint32_t bits = parent_asks::kTouchedBy[a.children]; bits != 0; bits &= bits - 1) {
+    uint32_t asked = parent_asks::kTouchedBy[a.children];
+    // The parent's siblings are there (leaves or inner) when its own parent
+    // is inner, as it is above a leaf of the input: only the neighbours
+    // outside it are asked about.
+    if (!a.created && l >= 2) asked &= kLeavingParent[octant_key_child_id(a.parent)];
+    for (uint32_t bits = asked; bits != 0; bits &= bits - 1) {
       uint64_t nb = 0;
       if (!octant_key_neighbour(a.parent, kFaceAndEdgeDirections[std::countr_zero(bits)], &nb)) {
         continue;
@@ -160,7 +210,7 @@ void SubtreeBalancer::ask_level(int l) {
       map_.add(nb, OctantMap::kCreated);
       created_.push_back(nb);
       if (l - 1 > 0) {
-        asks_[l - 1].push_back({octant_key_parent(nb), 255});
+        asks_[l - 1].push_back({octant_key_parent(nb), 255, true});
         unsorted_[l - 1] = true;
       }
     }

@@ -52,16 +52,18 @@ class SubtreeBalancer {
   void balance(const Octant& root, SubtreeLeaves* leaves);
 
   // Leaves outside the subtrees collected, summed over the calls.
-  uint64_t neighbours_collected() const { return collected_; }
+  uint64_t neighbours_collected() const { return collected_count_; }
 
  private:
   struct Ask {
     uint64_t parent;
     unsigned children;  // a bit for each child that asks (255: all)
+    bool created;       // a created child asks (its grandparent may be a leaf)
   };
 
   void grow_box(const Octant& root, const SubtreeLeaves& leaves);
-  void collect(const Octant& x, const Octant& root);
+  void collect(const Octant& x, const float* samples, const Octant& root);
+  bool wanted(const Octant& x, const Octant& root) const;
   void add_local(uint64_t key);
   void ripple();
   void ask_level(int level);
@@ -71,13 +73,15 @@ class SubtreeBalancer {
   const Descent& descent_;
   const bool fill_;
   int64_t box_lo_[3] = {}, box_hi_[3] = {};  // the grown box, ticks, half-open
-  std::vector<uint64_t> local_;  // the subtree's leaves and the ones collected, in key order
+  std::vector<Octant> blocks_;       // the blocks the grown box meets, in key order
+  std::vector<uint64_t> collected_;  // leaves around the subtree, in key order
+  std::vector<uint64_t> local_;      // those and the subtree's leaves, in key order
   OctantMap map_;
   std::array<std::vector<Ask>, kMaxLevel + 1> asks_;  // by the level of the children
   std::array<bool, kMaxLevel + 1> unsorted_{};        // created octants added to asks_
   std::vector<uint64_t> created_;
   SubtreeLeaves out_;
-  uint64_t collected_ = 0;
+  uint64_t collected_count_ = 0;
 };
 
 }  // namespace weaver

@@ -34,7 +34,7 @@ struct Outcome {
     s << shard.records << ' ' << shard.first_key << ' ' << shard.last_key << ' ' << result.elements
       << ' ' << result.smallest_edge_m << ' ' << result.largest_edge_m << ' ' << result.worst_ppw
       << ' ' << result.table_bytes << ' ' << result.subtrees << ' ' << result.subtrees_over << ' '
-      << seconds << ' ' << peak_rss;
+      << result.descended << ' ' << result.neighbours << ' ' << seconds << ' ' << peak_rss;
     for (uint64_t l : result.levels) s << ' ' << l;
     s << ' ' << shard.file << '\n' << error;
     return s.str();
@@ -44,8 +44,8 @@ struct Outcome {
     std::istringstream s(text);
     s >> o.shard.records >> o.shard.first_key >> o.shard.last_key >> o.result.elements >>
         o.result.smallest_edge_m >> o.result.largest_edge_m >> o.result.worst_ppw >>
-        o.result.table_bytes >> o.result.subtrees >> o.result.subtrees_over >> o.seconds >>
-        o.peak_rss;
+        o.result.table_bytes >> o.result.subtrees >> o.result.subtrees_over >>
+        o.result.descended >> o.result.neighbours >> o.seconds >> o.peak_rss;
     for (uint64_t& l : o.result.levels) s >> l;
     s >> o.shard.file;
     s.ignore(1);
@@ -63,6 +63,8 @@ ConstructResult combine(const std::vector<Outcome>& all) {
     r.table_bytes += x.table_bytes;
     r.subtrees += x.subtrees;
     r.subtrees_over += x.subtrees_over;
+    r.descended += x.descended;
+    r.neighbours += x.neighbours;
     for (size_t l = 0; l < r.levels.size(); ++l) r.levels[l] += x.levels[l];
     if (x.elements == 0) continue;
     r.smallest_edge_m = first ? x.smallest_edge_m : std::min(r.smallest_edge_m, x.smallest_edge_m);
@@ -110,6 +112,7 @@ int finish(const Comm& comm, Database& db, const std::vector<Outcome>& all, doub
   }
   const ConstructResult r = combine(all);
   cli::print_construct_result(r, seconds);
+  cli::print_construct_balance(r);
   std::printf("sharded    table octants in shards of %d ranks ('weaver compact' joins them)\n",
               comm.size());
   return 0;
