@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <thread>
@@ -47,17 +48,54 @@ uint64_t peak_rss() {
 }
 void reset_peak() { std::ofstream("/proc/self/clear_refs") << "5"; }
 
-struct Stage {
-  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
-  double seconds() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+// The bytes this process has read and written through read/write calls
+// (rchar, wchar of /proc/self/io: page cache hits included, so what the
+// stages ask of the disk, not what reaches it); 0 where unavailable.
+struct IoBytes {
+  uint64_t read = 0, written = 0;
+  static IoBytes now() {
+    IoBytes b;
+    std::ifstream in("/proc/self/io");
+    std::string key;
+    uint64_t value = 0;
+    while (in >> key >> value) {
+      if (key == "rchar:") b.read = value;
+      if (key == "wchar:") b.written = value;
+    }
+    return b;
   }
 };
 
-void stage_line(const char* name, uint64_t count, const char* what, double secs) {
-  std::printf("%-10s %12llu %-9s %7.2fs %12.0f/s  peak %6.1f MB\n", name, (unsigned long long)count,
-              what, secs, count / secs, peak_rss() / 1e6);
+struct Stage {
+  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+  IoBytes io0 = IoBytes::now();
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  // Bytes read and written since the stage began.
+  IoBytes io() const {
+    const IoBytes b = IoBytes::now();
+    return {b.read - io0.read, b.written - io0.written};
+  }
+};
+
+void stage_line(const char* name, uint64_t count, const char* what, const Stage& s) {
+  const double secs = s.seconds();
+  const IoBytes io = s.io();
+  std::printf("%-10s %12llu %-9s %7.2fs %12.0f/s  peak %6.1f MB  read %8.1f MB  wrote %8.1f MB\n",
+              name, (unsigned long long)count, what, secs, count / secs, peak_rss() / 1e6,
+              io.read / 1e6, io.written / 1e6);
   std::fflush(stdout);
+}
+
+// The bytes of the files in a database directory.
+uint64_t directory_bytes(const std::string& dir) {
+  uint64_t n = 0;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    if (e.is_regular_file(ec)) n += e.file_size(ec);
+  }
+  return n;
 }
 
 // A later stage failed: say so, and what the earlier ones left committed.
@@ -110,7 +148,7 @@ int cmd_mesh(int argc, char** argv) {
   st = construct_octree(db, co, &plan, &cr);
   construct_line.finish();
   if (!st.ok()) return report("mesh", st);
-  stage_line("construct", cr.elements, "leaves", s1.seconds());
+  stage_line("construct", cr.elements, "leaves", s1);
   print_construct_balance(cr);
 
   LevelCounts levels = cr.levels;
@@ -126,7 +164,7 @@ int cmd_mesh(int argc, char** argv) {
     st = balance_octree(db, bo, &br);
     balance_line.finish();
     if (!st.ok()) return report_after("balance", st, "construct committed the octant table");
-    stage_line("balance", br.output_leaves, "leaves", s2.seconds());
+    stage_line("balance", br.output_leaves, "leaves", s2);
     levels = br.levels;
   }
 
@@ -140,10 +178,14 @@ int cmd_mesh(int argc, char** argv) {
   if (!st.ok()) {
     return report_after("extract", st, "construct committed the balanced octant table");
   }
-  stage_line("extract", er.nodes, "nodes", s3.seconds());
+  stage_line("extract", er.nodes, "nodes", s3);
 
   std::printf("\nmesh at %g Hz, %g points per wavelength, in %.2fs\n", co.freq, co.ppw,
               total.seconds());
+  const uint64_t db_bytes = directory_bytes(db);
+  std::printf("  database   %.1f MB; the run wrote %.1f MB (%.2fx) and read %.1f MB\n", db_bytes / 1e6,
+              total.io().written / 1e6, double(total.io().written) / std::max<uint64_t>(1, db_bytes),
+              total.io().read / 1e6);
   std::printf(
       "  elements   %llu\n  nodes      %llu\n  danglings  %llu (%llu on edges, %llu on "
       "faces)\n",
