@@ -86,7 +86,7 @@ Status BTree::open(std::unique_ptr<File> file, uint64_t pool_bytes, std::unique_
   TableOptions o;
   o.page_size = h.page_size;
   o.key_kind = static_cast<KeyKind>(h.key_kind);
-  o.packed = h.leaf_format == 1;
+  o.packed = h.leaf_format >= 1;
   std::string error;
   const auto schema = RecordSchema::parse(h.schema_text, &error);
   if (!schema) return Status::Corruption(name + ": bad schema in header: " + error);
@@ -120,7 +120,7 @@ Status BTree::write_header() {
   h.page_size = options_.page_size;
   h.payload_size = payload_;
   h.key_kind = static_cast<uint8_t>(options_.key_kind);
-  h.leaf_format = options_.packed ? 1 : 0;
+  h.leaf_format = options_.packed ? 2 : 0;
   h.height = height_;
   h.root = root_;
   h.page_count = page_count_;

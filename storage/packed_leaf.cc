@@ -12,7 +12,8 @@
 namespace weaver::page {
 namespace {
 
-constexpr size_t kPgBlocks = 16, kPgFields = 18, kFieldsStart = 20, kFieldBytes = 9;
+constexpr size_t kPgBlocks = 16, kPgFields = 18, kPgCoding = 19, kFieldsStart = 20, kFieldBytes = 9;
+constexpr uint8_t kCodingColumns = 0, kCodingDictionary = 1;
 constexpr uint8_t kModeSuccessor = 0x80, kShiftMask = 0x3f;
 
 uint64_t blocks_for(uint64_t n) { return (n + kPackedBlock - 1) / kPackedBlock; }
@@ -104,6 +105,18 @@ void decode_column(const std::byte* col, uint32_t w, uint64_t min, uint32_t n, s
   }
 }
 
+// A hash of a payload row of `size` bytes.
+inline uint64_t row_hash(const std::byte* p, uint32_t size) {
+  uint64_t h = size;
+  for (uint32_t at = 0; at < size; at += 8) {
+    uint64_t v = 0;
+    std::memcpy(&v, p + at, std::min<uint32_t>(8, size - at));
+    h = (h ^ v) * 0x9E3779B97F4A7C15ULL;
+    h ^= h >> 29;
+  }
+  return h;
+}
+
 }  // namespace
 
 uint64_t PackedShape::index_bytes(uint64_t entries) const {
@@ -124,7 +137,15 @@ PackedShape PackedShape::of(uint32_t page_size, KeyKind kind, const RecordSchema
 // ---------------------------------------------------------------------------
 
 PackedLeafBuilder::PackedLeafBuilder(const PackedShape& shape)
-    : shape_(shape), cols_(shape.field_sizes.size()), scratch_cols_(shape.field_sizes.size()) {}
+    : shape_(shape), cols_(shape.field_sizes.size()), scratch_cols_(shape.field_sizes.size()) {
+  // A dictionary of more rows than a page holds raw cannot fit: that many
+  // is all it needs to tell apart.
+  if (shape.payload > 0) {
+    dict_max_rows_ = shape.page_size / shape.payload;
+    dict_slots_.resize(std::bit_ceil(2 * dict_max_rows_ + 2));
+  }
+  dict_over_ = shape.payload == 0;
+}
 
 void PackedLeafBuilder::clear() {
   keys_.clear();
@@ -133,6 +154,47 @@ void PackedLeafBuilder::clear() {
   key_bytes_closed_ = 0;
   open_ = OpenBlock{};
   std::fill(cols_.begin(), cols_.end(), Column{});
+  std::fill(dict_slots_.begin(), dict_slots_.end(), DictSlot{});
+  dict_first_.clear();
+  dict_over_ = shape_.payload == 0;
+}
+
+size_t PackedLeafBuilder::dict_probe(const std::byte* row, const std::byte* group) const {
+  const size_t mask = dict_slots_.size() - 1, have = keys_.size();
+  const uint32_t size = shape_.payload;
+  for (size_t s = row_hash(row, size) & mask;; s = (s + 1) & mask) {
+    const uint32_t first = dict_slots_[s].first;
+    if (first == UINT32_MAX) return s;
+    const std::byte* at =
+        first < have ? vals_.data() + size_t{first} * size : group + size_t{first - have} * size;
+    if (std::memcmp(at, row, size) == 0) return s;
+  }
+}
+
+bool PackedLeafBuilder::dict_add(const std::byte* vals, uint32_t count) {
+  dict_added_.clear();
+  if (dict_over_) return false;
+  for (uint32_t i = 0; i < count; ++i) {
+    const std::byte* row = vals + size_t{i} * shape_.payload;
+    const size_t s = dict_probe(row, vals);
+    if (dict_slots_[s].first != UINT32_MAX) continue;
+    if (dict_first_.size() == dict_max_rows_) return false;
+    const auto entry = static_cast<uint32_t>(keys_.size() + i);
+    dict_slots_[s] = {entry, static_cast<uint32_t>(dict_first_.size())};
+    dict_first_.push_back(entry);
+    dict_added_.push_back(s);
+  }
+  return true;
+}
+
+// Linear probing: the slots filled last end their chains, so emptying them
+// in reverse leaves every other chain whole.
+void PackedLeafBuilder::dict_rollback() {
+  for (auto it = dict_added_.rbegin(); it != dict_added_.rend(); ++it) {
+    dict_slots_[*it] = DictSlot{};
+    dict_first_.pop_back();
+  }
+  dict_added_.clear();
 }
 
 inline void PackedLeafBuilder::extend(OpenBlock& b, uint64_t key, KeyKind kind) {
@@ -165,13 +227,24 @@ PackedLeafBuilder::BlockCode PackedLeafBuilder::choose(const OpenBlock& b, KeyKi
   return w < delta.width ? BlockCode{w, kModeSuccessor} : delta;
 }
 
-uint64_t PackedLeafBuilder::bytes_for(size_t n, uint64_t key_bytes_closed, const OpenBlock& open,
-                                      const std::vector<Column>& cols) const {
-  uint64_t bytes = kFieldsStart + kFieldBytes * cols.size() + 12 * blocks_for(n) +
-                   key_bytes_closed + block_bytes(open.count, choose(open, shape_.key_kind).width) +
-                   kPackedSlack;
+uint64_t PackedLeafBuilder::column_bytes(size_t n, const std::vector<Column>& cols) const {
+  uint64_t bytes = 0;
   for (const Column& c : cols) bytes += bits_to_bytes(n * uint64_t(std::bit_width(c.max - c.min)));
   return bytes;
+}
+
+uint64_t PackedLeafBuilder::dictionary_bytes(size_t n, size_t dict_rows) const {
+  if (dict_over_ || dict_rows == 0) return UINT64_MAX;
+  const auto w = static_cast<uint64_t>(std::bit_width(dict_rows - 1));
+  return bits_to_bytes(n * w) + uint64_t{dict_rows} * shape_.payload;
+}
+
+uint64_t PackedLeafBuilder::bytes_for(size_t n, uint64_t key_bytes_closed, const OpenBlock& open,
+                                      const std::vector<Column>& cols, size_t dict_rows) const {
+  const uint64_t bytes =
+      kFieldsStart + kFieldBytes * cols.size() + 12 * blocks_for(n) + key_bytes_closed +
+      block_bytes(open.count, choose(open, shape_.key_kind).width) + kPackedSlack;
+  return bytes + std::min(column_bytes(n, cols), dictionary_bytes(n, dict_rows));
 }
 
 bool PackedLeafBuilder::add(uint64_t key, const std::byte* payload) {
@@ -202,8 +275,19 @@ bool PackedLeafBuilder::add_group(const uint64_t* keys, const std::byte* vals, u
       field += shape_.field_sizes[f];
     }
   }
-  if (bytes_for(n, closed_bytes, open, scratch_cols_) > shape_.page_size) {
+  // Past the dictionary's room the page is column-wise from here on: it
+  // stops counting rows (and a dictionary can never come back).  A group
+  // that does not fit leaves the dictionary as it was: the entries before
+  // it may need it to fit.
+  const bool over_before = dict_over_;
+  if (!dict_add(vals, count)) {
+    dict_rollback();
+    dict_over_ = true;
+  }
+  if (bytes_for(n, closed_bytes, open, scratch_cols_, dict_first_.size()) > shape_.page_size) {
     closed_.resize(closed_before);
+    dict_rollback();
+    dict_over_ = over_before;
     return false;
   }
   key_bytes_closed_ = closed_bytes;
@@ -257,6 +341,10 @@ void PackedLeafBuilder::encode(std::byte* pg) const {
     off += block_bytes(cnt, code.width);
   }
   std::byte* col = key_bits + off;
+  if (dictionary_bytes(n, dict_first_.size()) < column_bytes(n, cols_)) {
+    encode_dictionary(pg, col);
+    return;
+  }
   size_t field_off = 0;
   for (size_t f = 0; f < nf; ++f) {
     const Column& c = cols_[f];
@@ -270,6 +358,25 @@ void PackedLeafBuilder::encode(std::byte* pg) const {
     bits.finish();
     col += bits_to_bytes(uint64_t{n} * w);
     field_off += shape_.field_sizes[f];
+  }
+}
+
+// Coding 1: the index of each entry's row, then the rows.
+void PackedLeafBuilder::encode_dictionary(std::byte* pg, std::byte* col) const {
+  const auto n = static_cast<uint32_t>(keys_.size());
+  const uint64_t rows = dict_first_.size();
+  const auto w = static_cast<uint32_t>(std::bit_width(rows - 1));
+  pg[kPgCoding] = static_cast<std::byte>(kCodingDictionary);
+  store64(pg + kFieldsStart, rows);
+  pg[kFieldsStart + 8] = static_cast<std::byte>(w);
+  BitWriter bits(col);
+  for (uint32_t i = 0; i < n; ++i)
+    bits.put(dict_slots_[dict_probe(payload(i), nullptr)].ordinal, w);
+  bits.finish();
+  std::byte* out = col + bits_to_bytes(uint64_t{n} * w);
+  for (uint32_t first : dict_first_) {
+    std::memcpy(out, payload(first), shape_.payload);
+    out += shape_.payload;
   }
 }
 
@@ -298,6 +405,10 @@ bool PackedLeaf::open(const std::byte* pg, const PackedShape& shape) {
     const uint32_t cnt = n_ - (m_ - 1) * kPackedBlock;
     col += load16(last) + block_bytes(cnt, static_cast<uint32_t>(last[2]));
   }
+  const auto coding = static_cast<uint8_t>(pg[kPgCoding]);
+  if (coding == kCodingDictionary) return open_dictionary(col, limit);
+  if (coding != kCodingColumns) return false;
+  dict_index_ = nullptr;
   cols_.resize(nf);
   for (size_t f = 0; f < nf; ++f) {
     const auto w = static_cast<uint32_t>(fields_[kFieldBytes * f + 8]);
@@ -306,6 +417,30 @@ bool PackedLeaf::open(const std::byte* pg, const PackedShape& shape) {
     col += bits_to_bytes(uint64_t{n_} * w);
   }
   return col <= limit;
+}
+
+// Coding 1, its index column from byte `col` of the page.
+bool PackedLeaf::open_dictionary(uint64_t col, uint64_t limit) {
+  cols_.clear();
+  if (shape_->field_sizes.empty()) return false;
+  dict_count_ = load64(fields_);
+  dict_width_ = static_cast<uint32_t>(fields_[8]);
+  if (dict_count_ == 0 || dict_count_ > shape_->page_size ||
+      dict_width_ != static_cast<uint32_t>(std::bit_width(dict_count_ - 1))) {
+    return false;
+  }
+  dict_index_ = pg_ + col;
+  col += bits_to_bytes(uint64_t{n_} * dict_width_);
+  dict_rows_ = pg_ + col;
+  col += dict_count_ * shape_->payload;
+  return col <= limit;
+}
+
+// The dictionary row of entry i (a damaged page's index past the rows reads
+// the last row: garbage, as any damaged value, never out of bounds).
+const std::byte* PackedLeaf::dict_row(uint32_t i) const {
+  const uint64_t r = read_bits(dict_index_, uint64_t{i} * dict_width_, dict_width_);
+  return dict_rows_ + std::min(r, dict_count_ - 1) * shape_->payload;
 }
 
 const std::byte* PackedLeaf::block_bits(uint32_t j, uint32_t* cnt, uint32_t* w,
@@ -342,6 +477,10 @@ bool PackedLeaf::block_keys(uint32_t j, uint64_t* out, uint32_t* cnt_out) const 
 
 void PackedLeaf::prefetch_payloads(uint32_t j) const {
   const uint64_t cnt = std::min(kPackedBlock, n_ - j * kPackedBlock);
+  if (dict_index_ != nullptr) {
+    __builtin_prefetch(dict_index_ + uint64_t{j} * kPackedBlock * dict_width_ / 8);
+    return;
+  }
   for (size_t f = 0; f < cols_.size(); ++f) {
     const uint64_t w = static_cast<uint32_t>(fields_[kFieldBytes * f + 8]);
     const uint64_t first_bit = uint64_t{j} * kPackedBlock * w;
@@ -393,6 +532,10 @@ bool PackedLeaf::key(uint32_t i, uint64_t* out) const {
 }
 
 void PackedLeaf::payload(uint32_t i, std::byte* out) const {
+  if (dict_index_ != nullptr) {
+    std::memcpy(out, dict_row(i), shape_->payload);
+    return;
+  }
   for (size_t f = 0; f < cols_.size(); ++f) {
     const uint32_t w = static_cast<uint32_t>(fields_[kFieldBytes * f + 8]);
     const uint64_t v = load64(fields_ + kFieldBytes * f) + read_bits(cols_[f], uint64_t{i} * w, w);
@@ -408,6 +551,15 @@ bool PackedLeaf::decode(uint64_t* keys, std::byte* vals) const {
   }
   if (vals == nullptr) return true;
   const uint32_t stride = shape_->payload;
+  if (dict_index_ != nullptr) {
+    for (uint32_t i = 0; i < n_; ++i) {
+      if (read_bits(dict_index_, uint64_t{i} * dict_width_, dict_width_) >= dict_count_) {
+        return false;
+      }
+      std::memcpy(vals + size_t{i} * stride, dict_row(i), stride);
+    }
+    return true;
+  }
   size_t field_off = 0;
   for (size_t f = 0; f < cols_.size(); ++f) {
     const uint32_t w = static_cast<uint32_t>(fields_[kFieldBytes * f + 8]);

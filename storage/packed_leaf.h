@@ -12,7 +12,9 @@
 //
 //   header    the common 16-byte page header; its count is n, the entries.
 //   m (u16)   blocks: entries [64j, 64j+64) form block j, so m = ceil(n/64).
-//   F (u8), reserved (u8)   the schema's field count.
+//   F (u8)    the schema's field count.
+//   coding (u8)   how the payloads are stored: 0 column-wise (below), 1 as a
+//             row dictionary (below); files of leaf format 1 hold only 0.
 //   field[f]  frame of reference of field f: min u64, width u8 (bits).
 //             Entry i's field f is min + bits[i*width, (i+1)*width) of the
 //             field's column, read as the field's raw little-endian bytes.
@@ -27,8 +29,14 @@
 //             one's subtree ends, so mode 1 leaves only the level slot (< 28,
 //             5 bits); node keys of a mesh are near-dense after dropping the
 //             block's common trailing zeros, so mode 0 leaves a few bits.
-//   columns   one bit column per field, each starting on a byte boundary,
-//             right after the last block's key bits.
+//   columns   coding 0: one bit column per field, each starting on a byte
+//             boundary, right after the last block's key bits.
+//             coding 1 (a row dictionary: the page's D distinct payloads,
+//             where that is smaller; a mesh's materials in Z-order repeat
+//             from leaf to leaf): field[0] holds min = D and width = w =
+//             bit_width(D - 1), the other fields zero; then one column of n
+//             w-bit indices, from a byte boundary, and after it (from the
+//             next byte boundary) the D payloads, raw, in order of first use.
 //   slack     the encoder leaves >= 16 bytes unused at the end, so readers
 //             may load 64 bits at any bit offset inside the data.
 #pragma once
@@ -81,7 +89,7 @@ class PackedLeafBuilder {
   uint64_t key(uint32_t i) const { return keys_[i]; }
   const std::byte* payload(uint32_t i) const { return vals_.data() + size_t{i} * shape_.payload; }
   uint64_t encoded_bytes() const {
-    return bytes_for(keys_.size(), key_bytes_closed_, open_, cols_);
+    return bytes_for(keys_.size(), key_bytes_closed_, open_, cols_, dict_first_.size());
   }
 
  private:
@@ -99,13 +107,30 @@ class PackedLeafBuilder {
   struct BlockCode {
     uint8_t width, mode;
   };
+  // A distinct payload of the page: the first entry holding it, and its
+  // place in the row dictionary.
+  struct DictSlot {
+    uint32_t first = UINT32_MAX, ordinal = 0;
+  };
 
   // Adds all `count` entries if they fit together, else none.
   bool add_group(const uint64_t* keys, const std::byte* vals, uint32_t count);
   static void extend(OpenBlock& b, uint64_t key, KeyKind kind);
   static BlockCode choose(const OpenBlock& b, KeyKind kind);
   uint64_t bytes_for(size_t n, uint64_t key_bytes_closed, const OpenBlock& open,
-                     const std::vector<Column>& cols) const;
+                     const std::vector<Column>& cols, size_t dict_rows) const;
+  // The payloads' bytes column-wise, and as a row dictionary (UINT64_MAX
+  // when the page has too many distinct payloads for one).
+  uint64_t column_bytes(size_t n, const std::vector<Column>& cols) const;
+  uint64_t dictionary_bytes(size_t n, size_t dict_rows) const;
+  // The slot of the row `payload`, or the empty slot where it would go.
+  // Rows at entries >= keys_.size() are read from `group`.
+  size_t dict_probe(const std::byte* payload, const std::byte* group) const;
+  // Adds a group's rows to the dictionary (false: too many rows; it stops
+  // tracking them); dict_added_ says which slots it filled.
+  bool dict_add(const std::byte* vals, uint32_t count);
+  void dict_rollback();
+  void encode_dictionary(std::byte* page, std::byte* col) const;
 
   PackedShape shape_;
   std::vector<uint64_t> keys_;
@@ -115,6 +140,11 @@ class PackedLeafBuilder {
   OpenBlock open_;
   std::vector<Column> cols_;
   std::vector<Column> scratch_cols_;
+  std::vector<DictSlot> dict_slots_;  // open addressing by a hash of the row
+  std::vector<uint32_t> dict_first_;  // by ordinal: the first entry holding the row
+  std::vector<size_t> dict_added_;    // slots filled by the group being added
+  size_t dict_max_rows_ = 0;          // past this, no dictionary can beat the columns
+  bool dict_over_ = false;            // the page has more distinct rows than that
 };
 
 // Read access to a packed leaf in a page.  Every accessor checks the offsets
@@ -148,6 +178,8 @@ class PackedLeaf {
   // Block j's key bits, entry count, residual width and mode; null if the
   // block's bits lie outside the page.
   const std::byte* block_bits(uint32_t j, uint32_t* cnt, uint32_t* w, uint8_t* mode) const;
+  bool open_dictionary(uint64_t col, uint64_t limit);
+  const std::byte* dict_row(uint32_t i) const;
 
   const std::byte* pg_ = nullptr;
   const PackedShape* shape_ = nullptr;
@@ -158,6 +190,12 @@ class PackedLeaf {
   const std::byte* key_bits_ = nullptr;
   const std::byte* end_ = nullptr;  // the first byte the data may not reach
   std::vector<const std::byte*> cols_;
+  // Coding 1: the index column, the dictionary's rows, their count and the
+  // indices' width.
+  const std::byte* dict_index_ = nullptr;
+  const std::byte* dict_rows_ = nullptr;
+  uint64_t dict_count_ = 0;
+  uint32_t dict_width_ = 0;
 };
 
 }  // namespace weaver::page

@@ -47,7 +47,7 @@ Status decode_file_header(const std::byte* in, const std::string& name, FileHead
     return Status::Corruption(name + ": unknown key kind " + std::to_string(h->key_kind));
   }
   h->leaf_format = static_cast<uint8_t>(in[kHdrLeafFormat]);
-  if (h->leaf_format > 1) {
+  if (h->leaf_format > 2) {
     return Status::Corruption(name + ": unknown leaf format " + std::to_string(h->leaf_format));
   }
   const uint32_t schema_len = load32(in + kHdrSchemaLen);

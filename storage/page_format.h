@@ -16,7 +16,9 @@
 //   16  4    page size P
 //   20  4    payload size (bytes per record after the key)
 //   24  1    key kind (0 = node key / plain u64, 1 = packed octant key)
-//   25  1    leaf format (0 = plain, below; 1 = packed: storage/packed_leaf.h)
+//   25  1    leaf format (0 = plain, below; 1 = packed: storage/packed_leaf.h,
+//            payloads column-wise; 2 = packed, each page's payloads
+//            column-wise or as a row dictionary, whichever is smaller)
 //   26  2    reserved, zero
 //   28  4    tree height (0 = empty, 1 = the root is a leaf)
 //   32  4    root page
@@ -88,7 +90,7 @@ struct FileHeader {
   uint32_t page_size = 0;
   uint32_t payload_size = 0;
   uint8_t key_kind = 0;     // KeyKind (storage/store.h): 0 or 1
-  uint8_t leaf_format = 0;  // 0 plain, 1 packed
+  uint8_t leaf_format = 0;  // 0 plain, 1 packed (columns), 2 packed (columns or dictionary)
   uint32_t height = 0, root = 0, page_count = 0, free_head = 0;
   uint64_t record_count = 0;
   std::string schema_text;  // schema/record_schema.h's text form

@@ -9,7 +9,6 @@
 #include <map>
 #include <random>
 
-#include "util/parent_asks.h"
 #include "construct/construct.h"
 #include "db/database.h"
 #include "gen/octree_gen.h"
@@ -21,6 +20,7 @@
 #include "test_mesh.h"
 #include "test_octrees.h"
 #include "test_util.h"
+#include "util/parent_asks.h"
 
 namespace weaver {
 namespace {

@@ -214,43 +214,91 @@ TEST(PackedLeaf, ModelsCompressOctreesAndNodeGrids) {
   EXPECT_LT(node_bytes, 0.3);  // deltas of one step after the shift: zero-bit residuals
 }
 
-// Random damage to a packed page: readers may return garbage or refuse, but
-// never read outside the page.
-TEST(PackedLeaf, DamagedPagesNeverReadOutOfBounds) {
-  std::mt19937_64 rng(5);
-  const PackedShape shape = PackedShape::of(512, KeyKind::kOctant, schema_of("a:u32,b:u8"));
-  Entries e;
-  octree_leaves({0, 0, 0, 0}, rng, {2, 8, 0.3, 0.05}, &e.keys);
-  e.vals = payloads(rng, e.keys.size(), shape.payload);
-  PackedLeafBuilder b(shape);
-  b.add_range(e.keys.data(), e.vals.data(), 0, static_cast<uint32_t>(e.keys.size()));
-  // An exact-size heap copy, so that the sanitizers see any read past the end.
-  std::vector<std::byte> good(shape.page_size);
-  b.encode(good.data());
-  int refused = 0;
-  for (int trial = 0; trial < 3000; ++trial) {
-    auto bad = std::make_unique<std::byte[]>(shape.page_size);
-    std::copy(good.begin(), good.end(), bad.get());
-    for (int flips = 1 + static_cast<int>(rng() % 4); flips > 0; --flips) {
-      bad[kPgCount + rng() % (shape.page_size - kPgCount)] = std::byte(rng() & 0xff);
-    }
-    PackedLeaf leaf;
-    if (!leaf.open(bad.get(), shape)) {
-      ++refused;
-      continue;
-    }
-    std::vector<uint64_t> keys(leaf.size() + 1);
-    std::vector<std::byte> vals((leaf.size() + 1) * size_t{shape.payload});
-    if (!leaf.decode(keys.data(), vals.data())) ++refused;
-    uint32_t pos = 0;
-    uint64_t k = 0;
-    if (leaf.size() > 0) {
-      const uint32_t i = static_cast<uint32_t>(rng() % leaf.size());
-      if (!leaf.bound(rng(), rng() % 2, &pos) || !leaf.key(i, &k)) ++refused;
-      leaf.payload(i, vals.data());
-    }
+// Payloads drawn from a pool of `distinct` random rows, in runs: a mesh's
+// materials in Z-order, where neighbours share a depth and so a value.
+std::vector<std::byte> pooled_payloads(std::mt19937_64& rng, size_t n, uint32_t size,
+                                       size_t distinct) {
+  std::vector<std::byte> pool(distinct * size), v(n * size);
+  for (std::byte& b : pool) b = std::byte(rng() & 0xff);
+  size_t row = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (rng() % 4 == 0) row = rng() % distinct;
+    std::copy_n(pool.begin() + row * size, size, v.begin() + i * size);
   }
-  EXPECT_GT(refused, 0) << "some damage must be caught by the layout checks";
+  return v;
+}
+
+// Pages whose payloads repeat a few rows store them as a row dictionary
+// (coding 1) and hold several times the entries the columns would; every
+// reader returns what was packed; rows of noise stay column-wise (coding 0).
+TEST(PackedLeaf, RepeatedPayloadsTakeARowDictionary) {
+  std::mt19937_64 rng(11);
+  Entries e;
+  octree_leaves({0, 0, 0, 0}, rng, {3, 10, 0.3, 0}, &e.keys);
+  for (const char* text : {"vp:f32,vs:f32,rho:f32", "vp:f32,vs:f32,rho:f32,qp:f32,qs:f32"}) {
+    const PackedShape shape = PackedShape::of(4096, KeyKind::kOctant, schema_of(text));
+    e.vals = pooled_payloads(rng, e.keys.size(), shape.payload, 12);
+    const size_t dictionary_pages = pack_and_check(shape, e, rng);
+    std::vector<std::byte> page(shape.page_size);
+    PackedLeafBuilder b(shape);
+    b.add_range(e.keys.data(), e.vals.data(), 0, static_cast<uint32_t>(e.keys.size()));
+    b.encode(page.data());
+    EXPECT_EQ(static_cast<int>(page[19]), 1) << text << ": a dictionary page";
+    // The same keys with noise for payloads: columns, and many more pages.
+    Entries noise = e;
+    noise.vals = payloads(rng, e.keys.size(), shape.payload);
+    for (std::byte& v : noise.vals) v = std::byte(rng() & 0xff);
+    const size_t column_pages = pack_and_check(shape, noise, rng);
+    b.clear();
+    b.add_range(noise.keys.data(), noise.vals.data(), 0, static_cast<uint32_t>(e.keys.size()));
+    b.encode(page.data());
+    EXPECT_EQ(static_cast<int>(page[19]), 0) << text << ": a column page";
+    EXPECT_GT(column_pages, 5 * dictionary_pages) << text;
+  }
+}
+
+// Random damage to a packed page, column-wise or a row dictionary: readers
+// may return garbage or refuse, but never read outside the page.
+TEST(PackedLeaf, DamagedPagesNeverReadOutOfBounds) {
+  for (const bool dictionary : {false, true}) {
+    SCOPED_TRACE(dictionary ? "row dictionary" : "columns");
+    std::mt19937_64 rng(5);
+    const PackedShape shape = PackedShape::of(512, KeyKind::kOctant, schema_of("a:u32,b:u8"));
+    Entries e;
+    octree_leaves({0, 0, 0, 0}, rng, {2, 8, 0.3, 0.05}, &e.keys);
+    e.vals = dictionary ? pooled_payloads(rng, e.keys.size(), shape.payload, 5)
+                        : payloads(rng, e.keys.size(), shape.payload);
+    PackedLeafBuilder b(shape);
+    b.add_range(e.keys.data(), e.vals.data(), 0, static_cast<uint32_t>(e.keys.size()));
+    // An exact-size heap copy, so that the sanitizers see any read past the end.
+    std::vector<std::byte> good(shape.page_size);
+    b.encode(good.data());
+    int refused = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+      auto bad = std::make_unique<std::byte[]>(shape.page_size);
+      std::copy(good.begin(), good.end(), bad.get());
+      for (int flips = 1 + static_cast<int>(rng() % 4); flips > 0; --flips) {
+        bad[kPgCount + rng() % (shape.page_size - kPgCount)] = std::byte(rng() & 0xff);
+      }
+      PackedLeaf leaf;
+      if (!leaf.open(bad.get(), shape)) {
+        ++refused;
+        continue;
+      }
+      std::vector<uint64_t> keys(leaf.size() + 1);
+      std::vector<std::byte> vals((leaf.size() + 1) * size_t{shape.payload});
+      if (!leaf.decode(keys.data(), vals.data())) ++refused;
+      uint32_t pos = 0;
+      uint64_t k = 0;
+      if (leaf.size() > 0) {
+        const uint32_t i = static_cast<uint32_t>(rng() % leaf.size());
+        if (!leaf.bound(rng(), rng() % 2, &pos) || !leaf.key(i, &k)) ++refused;
+        leaf.payload(i, vals.data());
+      }
+    }
+    EXPECT_GT(refused, 0) << "some damage must be caught by the layout checks";
+    EXPECT_EQ(static_cast<int>(good[19]), dictionary ? 1 : 0);
+  }
 }
 
 }  // namespace

@@ -5,11 +5,11 @@
 #include <bit>
 #include <filesystem>
 
-#include "util/parent_asks.h"
 #include "schema/octant.h"
 #include "sort/external_sort.h"
 #include "util/key_set.h"
 #include "util/parallel.h"
+#include "util/parent_asks.h"
 
 namespace weaver {
 namespace {

@@ -218,11 +218,11 @@ void print_construct_result(const ConstructResult& r, double secs) {
 
 void print_construct_balance(const ConstructResult& r) {
   if (r.descended == 0) return;  // unbalanced
-  std::printf("balanced   %llu leaves descended, %llu more made by the balance's splits; %llu "
-              "leaves around the subtrees descended again (%.1f%%)\n",
-              (unsigned long long)r.descended, (unsigned long long)(r.elements - r.descended),
-              (unsigned long long)r.neighbours,
-              100.0 * r.neighbours / std::max<uint64_t>(1, r.descended));
+  std::printf(
+      "balanced   %llu leaves descended, %llu more made by the balance's splits; %llu "
+      "leaves around the subtrees descended again (%.1f%%)\n",
+      (unsigned long long)r.descended, (unsigned long long)(r.elements - r.descended),
+      (unsigned long long)r.neighbours, 100.0 * r.neighbours / std::max<uint64_t>(1, r.descended));
 }
 
 }  // namespace weaver::cli

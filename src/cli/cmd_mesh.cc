@@ -25,7 +25,8 @@ constexpr char kUsage[] =
     "\n"
     "The whole pipeline: construct the octree from the model, 2:1 balanced as it is\n"
     "descended, and extract the mesh (--unbalanced: construct, then 'weaver balance',\n"
-    "then extract, as before).  Prints a line per stage (count, rate, time, peak memory), then the\n"
+    "then extract, as before).  Prints a line per stage (count, rate, time, peak memory), then "
+    "the\n"
     "mesh summary (elements, nodes, dangling nodes, as in the paper's Figure 11) and\n"
     "its quality: elements per level, smallest and largest edge, and the fewest\n"
     "points per wavelength at any element.  Options as for 'weaver construct';\n"
@@ -183,9 +184,9 @@ int cmd_mesh(int argc, char** argv) {
   std::printf("\nmesh at %g Hz, %g points per wavelength, in %.2fs\n", co.freq, co.ppw,
               total.seconds());
   const uint64_t db_bytes = directory_bytes(db);
-  std::printf("  database   %.1f MB; the run wrote %.1f MB (%.2fx) and read %.1f MB\n", db_bytes / 1e6,
-              total.io().written / 1e6, double(total.io().written) / std::max<uint64_t>(1, db_bytes),
-              total.io().read / 1e6);
+  std::printf("  database   %.1f MB; the run wrote %.1f MB (%.2fx) and read %.1f MB\n",
+              db_bytes / 1e6, total.io().written / 1e6,
+              double(total.io().written) / std::max<uint64_t>(1, db_bytes), total.io().read / 1e6);
   std::printf(
       "  elements   %llu\n  nodes      %llu\n  danglings  %llu (%llu on edges, %llu on "
       "faces)\n",

@@ -105,7 +105,8 @@ void Descent::children_samples(const Octant& o, float (*out)[27]) const {
     const int cx = 2 * (c & 1), cy = (c & 2), cz = (c & 4) / 2;
     for (int k = 0; k < 3; ++k)
       for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 3; ++i) out[c][(k * 3 + j) * 3 + i] = fine[((cz + k) * 5 + cy + j) * 5 + cx + i];
+        for (int i = 0; i < 3; ++i)
+          out[c][(k * 3 + j) * 3 + i] = fine[((cz + k) * 5 + cy + j) * 5 + cx + i];
   }
 }
 

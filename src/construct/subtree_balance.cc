@@ -135,38 +135,50 @@ void SubtreeBalancer::collect(const Octant& x, const float* samples, const Octan
   }
 }
 
-// Every local leaf, and its ancestors as inner octants, into the map; each
-// leaf's ask into asks_ of its level (the leaves of one parent merged: they
-// come one after another among the leaves of their level).
-void SubtreeBalancer::add_local(uint64_t key) {
-  map_.add(key, OctantMap::kLeaf);
-  const int level = octant_key_level(key);
-  if (level == 0) return;
-  const uint64_t parent = octant_key_parent(key);
-  const unsigned bit = 1u << octant_key_child_id(key);
-  std::vector<Ask>& asks = asks_[level];
-  if (!asks.empty() && asks.back().parent == parent) {
-    asks.back().children |= bit;
-  } else {
-    asks.push_back({parent, bit, false});
-  }
-  for (uint64_t q = parent; map_.add(q, OctantMap::kInner) && octant_key_level(q) > 0;) {
-    q = octant_key_parent(q);
-  }
-}
-
 // The created octants (strictly inside a local leaf, required by the
 // balance), into created_ in key order.
+//
+// A leaf of level l asks for octants of level l - 1, which lie strictly
+// inside a leaf only if that leaf's level is l - 2 or coarser.  So only the
+// leaves two levels finer than the coarsest ask (a subtree graded by one
+// level at most has nothing to do), and only the leaves two levels coarser
+// than the finest go into the map as leaves: the others are found resolved
+// all the same, since their parents are inner.
 void SubtreeBalancer::ripple() {
-  map_.reset(local_.size() + local_.size() / 4 + 64);
   created_.clear();
-  int finest = 0;
+  LevelCounts count{};
+  for (uint64_t key : local_) ++count[octant_key_level(key)];
+  int coarsest = 0, finest = kMaxLevel;
+  while (count[coarsest] == 0) ++coarsest;
+  while (count[finest] == 0) --finest;
+  if (finest - coarsest < 2) return;
+  map_.reset(local_.size() / 4 + 64);
+  uint64_t last_parent = ~uint64_t{0};
   for (uint64_t key : local_) {
-    add_local(key);
-    finest = std::max(finest, octant_key_level(key));
+    const int level = octant_key_level(key);
+    if (level <= finest - 2) map_.add(key, OctantMap::kLeaf);
+    if (level == 0) continue;
+    const uint64_t parent = octant_key_parent(key);
+    if (level >= coarsest + 2) add_ask(level, parent, 1u << octant_key_child_id(key));
+    if (parent == last_parent) continue;
+    last_parent = parent;
+    for (uint64_t q = parent; map_.add(q, OctantMap::kInner) && octant_key_level(q) > 0;) {
+      q = octant_key_parent(q);
+    }
   }
   for (int l = finest; l >= 1; --l) ask_level(l);
   std::sort(created_.begin(), created_.end());
+}
+
+// A leaf's ask, merged with its siblings' (they come one after another
+// among the leaves of their level).
+void SubtreeBalancer::add_ask(int level, uint64_t parent, unsigned child_bit) {
+  std::vector<Ask>& asks = asks_[level];
+  if (!asks.empty() && asks.back().parent == parent) {
+    asks.back().children |= child_bit;
+  } else {
+    asks.push_back({parent, child_bit, false});
+  }
 }
 
 // The asks of level l's parents: each neighbour one level coarser that is
@@ -176,7 +188,8 @@ void SubtreeBalancer::ripple() {
 void SubtreeBalancer::ask_level(int l) {
   std::vector<Ask>& asks = asks_[l];
   if (unsorted_[l]) {
-    std::sort(asks.begin(), asks.end(), [](const Ask& a, const Ask& b) { return a.parent < b.parent; });
+    std::sort(asks.begin(), asks.end(),
+              [](const Ask& a, const Ask& b) { return a.parent < b.parent; });
     size_t n = 0;
     for (const Ask& a : asks) {
       if (n > 0 && asks[n - 1].parent == a.parent) {
@@ -222,8 +235,8 @@ void SubtreeBalancer::ask_level(int l) {
 void SubtreeBalancer::refine(const Octant& root, SubtreeLeaves* leaves) {
   out_.clear();
   const size_t bytes = descent_.payload_bytes();
-  size_t pos = std::lower_bound(created_.begin(), created_.end(), octant_key(root)) -
-               created_.begin();
+  size_t pos =
+      std::lower_bound(created_.begin(), created_.end(), octant_key(root)) - created_.begin();
   for (size_t i = 0; i < leaves->keys.size(); ++i) {
     const uint64_t key = leaves->keys[i];
     const std::byte* payload = leaves->payloads.data() + i * bytes;

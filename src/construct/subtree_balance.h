@@ -64,7 +64,7 @@ class SubtreeBalancer {
   void grow_box(const Octant& root, const SubtreeLeaves& leaves);
   void collect(const Octant& x, const float* samples, const Octant& root);
   bool wanted(const Octant& x, const Octant& root) const;
-  void add_local(uint64_t key);
+  void add_ask(int level, uint64_t parent, unsigned child_bit);
   void ripple();
   void ask_level(int level);
   void refine(const Octant& root, SubtreeLeaves* leaves);
@@ -73,9 +73,9 @@ class SubtreeBalancer {
   const Descent& descent_;
   const bool fill_;
   int64_t box_lo_[3] = {}, box_hi_[3] = {};  // the grown box, ticks, half-open
-  std::vector<Octant> blocks_;       // the blocks the grown box meets, in key order
-  std::vector<uint64_t> collected_;  // leaves around the subtree, in key order
-  std::vector<uint64_t> local_;      // those and the subtree's leaves, in key order
+  std::vector<Octant> blocks_;               // the blocks the grown box meets, in key order
+  std::vector<uint64_t> collected_;          // leaves around the subtree, in key order
+  std::vector<uint64_t> local_;              // those and the subtree's leaves, in key order
   OctantMap map_;
   std::array<std::vector<Ask>, kMaxLevel + 1> asks_;  // by the level of the children
   std::array<bool, kMaxLevel + 1> unsorted_{};        // created octants added to asks_

@@ -44,8 +44,8 @@ struct Outcome {
     std::istringstream s(text);
     s >> o.shard.records >> o.shard.first_key >> o.shard.last_key >> o.result.elements >>
         o.result.smallest_edge_m >> o.result.largest_edge_m >> o.result.worst_ppw >>
-        o.result.table_bytes >> o.result.subtrees >> o.result.subtrees_over >>
-        o.result.descended >> o.result.neighbours >> o.seconds >> o.peak_rss;
+        o.result.table_bytes >> o.result.subtrees >> o.result.subtrees_over >> o.result.descended >>
+        o.result.neighbours >> o.seconds >> o.peak_rss;
     for (uint64_t& l : o.result.levels) s >> l;
     s >> o.shard.file;
     s.ignore(1);
