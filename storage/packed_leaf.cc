@@ -14,6 +14,7 @@ namespace {
 
 constexpr size_t kPgBlocks = 16, kPgFields = 18, kPgCoding = 19, kFieldsStart = 20, kFieldBytes = 9;
 constexpr uint8_t kCodingColumns = 0, kCodingDictionary = 1;
+constexpr uint32_t kDictMinPayload = 4;
 constexpr uint8_t kModeSuccessor = 0x80, kShiftMask = 0x3f;
 
 uint64_t blocks_for(uint64_t n) { return (n + kPackedBlock - 1) / kPackedBlock; }
@@ -139,12 +140,13 @@ PackedShape PackedShape::of(uint32_t page_size, KeyKind kind, const RecordSchema
 PackedLeafBuilder::PackedLeafBuilder(const PackedShape& shape)
     : shape_(shape), cols_(shape.field_sizes.size()), scratch_cols_(shape.field_sizes.size()) {
   // A dictionary of more rows than a page holds raw cannot fit: that many
-  // is all it needs to tell apart.
-  if (shape.payload > 0) {
+  // is all it needs to tell apart.  Payloads narrower than kDictMinPayload
+  // (a node's kind) stay column-wise: a frame of reference is as small.
+  if (shape.payload >= kDictMinPayload) {
     dict_max_rows_ = shape.page_size / shape.payload;
     dict_slots_.resize(std::bit_ceil(2 * dict_max_rows_ + 2));
   }
-  dict_over_ = shape.payload == 0;
+  dict_over_ = shape.payload < kDictMinPayload;
 }
 
 void PackedLeafBuilder::clear() {
@@ -156,7 +158,7 @@ void PackedLeafBuilder::clear() {
   std::fill(cols_.begin(), cols_.end(), Column{});
   std::fill(dict_slots_.begin(), dict_slots_.end(), DictSlot{});
   dict_first_.clear();
-  dict_over_ = shape_.payload == 0;
+  dict_over_ = shape_.payload < kDictMinPayload;
 }
 
 size_t PackedLeafBuilder::dict_probe(const std::byte* row, const std::byte* group) const {
@@ -174,8 +176,14 @@ size_t PackedLeafBuilder::dict_probe(const std::byte* row, const std::byte* grou
 bool PackedLeafBuilder::dict_add(const std::byte* vals, uint32_t count) {
   dict_added_.clear();
   if (dict_over_) return false;
+  const uint32_t size = shape_.payload;
+  // Rows come in runs (a mesh's neighbours share their material): a row
+  // equal to the one before is in the dictionary already.
+  const std::byte* prev = keys_.empty() ? nullptr : vals_.data() + vals_.size() - size;
   for (uint32_t i = 0; i < count; ++i) {
-    const std::byte* row = vals + size_t{i} * shape_.payload;
+    const std::byte* row = vals + size_t{i} * size;
+    if (prev != nullptr && std::memcmp(prev, row, size) == 0) continue;
+    prev = row;
     const size_t s = dict_probe(row, vals);
     if (dict_slots_[s].first != UINT32_MAX) continue;
     if (dict_first_.size() == dict_max_rows_) return false;
@@ -370,8 +378,13 @@ void PackedLeafBuilder::encode_dictionary(std::byte* pg, std::byte* col) const {
   store64(pg + kFieldsStart, rows);
   pg[kFieldsStart + 8] = static_cast<std::byte>(w);
   BitWriter bits(col);
-  for (uint32_t i = 0; i < n; ++i)
-    bits.put(dict_slots_[dict_probe(payload(i), nullptr)].ordinal, w);
+  uint32_t ordinal = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (i == 0 || std::memcmp(payload(i), payload(i - 1), shape_.payload) != 0) {
+      ordinal = dict_slots_[dict_probe(payload(i), nullptr)].ordinal;
+    }
+    bits.put(ordinal, w);
+  }
   bits.finish();
   std::byte* out = col + bits_to_bytes(uint64_t{n} * w);
   for (uint32_t first : dict_first_) {
@@ -441,6 +454,20 @@ bool PackedLeaf::open_dictionary(uint64_t col, uint64_t limit) {
 const std::byte* PackedLeaf::dict_row(uint32_t i) const {
   const uint64_t r = read_bits(dict_index_, uint64_t{i} * dict_width_, dict_width_);
   return dict_rows_ + std::min(r, dict_count_ - 1) * shape_->payload;
+}
+
+// Every entry's row into vals (rows of `Size` bytes, or the shape's when 0).
+template <uint32_t Size>
+bool PackedLeaf::decode_dictionary(std::byte* vals) const {
+  const uint32_t size = Size != 0 ? Size : shape_->payload, w = dict_width_;
+  const uint64_t mask = w == 0 ? 0 : (uint64_t{1} << w) - 1;  // w <= 16: one load holds it
+  uint64_t pos = 0;
+  for (uint32_t i = 0; i < n_; ++i, pos += w, vals += size) {
+    const uint64_t r = (load64(dict_index_ + (pos >> 3)) >> (pos & 7)) & mask;
+    if (r >= dict_count_) return false;
+    std::memcpy(vals, dict_rows_ + r * size, Size != 0 ? Size : size);
+  }
+  return true;
 }
 
 const std::byte* PackedLeaf::block_bits(uint32_t j, uint32_t* cnt, uint32_t* w,
@@ -552,13 +579,11 @@ bool PackedLeaf::decode(uint64_t* keys, std::byte* vals) const {
   if (vals == nullptr) return true;
   const uint32_t stride = shape_->payload;
   if (dict_index_ != nullptr) {
-    for (uint32_t i = 0; i < n_; ++i) {
-      if (read_bits(dict_index_, uint64_t{i} * dict_width_, dict_width_) >= dict_count_) {
-        return false;
-      }
-      std::memcpy(vals + size_t{i} * stride, dict_row(i), stride);
+    switch (stride) {  // a copy of a known size is a few moves, not a call
+      case 12: return decode_dictionary<12>(vals);
+      case 20: return decode_dictionary<20>(vals);
+      default: return decode_dictionary<0>(vals);
     }
-    return true;
   }
   size_t field_off = 0;
   for (size_t f = 0; f < cols_.size(); ++f) {

@@ -180,6 +180,8 @@ class PackedLeaf {
   const std::byte* block_bits(uint32_t j, uint32_t* cnt, uint32_t* w, uint8_t* mode) const;
   bool open_dictionary(uint64_t col, uint64_t limit);
   const std::byte* dict_row(uint32_t i) const;
+  template <uint32_t Size>
+  bool decode_dictionary(std::byte* vals) const;
 
   const std::byte* pg_ = nullptr;
   const PackedShape* shape_ = nullptr;

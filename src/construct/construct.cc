@@ -28,10 +28,15 @@ constexpr int kMaxBlockLevel = 10;
 constexpr int kRoundedBlockLevel = 7;
 // Subtrees are cut so that the estimate puts about this many leaves in
 // each: enough to keep a thread busy for a while, few enough to balance.
-// A balanced construct descends again the leaves around each subtree, a
-// share that falls as the subtree grows: it takes 8 times as many.
 constexpr double kLeavesPerSubtree = 4096;
-constexpr double kLeavesPerBalancedSubtree = 8 * kLeavesPerSubtree;
+// A balanced construct descends again the leaves around each subtree, a
+// share that falls as the subtree grows, but the balance of a larger one
+// leaves the cache: at 1 Hz, subtrees of 32K to 256K estimated leaves
+// descended 27% again against 36% for 4K to 32K, and took 10-20% longer.
+// So its subtrees hold 4K to 32K estimated leaves (the model's small
+// features add up to 3x; past the cap a subtree is visited again as its 8
+// children).
+constexpr double kLeastLeavesPerBalancedSubtree = 4096;
 // Subtrees in flight per thread: workers run ahead of the writer.
 constexpr size_t kSubtreesPerThread = 8;
 
@@ -75,8 +80,13 @@ int subtree_level(const ConstructOptions& o, const ConstructPlan& p) {
   const double blocks = double(p.blocks[0]) * p.blocks[1] * p.blocks[2];
   double per_subtree = p.estimated_elements / blocks;
   int level = p.block_level;
-  const double target = o.balanced ? kLeavesPerBalancedSubtree : kLeavesPerSubtree;
-  while (level < o.max_level && per_subtree > target) per_subtree /= 8, ++level;
+  if (o.balanced) {
+    while (level < o.max_level && per_subtree >= 8 * kLeastLeavesPerBalancedSubtree) {
+      per_subtree /= 8, ++level;
+    }
+    return level;
+  }
+  while (level < o.max_level && per_subtree > kLeavesPerSubtree) per_subtree /= 8, ++level;
   return level;
 }
 
@@ -108,7 +118,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
   const int threads = std::max(1, o.threads);
   const size_t window = kSubtreesPerThread * threads;
   const size_t cap = std::clamp<uint64_t>(
-      memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64, uint64_t{1} << 16);
+      memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64, uint64_t{1} << 19);
   WorkQueue<Slot> queue;
   std::vector<std::thread> workers;
   std::vector<std::unique_ptr<SubtreeVisitor>> visitors;
