@@ -284,6 +284,9 @@ class CrashTest : public ::testing::Test {
     f({"construct", {"construct", "{db}", "--model", "basin", "--freq", "0.08", "--memory", "1M"}},
       {import_a});
     f({"balance", balance}, {import_a});
+    f({"mesh over a mesh",
+       {"mesh", "{db}", "--model", "basin", "--freq", "0.08", "--memory", "1M", "--quiet"}},
+      {import_a, balance, extract});
     f({"extract (sort)", extract}, {import_a, balance});
     f({"extract (search, lsm)",
        {"extract", "{db}", "--algorithm", "search", "--store", "lsm", "--memory", "1M"}},
@@ -321,6 +324,10 @@ TEST_F(CrashTest, EveryWriterLeavesTheOldOrTheNewState) {
       {"construct", {"construct", "{db}", "--model", "basin", "--freq", "0.08", "--memory", "1M"}},
       {import_of(text_a_)}, steps, kills);
   torture({"balance", balance}, {import_of(text_a_)}, steps, kills);
+  // A re-mesh: construct stages its table, extract commits both at once.
+  torture({"mesh over a mesh",
+           {"mesh", "{db}", "--model", "basin", "--freq", "0.08", "--memory", "1M", "--quiet"}},
+          {import_of(text_a_), balance, {"extract", "{db}", "--memory", "1M"}}, steps, kills);
   torture({"extract (sort)", {"extract", "{db}", "--memory", "1M"}}, {import_of(text_a_), balance},
           steps, kills);
   torture({"extract (search)", {"extract", "{db}", "--algorithm", "search", "--memory", "1M"}},

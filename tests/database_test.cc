@@ -43,6 +43,55 @@ TEST_F(DatabaseTest, CommitReplacesTablesAndRemovesOldFiles) {
   EXPECT_FALSE(std::filesystem::exists(dir_.file("db/" + first)));
 }
 
+// A staged table (Database::stage) is the writer's own until its next
+// commit makes it live with that commit's tables; readers see the old one
+// meanwhile, and a writer that closes without committing deletes it.
+TEST_F(DatabaseTest, StagedTablesGoLiveWithTheNextCommitOrNotAtAll) {
+  make_table("octants", 10);
+  make_table("nodes", 11);
+  auto records = [&](Database& d, const char* name) {
+    std::unique_ptr<BTree> t;
+    EXPECT_OK(d.open_table(name, 1 << 20, &t));
+    return t == nullptr ? uint64_t{0} : t->size();
+  };
+  auto stage_octants = [&](Database& w, uint64_t n, std::string* file) {
+    std::unique_ptr<BTree> t;
+    ASSERT_OK(w.create_table("octants", TableOptions{}, 1 << 20, &t, file));
+    for (uint64_t i = 0; i < n; ++i) ASSERT_OK(t->append(i, nullptr));
+    ASSERT_OK(w.stage("octants", *file, t, Status::Ok()));
+  };
+  std::string staged;
+  {
+    std::unique_ptr<Database> w;
+    ASSERT_OK(Database::open(db(), Database::Mode::kWrite, false, &w));
+    stage_octants(*w, 30, &staged);
+    EXPECT_EQ(records(*w, "octants"), 30u);  // the writer reads what it staged
+    std::unique_ptr<Database> r;
+    ASSERT_OK(Database::open(db(), Database::Mode::kRead, false, &r));
+    EXPECT_EQ(records(*r, "octants"), 10u);  // readers see the live table
+  }                                          // closed without a commit
+  EXPECT_FALSE(std::filesystem::exists(dir_.file("db/" + staged)));
+  std::unique_ptr<Database> r;
+  ASSERT_OK(Database::open(db(), Database::Mode::kRead, false, &r));
+  EXPECT_EQ(records(*r, "octants"), 10u);
+  EXPECT_EQ(records(*r, "nodes"), 11u);
+  r.reset();
+  {
+    std::unique_ptr<Database> w;
+    ASSERT_OK(Database::open(db(), Database::Mode::kWrite, false, &w));
+    stage_octants(*w, 40, &staged);
+    std::unique_ptr<BTree> nodes;
+    std::string file;
+    ASSERT_OK(w->create_table("nodes", TableOptions{}, 1 << 20, &nodes, &file));
+    for (uint64_t i = 0; i < 41; ++i) ASSERT_OK(nodes->append(i, nullptr));
+    ASSERT_OK(w->publish("nodes", file, nodes, Status::Ok()));
+  }
+  ASSERT_OK(Database::open(db(), Database::Mode::kRead, false, &r));
+  EXPECT_EQ(records(*r, "octants"), 40u);  // both in one commit, nodes not dropped
+  EXPECT_EQ(records(*r, "nodes"), 41u);
+  EXPECT_TRUE(std::filesystem::exists(dir_.file("db/" + staged)));
+}
+
 TEST_F(DatabaseTest, WriterRemovesLeftoversOfACrashedWriter) {
   make_table("octants", 5);
   std::ofstream(dir_.file("db/octants-99.bt")) << "half written";

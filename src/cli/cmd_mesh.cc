@@ -9,6 +9,8 @@
 #include "balance/balance.h"
 #include "cli/cli.h"
 #include "construct/construct.h"
+#include "construct/estimate.h"
+#include "db/database.h"
 #include "extract/extract.h"
 #include "schema/octant.h"
 #include "util/progress.h"
@@ -138,6 +140,20 @@ int cmd_mesh(int argc, char** argv) {
   if (st.is_invalid_argument()) return usage_error("mesh", st.message(), kUsage);
   if (!st.ok()) return report("mesh", st);
   print_construct_plan(co, plan);
+  // One pass commits once: construct stages the octant table in this
+  // writer, and extract's commit makes it live with the node table, so a
+  // re-mesh leaves the old mesh or the new one (Database::stage).
+  std::unique_ptr<Database> writer;
+  if (co.balanced) {
+    ConstructEstimate e;  // refuse a runaway size before the writer creates DB
+    e.elements = plan.estimated_elements;
+    e.disk_bytes = plan.estimated_disk_bytes;
+    st = check_construct_fits(co, e, db);
+    if (st.ok()) st = Database::open(db, Database::Mode::kWrite, true, &writer);
+    if (!st.ok()) return report("mesh", st);
+    co.writer = eo.writer = writer.get();
+    co.stage = true;
+  }
   const Stage total;
 
   reset_peak();
@@ -177,7 +193,9 @@ int cmd_mesh(int argc, char** argv) {
   st = extract_mesh(db, eo, &er);
   extract_line.finish();
   if (!st.ok()) {
-    return report_after("extract", st, "construct committed the balanced octant table");
+    return report_after("extract", st,
+                        co.balanced ? "nothing committed: the database is as it was"
+                                    : "construct and balance committed the balanced octant table");
   }
   stage_line("extract", er.nodes, "nodes", s3);
 

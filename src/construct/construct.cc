@@ -319,14 +319,19 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   e.elements = p->estimated_elements;
   e.disk_bytes = p->estimated_disk_bytes;
   WEAVER_RETURN_IF_ERROR(check_construct_fits(o, e, db_dir));
-  std::unique_ptr<Database> db;
-  WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, true, &db));
+  std::unique_ptr<Database> own;
+  Database* db = o.writer;
+  if (db == nullptr) {
+    WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, true, &own));
+    db = own.get();
+  }
   std::unique_ptr<BTree> table;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, octant_table_options(o, *model),
                                           memory.table_pool, &table, &file));
   const Status st = write_octree(o, *p, *model, memory, *table, r);
-  WEAVER_RETURN_IF_ERROR(db->publish(kOctantTable, file, table, st));
+  WEAVER_RETURN_IF_ERROR(o.stage ? db->stage(kOctantTable, file, table, st)
+                                 : db->publish(kOctantTable, file, table, st));
   r->table_bytes = table->file_bytes();
   return Status::Ok();
 }

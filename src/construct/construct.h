@@ -63,6 +63,11 @@ struct ConstructOptions {
   // Leaves written, and the fraction of the estimate (construct/estimate.h)
   // that lies before the last of them in Z-order.
   ProgressFn progress;
+  // A writer already open on the database (else construct opens its own),
+  // and whether to stage the table there (Database::stage: `weaver mesh`
+  // commits it with the node table) rather than publish it.
+  Database* writer = nullptr;
+  bool stage = false;
 };
 
 // Where construct's memory goes: the shares of options.memory.  The descent

@@ -194,6 +194,7 @@ Status create_shard_table(const std::string& dir, const std::string& file,
 }
 
 Database::~Database() {
+  for (const auto& [name, file] : staged_) abandon(file);
   for (const auto& [name, fd] : snapshot_fds_) ::close(fd);
   if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
 }
@@ -453,6 +454,7 @@ Status Database::open_sharded(const std::string& name, uint64_t pool_bytes,
 Status Database::open_table(const std::string& name, uint64_t pool_bytes,
                             std::unique_ptr<BTree>* out) const {
   if (!has_table(name)) return Status::NotFound(dir_ + ": no table '" + name + "'");
+  if (staged_.count(name)) return open_file(staged_.at(name), pool_bytes, out);
   if (!shards_of(name).empty()) return open_sharded(name, pool_bytes, out);
   return open_file(tables_.at(name), pool_bytes, out);
 }
@@ -467,7 +469,9 @@ Status Database::create_table(const std::string& name, const TableOptions& optio
   return BTree::create(std::move(f), options, pool_bytes, out);
 }
 
-Status Database::commit(const std::map<std::string, std::string>& table_files) {
+Status Database::commit(const std::map<std::string, std::string>& given) {
+  std::map<std::string, std::string> table_files = staged_;  // staged tables go live too
+  for (const auto& [name, file] : given) table_files[name] = file;
   std::map<std::string, std::string> next = tables_;
   for (const auto& [name, file] : table_files) next[name] = file;
   std::vector<std::string> dropped;
@@ -479,6 +483,7 @@ Status Database::commit(const std::map<std::string, std::string>& table_files) {
     }
   }
   WEAVER_RETURN_IF_ERROR(commit_exactly(next));
+  staged_.clear();
   dropped_ = dropped;
   for (const std::string& name : dropped) {
     std::fprintf(stderr, "weaver: %s: dropped table '%s', derived from the replaced table '%s'\n",
@@ -530,6 +535,19 @@ Status Database::publish(const std::string& name, const std::string& file,
     abandon(file);
   }
   return built;
+}
+
+Status Database::stage(const std::string& name, const std::string& file,
+                       std::unique_ptr<BTree>& table, Status built) {
+  if (built.ok()) built = table->commit();
+  if (!built.ok()) {
+    table.reset();
+    abandon(file);
+    return built;
+  }
+  if (staged_.count(name)) abandon(staged_.at(name));
+  staged_[name] = file;
+  return Status::Ok();
 }
 
 void Database::abandon(const std::string& file_name) {

@@ -72,7 +72,9 @@ class Database {
   // (src/db/recover.cc).  Refuses a database whose manifest is intact.
   static Status recover(const std::string& dir, RecoverReport* report);
 
-  bool has_table(const std::string& name) const { return tables_.count(name) != 0; }
+  bool has_table(const std::string& name) const {
+    return tables_.count(name) != 0 || staged_.count(name) != 0;
+  }
   std::vector<std::string> table_names() const;
   // A table's file; a sharded table's first shard.
   std::string table_path(const std::string& name) const;
@@ -111,6 +113,14 @@ class Database {
   // and deletes the file.  Returns the first error.
   Status publish(const std::string& name, const std::string& file, std::unique_ptr<BTree>& table,
                  Status built);
+  // Writer only: ends the build of table `name` in `file` as publish does,
+  // but stages it instead of making it live: this Database's open_table
+  // serves it from now on, and its next commit (a later publish) makes it
+  // live together with that commit's tables, in one manifest.  Staged files
+  // never committed are deleted when the Database closes, so a command of
+  // several stages (weaver mesh) leaves the old tables or all the new ones.
+  Status stage(const std::string& name, const std::string& file, std::unique_ptr<BTree>& table,
+               Status built);
 
   // Files in the directory that no manifest names (left by a crashed writer);
   // a writer removes them when it opens.
@@ -138,6 +148,7 @@ class Database {
   uint64_t next_file_number_ = 1;
   // name -> file name; a sharded table's shard files joined by ','.
   std::map<std::string, std::string> tables_;
+  std::map<std::string, std::string> staged_;      // table -> its staged file (stage)
   std::map<std::string, ShardEntry> shard_files_;  // file -> its shard entry, for the manifest
   std::map<std::string, int> snapshot_fds_;        // reader: file -> open descriptor
   Status open_snapshot();

@@ -124,8 +124,12 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
                     ExtractResult* result) {
   *result = ExtractResult{};
   const ExtractMemory memory(options);
-  std::unique_ptr<Database> db;
-  WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, false, &db));
+  std::unique_ptr<Database> own;
+  Database* db = options.writer;
+  if (db == nullptr) {
+    WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, false, &own));
+    db = own.get();
+  }
   std::unique_ptr<BTree> octants;
   WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, memory.octant_pool, &octants));
   TableOptions topt;

@@ -56,6 +56,10 @@ struct ExtractOptions {
   int bucket_level = -1;
   // Packed leaf pages for the node table (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
+  // A writer already open on the database (else extract opens its own):
+  // its octant table may be staged (Database::stage), and then goes live
+  // with the node table.
+  Database* writer = nullptr;
   // Elements done, and their fraction of the octant table (sort only).
   ProgressFn progress;
 };
