@@ -5,6 +5,7 @@
 
 #include "balance/closure.h"
 #include "db/async_append.h"
+#include "util/resolve_split.h"
 
 namespace weaver {
 namespace {
@@ -25,7 +26,9 @@ class Completion {
   Status write(const Octant& t, const std::byte* parent_payload, const std::vector<KeyTag>& inside,
                BalanceResult* r) {
     size_t pos = 0;
-    return split(t, false, parent_payload, inside, &pos, r);
+    return split_to_resolve(
+        t, false, inside.size(), [&](size_t i) { return inside[i].key; }, &pos,
+        [&](const Octant& o, bool is_new) { return emit(o, is_new, parent_payload, r); });
   }
   // A leaf with nothing required inside it (nearly all of them): copied
   // from its key and payload as they are, without decoding the octant.
@@ -41,19 +44,6 @@ class Completion {
 
  private:
   // is_new: o is a child made by a split, not a leaf of the input.
-  Status split(const Octant& o, bool is_new, const std::byte* parent_payload,
-               const std::vector<KeyTag>& inside, size_t* pos, BalanceResult* r) {
-    const uint64_t key = octant_key(o), end = octant_key_subtree_end(o);
-    while (*pos < inside.size() && inside[*pos].key <= key) ++*pos;  // o itself is resolved
-    if (*pos < inside.size() && inside[*pos].key < end) {
-      for (int c = 0; c < 8; ++c) {
-        WEAVER_RETURN_IF_ERROR(split(octant_child(o, c), true, parent_payload, inside, pos, r));
-      }
-      return Status::Ok();
-    }
-    return emit(o, is_new, parent_payload, r);
-  }
-
   Status emit(const Octant& o, bool is_new, const std::byte* parent_payload, BalanceResult* r) {
     add_entry(octant_key(o), o.level, parent_payload, r);
     if (is_new && fill_) fill_(o, &*(batch_.payloads.end() - payload_));

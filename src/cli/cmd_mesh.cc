@@ -202,9 +202,10 @@ int cmd_mesh(int argc, char** argv) {
   std::printf("\nmesh at %g Hz, %g points per wavelength, in %.2fs\n", co.freq, co.ppw,
               total.seconds());
   const uint64_t db_bytes = directory_bytes(db);
+  const IoBytes io = total.io();
   std::printf("  database   %.1f MB; the run wrote %.1f MB (%.2fx) and read %.1f MB\n",
-              db_bytes / 1e6, total.io().written / 1e6,
-              double(total.io().written) / std::max<uint64_t>(1, db_bytes), total.io().read / 1e6);
+              db_bytes / 1e6, io.written / 1e6,
+              double(io.written) / std::max<uint64_t>(1, db_bytes), io.read / 1e6);
   std::printf(
       "  elements   %llu\n  nodes      %llu\n  danglings  %llu (%llu on edges, %llu on "
       "faces)\n",

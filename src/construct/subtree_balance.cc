@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "util/parent_asks.h"
+#include "util/resolve_split.h"
 
 namespace weaver {
 namespace {
@@ -79,6 +80,9 @@ void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
   std::merge(collected_.begin(), collected_.end(), leaves->keys.begin(), leaves->keys.end(),
              local_.begin());
   ripple();
+  // Nothing created inside the subtree (most subtrees): its leaves stand.
+  const auto inside_root = std::lower_bound(created_.begin(), created_.end(), octant_key(root));
+  if (inside_root == created_.end() || *inside_root >= octant_key_subtree_end(root)) return;
   refine(root, leaves);
 }
 
@@ -247,7 +251,9 @@ void SubtreeBalancer::refine(const Octant& root, SubtreeLeaves* leaves) {
       ++out_.levels[octant_key_level(key)];
       continue;
     }
-    for (int c = 0; c < 8; ++c) split(octant_child(octant_from_key(key), c), payload, &pos, &out_);
+    split_to_resolve(
+        octant_from_key(key), false, created_.size(), [&](size_t j) { return created_[j]; }, &pos,
+        [&](const Octant& o, bool is_new) { return emit_leaf(o, is_new, payload); });
   }
   out_.elements = out_.keys.size();
   int coarsest = 0;
@@ -259,24 +265,19 @@ void SubtreeBalancer::refine(const Octant& root, SubtreeLeaves* leaves) {
   leaves->largest_edge_m = octant_edge(coarsest) * descent_.plan().tick_m;
 }
 
-// o, a new octant, is a leaf unless something created lies strictly inside it.
-void SubtreeBalancer::split(const Octant& o, const std::byte* parent_payload, size_t* pos,
-                            SubtreeLeaves* out) {
-  const uint64_t key = octant_key(o), end = octant_key_subtree_end(key);
-  while (*pos < created_.size() && created_[*pos] <= key) ++*pos;
-  if (*pos < created_.size() && created_[*pos] < end) {
-    for (int c = 0; c < 8; ++c) split(octant_child(o, c), parent_payload, pos, out);
-    return;
-  }
-  const size_t bytes = descent_.payload_bytes(), at = out->payloads.size();
-  out->keys.push_back(key);
-  out->payloads.resize(at + bytes);
-  if (fill_) {
-    descent_.material(o, out->payloads.data() + at);
+// A leaf of the refinement into out_: a new one with the model's material
+// at its centre (or a copy of its parent's), else as it was.
+Status SubtreeBalancer::emit_leaf(const Octant& o, bool is_new, const std::byte* parent_payload) {
+  const size_t bytes = descent_.payload_bytes(), at = out_.payloads.size();
+  out_.keys.push_back(octant_key(o));
+  out_.payloads.resize(at + bytes);
+  if (is_new && fill_) {
+    descent_.material(o, out_.payloads.data() + at);
   } else {
-    std::memcpy(out->payloads.data() + at, parent_payload, bytes);
+    std::memcpy(out_.payloads.data() + at, parent_payload, bytes);
   }
-  ++out->levels[o.level];
+  ++out_.levels[o.level];
+  return Status::Ok();
 }
 
 }  // namespace weaver

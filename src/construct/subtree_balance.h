@@ -68,7 +68,7 @@ class SubtreeBalancer {
   void ripple();
   void ask_level(int level);
   void refine(const Octant& root, SubtreeLeaves* leaves);
-  void split(const Octant& o, const std::byte* parent_payload, size_t* pos, SubtreeLeaves* out);
+  Status emit_leaf(const Octant& o, bool is_new, const std::byte* parent_payload);
 
   const Descent& descent_;
   const bool fill_;

@@ -1,0 +1,34 @@
+// The leaves that resolve required octants inside an octant: the octant
+// is split, and each child in turn, while a required octant lies strictly
+// inside it.  Balance's refinement writer and construct's subtree balance
+// both split their leaves this way.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "schema/octant.h"
+#include "schema/status.h"
+
+namespace weaver {
+
+// key_of(i) is the i-th of `count` required octant keys, in key order; *pos
+// is the first not yet passed, and moves forward (calls for leaves in key
+// order share it).  emit(leaf, is_new) is called for each resulting leaf
+// in key order (is_new: made by a split, not o itself); the first error it
+// returns stops the walk.
+template <typename KeyOf, typename Emit>
+Status split_to_resolve(const Octant& o, bool is_new, size_t count, const KeyOf& key_of,
+                        size_t* pos, const Emit& emit) {
+  const uint64_t key = octant_key(o), end = octant_key_subtree_end(key);
+  while (*pos < count && key_of(*pos) <= key) ++*pos;  // o itself is resolved
+  if (*pos < count && key_of(*pos) < end) {
+    for (int c = 0; c < 8; ++c) {
+      WEAVER_RETURN_IF_ERROR(split_to_resolve(octant_child(o, c), true, count, key_of, pos, emit));
+    }
+    return Status::Ok();
+  }
+  return emit(o, is_new);
+}
+
+}  // namespace weaver
