@@ -61,11 +61,20 @@ TEST(Cli, ImportStatQueryRoundTrip) {
       << loc.out;
   const CommandRun range = run("query " + d.file("db") + " range 0 0 0 131072 0 0 --json --list");
   ASSERT_EQ(range.code, 0);
-  // JSON Lines: one object per leaf.
+  // One JSON document: an array of the leaves, one a line; --format jsonl
+  // the same objects without the brackets.
   EXPECT_EQ(lines(range.out), 2) << range.out;
+  EXPECT_EQ(range.out.substr(0, 13), "[{\"element\": ") << range.out;
+  EXPECT_EQ(range.out.substr(range.out.size() - 3), "}]\n") << range.out;
   EXPECT_NE(range.out.find("{\"element\": 1, \"x\": 131072, \"y\": 0, \"z\": 0, \"level\": 3"),
             std::string::npos)
       << range.out;
+  const CommandRun jsonl =
+      run("query " + d.file("db") + " range 0 0 0 131072 0 0 --format jsonl --list");
+  ASSERT_EQ(jsonl.code, 0);
+  EXPECT_EQ(lines(jsonl.out), 2) << jsonl.out;
+  EXPECT_EQ(jsonl.out.substr(0, 2), "{\"") << jsonl.out;
+  EXPECT_EQ(jsonl.out.find('['), std::string::npos) << jsonl.out;
 }
 
 TEST(Cli, DataErrorsAreOneLineWithStatus1) {

@@ -134,9 +134,9 @@ TEST_F(QueryCli, NeighbourhoodsPrintOneRowEach) {
   EXPECT_EQ(ids.size(), want + corner_only) << n.out;
   const auto e = run("query " + db_ + " node-elements 0 --format json");
   ASSERT_EQ(e.code, 0) << e.err;
-  EXPECT_EQ(e.out, "{\"element\": 0, \"corner\": 0, \"x\": 0, \"y\": 0, \"z\": 0, \"level\": " +
+  EXPECT_EQ(e.out, "[{\"element\": 0, \"corner\": 0, \"x\": 0, \"y\": 0, \"z\": 0, \"level\": " +
                        std::to_string(leaves_[0].level) +
-                       ", \"edge\": " + std::to_string(octant_edge(leaves_[0])) + "}\n");
+                       ", \"edge\": " + std::to_string(octant_edge(leaves_[0])) + "}]\n");
   const auto bad = run("query " + db_ + " depends 99999999");
   EXPECT_EQ(bad.code, 1);
   EXPECT_NE(bad.err.find("node 99999999 does not exist"), std::string::npos) << bad.err;

@@ -31,7 +31,7 @@ constexpr char kUsage[] =
 
 constexpr char kDotHelp[] =
     ".help                 this text\n"
-    ".mode [MODE]          output mode: text (default), table, json, csv or tsv\n"
+    ".mode [MODE]          output mode: text (default), table, json, jsonl, csv or tsv\n"
     ".timer on|off         print the wall time of each command\n"
     ".units ticks|m        coordinates in and out in ticks (default) or metres\n"
     ".read FILE            run the commands in FILE\n"

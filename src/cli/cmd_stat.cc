@@ -3,6 +3,7 @@
 #include "cli/cli.h"
 #include "db/database.h"
 #include "query/table_stats.h"
+#include "util/json_string.h"
 
 namespace weaver::cli {
 namespace {
@@ -27,7 +28,8 @@ int cmd_stat(int argc, char** argv) {
   st = Database::open(args.positional[0], Database::Mode::kRead, false, &db);
   if (!st.ok()) return report("stat", st);
   const bool json = args.flags.count("json") != 0;
-  std::string out = json ? "{\"database\": \"" + args.positional[0] + "\", \"tables\": [" : "";
+  std::string out =
+      json ? "{\"database\": " + json_string(args.positional[0]) + ", \"tables\": [" : "";
   bool first = true;
   for (const std::string& name : db->table_names()) {
     std::unique_ptr<BTree> t;

@@ -21,12 +21,15 @@ constexpr uint32_t kFar = UINT32_MAX;
 // many for a std::string append per field.
 class RowWriter {
  public:
-  explicit RowWriter(OutputMode mode) : mode_(mode), buf_(kCapacity) {
+  // one: the answer to one point, which JSON prints as an object rather
+  // than as an array of one.
+  RowWriter(OutputMode mode, bool one) : mode_(mode), one_(one), buf_(kCapacity) {
     sep_ = mode == OutputMode::kCsv ? ',' : mode == OutputMode::kTsv ? '\t' : ' ';
   }
   void header(const std::vector<const char*>& columns) {
     columns_ = columns;
-    if (mode_ == OutputMode::kJson) return;
+    if (mode_ == OutputMode::kJson && !one_) raw("[");
+    if (json()) return;
     begin();
     if (mode_ == OutputMode::kText || mode_ == OutputMode::kTable) raw("# ");
     for (const char* c : columns) put(c, false);
@@ -36,6 +39,7 @@ class RowWriter {
   void begin() {
     field_ = 0;
     if (len_ + kMaxRow > buf_.size()) buf_.resize(std::max(buf_.size() * 2, len_ + kMaxRow));
+    if (mode_ == OutputMode::kJson && rows_ > 0) raw(",\n");
   }
   template <typename T>
   void number(T v) {
@@ -44,10 +48,16 @@ class RowWriter {
     close(false);
   }
   void text(std::string_view s) { put(s, true); }
-  void null() {
-    put(mode_ == OutputMode::kJson ? "null" : mode_ == OutputMode::kText ? "-" : "", false);
+  void null() { put(json() ? "null" : mode_ == OutputMode::kText ? "-" : "", false); }
+  void end() {
+    raw(mode_ == OutputMode::kJson ? "}" : json() ? "}\n" : "\n");
+    ++rows_;
   }
-  void end() { raw(mode_ == OutputMode::kJson ? "}\n" : "\n"); }
+  // After the last row: closes the JSON document.
+  void close_document() {
+    if (len_ + 4 > buf_.size()) buf_.resize(len_ + 4);
+    if (mode_ == OutputMode::kJson) raw(one_ && rows_ == 1 ? "\n" : "]\n");
+  }
   size_t size() const { return len_; }
   // Writes the rows held to out and forgets them.
   Status flush(std::FILE* out) {
@@ -68,7 +78,7 @@ class RowWriter {
   }
   // What goes before a field: a separator, or in JSON its name.
   void separate(bool quoted) {
-    if (mode_ == OutputMode::kJson) {
+    if (json()) {
       raw(field_ == 0 ? "{\"" : ", \"");
       raw(columns_[field_]);
       raw(quoted ? "\": \"" : "\": ");
@@ -77,7 +87,7 @@ class RowWriter {
     }
   }
   void close(bool quoted) {
-    if (quoted && mode_ == OutputMode::kJson) buf_[len_++] = '"';
+    if (quoted && json()) buf_[len_++] = '"';
     ++field_;
   }
   void put(std::string_view v, bool quoted) {
@@ -86,7 +96,11 @@ class RowWriter {
     close(quoted);
   }
 
+  bool json() const { return mode_ == OutputMode::kJson || mode_ == OutputMode::kJsonl; }
+
   OutputMode mode_;
+  bool one_;
+  uint64_t rows_ = 0;
   char sep_;
   std::vector<const char*> columns_;
   size_t field_ = 0;
@@ -137,7 +151,7 @@ class LineReader {
 class BatchRunner {
  public:
   BatchRunner(Explorer& ex, const PointBatchOptions& o, std::FILE* out)
-      : ex_(ex), o_(o), out_(out), w_(o.mode) {}
+      : ex_(ex), o_(o), out_(out), w_(o.mode, o.one) {}
 
   void header() {
     std::vector<const char*> c = {"x", "y", "z", "status"};
@@ -216,7 +230,10 @@ class BatchRunner {
     return Status::Ok();
   }
 
-  Status finish() { return w_.flush(out_); }
+  Status finish() {
+    w_.close_document();
+    return w_.flush(out_);
+  }
 
  private:
   bool parse(const char* b, const char* e, double* v) const {

@@ -22,6 +22,7 @@ struct PointBatchOptions {
   PointQuery query = PointQuery::kLocate;
   OutputMode mode = OutputMode::kText;  // text and table print space-separated columns
   bool metres = false;                  // input and lengths in metres, not ticks
+  bool one = false;  // one point asked on the command line: JSON prints an object
 };
 
 struct PointBatchResult {

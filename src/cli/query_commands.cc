@@ -33,7 +33,8 @@ const char kQueryHelp[] =
     "  --geo                 locate, material, node-at: points as LON LAT DEPTH (WGS84\n"
     "                        degrees, metres down), in a georeferenced database\n"
     "                        (construct --origin-geo); answers in metres\n"
-    "  --format MODE         text (default), table, json, csv or tsv; --json = --format json\n";
+    "  --format MODE         text (default), table, json (one document), jsonl (one object\n"
+    "                        a line; also ndjson), csv or tsv; --json = --format json\n";
 
 namespace {
 
@@ -234,6 +235,7 @@ int Query::run_points(PointQuery q) {
     if (st.ok()) st = point_argument(1, &c);
     if (!st.ok()) return usage(st.message());
     if (text()) return run_point_text(q, c);
+    o.one = true;
     const std::string line =
         args.positional[1] + " " + args.positional[2] + " " + args.positional[3] + "\n";
     std::FILE* in = fmemopen(const_cast<char*>(line.data()), line.size(), "r");
@@ -315,7 +317,7 @@ int Query::run_range() {
   }
   st = range_query(ex.mesh().octants(), {lo, hi}, &count, each);
   if (!st.ok()) return fail(st);
-  if (!list) t.rows.push_back({Cell::number(count)});
+  if (!list) t.rows.push_back({Cell::number(count)}), t.one = true;
   if (text() && !list)
     return std::fprintf(out, "%llu leaves intersect the box\n", (unsigned long long)count), 0;
   return print(t);
@@ -340,6 +342,7 @@ int Query::run_element() {
   }
   Table t;
   t.columns = {"element", "x", "y", "z", "level", "edge"};
+  t.one = true;
   std::vector<Cell> row{Cell::number(id)};
   octant_cells(e.octant, &row);
   if (nodes) t.columns.push_back("nodes"), row.push_back(ids(e.nodes.data(), 8));
@@ -370,6 +373,7 @@ int Query::run_node() {
   }
   Table t;
   t.columns = {"node", "x", "y", "z", "kind", "anchors"};
+  t.one = true;
   t.rows.push_back({Cell::number(id), position(n.c.x, 0), position(n.c.y, 1), position(n.c.z, 2),
                     Cell::string(node_kind_name(n.kind)), ids(n.anchors.data(), n.anchor_count)});
   return print(t);

@@ -3,21 +3,25 @@
 #include <algorithm>
 #include <charconv>
 
+#include "util/json_string.h"
+
 namespace weaver::cli {
 
+namespace {
+// In OutputMode's order.
+const char* const kModeNames[] = {"text", "table", "json", "jsonl", "csv", "tsv"};
+}  // namespace
+
 Status parse_output_mode(const std::string& name, OutputMode* out) {
-  static const char* const kNames[] = {"text", "table", "json", "csv", "tsv"};
-  for (int i = 0; i < 5; ++i) {
-    if (name == kNames[i]) return *out = OutputMode(i), Status::Ok();
+  for (int i = 0; i < 6; ++i) {
+    if (name == kModeNames[i]) return *out = OutputMode(i), Status::Ok();
   }
+  if (name == "ndjson") return *out = OutputMode::kJsonl, Status::Ok();
   return Status::InvalidArgument("unknown output mode '" + name +
-                                 "' (text, table, json, csv or tsv)");
+                                 "' (text, table, json, jsonl, csv or tsv)");
 }
 
-const char* output_mode_name(OutputMode m) {
-  static const char* const kNames[] = {"text", "table", "json", "csv", "tsv"};
-  return kNames[int(m)];
-}
+const char* output_mode_name(OutputMode m) { return kModeNames[int(m)]; }
 
 Cell Cell::number(double v) {
   char buf[32];
@@ -45,31 +49,30 @@ std::string plain_text(const Cell& c) {
 
 namespace {
 
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (const char ch : s) {
-    const unsigned char c = static_cast<unsigned char>(ch);
-    if (c == '"' || c == '\\') {
-      out += '\\', out += ch;
-    } else if (c < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += ch;
-    }
+std::string json_object(const Table& t, const std::vector<Cell>& row) {
+  std::string s = "{";
+  for (size_t i = 0; i < row.size(); ++i) {
+    s += (i ? ", " : "") + json_string(t.columns[i]) + ": " + json_text(row[i]);
   }
-  return out + "\"";
+  return s + "}";
 }
 
+// One document: the one row of a single answer as an object, any other
+// answer as an array, a row a line as sqlite3 prints it.
 void print_json(const Table& t, std::FILE* out) {
-  for (const auto& row : t.rows) {
-    std::string line = "{";
-    for (size_t i = 0; i < row.size(); ++i) {
-      line += (i ? ", " : "") + json_string(t.columns[i]) + ": " + json_text(row[i]);
-    }
-    std::fprintf(out, "%s}\n", line.c_str());
+  if (t.one && t.rows.size() == 1) {
+    std::fprintf(out, "%s\n", json_object(t, t.rows[0]).c_str());
+    return;
   }
+  std::fputs("[", out);
+  for (size_t r = 0; r < t.rows.size(); ++r) {
+    std::fprintf(out, "%s%s", r ? ",\n" : "", json_object(t, t.rows[r]).c_str());
+  }
+  std::fputs("]\n", out);
+}
+
+void print_json_lines(const Table& t, std::FILE* out) {
+  for (const auto& row : t.rows) std::fprintf(out, "%s\n", json_object(t, row).c_str());
 }
 
 void print_separated(const Table& t, char sep, std::FILE* out) {
@@ -146,6 +149,7 @@ std::string csv_text(const Cell& c, char separator) {
 void print_table(const Table& t, OutputMode mode, std::FILE* out) {
   switch (mode) {
     case OutputMode::kJson: return print_json(t, out);
+    case OutputMode::kJsonl: return print_json_lines(t, out);
     case OutputMode::kCsv: return print_separated(t, ',', out);
     case OutputMode::kTsv: return print_separated(t, '\t', out);
     default: return print_aligned(t, out);

@@ -2,7 +2,9 @@
 // the shell's `.mode`, in the manner of the sqlite3 shell.
 //   text   sentences for one answer, a table for several (the default)
 //   table  aligned columns under a header
-//   json   one JSON object per answer (JSON Lines)
+//   json   one JSON document: an array of row objects, or one object where
+//          the answer is one thing (as sqlite3's -json and duckdb's -json)
+//   jsonl  one JSON object a line (JSON Lines, also called ndjson), streamed
 //   csv    a header, then one line per answer (RFC 4180 quoting)
 //   tsv    the same with tabs
 #pragma once
@@ -15,9 +17,9 @@
 
 namespace weaver::cli {
 
-enum class OutputMode { kText, kTable, kJson, kCsv, kTsv };
+enum class OutputMode { kText, kTable, kJson, kJsonl, kCsv, kTsv };
 
-// "text", "table", "json", "csv", "tsv".
+// "text", "table", "json", "jsonl" (or "ndjson"), "csv", "tsv".
 Status parse_output_mode(const std::string& name, OutputMode* out);
 const char* output_mode_name(OutputMode m);
 
@@ -40,6 +42,9 @@ struct Cell {
 struct Table {
   std::vector<std::string> columns;
   std::vector<std::vector<Cell>> rows;
+  // The answer is one thing (an element, a node, a count): JSON prints its
+  // one row as an object, not as an array of one.
+  bool one = false;
 };
 
 // Prints t in mode (kText prints it as kTable).  Header lines (table, csv,

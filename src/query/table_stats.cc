@@ -5,6 +5,7 @@
 #include "db/octant_table.h"
 #include "schema/node.h"
 #include "schema/octant.h"
+#include "util/json_string.h"
 
 namespace weaver {
 
@@ -84,15 +85,15 @@ std::string stats_to_text(const TableStats& s) {
 std::string stats_to_json(const TableStats& s) {
   char buf[512];
   std::snprintf(buf, sizeof buf,
-                "{\"table\": \"%s\", \"file\": \"%s\", \"records\": %llu, \"bytes\": %llu, "
+                ", \"records\": %llu, \"bytes\": %llu, "
                 "\"bytes_per_record\": %.4f, \"raw_bytes_per_record\": %u, "
                 "\"overhead_pct\": %.4f, \"packed\": %s, \"depth\": %u, \"page_size\": %u, "
-                "\"schema\": \"%s\"",
-                s.name.c_str(), s.file.c_str(), (unsigned long long)s.records,
-                (unsigned long long)s.file_bytes, s.bytes_per_record(), 8 + s.payload_bytes,
-                s.overhead_pct(), s.packed ? "true" : "false", s.depth, s.page_size,
-                s.schema.c_str());
-  std::string out = buf;
+                "\"schema\": ",
+                (unsigned long long)s.records, (unsigned long long)s.file_bytes,
+                s.bytes_per_record(), 8 + s.payload_bytes, s.overhead_pct(),
+                s.packed ? "true" : "false", s.depth, s.page_size);
+  std::string out = "{\"table\": " + json_string(s.name) + ", \"file\": " + json_string(s.file) +
+                    buf + json_string(s.schema);
   if (s.key_kind == KeyKind::kOctant) {
     out += ", \"per_level\": {";
     bool first = true;
