@@ -65,6 +65,10 @@ Status import_model_option(const std::string& db, weaver::ConstructOptions* o);
 // queries (`material` only, in metres) 'weaver model material' answers;
 // query_model runs one (memory: --memory's text, "" for the default).
 bool is_model_only(const std::string& db);
+// A database about to be written by a writer of mesh (mesh = true) or of a
+// model database: InvalidArgument when db holds tables of the other kind
+// (a model database given to mesh, a mesh given to model import).
+Status check_target_kind(const std::string& db, bool mesh);
 int query_model(const std::string& db, const std::vector<std::string>& words,
                 const std::string& memory);
 

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "cli/cli.h"
+#include "db/output_path.h"
 #include "export/export.h"
 #include "util/printable.h"
 #include "util/progress.h"
@@ -110,6 +111,11 @@ Status parse_export_options(const ParsedArgs& args, ExportOptions* o) {
   }
   if (o->parts > 1 && o->has_box && f == ExportFormat::kRaw) {
     return Status::InvalidArgument("raw takes --box or --parts, not both");
+  }
+  // Nothing written into a database, whatever the path says.
+  for (const std::string& path : {o->out, o->nodes_path, o->elements_path,
+                                  f == ExportFormat::kPvtu ? pvtu_stem(o->out) : ""}) {
+    if (!path.empty()) WEAVER_RETURN_IF_ERROR(check_output_path(path));
   }
   return memory_option(args, &o->memory);
 }

@@ -1,6 +1,7 @@
 #include <cstdio>
 
 #include "cli/cli.h"
+#include "db/output_path.h"
 #include "gen/octree_gen.h"
 #include "import/octant_text.h"
 
@@ -75,6 +76,7 @@ int cmd_generate(int argc, char** argv) {
     st = parse_double(args.values["radius"], "--radius", &o.radius);
   }
   o.shuffle = args.flags.count("shuffle") != 0;
+  if (st.ok()) st = check_output_path(args.positional[0]);
   if (!st.ok()) return usage_error("generate", st.message(), kUsage);
   std::vector<Octant> leaves;
   st = generate_octree(o, &leaves);

@@ -12,6 +12,7 @@
 #include "construct/estimate.h"
 #include "db/database.h"
 #include "extract/extract.h"
+#include "modeldb/open_model.h"
 #include "schema/octant.h"
 #include "util/progress.h"
 
@@ -128,6 +129,9 @@ int cmd_mesh(int argc, char** argv) {
   if (st.ok()) {
     st = threads_option(args, default_threads(), &eo.threads);
   }
+  // A model database given as the mesh's target (a model source file is
+  // imported into the target, which then holds both).
+  if (st.ok() && !is_model_source(co.model)) st = check_target_kind(args.positional[0], true);
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);
   eo.memory = co.memory;
   co.threads = eo.threads;

@@ -155,6 +155,7 @@ int import(const ParsedArgs& args) {
     st = parse_double(args.values.at("tolerance"), "--tolerance", &o.tolerance);
   if (st.ok() && args.values.count("root-edge"))
     st = parse_double(args.values.at("root-edge"), "--root-edge", &o.root_edge_m);
+  if (st.ok()) st = check_target_kind(args.positional[1], false);
   if (!st.ok()) return usage_error("model", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   ModelImportResult r;

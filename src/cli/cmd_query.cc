@@ -36,6 +36,20 @@ bool is_model_only(const std::string& db) {
          d->has_table(kModelTable);
 }
 
+Status check_target_kind(const std::string& db, bool mesh) {
+  std::unique_ptr<Database> d;
+  if (!Database::open(db, Database::Mode::kRead, false, &d).ok()) return Status::Ok();
+  if (mesh && is_model_only(db)) {
+    return Status::InvalidArgument(db + " is a model database, not a mesh: give the mesh a " +
+                                   "database of its own (--model db:" + db + " reads the model)");
+  }
+  if (!mesh && d->has_table(kOctantTable)) {
+    return Status::InvalidArgument(db + " is a mesh database: import the model into a " +
+                                   "database of its own");
+  }
+  return Status::Ok();
+}
+
 int query_model(const std::string& db, const std::vector<std::string>& words,
                 const std::string& memory) {
   if (words[0] != "material") {

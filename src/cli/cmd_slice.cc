@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "cli/cli.h"
+#include "db/output_path.h"
 #include "slice/slice.h"
 
 namespace weaver::cli {
@@ -66,6 +67,7 @@ int cmd_slice(int argc, char** argv) {
   const std::string& out = args.values.at("out");
   const bool image = out.size() >= 4 && (out.compare(out.size() - 4, 4, ".png") == 0 ||
                                          out.compare(out.size() - 4, 4, ".svg") == 0);
+  if (st.ok()) st = check_output_path(out);
   if (st.ok() && !image) st = Status::InvalidArgument("--out must end in .png or .svg");
   o.danglings = args.flags.count("danglings") != 0;
   if (st.ok() && args.values.count("region")) {

@@ -73,6 +73,9 @@ struct ExportResult {
 
 Status export_mesh(const std::string& db_dir, const ExportOptions& options, ExportResult* result);
 
+// STEM of OUT = STEM.pvtu: the directory where pvtu's pieces go.
+std::string pvtu_stem(const std::string& out);
+
 // raw and pvtu with --parts N written a part at a time by separate writers
 // (weaver-mpi export: one a rank), into the same files export_mesh writes:
 // export_parts_begin once (raw: makes OUT.tmp; pvtu: the pieces' directory),

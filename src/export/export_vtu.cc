@@ -25,6 +25,12 @@
 #include "export/writers.h"
 
 namespace weaver {
+
+std::string pvtu_stem(const std::string& out) {
+  const bool suffix = out.size() > 5 && out.compare(out.size() - 5, 5, ".pvtu") == 0;
+  return suffix ? out.substr(0, out.size() - 5) : out;
+}
+
 namespace {
 
 constexpr uint8_t kVtkHexahedron = 12;
@@ -212,12 +218,6 @@ Status write_vtu(ExportJob& job) {
 }
 
 namespace {
-
-// STEM of OUT = STEM.pvtu: the pieces go in the directory STEM/.
-std::string pvtu_stem(const std::string& out) {
-  const bool suffix = out.size() > 5 && out.compare(out.size() - 5, 5, ".pvtu") == 0;
-  return suffix ? out.substr(0, out.size() - 5) : out;
-}
 
 std::string piece_name(const std::string& stem, uint32_t p) {
   return base_name(stem) + "/" + base_name(stem) + "_" + std::to_string(p) + ".vtu";

@@ -136,6 +136,17 @@ grep -q '"method": "graph"' "$tmp/graph.mpi/parts.json" || fail "export: graph p
 "$mpi" export "$tmp/mesh" --format raw --out "$tmp/alone.mpi" >/dev/null || fail "export alone"
 "$weaver" export "$tmp/mesh.serial" --format raw --out "$tmp/alone.serial" --quiet >/dev/null
 diff -r "$tmp/alone.serial" "$tmp/alone.mpi" >/dev/null || fail "export on one rank differs"
+# No output into a database: refused with one line and status 2 before any
+# rank writes, the database unchanged.
+before=$(cd "$tmp/mesh" && find . -type f ! -name LOCK -exec md5sum {} + | sort)
+for out in "$tmp/mesh/MANIFEST" "$tmp/mesh/parts" "$tmp/mesh"; do
+  status=0
+  run 2 "$mpi" export "$tmp/mesh" --format raw --out "$out" >/dev/null 2>"$tmp/err" || status=$?
+  [ "$status" = 2 ] && grep -q "weaver database" "$tmp/err" ||
+    fail "export --out $out: status $status, $(cat "$tmp/err")"
+done
+[ "$(cd "$tmp/mesh" && find . -type f ! -name LOCK -exec md5sum {} + | sort)" = "$before" ] ||
+  fail "a refused export changed the database"
 set +e
 run 3 "$mpi" export "$tmp/mesh" --format raw --parts 4 --out "$tmp/bad" >/dev/null 2>"$tmp/err"
 code=$?
