@@ -41,6 +41,14 @@ struct State {
     if (crash_at == 0)
       std::atexit([] {
         std::fprintf(stderr, "crash steps: %llu\n", (unsigned long long)instance().steps);
+        // Also to a file, for a process whose stderr goes nowhere (a rank of
+        // weaver-mpi other than 0).
+        const char* to = std::getenv("WEAVER_CRASH_STEPS_FILE");
+        std::FILE* f = to != nullptr ? std::fopen(to, "w") : nullptr;
+        if (f != nullptr) {
+          std::fprintf(f, "%llu\n", (unsigned long long)instance().steps);
+          std::fclose(f);
+        }
       });
   }
   static State& instance();

@@ -7,7 +7,8 @@
 // still-open file since that file's last sync, which is what the disk may
 // hold for writes that never reached it.  With WEAVER_CRASH_AT=0 nothing
 // dies and the step count is printed to stderr at exit ("crash steps: N"),
-// so a harness can spread its kill points over a writer's whole run.
+// so a harness can spread its kill points over a writer's whole run (and
+// to the file WEAVER_CRASH_STEPS_FILE names, when set).
 //
 // Faults instead of deaths: with WEAVER_FAIL_AT=N the N-th step fails with
 // the error WEAVER_FAIL_ERRNO names (EIO, the default, or ENOSPC) instead of

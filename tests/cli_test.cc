@@ -188,9 +188,9 @@ TEST(Cli, PackedAndPlainTablesHoldTheSameMesh) {
     ASSERT_NE(at, std::string::npos);
     bytes[plain] = std::stoull(stat.out.substr(at + 9));
     const CommandRun exp =
-        run("export " + db + " --nodes " + db + "/n.csv --elements " + db + "/e.csv");
+        run("export " + db + " --nodes " + db + ".n.csv --elements " + db + ".e.csv");
     ASSERT_EQ(exp.code, 0) << exp.err;
-    std::ifstream n(db + "/n.csv"), e(db + "/e.csv");
+    std::ifstream n(db + ".n.csv"), e(db + ".e.csv");
     csv[plain].assign(std::istreambuf_iterator<char>(n), {});
     csv[plain].append(std::istreambuf_iterator<char>(e), {});
   }

@@ -1,8 +1,9 @@
-// verify's RecentPages against the B+tree it reads: floors and gets, with
-// payloads, over plain and packed tables of many pages, for keys asked in
-// runs near each other (as verify asks them), far apart, between pages,
-// below the first key and past the last.
-#include "verify/leaf_window.h"
+// LeafWindow (queries', slices' and verify's window on a table) against the
+// B+tree it reads: floors with their ranks and payloads, and gets, over
+// plain and packed tables of many pages, for keys asked in runs near each
+// other (as a sorted batch and verify ask them), far apart, between pages,
+// below the first key and past the last; decoded pages and sparse lookups.
+#include "db/leaf_window.h"
 
 #include <gtest/gtest.h>
 
@@ -34,15 +35,16 @@ std::unique_ptr<BTree> table_of(const std::string& path, bool packed,
   return t;
 }
 
-TEST(RecentPages, AnswersAsTheTreeDoes) {
+TEST(LeafWindow, AnswersAsTheTreeDoes) {
   testing::TempDir dir;
   std::mt19937_64 rng(23);
-  for (const bool packed : {false, true}) {
+  for (const int mode : {0, 1, 2}) {
+    const bool packed = mode > 0, sparse = mode == 2;
     std::vector<uint64_t> keys;
     uint64_t k = 1000;
     for (int i = 0; i < 60000; ++i) keys.push_back(k += 1 + rng() % (rng() % 50 == 0 ? 5000 : 9));
     auto t = table_of(dir.file(packed ? "packed" : "plain"), packed, keys);
-    RecentPages window(*t, true);
+    LeafWindow window(*t, true);
     uint64_t q = keys[0];
     int hits = 0;
     for (int i = 0; i < 300000; ++i) {
@@ -51,16 +53,22 @@ TEST(RecentPages, AnswersAsTheTreeDoes) {
         case 1: q = rng() % 1000; break;                   // below the first key
         default: q = q + rng() % 40 - (q >= 20 ? 20 : q);  // a walk near the last key
       }
-      SCOPED_TRACE(std::string(packed ? "packed" : "plain") + ", key " + std::to_string(q));
-      uint64_t want = 0, got = 0;
+      SCOPED_TRACE(std::string(packed ? "packed" : "plain") + (sparse ? ", sparse" : "") +
+                   ", key " + std::to_string(q));
+      window.set_sparse(sparse && rng() % 2 == 0);  // switching back and forth
+      uint64_t want = 0, want_rank = 0;
       bool want_found = false, got_found = false;
-      ASSERT_OK(t->floor(q, &want, nullptr, &want_found));
-      ASSERT_OK(window.floor(q, &got, &got_found));
-      ASSERT_EQ(got_found, want_found);
-      if (want_found) {
-        ASSERT_EQ(got, want);
-      }
       std::byte want_kind{};
+      ASSERT_OK(t->floor(q, &want, &want_kind, &want_found));
+      LeafWindow::Floor f;
+      ASSERT_OK(window.floor(q, &f));
+      ASSERT_EQ(f.found, want_found);
+      if (want_found) {
+        ASSERT_OK(t->rank(want, &want_rank));
+        ASSERT_EQ(f.key, want);
+        ASSERT_EQ(f.rank, want_rank);
+        ASSERT_EQ(*f.payload, want_kind);
+      }
       const std::byte* kind = nullptr;
       ASSERT_OK(t->get(q, &want_kind, &want_found));
       ASSERT_OK(window.get(q, &kind, &got_found));

@@ -118,20 +118,36 @@ TEST(Partition, SfcByLevelWeightBalancesTheWeight) {
   const auto leaves = meshes()[0];
   testing::TempDir dir;
   const std::string db = build_mesh(leaves, dir);
+  const reference::Mesh ref = reference::extract(leaves);
   PartitionOptions o;
   o.parts = 4;
   o.weight = PartitionOptions::Weight::kLevel;
   PartitionReport r;
   ASSERT_OK(partition_mesh(db, o, &r));
+  // The weights rebuilt from the stored parts, not taken from the report.
   int coarsest = kMaxLevel, finest = 0;
-  for (const Octant& l : leaves)
+  for (const Octant& l : ref.elements)
     coarsest = std::min<int>(coarsest, l.level), finest = std::max<int>(finest, l.level);
+  ASSERT_LT(coarsest, finest) << "a graded mesh is needed to tell weights from counts";
+  const std::vector<uint32_t> part = stored_parts(db, ref.elements.size());
+  std::vector<uint64_t> weight(4), count(4);
   uint64_t total = 0;
-  for (const Octant& l : leaves) total += uint64_t{1} << (l.level - coarsest);
-  const uint64_t biggest = uint64_t{1} << (finest - coarsest);
-  for (const PartStats& s : r.parts) {
-    EXPECT_LE(std::llabs(int64_t(s.weight) - int64_t(total / 4)), int64_t(biggest)) << s.weight;
+  for (size_t i = 0; i < part.size(); ++i) {
+    if (i > 0) {
+      ASSERT_LE(part[i - 1], part[i]) << "sfc parts are runs of ids";
+    }
+    const uint64_t w = uint64_t{1} << (ref.elements[i].level - coarsest);
+    weight[part[i]] += w, ++count[part[i]], total += w;
   }
+  const uint64_t biggest = uint64_t{1} << (finest - coarsest);
+  ASSERT_EQ(r.parts.size(), 4u);
+  for (uint32_t p = 0; p < 4; ++p) {
+    EXPECT_LE(std::llabs(int64_t(weight[p]) - int64_t(total / 4)), int64_t(biggest))
+        << "part " << p << " weighs " << weight[p] << " of " << total;
+    EXPECT_EQ(r.parts[p].weight, weight[p]) << "part " << p;
+    EXPECT_EQ(r.parts[p].elements, count[p]) << "part " << p;
+  }
+  ASSERT_NO_FATAL_FAILURE(expect_report(ref, part, 4, r));
 }
 
 // A part file (gpmetis's format) becomes runs that give back every part;

@@ -242,6 +242,34 @@ TEST_F(Robustness, MeshSaysWhichStagesCommittedWhenALaterOneFails) {
       << late.err;
   EXPECT_EQ(testing::slurp(dir_.file("late") + "/MANIFEST").find("octants"), std::string::npos);
   expect_verifies(dir_.file("late"));
+
+  // With --unbalanced each stage commits: a failure in balance (a step past
+  // construct's own, counted alone) leaves construct's committed table.
+  const std::string construct =
+      "construct DB --unbalanced --model basin --freq 0.05 --domain 20000,20000,10000";
+  const CommandRun alone =
+      run(std::string(construct).replace(10, 2, dir_.file("alone")), "WEAVER_CRASH_AT=0 ");
+  ASSERT_EQ(alone.code, 0) << alone.err;
+  const uint64_t construct_steps =
+      std::stoull(alone.err.substr(alone.err.find("crash steps: ") + 13));
+  const CommandRun balance = run("balance " + dir_.file("alone"), "WEAVER_CRASH_AT=0 ");
+  ASSERT_EQ(balance.code, 0) << balance.err;
+  const uint64_t balance_steps =
+      std::stoull(balance.err.substr(balance.err.find("crash steps: ") + 13));
+  ASSERT_GT(balance_steps, 2u);
+  const CommandRun mid =
+      run(with(dir_.file("mid")) + " --unbalanced",
+          "WEAVER_FAIL_AT=" + std::to_string(construct_steps + balance_steps / 2) + " ");
+  EXPECT_EQ(mid.code, 1);
+  EXPECT_EQ(lines(mid.err), 1) << mid.err;
+  EXPECT_NE(mid.err.find("balance failed"), std::string::npos) << mid.err;
+  EXPECT_NE(mid.err.find("construct committed the octant table"), std::string::npos) << mid.err;
+  const std::string manifest = testing::slurp(dir_.file("mid") + "/MANIFEST");
+  EXPECT_NE(manifest.find("octants"), std::string::npos) << manifest;
+  EXPECT_EQ(manifest.find("nodes"), std::string::npos) << manifest;
+  // The committed table is construct's, whole: its pages and keys check.
+  const CommandRun v = run("verify " + dir_.file("mid") + " --storage-only");
+  EXPECT_EQ(v.code, 0) << v.out << v.err;
 }
 
 TEST_F(Robustness, SmallProbes) {

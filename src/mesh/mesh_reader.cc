@@ -58,6 +58,41 @@ std::string metadata_value(const std::string& metadata, const std::string& key) 
   return "";
 }
 
+Status Mesh::element(uint64_t id, bool with_nodes, MeshElement* out) {
+  if (id >= element_count()) {
+    return Status::InvalidArgument("element " + std::to_string(id) + " does not exist (" +
+                                   std::to_string(element_count()) + " elements)");
+  }
+  std::vector<std::byte> payload(octants_->payload_size() + 1);
+  uint64_t key = 0;
+  WEAVER_RETURN_IF_ERROR(octants_->select(id, &key, payload.data()));
+  *out = MeshElement{};
+  out->id = id;
+  out->octant = octant_from_key(key);
+  fill_material(payload.data(), out);
+  if (!with_nodes || !has_nodes()) return Status::Ok();
+  for (int k = 0; k < 8; ++k) {
+    WEAVER_RETURN_IF_ERROR(node_id(octant_corner(out->octant, k), &out->nodes[k]));
+  }
+  return Status::Ok();
+}
+
+Status Mesh::leaf_covering(const Octant& r, bool* found, uint64_t* id, Octant* leaf) {
+  uint64_t key = 0;
+  WEAVER_RETURN_IF_ERROR(floor_holding(*octants_, r, &key, nullptr, found));
+  if (!*found) return Status::Ok();
+  *leaf = octant_from_key(key);
+  return octants_->rank(key, id);
+}
+
+Status Mesh::leaves_inside(const Octant& r, uint64_t* count) {
+  uint64_t first = 0, end = 0;
+  WEAVER_RETURN_IF_ERROR(octants_->rank(octant_key(r), &first));
+  WEAVER_RETURN_IF_ERROR(octants_->rank(octant_key_subtree_end(r), &end));
+  *count = end - first;
+  return Status::Ok();
+}
+
 Status Mesh::node_id(Coord c, uint64_t* id) {
   bool present = false;
   WEAVER_RETURN_IF_ERROR(nodes_->rank_exact(node_key(c), id, &present));

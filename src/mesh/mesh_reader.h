@@ -64,6 +64,14 @@ class Mesh {
   Status partition(PartMap* out) { return PartMap::of_table(*partition_, partition_parts_, out); }
   BTree& partition_table() { return *partition_; }
 
+  // Element `id` (InvalidArgument past the last) with its material and,
+  // when with_nodes and the mesh has nodes, its corners' node ids.
+  Status element(uint64_t id, bool with_nodes, MeshElement* out);
+  // The leaf that holds all of region r, with its id; *found false when the
+  // leaves inside r are finer than r, or r lies in a hole of the domain.
+  Status leaf_covering(const Octant& r, bool* found, uint64_t* id, Octant* leaf);
+  // How many leaves lie inside region r.
+  Status leaves_inside(const Octant& r, uint64_t* count);
   // The id of the node at c; Corruption naming c when the node table lacks it.
   Status node_id(Coord c, uint64_t* id);
   // The node with this id (InvalidArgument past the last), with its anchors' ids.

@@ -90,12 +90,6 @@ Status Explorer::node_at_batch(const Coord* p, size_t n, NodeHit* out) {
   return Status::Ok();
 }
 
-Status Explorer::check_element(uint64_t id) const {
-  if (id < element_count()) return Status::Ok();
-  return Status::InvalidArgument("element " + std::to_string(id) + " does not exist (" +
-                                 std::to_string(element_count()) + " elements)");
-}
-
 Status Explorer::check_node(uint64_t id) const {
   WEAVER_RETURN_IF_ERROR(require_nodes());
   if (id < node_count()) return Status::Ok();
@@ -103,21 +97,7 @@ Status Explorer::check_node(uint64_t id) const {
                                  std::to_string(node_count()) + " nodes)");
 }
 
-Status Explorer::element(uint64_t id, MeshElement* out) {
-  WEAVER_RETURN_IF_ERROR(check_element(id));
-  std::vector<std::byte> payload(mesh_->octants().payload_size() + 1);
-  uint64_t key = 0;
-  WEAVER_RETURN_IF_ERROR(mesh_->octants().select(id, &key, payload.data()));
-  *out = MeshElement{};
-  out->id = id;
-  out->octant = octant_from_key(key);
-  mesh_->fill_material(payload.data(), out);
-  if (!has_nodes()) return Status::Ok();
-  for (int k = 0; k < 8; ++k) {
-    WEAVER_RETURN_IF_ERROR(mesh_->node_id(octant_corner(out->octant, k), &out->nodes[k]));
-  }
-  return Status::Ok();
-}
+Status Explorer::element(uint64_t id, MeshElement* out) { return mesh_->element(id, true, out); }
 
 Status Explorer::node(uint64_t id, MeshNode* out) {
   WEAVER_RETURN_IF_ERROR(check_node(id));

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "db/leaf_window.h"
 #include "mesh/mesh_reader.h"
-#include "query/leaf_window.h"
 #include "schema/octant.h"
 #include "schema/status.h"
 #include "util/memory_budget.h"
@@ -113,7 +113,6 @@ class Explorer {
   // sorted by key.
   template <typename Hit, typename Valid, typename KeyOf>
   void sort_points(const Coord* p, size_t n, Hit* out, Valid valid, KeyOf key_of);
-  Status check_element(uint64_t id) const;
   // node_elements() for a node already read.
   Status elements_around(const MeshNode& n, std::vector<NodeElement>* out);
   Status check_node(uint64_t id) const;

@@ -3,7 +3,6 @@
 // nodes that depend on a node.
 #include <algorithm>
 
-#include "db/octant_table.h"
 #include "query/explorer.h"
 
 namespace weaver {
@@ -42,21 +41,16 @@ std::string direction_name(Direction d) {
 
 Status Explorer::visit_across(const Octant& o, Direction d, const Octant& r,
                               std::vector<Neighbor>* out) {
-  BTree& t = mesh_->octants();
-  const uint64_t key = octant_key(r);
-  uint64_t floor_key = 0;
+  Neighbor n{d, 0, {}};
   bool found = false;
-  WEAVER_RETURN_IF_ERROR(floor_holding(t, r, &floor_key, nullptr, &found));
+  WEAVER_RETURN_IF_ERROR(mesh_->leaf_covering(r, &found, &n.id, &n.octant));
   if (found) {
-    Neighbor n{d, 0, octant_from_key(floor_key)};
-    WEAVER_RETURN_IF_ERROR(t.rank(floor_key, &n.id));
     out->push_back(n);
     return Status::Ok();
   }
-  uint64_t first = 0, end = 0;
-  WEAVER_RETURN_IF_ERROR(t.rank(key, &first));
-  WEAVER_RETURN_IF_ERROR(t.rank(octant_key_subtree_end(r), &end));
-  if (end == first || r.level == kMaxLevel) return Status::Ok();  // a hole in the domain
+  uint64_t inside = 0;
+  WEAVER_RETURN_IF_ERROR(mesh_->leaves_inside(r, &inside));
+  if (inside == 0 || r.level == kMaxLevel) return Status::Ok();  // a hole in the domain
   for (int k = 0; k < 8; ++k) {
     if (child_faces_back(k, d)) WEAVER_RETURN_IF_ERROR(visit_across(o, d, octant_child(r, k), out));
   }
@@ -65,14 +59,12 @@ Status Explorer::visit_across(const Octant& o, Direction d, const Octant& r,
 
 Status Explorer::neighbors(uint64_t id, unsigned kinds, std::vector<Neighbor>* out) {
   out->clear();
-  WEAVER_RETURN_IF_ERROR(check_element(id));
-  uint64_t key = 0;
-  WEAVER_RETURN_IF_ERROR(mesh_->octants().select(id, &key, nullptr));
-  const Octant o = octant_from_key(key);
+  MeshElement e;
+  WEAVER_RETURN_IF_ERROR(mesh_->element(id, false, &e));
   for (const Direction& d : kAllDirections) {
     Octant r;
-    if (!(kinds >> d.nonzero() & 1) || !octant_neighbour(o, d, &r)) continue;
-    WEAVER_RETURN_IF_ERROR(visit_across(o, d, r, out));
+    if (!(kinds >> d.nonzero() & 1) || !octant_neighbour(e.octant, d, &r)) continue;
+    WEAVER_RETURN_IF_ERROR(visit_across(e.octant, d, r, out));
   }
   return Status::Ok();
 }

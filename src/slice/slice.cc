@@ -4,9 +4,9 @@
 #include <cmath>
 #include <functional>
 
+#include "db/leaf_window.h"
 #include "export/output_file.h"
 #include "query/explorer.h"
-#include "query/leaf_window.h"
 #include "query/octant_query.h"
 #include "slice/canvas.h"
 #include "slice/font.h"

@@ -4,9 +4,9 @@
 #include <array>
 #include <string>
 
+#include "db/leaf_window.h"
 #include "schema/node.h"
 #include "schema/octant.h"
-#include "verify/leaf_window.h"
 
 namespace weaver {
 namespace {
@@ -29,10 +29,10 @@ class LeafFinder {
       if (r.key <= pk && pk < r.end) return *leaf = &r.leaf, Status::Ok();
     }
     *leaf = nullptr;
-    uint64_t key = 0;
-    bool found = false;
-    WEAVER_RETURN_IF_ERROR(octants_.floor(pk, &key, &found));
-    if (!found || pk >= octant_key_subtree_end(key)) return Status::Ok();
+    LeafWindow::Floor f;
+    WEAVER_RETURN_IF_ERROR(octants_.floor(pk, &f));
+    const uint64_t key = f.key;
+    if (!f.found || pk >= octant_key_subtree_end(key)) return Status::Ok();
     Recent& r = recent_[next_++ % recent_.size()];
     r.key = key;
     r.end = octant_key_subtree_end(key);
@@ -46,7 +46,7 @@ class LeafFinder {
     uint64_t key = 1, end = 0;  // [key, end): the keys of the leaf's pixels; empty at first
     Octant leaf{};
   };
-  RecentPages octants_;
+  LeafWindow octants_;
   std::array<Recent, 16> recent_{};
   size_t next_ = 0;
 };
@@ -141,7 +141,7 @@ class NodeChecker {
   }
 
   LeafFinder finder_;
-  RecentPages nodes_;
+  LeafWindow nodes_;
   Problems& problems_;
   VerifyReport* report_;
 };

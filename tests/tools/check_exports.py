@@ -36,6 +36,13 @@ def need(what, ok):
     sys.exit(SKIP)
 
 
+def check(ok, what="a check failed"):
+    """An assert that python3 -O keeps: the failed check's line and what."""
+    if not ok:
+        line = sys._getframe(1).f_lineno
+        sys.exit(f"check_exports: line {line}: {what}")
+
+
 try:
     import numpy as np
     import vtk
@@ -119,14 +126,14 @@ def check_vtu(db, m, d, raw):
     r.Update()
     g = r.GetOutput()
     E, N = len(m.e["id"]), len(m.n["id"])
-    assert g.GetNumberOfCells() == E, (g.GetNumberOfCells(), E)
-    assert g.GetNumberOfPoints() == N
+    check(g.GetNumberOfCells() == E, (g.GetNumberOfCells(), E))
+    check(g.GetNumberOfPoints() == N)
     pts = vtk_to_numpy(g.GetPoints().GetData())
-    assert np.allclose(pts, m.metres(raw)), "points are not the nodes in metres"
+    check(np.allclose(pts, m.metres(raw)), "points are not the nodes in metres")
     types = vtk_to_numpy(g.GetCellTypesArray())
-    assert (types == vtk.VTK_HEXAHEDRON).all()
+    check((types == vtk.VTK_HEXAHEDRON).all())
     conn = vtk_to_numpy(g.GetCells().GetConnectivityArray()).reshape(E, 8)
-    assert (conn == m.corners[:, VTK_ORDER]).all(), "connectivity differs from elements.csv"
+    check((conn == m.corners[:, VTK_ORDER]).all(), "connectivity differs from elements.csv")
     # VTK's own measure of each cell: positive and edge^3 (a wrong corner
     # order gives zero, negative or twisted volumes).
     q = vtk.vtkCellSizeFilter()
@@ -135,34 +142,34 @@ def check_vtu(db, m, d, raw):
     q.Update()
     vol = vtk_to_numpy(q.GetOutput().GetCellData().GetArray("Volume"))
     edge_m = m.edge.astype(np.float64) * raw["tick_m"]
-    assert np.allclose(vol, edge_m ** 3, rtol=1e-9), "a cell's volume is not edge^3"
-    assert (hex_volumes(pts[conn]) > 0).all()
+    check(np.allclose(vol, edge_m ** 3, rtol=1e-9), "a cell's volume is not edge^3")
+    check((hex_volumes(pts[conn]) > 0).all())
     cd, pd = g.GetCellData(), g.GetPointData()
-    assert (vtk_to_numpy(cd.GetArray("element_id")) == np.arange(E)).all()
-    assert (vtk_to_numpy(cd.GetArray("level")) == m.e["level"]).all()
-    assert np.allclose(vtk_to_numpy(cd.GetArray("edge")), edge_m)
-    assert (vtk_to_numpy(pd.GetArray("node_id")) == np.arange(N)).all()
-    assert (vtk_to_numpy(pd.GetArray("kind")) == m.n["kind"]).all()
+    check((vtk_to_numpy(cd.GetArray("element_id")) == np.arange(E)).all())
+    check((vtk_to_numpy(cd.GetArray("level")) == m.e["level"]).all())
+    check(np.allclose(vtk_to_numpy(cd.GetArray("edge")), edge_m))
+    check((vtk_to_numpy(pd.GetArray("node_id")) == np.arange(N)).all())
+    check((vtk_to_numpy(pd.GetArray("kind")) == m.n["kind"]).all())
     if "node_lonlat" in raw["arrays"]:
         ll = raw_array(d + "/m.raw", raw, "node_lonlat")
-        assert np.array_equal(vtk_to_numpy(pd.GetArray("longitude")), ll[:, 0])
-        assert np.array_equal(vtk_to_numpy(pd.GetArray("latitude")), ll[:, 1])
-        assert (abs(ll[:, 0] + 118.2) < 1.5).all() and (abs(ll[:, 1] - 34) < 1.5).all()
+        check(np.array_equal(vtk_to_numpy(pd.GetArray("longitude")), ll[:, 0]))
+        check(np.array_equal(vtk_to_numpy(pd.GetArray("latitude")), ll[:, 1]))
+        check((abs(ll[:, 0] + 118.2) < 1.5).all() and (abs(ll[:, 1] - 34) < 1.5).all())
     else:
-        assert pd.GetArray("longitude") is None
+        check(pd.GetArray("longitude") is None)
     if "element_material" in raw["arrays"]:
         mat = raw_array(d + "/m.raw", raw, "element_material")
         for i, name in enumerate(("vp", "vs", "rho")):
-            assert np.array_equal(vtk_to_numpy(cd.GetArray(name)), mat[:, i]), name
-        assert (mat[:, 0] > mat[:, 1]).all() and (mat[:, 2] > 0).all()
+            check(np.array_equal(vtk_to_numpy(cd.GetArray(name)), mat[:, i]), name)
+        check((mat[:, 0] > mat[:, 1]).all() and (mat[:, 2] > 0).all())
     else:
-        assert cd.GetArray("vp") is None
+        check(cd.GetArray("vp") is None)
     if "element_q" in raw["arrays"]:
         q = raw_array(d + "/m.raw", raw, "element_q")
         for i, name in enumerate(("qp", "qs")):
-            assert np.array_equal(vtk_to_numpy(cd.GetArray(name)), q[:, i]), name
+            check(np.array_equal(vtk_to_numpy(cd.GetArray(name)), q[:, i]), name)
     else:
-        assert cd.GetArray("qp") is None
+        check(cd.GetArray("qp") is None)
     return "vtu ok"
 
 
@@ -172,18 +179,18 @@ def check_pvtu(db, m, d, raw, parts=3):
     r = vtk.vtkXMLPUnstructuredGridReader()
     r.SetFileName(path)
     r.Update()
-    assert r.GetNumberOfPieces() == parts, r.GetNumberOfPieces()
+    check(r.GetNumberOfPieces() == parts, r.GetNumberOfPieces())
     g = r.GetOutput()
     E = len(m.e["id"])
-    assert g.GetNumberOfCells() == E
+    check(g.GetNumberOfCells() == E)
     # Each piece has only the nodes it uses; node_id maps them back.
     ids = vtk_to_numpy(g.GetCellData().GetArray("element_id"))
-    assert (np.sort(ids) == np.arange(E)).all(), "pieces miss or repeat elements"
+    check((np.sort(ids) == np.arange(E)).all(), "pieces miss or repeat elements")
     node_id = vtk_to_numpy(g.GetPointData().GetArray("node_id"))
     conn = vtk_to_numpy(g.GetCells().GetConnectivityArray()).reshape(E, 8)
-    assert (node_id[conn] == m.corners[ids][:, VTK_ORDER]).all()
+    check((node_id[conn] == m.corners[ids][:, VTK_ORDER]).all())
     pts = vtk_to_numpy(g.GetPoints().GetData())
-    assert np.allclose(pts, m.metres(raw)[node_id])
+    check(np.allclose(pts, m.metres(raw)[node_id]))
     sizes = []
     for p in range(parts):
         one = vtk.vtkXMLUnstructuredGridReader()
@@ -191,8 +198,8 @@ def check_pvtu(db, m, d, raw, parts=3):
         one.Update()
         sizes.append(one.GetOutput().GetNumberOfCells())
         used = np.unique(vtk_to_numpy(one.GetOutput().GetCells().GetConnectivityArray()))
-        assert len(used) == one.GetOutput().GetNumberOfPoints(), "a piece has unused points"
-    assert max(sizes) - min(sizes) <= 1, sizes
+        check(len(used) == one.GetOutput().GetNumberOfPoints(), "a piece has unused points")
+    check(max(sizes) - min(sizes) <= 1, sizes)
     return f"pvtu ok ({parts} pieces of {sizes} cells)"
 
 
@@ -218,27 +225,27 @@ def check_box(db, m, d, raw):
     r.Update()
     g = r.GetOutput()
     ids = vtk_to_numpy(g.GetCellData().GetArray("element_id"))
-    assert (ids == want).all(), f"box: {len(ids)} elements, want {len(want)}"
+    check((ids == want).all(), f"box: {len(ids)} elements, want {len(want)}")
     node_id = vtk_to_numpy(g.GetPointData().GetArray("node_id"))
     conn = vtk_to_numpy(g.GetCells().GetConnectivityArray()).reshape(len(ids), 8)
-    assert (node_id[conn] == m.corners[want][:, VTK_ORDER]).all()
-    assert (np.unique(conn) == np.arange(g.GetNumberOfPoints())).all(), "unused or missing points"
-    assert (np.diff(node_id) > 0).all(), "local ids are not in global id order"
+    check((node_id[conn] == m.corners[want][:, VTK_ORDER]).all())
+    check((np.unique(conn) == np.arange(g.GetNumberOfPoints())).all(), "unused or missing points")
+    check((np.diff(node_id) > 0).all(), "local ids are not in global id order")
     with open(rawdir + "/mesh.json") as f:
         h = json.load(f)
     get = lambda name: raw_array(rawdir, h, name)
     gid = get("node_global_id")
-    assert (get("element_global_id") == want).all()
-    assert (gid[get("element_nodes")] == m.corners[want]).all()
+    check((get("element_global_id") == want).all())
+    check((gid[get("element_nodes")] == m.corners[want]).all())
     # Every constraint of a node the box uses is there, anchors included.
     dn, da = get("dangling_nodes"), get("dangling_anchors")
-    assert (m.n["kind"][gid[dn]] != 0).all()
-    assert ((m.n["kind"][gid] != 0).sum() == len(dn))
+    check((m.n["kind"][gid[dn]] != 0).all())
+    check((m.n["kind"][gid] != 0).sum() == len(dn))
     anchors = np.stack([m.n[f"a{k}"] for k in range(4)], axis=1)[gid[dn]]
-    assert (np.where(da >= 0, gid[np.maximum(da, 0)], -1) == anchors).all()
+    check((np.where(da >= 0, gid[np.maximum(da, 0)], -1) == anchors).all())
     mm = meshio.read(msh)
-    assert len(mm.cells[0].data) == len(want)
-    assert np.allclose(mm.points[mm.cells[0].data], m.metres(raw)[m.corners[want][:, VTK_ORDER]])
+    check(len(mm.cells[0].data) == len(want))
+    check(np.allclose(mm.points[mm.cells[0].data], m.metres(raw)[m.corners[want][:, VTK_ORDER]]))
     return f"box ok ({len(want)} of {len(m.e['id'])} elements, {len(gid)} nodes, {len(dn)} dangling)"
 
 
@@ -249,27 +256,27 @@ def check_msh(db, m, d, raw):
     # meshio also reads), failing on anything it does not understand.
     out = d + "/gmsh_again.msh"
     log = run("gmsh", path, "-0", "-format", "msh22", "-o", out)
-    assert "Error" not in log, log
+    check("Error" not in log, log)
     E = len(m.e["id"])
     for f in (path, out):
         mm = meshio.read(f)
         hexes = [c.data for c in mm.cells if c.type == "hexahedron"]
-        assert len(hexes) == 1 and len(hexes[0]) == E, f
+        check(len(hexes) == 1 and len(hexes[0]) == E, f)
         conn = hexes[0]
-        assert np.allclose(mm.points, m.metres(raw)), f
-        assert (conn == m.corners[:, VTK_ORDER]).all(), f
-        assert (hex_volumes(mm.points[conn]) > 0).all(), f
+        check(np.allclose(mm.points, m.metres(raw)), f)
+        check((conn == m.corners[:, VTK_ORDER]).all(), f)
+        check((hex_volumes(mm.points[conn]) > 0).all(), f)
     mm = meshio.read(path)
-    assert (mm.cell_data["level"][0] == m.e["level"]).all()
+    check((mm.cell_data["level"][0] == m.e["level"]).all())
     if "element_material" in raw["arrays"]:
         mat = raw_array(d + "/m.raw", raw, "element_material")
-        assert np.allclose(mm.cell_data["vs"][0], mat[:, 1], rtol=1e-6)
+        check(np.allclose(mm.cell_data["vs"][0], mat[:, 1], rtol=1e-6))
     if "element_q" in raw["arrays"]:
         q = raw_array(d + "/m.raw", raw, "element_q")
-        assert np.allclose(mm.cell_data["qp"][0], q[:, 0], rtol=1e-6)
-        assert np.allclose(mm.cell_data["qs"][0], q[:, 1], rtol=1e-6)
+        check(np.allclose(mm.cell_data["qp"][0], q[:, 0], rtol=1e-6))
+        check(np.allclose(mm.cell_data["qs"][0], q[:, 1], rtol=1e-6))
     else:
-        assert "qp" not in mm.cell_data
+        check("qp" not in mm.cell_data)
     return "msh ok (gmsh, meshio)"
 
 
@@ -280,20 +287,20 @@ def check_metis(db, m, d):
         n, edges = map(int, f.readline().split()[:2])
         lists = [np.array([int(t) - 1 for t in line.split()], dtype=np.int64) for line in f]
     E = len(m.e["id"])
-    assert n == E and len(lists) == E
+    check(n == E and len(lists) == E)
     truth = m.face_graph()
     for i in range(E):
-        assert np.array_equal(lists[i], truth[i]), f"element {i}: {lists[i]} != {truth[i]}"
-    assert edges * 2 == sum(len(a) for a in truth)
+        check(np.array_equal(lists[i], truth[i]), f"element {i}: {lists[i]} != {truth[i]}")
+    check(edges * 2 == sum(len(a) for a in truth))
     steps = sum(1 for i in range(E) for j in truth[i] if m.e["level"][j] > m.e["level"][i])
     parts = 4
     log = run("gpmetis", path, str(parts))
     with open(f"{path}.part.{parts}") as f:
         part = np.array([int(x) for x in f])
-    assert len(part) == E and set(part) == set(range(parts)), log
+    check(len(part) == E and set(part) == set(range(parts)), log)
     cut = sum(1 for i in range(E) for j in truth[i] if j > i and part[i] != part[j])
     said = re.search(r"Edgecut:\s*(\d+)", log)
-    assert said and int(said.group(1)) == cut, log
+    check(said and int(said.group(1)) == cut, log)
     return f"metis ok ({edges} edges, {steps} across 2:1 steps, gpmetis edge cut {cut})"
 
 
@@ -303,7 +310,7 @@ def check_partition(db, m):
     out = run(WEAVER, "partition", db, "--parts", "4", "--method", "graph", "--compare", "--quiet")
     theirs = int(re.search(r"gpmetis reported an edge cut of (\d+)", out).group(1))
     ours = [int(x) for x in re.findall(r"edge cut (\d+) faces", out)]
-    assert ours[0] == theirs, out
+    check(ours[0] == theirs, out)
     return f"partition ok (graph edge cut {ours[0]} = gpmetis's, sfc {ours[1]})"
 
 
@@ -315,7 +322,7 @@ def check_raw_parts(db, m, d, parts):
     run(WEAVER, "export", db, "--format", "raw", "--parts", str(parts), "--out", out, "--quiet")
     with open(out + "/parts.json") as f:
         index = json.load(f)
-    assert index["parts"] == parts
+    check(index["parts"] == parts)
     E = len(m.e["id"])
     part_of = np.full(E, -1)
     users = {}  # global node -> parts using it
@@ -325,13 +332,13 @@ def check_raw_parts(db, m, d, parts):
             h = json.load(f)
         get = lambda name, h=h, sub=sub: raw_array(f"{out}/{sub}", h, name)
         eg, ng = get("element_global_id"), get("node_global_id")
-        assert (part_of[eg] == -1).all(), "an element in two parts"
+        check((part_of[eg] == -1).all(), "an element in two parts")
         part_of[eg] = p
-        assert (ng[get("element_nodes")] == m.corners[eg]).all()
+        check((ng[get("element_nodes")] == m.corners[eg]).all())
         dn, da = get("dangling_nodes"), get("dangling_anchors")
         anchors = np.stack([m.n[f"a{k}"] for k in range(4)], axis=1)[ng[dn]]
-        assert (np.where(da >= 0, ng[np.maximum(da, 0)], -1) == anchors).all()
-        assert (m.n["kind"][ng] != 0).sum() == len(dn)
+        check((np.where(da >= 0, ng[np.maximum(da, 0)], -1) == anchors).all())
+        check((m.n["kind"][ng] != 0).sum() == len(dn))
         for n in np.unique(m.corners[eg]):
             users.setdefault(int(n), set()).add(p)
         loaded.append((ng, get("shared_nodes"), get("shared_parts")))
@@ -342,13 +349,13 @@ def check_raw_parts(db, m, d, parts):
             r = vtk.vtkXMLUnstructuredGridReader()
             r.SetFileName(f"{out}_pv/{os.path.basename(out)}_pv_{p}.vtu")
             r.Update()
-            assert (vtk_to_numpy(r.GetOutput().GetCellData().GetArray("element_id")) == eg).all()
-    assert (part_of >= 0).all(), "an element in no part"
+            check((vtk_to_numpy(r.GetOutput().GetCellData().GetArray("element_id")) == eg).all())
+    check((part_of >= 0).all(), "an element in no part")
     pairs = 0
     for p, (ng, sn, sp) in enumerate(loaded):
         got = sorted(zip(ng[sn].tolist(), sp.tolist()))
         want = sorted((n, q) for n, us in users.items() if p in us for q in us if q != p)
-        assert got == want, f"part {p}: shared pairs differ"
+        check(got == want, f"part {p}: shared pairs differ")
         pairs += len(got)
     return f"raw --parts {parts} ok ({index['method']}; {pairs} shared pairs)"
 
@@ -358,7 +365,7 @@ def check_metis_mesh(db, m, d):
     run(WEAVER, "export", db, "--format", "metis-mesh", "--out", path, "--quiet")
     log = run("mpmetis", path, "2")
     with open(f"{path}.epart.2") as f:
-        assert sum(1 for _ in f) == len(m.e["id"]), log
+        check(sum(1 for _ in f) == len(m.e["id"]), log)
     return "metis-mesh ok (mpmetis)"
 
 
@@ -373,21 +380,21 @@ def check_raw(db, m, d):
     run(WEAVER, "export", db, "--format", "raw", "--out", path, "--quiet")
     with open(path + "/mesh.json") as f:
         h = json.load(f)
-    assert h["nodes"] == len(m.n["id"]) and h["elements"] == len(m.e["id"])
+    check(h["nodes"] == len(m.n["id"]) and h["elements"] == len(m.e["id"]))
     get = lambda name: raw_array(path, h, name)
-    assert np.allclose(get("node_coords"), m.metres(h))
-    assert (get("node_kind") == m.n["kind"]).all()
-    assert (get("element_nodes") == m.corners).all()
-    assert (get("element_level") == m.e["level"]).all()
+    check(np.allclose(get("node_coords"), m.metres(h)))
+    check((get("node_kind") == m.n["kind"]).all())
+    check((get("element_nodes") == m.corners).all())
+    check((get("element_level") == m.e["level"]).all())
     dangling = np.nonzero(m.n["kind"] != 0)[0]
-    assert (get("dangling_nodes") == dangling).all()
+    check((get("dangling_nodes") == dangling).all())
     anchors = np.stack([m.n[f"a{k}"] for k in range(4)], axis=1)[dangling]
-    assert (get("dangling_anchors") == anchors).all()
+    check((get("dangling_anchors") == anchors).all())
     ticks = path + "_ticks"
     run(WEAVER, "export", db, "--format", "raw", "--units", "ticks", "--out", ticks, "--quiet")
     with open(ticks + "/mesh.json") as f:
         ht = json.load(f)
-    assert (raw_array(ticks, ht, "node_coords") == m.ticks).all()
+    check((raw_array(ticks, ht, "node_coords") == m.ticks).all())
     return h, f"raw ok ({len(dangling)} dangling nodes)"
 
 
@@ -448,7 +455,7 @@ def main():
     m = Mesh(db, d + "/csv")
     anchors = np.stack([m.n[f"a{k}"] for k in range(4)], axis=1)
     chained = int(sum((m.n["kind"][a[a >= 0]] != 0).any() for a in anchors))
-    assert chained > 0, "the holed octree has no chain of dangling nodes"
+    check(chained > 0, "the holed octree has no chain of dangling nodes")
     raw, msg = check_raw(db, m, d)
     print(f"holes: {len(m.e['id'])} elements, {chained} nodes with a dangling anchor: {msg}")
     print(f"holes: {check_raw_parts(db, m, d, 256)}")
@@ -462,8 +469,8 @@ def main():
         "-118.7,33.58", "--azimuth", "30", "--quiet")
     m = Mesh(db, d + "/csv")
     raw, msg = check_raw(db, m, d)
-    assert "element_material" in raw["arrays"]
-    assert raw["geo"] == "-118.7,33.58,30" and "node_lonlat" in raw["arrays"]
+    check("element_material" in raw["arrays"])
+    check(raw["geo"] == "-118.7,33.58,30" and "node_lonlat" in raw["arrays"])
     print(f"basin: {len(m.e['id'])} elements: {msg}")
     print(f"basin: {check_vtu(db, m, d, raw)}")
     print(f"basin: {check_pvtu(db, m, d, raw, 4)}")
@@ -492,15 +499,15 @@ def check_layered_q():
         "64000,64000,48000", "--quiet")
     m = Mesh(db, d + "/csv")
     raw, msg = check_raw(db, m, d)
-    assert "element_q" in raw["arrays"], raw["arrays"].keys()
+    check("element_q" in raw["arrays"], raw["arrays"].keys())
     q = raw_array(d + "/m.raw", raw, "element_q")
     mat = raw_array(d + "/m.raw", raw, "element_material")
     centre_z = (m.e["z"] + m.edge / 2.0) * raw["tick_m"] + raw["origin_m"][2]
     tops = np.array([row[0] for row in HADLEY_KANAMORI])
     layer = np.searchsorted(tops, centre_z, side="right") - 1
     expect = np.array(HADLEY_KANAMORI, dtype=np.float32)[layer]
-    assert np.array_equal(mat, expect[:, 1:4]) and np.array_equal(q, expect[:, 4:6])
-    assert len(set(layer)) == len(HADLEY_KANAMORI), "the mesh does not reach every layer"
+    check(np.array_equal(mat, expect[:, 1:4]) and np.array_equal(q, expect[:, 4:6]))
+    check(len(set(layer)) == len(HADLEY_KANAMORI), "the mesh does not reach every layer")
     print(f"layers: {len(m.e['id'])} elements, Q from the table: {msg}")
     print(f"layers: {check_vtu(db, m, d, raw)}")
     print(f"layers: {check_msh(db, m, d, raw)}")

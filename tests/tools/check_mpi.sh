@@ -246,9 +246,15 @@ faults() {  # stage, the database before it (copied fresh for every try), stage 
   local stage=$1 base=$2; shift 2
   local old=$tmp/old steps code
   rm -rf "$tmp/count" && cp -r "$base" "$tmp/count"
-  steps=$(WEAVER_CRASH_AT=0 "$mpi" "$stage" "$tmp/count" "$@" --quiet 2>&1 >/dev/null |
-          sed -n 's/^crash steps: //p')
-  [ -n "$steps" ] || fail "$stage: no step count"
+  # Rank 1's own steps, counted in the same two-rank run the kills use.
+  # (Its stderr goes nowhere, so the count goes to a file.)
+  rm -f "$tmp/steps"
+  mpirun -np 1 "$mpi" "$stage" "$tmp/count" "$@" --quiet : \
+         -np 1 env WEAVER_CRASH_AT=0 WEAVER_CRASH_STEPS_FILE="$tmp/steps" \
+         "$mpi" "$stage" "$tmp/count" "$@" --quiet >/dev/null 2>&1 || fail "$stage: counting run"
+  steps=$(cat "$tmp/steps" 2>/dev/null || true)
+  [ -n "$steps" ] && [ "$steps" -gt 0 ] || fail "$stage: no step count for rank 1"
+  local fired=0
   for step in $(seq 1 "$steps"); do
     # Killed at every step; a failed write (an error, handled as any other)
     # at the first, middle and last, to keep CI short.
@@ -266,11 +272,14 @@ faults() {  # stage, the database before it (copied fresh for every try), stage 
              >/dev/null 2>"$tmp/err"
       code=$?
       set -e
-      if [ "$code" = 0 ]; then
-        # The step was past the rank's last write: the new state is whole.
-        "$weaver" verify "$old" >/dev/null || fail "$stage $what at $step: new state does not verify"
-        continue
+      # Every step counted is one rank 1 takes: the point armed there fires,
+      # a death (the simulator's exit status 137) or a one-line failure.
+      [ "$code" != 0 ] || fail "$stage: $what at step $step of $steps did not fire"
+      if [ "$what" = CRASH ]; then
+        grep -q "Exit code: *137" "$tmp/err" ||
+          fail "$stage: CRASH at step $step: rank 1 did not die there: $(cat "$tmp/err")"
       fi
+      fired=$((fired + 1))
       if [ "$what" = FAIL ]; then
         grep -q "^weaver-mpi $stage: rank 1: " "$tmp/err" ||
           fail "$stage FAIL at $step: $(cat "$tmp/err")"
@@ -282,7 +291,7 @@ faults() {  # stage, the database before it (copied fresh for every try), stage 
       "$weaver" verify "$old" >/dev/null || fail "$stage $what at $step: old database does not verify"
     done
   done
-  echo "ok  $stage: rank 1 killed at each of its $steps durable steps (failing at 3) leaves the old database"
+  echo "ok  $stage: rank 1 killed at each of its $steps durable steps (failing at 3; $fired points fired) leaves the old database"
 }
 "$weaver" construct "$tmp/f.built" --model basin --freq 0.1 --quiet >/dev/null
 faults construct "$tmp/f.built" --model basin --freq 0.2

@@ -5,6 +5,7 @@ usage: check_python_api.py MODULE_DIR WEAVER DB WORK_DIR"""
 import array
 import csv
 import io
+import os
 import random
 import subprocess
 import sys
@@ -81,6 +82,8 @@ with weaver.Database(db_path) as db:
         import numpy
     except ImportError:
         numpy = None
+        if os.environ.get("WEAVER_REQUIRE_TOOLS"):
+            fail("numpy is not installed (WEAVER_REQUIRE_TOOLS is set)")
     if numpy is not None:
         xyz = numpy.array(points, dtype=numpy.uint32)
         with warnings.catch_warnings():
