@@ -22,7 +22,7 @@ TEST(Cli, EveryCommandHasHelp) {
   EXPECT_EQ(top.code, 0);
   for (const char* cmd :
        {"generate", "import", "construct", "balance", "mesh", "extract", "export", "stat", "query",
-        "shell", "slice", "partition", "verify", "recover", "compact"}) {
+        "shell", "slice", "serve", "partition", "verify", "recover", "compact"}) {
     EXPECT_NE(top.out.find(cmd), std::string::npos);
     const CommandRun r = run(std::string(cmd) + " --help");
     EXPECT_EQ(r.code, 0) << cmd;

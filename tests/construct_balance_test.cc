@@ -45,16 +45,16 @@ std::string graded_grid(const testing::TempDir& dir, int seed) {
   return path;
 }
 
-struct Case {
+struct ModelCase {
   std::string name;
   ConstructOptions options;
 };
 
-std::vector<Case> cases(const testing::TempDir& dir) {
-  std::vector<Case> out;
+std::vector<ModelCase> cases(const testing::TempDir& dir) {
+  std::vector<ModelCase> out;
   auto add = [&](std::string name, const std::string& model, double freq,
                  std::array<double, 3> domain) {
-    Case c{std::move(name), ConstructOptions{}};
+    ModelCase c{std::move(name), ConstructOptions{}};
     c.options.model = model;
     c.options.freq = freq;
     c.options.domain_m = domain;
@@ -77,7 +77,7 @@ std::vector<Case> cases(const testing::TempDir& dir) {
 }
 
 // The octant table of the case built both ways; the reference first.
-void build_both(const Case& c, const std::string& reference, const std::string& balanced,
+void build_both(const ModelCase& c, const std::string& reference, const std::string& balanced,
                 int threads, uint64_t budget, ConstructResult* r) {
   ConstructOptions o = c.options;
   o.balanced = false;
@@ -101,7 +101,7 @@ TEST(BalancedConstruct, WritesWhatConstructThenBalanceWriteByteForByte) {
   const std::vector<int> threads =
       testing::small_scale() ? std::vector<int>{1, 3} : std::vector<int>{1, 2, 3};
   uint64_t cases_split = 0;
-  for (const Case& c : cases(dir)) {
+  for (const ModelCase& c : cases(dir)) {
     for (int t : threads) {
       for (uint64_t budget : {MemoryBudget::kDefaultBytes, MemoryBudget::kMinBytes}) {
         if (budget == MemoryBudget::kMinBytes && t == 2) continue;
@@ -140,7 +140,7 @@ TEST(BalancedConstruct, ModelDatabasesAgreeToo) {
                                            "2600 5000 2900 2600 400 200\n";
   const std::string sources[] = {"grid:" + graded_grid(dir, 4), "layers:" + dir.file("layers.txt")};
   for (const std::string& source : sources) {
-    Case c{source, ConstructOptions{}};
+    ModelCase c{source, ConstructOptions{}};
     c.options.freq = 0.1;
     c.options.domain_m = {20000, 15000, 10000};
     c.options.model = source;

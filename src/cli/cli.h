@@ -33,6 +33,7 @@ int cmd_verify(int argc, char** argv);
 int cmd_recover(int argc, char** argv);
 int cmd_compact(int argc, char** argv);
 int cmd_model(int argc, char** argv);
+int cmd_serve(int argc, char** argv);
 
 // Prints "weaver <command>: <message>" to stderr; returns 1 (2 for usage
 // errors, which are InvalidArgument statuses raised while parsing).

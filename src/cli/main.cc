@@ -27,6 +27,7 @@ constexpr char kUsage[] =
     "                    their neighbours, with material\n"
     "  shell DB          an interactive prompt for queries over one open database\n"
     "  slice DB          a picture (PNG or SVG) of the mesh cut by a plane\n"
+    "  serve DB          explore the mesh in a browser, and query it over HTTP\n"
     "  verify DB         check pages, keys and the mesh invariants\n"
     "  recover DB        rebuild a lost or damaged MANIFEST from the table files\n"
     "  compact DB        join the shards of weaver-mpi's tables into one file each\n"
@@ -96,6 +97,7 @@ int dispatch(int argc, char** argv) {
   if (cmd == "query") return cmd_query(argc, argv);
   if (cmd == "shell") return cmd_shell(argc, argv);
   if (cmd == "slice") return cmd_slice(argc, argv);
+  if (cmd == "serve") return cmd_serve(argc, argv);
   if (cmd == "verify") return cmd_verify(argc, argv);
   if (cmd == "recover") return cmd_recover(argc, argv);
   if (cmd == "compact") return cmd_compact(argc, argv);

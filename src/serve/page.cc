@@ -1,0 +1,217 @@
+// The page of `weaver serve`: a map of a cross-section made of the server's
+// tiles, pannable and zoomable with the mouse, the wheel, touch and the
+// keyboard, coloured by a field with its colour bar, with the coordinate
+// under the pointer, the element under a click (and its neighbours, which
+// are clickable), and the view kept in the URL.  Nothing is fetched from
+// elsewhere.
+#include "serve/service.h"
+
+namespace weaver::serve {
+
+const char kPage[] = R"PAGE(<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>weaver serve</title>
+<style>
+body{margin:0;font:14px system-ui,sans-serif;display:flex;flex-direction:column;height:100vh}
+header{display:flex;gap:12px;align-items:center;padding:6px 10px;background:#f3f3f3;flex-wrap:wrap}
+main{flex:1;display:flex;min-height:0}
+#map{flex:1;position:relative;overflow:hidden;background:#fff;cursor:grab;touch-action:none}
+#map img{position:absolute;width:256px;height:256px;image-rendering:pixelated;user-select:none}
+#axes{position:absolute;left:0;top:0;pointer-events:none}
+aside{width:320px;overflow:auto;padding:8px 10px;border-left:1px solid #ddd}
+#bar{display:block;margin:6px 0}
+.id{color:#0645ad;cursor:pointer;text-decoration:underline}
+table{border-collapse:collapse}td{padding:1px 6px 1px 0;vertical-align:top}
+#where{font-family:monospace}
+</style></head><body>
+<header>
+<b>weaver</b>
+<label>axis <select id="axis"><option>x</option><option>y</option><option selected>z</option></select></label>
+<label>at <input id="at" type="range" step="any" style="width:220px"> <input id="atn" type="number" step="any" style="width:90px"> m</label>
+<label>colour <select id="color"></select></label>
+<span id="where"></span>
+</header>
+<main><div id="map"><canvas id="axes"></canvas></div>
+<aside><div id="info"></div><canvas id="bar" width="300" height="46"></canvas><div id="note"></div><div id="sel">Click the map to select an element.</div></aside></main>
+<script>
+"use strict";
+const $ = id => document.getElementById(id);
+const map = $("map"), axesCanvas = $("axes");
+let stat = null, sec = null;
+const view = {axis: "z", at: 0, color: "level", zoom: 0, cu: 0.5, cv: 0.5};
+const VIRIDIS = [[68,1,84],[72,40,120],[62,74,137],[49,104,142],[38,130,142],[31,158,137],[53,183,121],[110,206,88],[181,222,43],[253,231,37]];
+const units = {level: "", edge: "m", vp: "m/s", vs: "m/s", rho: "kg/m^3", qp: "", qs: ""};
+
+async function json(url) {
+  const r = await fetch(url);
+  const j = await r.json();
+  if (!r.ok) throw new Error(j.error || r.statusText);
+  return j;
+}
+function readHash() {
+  const h = new URLSearchParams(location.hash.slice(1));
+  for (const k of Object.keys(view)) if (h.has(k)) view[k] = typeof view[k] === "number" ? Number(h.get(k)) : h.get(k);
+}
+function writeHash(push) {
+  const h = new URLSearchParams();
+  for (const [k, v] of Object.entries(view)) h.set(k, typeof v === "number" ? +v.toPrecision(8) : v);
+  const url = "#" + h.toString();
+  if (url !== location.hash) (push ? history.pushState : history.replaceState).call(history, null, "", url);
+}
+function axisIndex(a) { return "xyz".indexOf(a); }
+async function loadSection(push) {
+  const i = axisIndex(view.axis);
+  const lo = stat.origin_m[i], hi = lo + stat.extent_m[i];
+  $("at").min = $("atn").min = lo; $("at").max = $("atn").max = hi;
+  if (!(view.at >= lo && view.at < hi)) view.at = lo + (hi - lo) / (view.axis === "z" ? 20 : 2);
+  $("at").value = $("atn").value = view.at;
+  $("axis").value = view.axis; $("color").value = view.color;
+  try { sec = await json(`/api/section/${view.axis}/${view.at}?color=${view.color}`); }
+  catch (e) { $("note").textContent = e.message; return; }
+  writeHash(push);
+  drawBar(); draw();
+}
+function tileSize() { return 256; }
+function worldPerPixel() { return sec.side_m / (256 * 2 ** view.zoom); }
+function draw() {
+  if (!sec) return;
+  const w = map.clientWidth, h = map.clientHeight, z = view.zoom, n = 2 ** z;
+  const full = 256 * n;  // pixels across the whole section at this zoom
+  const left = w / 2 - view.cu * full, top = h / 2 - view.cv * full;
+  const want = new Set();
+  for (let ty = Math.max(0, Math.floor(-top / 256)); ty < Math.min(n, Math.ceil((h - top) / 256)); ty++)
+    for (let tx = Math.max(0, Math.floor(-left / 256)); tx < Math.min(n, Math.ceil((w - left) / 256)); tx++) {
+      const src = `/api/tile/${view.axis}/${view.at}/${z}/${tx}/${ty}.png?color=${view.color}&min=${sec.min}&max=${sec.max}`;
+      want.add(src);
+      let img = map.querySelector(`img[data-src="${CSS.escape(src)}"]`);
+      if (!img) { img = new Image(); img.dataset.src = src; img.src = src; img.draggable = false; map.insertBefore(img, axesCanvas); }
+      img.style.left = (left + tx * 256) + "px"; img.style.top = (top + ty * 256) + "px";
+    }
+  for (const img of [...map.querySelectorAll("img")]) if (!want.has(img.dataset.src)) img.remove();
+  drawAxes(left, top, full);
+}
+function niceStep(span, n) {
+  const raw = span / n, p = 10 ** Math.floor(Math.log10(raw));
+  for (const m of [1, 2, 5, 10]) if (m * p >= raw) return m * p;
+  return 10 * p;
+}
+function drawAxes(left, top, full) {
+  const w = map.clientWidth, h = map.clientHeight, c = axesCanvas;
+  c.width = w; c.height = h;
+  const g = c.getContext("2d");
+  g.font = "11px system-ui"; g.fillStyle = "#000"; g.strokeStyle = "#000";
+  const km = sec.side_m >= 2000, unit = km ? 1000 : 1;
+  const perPx = sec.side_m / full;
+  // u along the bottom, v along the left; v counts down the page in sections.
+  const u0 = sec.origin_m[0] + (0 - left) * perPx, u1 = sec.origin_m[0] + (w - left) * perPx;
+  let step = niceStep((u1 - u0) / unit, 6) * unit;
+  for (let u = Math.ceil(u0 / step) * step; u <= u1; u += step) {
+    const x = left + (u - sec.origin_m[0]) / perPx;
+    g.fillRect(x, h - 14, 1, 5); g.fillText((u / unit).toPrecision(4).replace(/\.?0+$/, ""), x + 2, h - 2);
+  }
+  const vAt = py => sec.down ? sec.origin_m[1] + (py - top) * perPx : sec.origin_m[1] + sec.side_m - (py - top) * perPx;
+  const va = vAt(0), vb = vAt(h), v0 = Math.min(va, vb), v1 = Math.max(va, vb);
+  step = niceStep((v1 - v0) / unit, 6) * unit;
+  for (let v = Math.ceil(v0 / step) * step; v <= v1; v += step) {
+    const y = sec.down ? top + (v - sec.origin_m[1]) / perPx : top + (sec.origin_m[1] + sec.side_m - v) / perPx;
+    g.fillRect(0, y, 5, 1); g.fillText((v / unit).toPrecision(4).replace(/\.?0+$/, ""), 7, y + 4);
+  }
+  g.fillText(`${sec.u} (${km ? "km" : "m"}) →`, w - 70, h - 18);
+  g.fillText(`${sec.v} (${km ? "km" : "m"})${sec.down ? ", down ↓" : " ↑"}`, 7, 12);
+}
+function viridis(t) {
+  t = Math.min(Math.max(t, 0), 1) * 9; const i = Math.min(8, Math.floor(t)), f = t - i;
+  return VIRIDIS[i].map((a, k) => Math.round(a + (VIRIDIS[i + 1][k] - a) * f));
+}
+function drawBar() {
+  const g = $("bar").getContext("2d");
+  g.clearRect(0, 0, 300, 46);
+  for (let x = 0; x < 300; x++) { g.fillStyle = `rgb(${viridis(x / 299)})`; g.fillRect(x, 0, 1, 20); }
+  g.fillStyle = "#000"; g.font = "12px system-ui";
+  const u = units[view.color] ? " " + units[view.color] : "";
+  g.fillText(`${+sec.min.toPrecision(5)}${u}`, 0, 36);
+  const t = `${+sec.max.toPrecision(5)}${u}`; g.fillText(t, 300 - g.measureText(t).width, 36);
+  $("note").textContent = `${view.color} on the ${view.axis} = ${+sec.at_m.toPrecision(8)} m plane; each pixel shows the element at its centre; colour range sampled over the section (${sec.samples} points)`;
+}
+function worldAt(px, py) {
+  const full = 256 * 2 ** view.zoom, perPx = sec.side_m / full;
+  const left = map.clientWidth / 2 - view.cu * full, top = map.clientHeight / 2 - view.cv * full;
+  const u = sec.origin_m[0] + (px - left) * perPx;
+  const v = sec.down ? sec.origin_m[1] + (py - top) * perPx : sec.origin_m[1] + sec.side_m - (py - top) * perPx;
+  const p = [0, 0, 0]; p[axisIndex(view.axis)] = sec.at_m; p[axisIndex(sec.u)] = u; p[axisIndex(sec.v)] = v;
+  return p;
+}
+function fmt(p) { return p.map(v => (+v.toFixed(2)).toString()).join(", "); }
+async function select(id) {
+  try {
+    const e = await json(`/api/element/${id}?units=m`);
+    const nb = await json(`/api/neighbors/${id}?units=m`);
+    let html = `<h3>element ${e.element}</h3><table>`;
+    for (const [k, v] of Object.entries(e)) if (k !== "element") html += `<tr><td>${k}</td><td>${Array.isArray(v) ? v.join(" ") : v}</td></tr>`;
+    html += `</table><p>face neighbours:</p><table>`;
+    for (const n of nb) html += `<tr><td>${n.across}</td><td><span class="id" data-id="${n.element}">${n.element}</span></td><td>level ${n.level}</td></tr>`;
+    $("sel").innerHTML = html + "</table>";
+  } catch (err) { $("sel").textContent = err.message; }
+}
+$("sel").addEventListener("click", ev => { const id = ev.target.dataset && ev.target.dataset.id; if (id) select(id); });
+let drag = null, moved = false;
+map.addEventListener("pointerdown", ev => { drag = {x: ev.clientX, y: ev.clientY, cu: view.cu, cv: view.cv}; moved = false; map.setPointerCapture(ev.pointerId); });
+map.addEventListener("pointermove", ev => {
+  const r = map.getBoundingClientRect();
+  if (sec) $("where").textContent = `(${fmt(worldAt(ev.clientX - r.left, ev.clientY - r.top))}) m`;
+  if (!drag) return;
+  const full = 256 * 2 ** view.zoom;
+  if (Math.abs(ev.clientX - drag.x) + Math.abs(ev.clientY - drag.y) > 3) moved = true;
+  view.cu = drag.cu - (ev.clientX - drag.x) / full; view.cv = drag.cv - (ev.clientY - drag.y) / full;
+  draw();
+});
+map.addEventListener("pointerup", async ev => {
+  drag = null;
+  if (moved) return writeHash(false);
+  const r = map.getBoundingClientRect(), p = worldAt(ev.clientX - r.left, ev.clientY - r.top);
+  try {
+    const h = await json(`/api/locate?x=${p[0]}&y=${p[1]}&z=${p[2]}&units=m`);
+    if (h.status === "inside") select(h.element); else $("sel").textContent = `(${fmt(p)}) m is outside the mesh`;
+  } catch (err) { $("sel").textContent = err.message; }
+});
+function zoomAt(dz, px, py) {
+  const z = Math.min(24, Math.max(0, view.zoom + dz));
+  if (z === view.zoom) return;
+  const full = 256 * 2 ** view.zoom, w = map.clientWidth, h = map.clientHeight;
+  const fu = view.cu + (px - w / 2) / full, fv = view.cv + (py - h / 2) / full;
+  const s = 2 ** (view.zoom - z);
+  view.cu = fu - (fu - view.cu) * s; view.cv = fv - (fv - view.cv) * s; view.zoom = z;
+  writeHash(false); draw();
+}
+map.addEventListener("wheel", ev => { ev.preventDefault(); const r = map.getBoundingClientRect(); zoomAt(ev.deltaY < 0 ? 1 : -1, ev.clientX - r.left, ev.clientY - r.top); }, {passive: false});
+document.addEventListener("keydown", ev => {
+  if (ev.target.tagName === "INPUT" || ev.target.tagName === "SELECT") return;
+  const step = 64 / (256 * 2 ** view.zoom), w = map.clientWidth / 2, h = map.clientHeight / 2;
+  if (ev.key === "+" || ev.key === "=") zoomAt(1, w, h);
+  else if (ev.key === "-") zoomAt(-1, w, h);
+  else if (ev.key === "ArrowLeft") view.cu -= step; else if (ev.key === "ArrowRight") view.cu += step;
+  else if (ev.key === "ArrowUp") view.cv -= step; else if (ev.key === "ArrowDown") view.cv += step;
+  else return;
+  writeHash(false); draw();
+});
+$("axis").onchange = () => { view.axis = $("axis").value; view.at = NaN; loadSection(true); };
+$("at").onchange = () => { view.at = Number($("at").value); loadSection(true); };
+$("at").oninput = () => { $("atn").value = $("at").value; };
+$("atn").onchange = () => { view.at = Number($("atn").value); loadSection(true); };
+$("color").onchange = () => { view.color = $("color").value; loadSection(true); };
+window.addEventListener("popstate", () => { readHash(); loadSection(false); });
+window.addEventListener("resize", draw);
+(async () => {
+  try { stat = await json("/api/stat"); } catch (e) { $("info").textContent = e.message; return; }
+  $("info").innerHTML = `<b>${stat.database.replace(/[&<>]/g, "")}</b><br>${stat.elements} elements, ${stat.nodes} nodes`;
+  for (const f of stat.fields) $("color").add(new Option(f, f));
+  readHash();
+  if (!stat.fields.includes(view.color)) view.color = stat.fields.includes("vs") ? "vs" : "level";
+  if (!location.hash) view.color = stat.fields.includes("vs") ? "vs" : "level";
+  loadSection(false);
+})();
+</script></body></html>
+)PAGE";
+
+}  // namespace weaver::serve

@@ -1,0 +1,262 @@
+#include "serve/service.h"
+
+#include <sys/stat.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "serve/tiles.h"
+#include "util/json_string.h"
+
+namespace weaver::serve {
+namespace {
+
+// A worker thread's open database: the Explorer, and which MANIFEST (inode
+// and change time) it opened, to see a commit by.
+struct Snapshot {
+  std::string db;
+  ino_t ino = 0;
+  timespec ctime{};
+  std::unique_ptr<Explorer> ex;
+};
+thread_local Snapshot t_snapshot;
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  size_t from = 0;
+  for (size_t at; (at = s.find(sep, from)) != std::string::npos; from = at + 1) {
+    out.push_back(s.substr(from, at - from));
+  }
+  out.push_back(s.substr(from));
+  return out;
+}
+
+bool parse_number(const std::string& s, double* v) {
+  char* end = nullptr;
+  *v = std::strtod(s.c_str(), &end);
+  return !s.empty() && *end == '\0' && std::isfinite(*v);
+}
+
+bool parse_whole(const std::string& s, int64_t lo, int64_t hi, int64_t* v) {
+  char* end = nullptr;
+  const long long n = std::strtoll(s.c_str(), &end, 10);
+  *v = n;
+  return !s.empty() && *end == '\0' && n >= lo && n <= hi;
+}
+
+int axis_of(const std::string& name) {
+  return name == "x" ? 0 : name == "y" ? 1 : name == "z" ? 2 : -1;
+}
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+Response status_response(const Status& st) {
+  return error_response(st.is_invalid_argument() ? 400
+                        : st.is_not_found()      ? 404
+                                                 : 500,
+                        st.message());
+}
+
+// A JSON array of points ([[x, y, z], ...]) as text lines; other bodies
+// pass as they are (text lines already).
+std::string points_text(const std::string& body) {
+  size_t at = body.find_first_not_of(" \t\r\n");
+  if (at == std::string::npos || body[at] != '[') return body;
+  std::string out;
+  int depth = 0;
+  for (const char c : body) {
+    if (c == '[') {
+      ++depth;
+    } else if (c == ']') {
+      if (depth-- == 2) out += '\n';
+    } else if (depth >= 2) {
+      out += c == ',' ? ' ' : c;
+    } else if (depth == 1 && c != ',' && c != ' ' && c != '\n' && c != '\r' && c != '\t') {
+      out += c;  // a bare value: left for the batch to call a bad line
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Status Service::check() {
+  Explorer* ex = nullptr;
+  return explorer(&ex);
+}
+
+Status Service::explorer(Explorer** out) {
+  struct stat st {};
+  const std::string manifest = db_ + "/MANIFEST";
+  if (::stat(manifest.c_str(), &st) != 0) {
+    return Status::NotFound(db_ + ": not a weaver database (no MANIFEST)");
+  }
+  Snapshot& s = t_snapshot;
+  if (!s.ex || s.db != db_ || s.ino != st.st_ino || s.ctime.tv_sec != st.st_ctim.tv_sec ||
+      s.ctime.tv_nsec != st.st_ctim.tv_nsec) {
+    s.ex.reset();
+    // Split the budget among the threads that may each hold one.
+    WEAVER_RETURN_IF_ERROR(Explorer::open(db_, memory_, &s.ex));
+    s.db = db_, s.ino = st.st_ino, s.ctime = st.st_ctim;
+  }
+  *out = s.ex.get();
+  return Status::Ok();
+}
+
+Response Service::handle(const Request& r) {
+  if (r.path == "/" || r.path == "/index.html") {
+    if (r.method != "GET") return error_response(405, "the page takes GET");
+    return {200, "text/html; charset=utf-8", kPage, "no-cache"};
+  }
+  if (r.path.rfind("/api/", 0) != 0) return error_response(404, "no such page: " + r.path);
+  if (r.method != "GET" && !(r.method == "POST" && r.path == "/api/points")) {
+    return error_response(405, r.method + " " + r.path + ": not taken here");
+  }
+  Explorer* ex = nullptr;
+  const Status st = explorer(&ex);
+  if (!st.ok()) return error_response(503, st.message());
+  return api(r, *ex);
+}
+
+Response Service::api(const Request& r, Explorer& ex) {
+  const std::vector<std::string> parts = split(r.path.substr(1), '/');  // "api", ...
+  const std::string& what = parts.size() > 1 ? parts[1] : "";
+  if (what == "stat" && parts.size() == 2) return stat(ex);
+  if (what == "section") return section(ex, parts, r);
+  if (what == "tile") return tile(ex, parts, r);
+  if (what == "locate" && parts.size() == 2) {
+    for (const char* c : {"x", "y", "z"}) {
+      if (!r.query.count(c)) return error_response(400, "locate takes x, y and z");
+    }
+    return run(ex, {"locate", r.query.at("x"), r.query.at("y"), r.query.at("z")}, r);
+  }
+  if (what == "points" && parts.size() == 2) {
+    const std::string q = r.query.count("query") ? r.query.at("query") : "locate";
+    if (q != "locate" && q != "material" && q != "node-at") {
+      return error_response(400, "query is locate, material or node-at, not '" + q + "'");
+    }
+    return run(ex, {q, "--points", "-"}, r, points_text(r.body));
+  }
+  const bool by_id = what == "element" || what == "node" || what == "neighbors" ||
+                     what == "node-elements" || what == "depends";
+  if (by_id && parts.size() == 3) {
+    std::vector<std::string> words = {what, parts[2]};
+    if (what == "neighbors" && r.query.count("kinds")) {
+      for (const std::string& k : split(r.query.at("kinds"), ',')) words.push_back("--" + k);
+    }
+    return run(ex, words, r);
+  }
+  if (what == "range" && parts.size() == 2) {
+    if (!r.query.count("box")) return error_response(400, "range takes box=X0,Y0,Z0,X1,Y1,Z1");
+    std::vector<std::string> words = split(r.query.at("box"), ',');
+    if (words.size() != 6) return error_response(400, "box is six numbers: X0,Y0,Z0,X1,Y1,Z1");
+    words.insert(words.begin(), "range");
+    if (r.query.count("list") && r.query.at("list") != "0") words.push_back("--list");
+    return run(ex, words, r);
+  }
+  return error_response(404, "no such API route: " + r.path);
+}
+
+Response Service::run(Explorer& ex, std::vector<std::string> words, const Request& r,
+                      const std::string& points) {
+  if (r.query.count("units")) words.insert(words.end(), {"--units", r.query.at("units")});
+  if (r.query.count("geo") && r.query.at("geo") != "0") words.push_back("--geo");
+  words.insert(words.end(), {"--format", "json"});
+  std::string out, err;
+  const int code = query_(ex, words, points, &out, &err);
+  // "weaver serve: message (see ...)" as the message alone.
+  std::string message = err.substr(0, err.find('\n'));
+  const size_t colon = message.find(": ");
+  if (colon != std::string::npos) message = message.substr(colon + 2);
+  const size_t see = message.find(" (see .help");
+  if (see != std::string::npos) message = message.substr(0, see);
+  if (code == 0 || (code == 1 && !out.empty())) return {200, "application/json", out};
+  if (code == 2) return error_response(400, message);
+  const bool missing = message.find("does not exist") != std::string::npos ||
+                       message.find("no mesh yet") != std::string::npos ||
+                       message.find("not georeferenced") != std::string::npos ||
+                       message.find("has no material") != std::string::npos;
+  return error_response(missing ? 404 : 500, message);
+}
+
+Response Service::stat(Explorer& ex) {
+  double extent[3];
+  const Status st = domain_extent(ex, extent);
+  if (!st.ok()) return status_response(st);
+  const Units& u = ex.units();
+  std::string j = "{\"database\": " + json_string(db_) +
+                  ", \"elements\": " + std::to_string(ex.element_count()) +
+                  ", \"nodes\": " + std::to_string(ex.node_count()) +
+                  ", \"tick_m\": " + number(u.tick_m) + ", \"origin_m\": [";
+  for (int a = 0; a < 3; ++a) j += (a ? ", " : "") + number(u.origin_m[a]);
+  j += "], \"extent_m\": [";
+  for (int a = 0; a < 3; ++a) j += (a ? ", " : "") + number(extent[a] * u.tick_m);
+  j += "], \"geo\": " + json_string(u.geo) + ", \"fields\": [\"level\", \"edge\"";
+  if (ex.mesh().has_material()) j += ", \"vp\", \"vs\", \"rho\"";
+  if (ex.mesh().has_q()) j += ", \"qp\", \"qs\"";
+  return {200, "application/json", j + "]}\n"};
+}
+
+Response Service::section(Explorer& ex, const std::vector<std::string>& parts, const Request& r) {
+  double at = 0;
+  if (parts.size() != 4 || axis_of(parts[2]) < 0 || !parse_number(parts[3], &at)) {
+    return error_response(400, "a section is /api/section/AXIS/POSITION (x, y or z; metres)");
+  }
+  const std::string color = r.query.count("color") ? r.query.at("color") : "level";
+  Section s;
+  FieldRange range;
+  Status st = check_field(ex, color);
+  if (st.ok()) st = section_of(ex, axis_of(parts[2]), at, &s);
+  if (st.ok()) st = field_range(ex, s, color, &range);
+  if (!st.ok()) return status_response(st);
+  const Units& u = ex.units();
+  std::string j =
+      "{\"axis\": \"" + parts[2] + "\", \"at_m\": " + number(u.origin_m[s.axis] + s.at * u.tick_m) +
+      ", \"at_ticks\": " + std::to_string(s.at) + ", \"u\": \"" + "xyz"[s.u] + "\", \"v\": \"" +
+      "xyz"[s.v] + "\", \"down\": " + (s.down ? "true" : "false") +
+      ", \"side_m\": " + number(s.side * u.tick_m) + ", \"origin_m\": [" + number(u.origin_m[s.u]) +
+      ", " + number(u.origin_m[s.v]) + "], \"extent_m\": [" + number(s.extent[s.u] * u.tick_m) +
+      ", " + number(s.extent[s.v] * u.tick_m) + "], \"color\": " + json_string(color) +
+      ", \"min\": " + number(range.min) + ", \"max\": " + number(range.max) +
+      ", \"samples\": " + std::to_string(range.samples) + "}\n";
+  return {200, "application/json", j};
+}
+
+Response Service::tile(Explorer& ex, const std::vector<std::string>& parts, const Request& r) {
+  double at = 0;
+  int64_t zoom = 0, x = 0, y = 0;
+  const std::string last = parts.size() == 7 ? parts[6] : "";
+  const bool png = last.size() > 4 && last.compare(last.size() - 4, 4, ".png") == 0;
+  if (parts.size() != 7 || axis_of(parts[2]) < 0 || !parse_number(parts[3], &at) ||
+      !parse_whole(parts[4], 0, 30, &zoom) || !png) {
+    return error_response(400, "a tile is /api/tile/AXIS/POSITION/ZOOM/X/Y.png (zoom 0 to 30)");
+  }
+  const int64_t n = int64_t{1} << zoom;
+  if (!parse_whole(parts[5], 0, n - 1, &x) ||
+      !parse_whole(last.substr(0, last.size() - 4), 0, n - 1, &y)) {
+    return error_response(404, "zoom " + std::to_string(zoom) + " has tiles 0 to " +
+                                   std::to_string(n - 1) + " across and down");
+  }
+  const std::string color = r.query.count("color") ? r.query.at("color") : "level";
+  Section s;
+  Status st = check_field(ex, color);
+  if (st.ok()) st = section_of(ex, axis_of(parts[2]), at, &s);
+  FieldRange range;
+  const bool given = r.query.count("min") && r.query.count("max");
+  if (given && (!parse_number(r.query.at("min"), &range.min) ||
+                !parse_number(r.query.at("max"), &range.max))) {
+    return error_response(400, "min and max are numbers");
+  }
+  if (st.ok() && !given) st = field_range(ex, s, color, &range);
+  std::string bytes;
+  if (st.ok()) st = render_tile(ex, s, color, range.min, range.max, int(zoom), x, y, &bytes);
+  if (!st.ok()) return status_response(st);
+  return {200, "image/png", std::move(bytes)};
+}
+
+}  // namespace weaver::serve

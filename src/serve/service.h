@@ -1,0 +1,67 @@
+// What `weaver serve` answers: the page, the JSON API and the map tiles of
+// one database, read-only.  Each request runs on one snapshot: a worker
+// thread keeps its own open Explorer and opens the database again when its
+// MANIFEST has changed (a writer committed), so a client never sees a mixed
+// state and sees the new one from its next request on.
+//
+// Routes (JSON answers are those of `weaver query ... --format json`):
+//   GET  /                         the page (serve/page.cc)
+//   GET  /api/stat                 the mesh: counts, units, extents, fields
+//   GET  /api/locate?x=&y=&z=[&units=m|ticks][&geo=1]
+//   POST /api/points[?query=locate|material|node-at][&units=][&geo=1]
+//                                  points as text lines or a JSON array
+//   GET  /api/element/ID, /api/node/ID, /api/neighbors/ID[?kinds=all]
+//   GET  /api/node-elements/ID, /api/depends/ID
+//   GET  /api/range?box=X0,Y0,Z0,X1,Y1,Z1[&list=1][&units=]
+//   GET  /api/section/AXIS/POSITION?color=F   the section's extent and the
+//                                  colour range its tiles share
+//   GET  /api/tile/AXIS/POSITION/ZOOM/X/Y.png?color=F[&min=&max=]
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "query/explorer.h"
+#include "serve/http.h"
+#include "util/memory_budget.h"
+
+namespace weaver::serve {
+
+// Runs one query of `weaver query` (words as the shell takes them, with
+// --format json among them) on ex: the exit status, and what it printed
+// to stdout and stderr.  The command line supplies it.
+using QueryRunner =
+    std::function<int(Explorer& ex, const std::vector<std::string>& words,
+                      const std::string& points, std::string* out, std::string* err)>;
+
+class Service {
+ public:
+  Service(std::string db, MemoryBudget memory, QueryRunner query)
+      : db_(std::move(db)), memory_(memory), query_(std::move(query)) {}
+
+  // Checks that the database opens: the error a user sees before the
+  // server starts.
+  Status check();
+  Response handle(const Request& r);
+
+ private:
+  // This thread's Explorer on the newest committed state.
+  Status explorer(Explorer** out);
+  Response api(const Request& r, Explorer& ex);
+  Response run(Explorer& ex, std::vector<std::string> words, const Request& r,
+               const std::string& points = "");
+  Response stat(Explorer& ex);
+  Response section(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
+  Response tile(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
+
+  std::string db_;
+  MemoryBudget memory_;
+  QueryRunner query_;
+};
+
+// The page: one HTML document with its script and style, nothing fetched
+// from elsewhere.
+extern const char kPage[];
+
+}  // namespace weaver::serve

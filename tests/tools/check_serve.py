@@ -1,0 +1,204 @@
+"""weaver serve as a client sees it, on 127.0.0.1 only, in loops bounded in
+count and time: every JSON route answers what `weaver query --format json`
+prints; tiles are 256 x 256 PNGs whose pixels have the colour of the element
+at their centre, in the documented tiling; bad requests get the right status
+and one JSON error; clients running while a writer re-meshes the database
+see the old mesh or the new one, never a mix, and the new one once it is
+committed; SIGTERM stops the server.
+usage: check_serve.py WEAVER WORK_DIR"""
+import http.client
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from picture import pixel, read_png, viridis  # noqa: E402
+
+weaver_bin, work = sys.argv[1:3]
+shutil.rmtree(work, ignore_errors=True)
+os.makedirs(work)
+DEADLINE = time.monotonic() + 240  # the whole check, whatever happens
+
+
+def fail(message):
+    sys.exit("check_serve: " + message)
+
+
+def run(*args, ok=True, stdin=None):
+    r = subprocess.run([weaver_bin, *args], input=stdin, capture_output=True, text=True)
+    if ok and r.returncode != 0:
+        fail(f"weaver {' '.join(args)}: {r.stderr}")
+    return r
+
+
+db = os.path.join(work, "basin.db")
+run("mesh", db, "--model", "basin", "--freq", "0.05", "--quiet")
+server = subprocess.Popen([weaver_bin, "serve", db, "--port", "0", "--threads", "3"],
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+try:
+    first = server.stdout.readline()
+    if "http://127.0.0.1:" not in first:
+        fail(f"no URL on the first line: {first!r} {server.stderr.read()}")
+    port = int(first.split("http://127.0.0.1:")[1].split("/")[0])
+
+    def request(method, path, body=None, headers=None):
+        if time.monotonic() > DEADLINE:
+            fail("out of time")
+        c = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
+        c.request(method, path, body=body, headers=headers or {})
+        r = c.getresponse()
+        data = r.read()
+        c.close()
+        return r.status, r.getheader("Content-Type"), data
+
+    def api(path, method="GET", body=None, status=200):
+        got, kind, data = request(method, path, body)
+        if got != status:
+            fail(f"{method} {path}: status {got}, expected {status}: {data[:300]!r}")
+        if kind != "application/json":
+            fail(f"{method} {path}: Content-Type {kind}")
+        return json.loads(data, parse_constant=lambda c: fail(f"{path}: {c} in JSON"))
+
+    def same_as_query(path, *words, method="GET", body=None, stdin=None):
+        want = json.loads(run("query", db, *words, "--format", "json", stdin=stdin,
+                              ok=False).stdout)
+        got = api(path, method, body)
+        if got != want:
+            fail(f"{path}: {json.dumps(got)[:300]}\n  weaver query {' '.join(words)}: "
+                 f"{json.dumps(want)[:300]}")
+        return got
+
+    # The JSON routes are the query answers.
+    stat = api("/api/stat")
+    counts = json.loads(run("stat", db, "--json").stdout)
+    records = {t["table"]: t["records"] for t in counts["tables"]}
+    if (stat["elements"], stat["nodes"]) != (records["octants"], records["nodes"]):
+        fail(f"/api/stat: {stat} against weaver stat {records}")
+    if stat["extent_m"] != [100000, 100000, 37500] or "vs" not in stat["fields"]:
+        fail(f"/api/stat: extent or fields: {stat}")
+    for i in (0, 7, stat["elements"] - 1):
+        e = same_as_query(f"/api/element/{i}", "element", str(i))
+        same_as_query(f"/api/neighbors/{i}", "neighbors", str(i))
+        same_as_query(f"/api/neighbors/{i}?kinds=all&units=m", "neighbors", str(i), "--all",
+                      "--units", "m")
+        same_as_query(f"/api/node/{e['nodes'][6]}", "node", str(e["nodes"][6]))
+        same_as_query(f"/api/node-elements/{e['nodes'][6]}", "node-elements",
+                      str(e["nodes"][6]))
+        same_as_query(f"/api/depends/{e['nodes'][0]}", "depends", str(e["nodes"][0]))
+    same_as_query("/api/locate?x=40000.5&y=51000&z=300&units=m", "locate", "40000.5", "51000",
+                  "300", "--units", "m")
+    same_as_query("/api/range?box=0,0,100,1048575,1048575,100", "range", "0", "0", "100",
+                  "1048575", "1048575", "100")
+    same_as_query("/api/range?box=0,0,100,1048575,1048575,100&list=1", "range", "0", "0", "100",
+                  "1048575", "1048575", "100", "--list")
+    lines = "".join(f"{i * 997} {i * 1231} {i * 89}\n" for i in range(300)) + "not a point\n"
+    same_as_query("/api/points?query=material&units=m", "material", "--points", "-",
+                  "--units", "m", method="POST", body=lines, stdin=lines)
+    array = json.dumps([[i * 5000, i * 3000, 700] for i in range(20)])
+    as_lines = "".join(f"{i * 5000} {i * 3000} 700\n" for i in range(20))
+    same_as_query("/api/points?units=m", "locate", "--points", "-", "--units", "m",
+                  method="POST", body=array, stdin=as_lines)
+
+    # A tile: each pixel the colour of the element at its centre (or the
+    # outline), north up, the whole section at zoom 0.
+    section = api("/api/section/z/1000?color=vs")
+    lo, hi, side = section["min"], section["max"], section["side_m"]
+    if not (section["u"], section["v"], section["down"]) == ("x", "y", False) or lo >= hi:
+        fail(f"/api/section: {section}")
+    for zoom, tx, ty in ((0, 0, 0), (2, 1, 2)):
+        status, kind, png = request("GET", f"/api/tile/z/1000/{zoom}/{tx}/{ty}.png?color=vs"
+                                    f"&min={lo}&max={hi}")
+        if status != 200 or kind != "image/png":
+            fail(f"tile {zoom}/{tx}/{ty}: status {status}, {kind}")
+        w, h, rows, _ = read_png(png)
+        if (w, h) != (256, 256):
+            fail(f"tile {zoom}/{tx}/{ty} is {w} x {h}")
+        span = side / 2 ** zoom
+        samples = [(i, j) for j in range(3, 256, 23) for i in range(5, 256, 19)]
+        points = "".join(f"{tx * span + (i + 0.5) * span / 256} "
+                         f"{side - ty * span - (j + 0.5) * span / 256} {section['at_m']}\n"
+                         for i, j in samples)
+        hits = api("/api/points?query=material&units=m", "POST", points)
+        matched = 0
+        for (i, j), hit in zip(samples, hits):
+            got = pixel(rows, i, j)
+            if hit["status"] != "inside":
+                continue
+            want = viridis((hit["vs"] - lo) / (hi - lo))
+            if got == (40, 40, 40):  # an outline
+                continue
+            if max(abs(a - b) for a, b in zip(got, want)) > 2:
+                fail(f"tile {zoom}/{tx}/{ty} pixel ({i}, {j}): {got}, vs {hit['vs']} is {want}")
+            matched += 1
+        if matched < len(samples) // 2:
+            fail(f"tile {zoom}/{tx}/{ty}: only {matched} of {len(samples)} pixels checked")
+
+    # Bad requests: a status and one JSON error each; never a crash.
+    for path, status in (("/api/element/99999999", 404), ("/api/element/x", 400),
+                         ("/api/nothing", 404), ("/../../etc/passwd", 404),
+                         ("/api/tile/q/1000/0/0/0.png", 400), ("/api/tile/z/1000/1/2/0.png", 404),
+                         ("/api/tile/z/99999999/0/0/0.png", 400),
+                         ("/api/tile/z/1000/0/0/0.png?color=mood", 400),
+                         ("/api/section/z/1000?color=qs", 400),
+                         ("/api/locate?x=1&y=2", 400), ("/api/range?box=1,2,3", 400),
+                         ("/api/locate?x=1&y=2&z=3&geo=1", 404)):
+        e = api(path, status=status)
+        if set(e) != {"error"}:
+            fail(f"{path}: {e}")
+    api("/api/stat", method="POST", body="x", status=405)
+    status, _, _ = request("POST", "/api/points", body="", headers={"Content-Length": "999999999999"})
+    if status != 413:
+        fail(f"an oversized body: status {status}")
+    status, kind, page = request("GET", "/")
+    if status != 200 or not kind.startswith("text/html") or b"/api/tile/" not in page \
+            or b"http://" in page.replace(b"http://127", b""):
+        fail(f"the page: status {status}, {kind}, or it fetches from elsewhere")
+
+    # Clients while a writer re-meshes the served database: each answer is
+    # the old mesh's or the new one's, and after the commit the new one's.
+    old = (stat["elements"], stat["nodes"])
+    seen, mixed, errors = set(), [], []
+    stop = threading.Event()
+
+    def client():
+        for _ in range(2000):  # bounded in count, and by the writer's end
+            if stop.is_set():
+                return
+            try:
+                s = api("/api/stat")
+                e = api(f"/api/element/{s['elements'] - 1}")
+                seen.add((s["elements"], s["nodes"]))
+                if e["element"] != s["elements"] - 1:
+                    mixed.append((s, e))
+            except SystemExit as x:  # an element past the snapshot's end: a mix
+                errors.append(str(x))
+                return
+
+    clients = [threading.Thread(target=client) for _ in range(3)]
+    for t in clients:
+        t.start()
+    run("mesh", db, "--model", "basin", "--freq", "0.08", "--quiet")
+    time.sleep(0.3)
+    stop.set()
+    for t in clients:
+        t.join(timeout=60)
+    new = tuple(api("/api/stat")[k] for k in ("elements", "nodes"))
+    if new == old or errors or mixed or not seen <= {old, new}:
+        fail(f"re-mesh while serving: old {old}, new {new}, seen {seen}, errors {errors[:2]}, "
+             f"mixed {mixed[:2]}")
+finally:
+    server.send_signal(signal.SIGTERM)
+    try:
+        code = server.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        server.kill()
+        fail("the server did not stop on SIGTERM")
+if code != 0:
+    fail(f"the server exited {code}: {server.stderr.read()}")
+print(f"check_serve: JSON routes as weaver query, tiles by pixel, bad requests, a re-mesh "
+      f"seen whole ({len(seen)} states), stopped by SIGTERM")
