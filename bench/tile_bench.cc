@@ -1,0 +1,111 @@
+// The tiles of `weaver serve` on a large mesh: the time to render one
+// 256 x 256 tile of the section z = 1 km, coloured by vs, at zoom 0 (the
+// whole plane in one tile), 3, 6 and 9 (random tiles that hold elements),
+// against `weaver slice` of the whole plane (the picture a user had before).
+// A tile reads only its pixels, so its time should not grow with the mesh.
+// Default: the basin's 0.5 Hz mesh (built here); --db DB for any mesh (the
+// 2 Hz one, say).  Prints one JSON object per measurement, then a table.
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "basin_stages.h"
+#include "bench_util.h"
+#include "serve/tiles.h"
+
+namespace weaver::bench {
+
+int tile_main(int argc, char** argv) {
+  std::string db;
+  double freq = 0.5;
+  int repeat = 5;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--db" && i + 1 < argc) {
+      db = argv[++i];
+    } else if (a == "--freq" && i + 1 < argc) {
+      freq = std::stod(argv[++i]);
+    } else if (a == "--repeat" && i + 1 < argc) {
+      repeat = std::stoi(argv[++i]);
+    } else {
+      std::printf("usage: tile_bench [--db DB | --freq F] [--repeat N]\n");
+      return 2;
+    }
+  }
+  const uint64_t memory = 256ull << 20;
+  if (db.empty()) {
+    const std::string dir = "/tmp/weaver-tile-bench";
+    std::filesystem::create_directories(dir);
+    db = dir + "/basin-" + fmt(freq) + "Hz.db";
+    uint64_t peak = 0;
+    if (!std::filesystem::exists(db + "/MANIFEST") &&
+        run_program({WEAVER_BINARY, "mesh", db, "--model", "basin", "--freq", fmt(freq), "--quiet"},
+                    &peak)
+            .empty()) {
+      return std::fprintf(stderr, "cannot build %s\n", db.c_str()), 1;
+    }
+  }
+  std::unique_ptr<Explorer> ex;
+  serve::Section s;
+  serve::FieldRange range;
+  double t0 = now_seconds();
+  Status st = Explorer::open(db, MemoryBudget(memory), &ex);
+  if (st.ok()) st = serve::section_of(*ex, 2, 1000, &s);
+  const double section_s = now_seconds() - t0;
+  t0 = now_seconds();
+  if (st.ok()) st = serve::field_range(*ex, s, "vs", &range);
+  const double range_s = now_seconds() - t0;
+  if (!st.ok()) return std::fprintf(stderr, "%s\n", st.message().c_str()), 1;
+  std::vector<std::map<std::string, std::string>> table;
+  auto emit = [&](const std::string& what, int zoom, std::vector<double> secs, uint64_t bytes) {
+    Json j;
+    j.add("bench", "tile").add("db", db).add("elements", ex->element_count()).add("what", what);
+    if (zoom >= 0) j.add("zoom", zoom);
+    j.add("median_s", median(secs)).add("repeat", int(secs.size()));
+    j.add("png_bytes", bytes);
+    std::printf("%s\n", j.str().c_str());
+    table.push_back({{"what", what},
+                     {"zoom", zoom >= 0 ? std::to_string(zoom) : ""},
+                     {"median ms", fmt(median(secs) * 1e3)},
+                     {"png bytes", std::to_string(bytes)}});
+  };
+  emit("section (domain extent)", -1, {section_s}, 0);
+  emit("colour range (512x512)", -1, {range_s}, 0);
+  std::mt19937_64 rng(7);
+  for (const int zoom : {0, 3, 6, 9}) {
+    std::vector<double> secs;
+    uint64_t bytes = 0;
+    for (int r = 0; r < repeat; ++r) {
+      // A tile inside the domain's square on the plane.
+      const int64_t n = int64_t{1} << zoom;
+      const double fx = s.extent[s.u] / s.side, fy = s.extent[s.v] / s.side;
+      const int64_t x = int64_t(rng() % uint64_t(std::max<int64_t>(1, int64_t(n * fx))));
+      const int64_t y = n - 1 - int64_t(rng() % uint64_t(std::max<int64_t>(1, int64_t(n * fy))));
+      std::string png;
+      t0 = now_seconds();
+      st = serve::render_tile(*ex, s, "vs", range.min, range.max, zoom, x, y, &png);
+      secs.push_back(now_seconds() - t0);
+      if (!st.ok()) return std::fprintf(stderr, "%s\n", st.message().c_str()), 1;
+      bytes = png.size();
+    }
+    emit("tile", zoom, secs, bytes);
+  }
+  std::vector<double> slice;
+  for (int r = 0; r < std::min(repeat, 3); ++r) {
+    uint64_t peak = 0;
+    t0 = now_seconds();
+    run_program({WEAVER_BINARY, "slice", db, "--axis", "z", "--at", "1000", "--units", "m",
+                 "--color", "vs", "--out", "/tmp/weaver-tile-bench-slice.png"},
+                &peak);
+    slice.push_back(now_seconds() - t0);
+  }
+  emit("weaver slice, whole plane", -1, slice, 0);
+  std::printf("\n%s: %llu elements\n", db.c_str(), (unsigned long long)ex->element_count());
+  print_table(table, {"what", "zoom", "median ms", "png bytes"});
+  return 0;
+}
+
+}  // namespace weaver::bench
+
+int main(int argc, char** argv) { return weaver::bench::tile_main(argc, argv); }
