@@ -16,8 +16,6 @@
 namespace weaver::serve {
 namespace {
 
-constexpr size_t kMaxHead = 16 << 10;
-
 const char* reason(int status) {
   switch (status) {
     case 200: return "OK";
@@ -33,66 +31,66 @@ const char* reason(int status) {
   }
 }
 
-// Reads until the head ends ("\r\n\r\n"); what follows it is the start of
-// the body.  False on timeout, close or a head too large (*status says).
-bool read_head(int fd, std::string* head, std::string* rest, int* status) {
-  char buf[4096];
-  std::string got;
-  for (;;) {
-    const size_t end = got.find("\r\n\r\n");
-    if (end != std::string::npos) {
-      *head = got.substr(0, end);
-      *rest = got.substr(end + 4);
-      return true;
+// A connection's bytes, read as requests arrive (pipelined ones included).
+class Reader {
+ public:
+  explicit Reader(int fd) : fd_(fd) {}
+  // The next request's head; false on close, timeout (*status 408) or a head
+  // past the limits (431).
+  bool head(std::string* out, int* status) {
+    *status = 0;
+    for (;;) {
+      const size_t end = buf_.find("\r\n\r\n");
+      if (end != std::string::npos) {
+        *out = buf_.substr(0, end);
+        buf_.erase(0, end + 4);
+        return true;
+      }
+      if (buf_.size() > kMaxRequestLine + kMaxHeaders) return *status = 431, false;
+      if (!more()) return *status = buf_.empty() ? 0 : 408, false;
     }
-    if (got.size() > kMaxHead) return *status = 431, false;
-    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
-    if (n <= 0) return *status = n < 0 && errno == EAGAIN ? 408 : 0, false;
-    got.append(buf, size_t(n));
   }
-}
+  // n bytes of body.
+  bool body(uint64_t n, std::string* out) {
+    while (buf_.size() < n) {
+      if (!more()) return false;
+    }
+    out->assign(buf_, 0, n);
+    buf_.erase(0, n);
+    return true;
+  }
+  bool pending() const { return !buf_.empty(); }
+
+ private:
+  bool more() {
+    char chunk[1 << 16];
+    const ssize_t n = ::recv(fd_, chunk, sizeof chunk, 0);
+    if (n <= 0) return false;
+    buf_.append(chunk, size_t(n));
+    return true;
+  }
+  int fd_;
+  std::string buf_;
+};
 
 std::string lower(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
   return s;
 }
 
-// The request line and headers; false for a malformed head.
-bool parse_head(const std::string& head, Request* r) {
-  size_t at = head.find("\r\n");
-  const std::string line = head.substr(0, at);
-  const size_t sp1 = line.find(' '), sp2 = line.rfind(' ');
-  if (sp1 == std::string::npos || sp2 <= sp1) return false;
-  r->method = line.substr(0, sp1);
-  const std::string target = line.substr(sp1 + 1, sp2 - sp1 - 1);
-  if (line.compare(sp2 + 1, 5, "HTTP/") != 0 || target.empty() || target[0] != '/') return false;
-  const size_t q = target.find('?');
-  if (!url_decode(target.substr(0, q), &r->path).ok()) return false;
-  if (q != std::string::npos) {
-    const std::string qs = target.substr(q + 1);
-    for (size_t from = 0; from <= qs.size();) {
-      size_t amp = qs.find('&', from);
-      if (amp == std::string::npos) amp = qs.size();
-      const std::string pair = qs.substr(from, amp - from);
-      const size_t eq = pair.find('=');
-      std::string k, v;
-      if (!url_decode(pair.substr(0, eq), &k).ok()) return false;
-      if (eq != std::string::npos && !url_decode(pair.substr(eq + 1), &v).ok()) return false;
-      if (!k.empty()) r->query[k] = v;
-      from = amp + 1;
-    }
+Status parse_query(const std::string& qs, Request* r) {
+  for (size_t from = 0; from <= qs.size();) {
+    size_t amp = qs.find('&', from);
+    if (amp == std::string::npos) amp = qs.size();
+    const std::string pair = qs.substr(from, amp - from);
+    const size_t eq = pair.find('=');
+    std::string k, v;
+    WEAVER_RETURN_IF_ERROR(url_decode(pair.substr(0, eq), &k));
+    if (eq != std::string::npos) WEAVER_RETURN_IF_ERROR(url_decode(pair.substr(eq + 1), &v));
+    if (!k.empty()) r->query[k] = v;
+    from = amp + 1;
   }
-  while (at != std::string::npos) {
-    const size_t next = head.find("\r\n", at + 2);
-    const std::string h = head.substr(at + 2, next == std::string::npos ? next : next - at - 2);
-    const size_t colon = h.find(':');
-    if (colon == std::string::npos) return false;
-    size_t v = colon + 1;
-    while (v < h.size() && (h[v] == ' ' || h[v] == '\t')) ++v;
-    r->headers[lower(h.substr(0, colon))] = h.substr(v);
-    at = next;
-  }
-  return true;
+  return Status::Ok();
 }
 
 bool send_all(int fd, const std::string& data) {
@@ -104,13 +102,14 @@ bool send_all(int fd, const std::string& data) {
   return true;
 }
 
-void respond(int fd, const Response& r) {
+bool respond(int fd, const Response& r, bool keep_alive) {
   std::string head = "HTTP/1.1 " + std::to_string(r.status) + " " + reason(r.status) + "\r\n";
   head += "Content-Type: " + r.content_type + "\r\n";
   head += "Content-Length: " + std::to_string(r.body.size()) + "\r\n";
   head += "Cache-Control: " + r.cache_control + "\r\n";
-  head += "X-Content-Type-Options: nosniff\r\nConnection: close\r\n\r\n";
-  if (send_all(fd, head)) send_all(fd, r.body);
+  head += "X-Content-Type-Options: nosniff\r\n";
+  head += keep_alive ? "Connection: keep-alive\r\n\r\n" : "Connection: close\r\n\r\n";
+  return send_all(fd, head) && send_all(fd, r.body);
 }
 
 }  // namespace
@@ -135,6 +134,52 @@ Status url_decode(const std::string& in, std::string* out) {
       *out += in[i];
     }
   }
+  return Status::Ok();
+}
+
+Status parse_request_head(const std::string& head, Request* r, bool* too_large) {
+  *too_large = false;
+  *r = Request{};
+  const size_t line_end = std::min(head.find("\r\n"), head.size());
+  if (line_end > kMaxRequestLine) {
+    *too_large = true;
+    return Status::InvalidArgument("the request line is longer than 8 KiB");
+  }
+  if (head.size() - line_end > kMaxHeaders) {
+    *too_large = true;
+    return Status::InvalidArgument("the headers are longer than 32 KiB");
+  }
+  const std::string line = head.substr(0, line_end);
+  const size_t sp1 = line.find(' '), sp2 = line.rfind(' ');
+  if (sp1 == std::string::npos || sp2 <= sp1) return Status::InvalidArgument("malformed request");
+  r->method = line.substr(0, sp1);
+  const std::string target = line.substr(sp1 + 1, sp2 - sp1 - 1);
+  const std::string version = line.substr(sp2 + 1);
+  if (version != "HTTP/1.1" && version != "HTTP/1.0") {
+    return Status::InvalidArgument("not HTTP/1.0 or HTTP/1.1");
+  }
+  if (target.empty() || target[0] != '/') {
+    return Status::InvalidArgument("the target is not a path");
+  }
+  const size_t q = target.find('?');
+  WEAVER_RETURN_IF_ERROR(url_decode(target.substr(0, q), &r->path));
+  if (q != std::string::npos) WEAVER_RETURN_IF_ERROR(parse_query(target.substr(q + 1), r));
+  for (size_t at = line_end; at < head.size();) {
+    size_t next = head.find("\r\n", at + 2);
+    if (next == std::string::npos) next = head.size();
+    const std::string h = head.substr(at + 2, next - at - 2);
+    const size_t colon = h.find(':');
+    if (colon == std::string::npos || colon == 0) {
+      return Status::InvalidArgument("malformed header line");
+    }
+    size_t v = colon + 1;
+    while (v < h.size() && (h[v] == ' ' || h[v] == '\t')) ++v;
+    r->headers[lower(h.substr(0, colon))] = h.substr(v);
+    at = next;
+  }
+  const auto c = r->headers.find("connection");
+  const std::string connection = c == r->headers.end() ? "" : lower(c->second);
+  r->keep_alive = version == "HTTP/1.1" ? connection != "close" : connection == "keep-alive";
   return Status::Ok();
 }
 
@@ -188,39 +233,50 @@ void Server::worker(const Handler& handler) {
 }
 
 void Server::answer(int fd, const Handler& handler) {
-  std::string head, body;
-  int status = 0;
-  if (!read_head(fd, &head, &body, &status)) {
-    if (status != 0) respond(fd, error_response(status, reason(status)));
-    return;
-  }
-  Request r;
-  if (!parse_head(head, &r)) return respond(fd, error_response(400, "malformed request"));
-  uint64_t length = 0;
-  const auto cl = r.headers.find("content-length");
-  if (cl != r.headers.end()) {
-    char* end = nullptr;
-    length = std::strtoull(cl->second.c_str(), &end, 10);
-    if (cl->second.empty() || *end != '\0') {
-      return respond(fd, error_response(400, "bad Content-Length"));
+  Reader in(fd);
+  for (int served = 0; served < o_.max_requests && !stopping_; ++served) {
+    // Between two requests a client may idle only a little: the thread is
+    // what the next connection waits for.
+    if (served > 0 && !in.pending()) {
+      pollfd p{fd, POLLIN, 0};
+      if (::poll(&p, 1, o_.idle_ms) <= 0) return;
     }
+    std::string head;
+    int status = 0;
+    if (!in.head(&head, &status)) {
+      if (status != 0) respond(fd, error_response(status, reason(status)), false);
+      return;
+    }
+    Request r;
+    bool too_large = false;
+    Status st = parse_request_head(head, &r, &too_large);
+    if (!st.ok())
+      return (void)respond(fd, error_response(too_large ? 431 : 400, st.message()), false);
+    uint64_t length = 0;
+    const auto cl = r.headers.find("content-length");
+    if (cl != r.headers.end()) {
+      char* end = nullptr;
+      length = std::strtoull(cl->second.c_str(), &end, 10);
+      if (cl->second.empty() || *end != '\0' || !std::isdigit(uint8_t(cl->second[0]))) {
+        return (void)respond(fd, error_response(400, "bad Content-Length"), false);
+      }
+    }
+    if (r.headers.count("transfer-encoding")) {
+      return (void)respond(
+          fd, error_response(400, "chunked bodies are not taken: send Content-Length"), false);
+    }
+    if (length > o_.max_body) {
+      return (void)respond(fd,
+                           error_response(413, "the body is larger than " +
+                                                   std::to_string(o_.max_body >> 20) + " MiB"),
+                           false);
+    }
+    if (!in.body(length, &r.body)) {
+      return (void)respond(fd, error_response(408, "the body did not arrive"), false);
+    }
+    const bool keep = r.keep_alive && served + 1 < o_.max_requests && !stopping_;
+    if (!respond(fd, handler(r), keep) || !keep) return;
   }
-  if (r.headers.count("transfer-encoding")) {
-    return respond(fd, error_response(400, "chunked bodies are not taken: send Content-Length"));
-  }
-  if (length > o_.max_body) {
-    return respond(fd, error_response(413, "the body is larger than " +
-                                               std::to_string(o_.max_body >> 20) + " MiB"));
-  }
-  char buf[1 << 16];
-  while (body.size() < length) {
-    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
-    if (n <= 0) return respond(fd, error_response(408, "the body did not arrive"));
-    body.append(buf, size_t(n));
-  }
-  body.resize(length);
-  r.body = std::move(body);
-  respond(fd, handler(r));
 }
 
 }  // namespace weaver::serve

@@ -1,8 +1,11 @@
 // A small HTTP/1.1 server on POSIX sockets, for `weaver serve`: a listening
-// socket and a pool of threads, each accepting a connection, reading one
-// request (request line, headers, a body of Content-Length bytes) and
-// writing one response, then closing it.  Bounded everywhere: the head of a
-// request, its body, and how long a client may take to send them.
+// socket and a pool of threads, each accepting a connection and answering
+// its requests (request line, headers, a body of Content-Length bytes) one
+// after another while the client keeps it alive.  Bounded everywhere: the
+// request line (8 KiB), the headers (32 KiB), the body, the requests a
+// connection may make, the connections served at once (the threads; the
+// rest wait in the kernel's queue), and how long a client may take to send
+// a request or stay idle between two.
 #pragma once
 
 #include <atomic>
@@ -21,7 +24,18 @@ struct Request {
   std::map<std::string, std::string> query;    // decoded ?a=1&b=2
   std::map<std::string, std::string> headers;  // names in lower case
   std::string body;
+  bool keep_alive = true;  // HTTP/1.1 unless "Connection: close"
 };
+
+// Limits of a request's head.
+inline constexpr size_t kMaxRequestLine = 8 << 10;
+inline constexpr size_t kMaxHeaders = 32 << 10;
+
+// Parses a request's head (the bytes before "\r\n\r\n"): its line, target
+// and headers into *r.  InvalidArgument saying what is wrong, for a reply
+// of 400 (or 431 when a limit is passed: *too_large).  What the fuzz target
+// fuzz/http_request_fuzz.cc feeds.
+Status parse_request_head(const std::string& head, Request* r, bool* too_large);
 
 struct Response {
   int status = 200;
@@ -39,6 +53,8 @@ struct ServerOptions {
   int threads = 4;
   uint64_t max_body = 64ull << 20;  // a POST of more is refused (413)
   int timeout_ms = 10000;           // to read a request, and to write its answer
+  int idle_ms = 1000;               // a kept-alive connection idle longer is closed
+  int max_requests = 1000;          // on one connection
 };
 
 class Server {

@@ -11,6 +11,7 @@ import json
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import threading
@@ -18,6 +19,10 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from picture import pixel, read_png, viridis  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "src",
+                                "api", "python"))
+import weaver  # noqa: E402  (its Client needs no library)
 
 weaver_bin, work = sys.argv[1:3]
 shutil.rmtree(work, ignore_errors=True)
@@ -158,6 +163,65 @@ try:
     if status != 200 or not kind.startswith("text/html") or b"/api/tile/" not in page \
             or b"http://" in page.replace(b"http://127", b""):
         fail(f"the page: status {status}, {kind}, or it fetches from elsewhere")
+
+    # The raw protocol: keep-alive, pipelining, limits, malformed heads, and
+    # a client that sends nothing never holds up the others.
+    def raw(data, read_all=True):
+        with socket.create_connection(("127.0.0.1", port), timeout=20) as so:
+            so.sendall(data)
+            got = b""
+            while read_all:
+                chunk = so.recv(65536)
+                if not chunk:
+                    break
+                got += chunk
+            return got
+
+    idle = socket.create_connection(("127.0.0.1", port), timeout=20)
+    t0 = time.monotonic()
+    api("/api/stat")
+    if time.monotonic() - t0 > 5:
+        fail("an idle connection held up another client")
+    two = raw(b"GET /api/element/1 HTTP/1.1\r\nHost: x\r\n\r\n"
+              b"GET /api/element/2 HTTP/1.1\r\nConnection: close\r\n\r\n")
+    if two.count(b"HTTP/1.1 200 OK") != 2 or b"Connection: keep-alive" not in two:
+        fail(f"two pipelined requests: {two[:300]!r}")
+    for data, want in ((b"GARBAGE\r\n\r\n", b" 400 "),
+                       (b"GET /api/stat HTTP/2.0\r\n\r\n", b" 400 "),
+                       (b"GET " + b"/a" * 5000 + b" HTTP/1.1\r\n\r\n", b" 431 "),
+                       (b"GET / HTTP/1.1\r\n" + b"X-Long: " + b"y" * 40000 + b"\r\n\r\n",
+                        b" 431 "),
+                       (b"GET / HTTP/1.1\r\nno colon here\r\n\r\n", b" 400 "),
+                       (b"POST /api/points HTTP/1.1\r\nContent-Length: -5\r\n\r\n", b" 400 "),
+                       (b"POST /api/points HTTP/1.1\r\nTransfer-Encoding: chunked\r\n\r\n",
+                        b" 400 ")):
+        got = raw(data)
+        if want not in got.split(b"\r\n")[0] or b'{"error": ' not in got:
+            fail(f"{data[:40]!r}: {got[:200]!r}")
+    idle.close()
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
+    for i in range(50):
+        conn.request("GET", f"/api/element/{i}")
+        r = conn.getresponse()
+        r.read()
+        if r.status != 200 or r.getheader("Connection") != "keep-alive":
+            fail(f"keep-alive request {i}: {r.status} {r.getheader('Connection')}")
+    conn.close()
+
+    # The Python module's client: the same answers, errors as WeaverError.
+    client = weaver.Client(f"http://127.0.0.1:{port}")
+    if client.element(7) != api("/api/element/7") or client.stat() != api("/api/stat"):
+        fail("weaver.Client answers otherwise")
+    if client.points([(5000, 5000, 10)], query="material", units="m")[0]["status"] != "inside":
+        fail("weaver.Client.points")
+    if read_png(client.tile("z", 1000, 0, 0, 0, color="vs"))[:2] != (256, 256):
+        fail("weaver.Client.tile")
+    try:
+        client.element(10 ** 9)
+        fail("weaver.Client.element past the end did not raise")
+    except weaver.WeaverError as e:
+        if e.status != 404 or "does not exist" not in str(e):
+            fail(f"weaver.Client's error: {e.status} {e}")
 
     # Clients while a writer re-meshes the served database: each answer is
     # the old mesh's or the new one's, and after the commit the new one's.

@@ -14,14 +14,28 @@ where the WEAVER_LIBRARY environment variable points.
             ...
 
 Coordinates are ticks; db.units gives metres per tick and the origin.
+
+A database served by `weaver serve` is read over HTTP by Client, with the
+JSON answers of `weaver query --format json` (no library needed there):
+
+    c = weaver.Client("http://127.0.0.1:8080")
+    c.stat()["elements"]
+    c.locate(40000, 51000, 300, units="m")["vs"]
+    c.points([(1000, 2000, 300), (5000, 5000, 10)], query="material", units="m")
+    c.element(5), c.node(7), c.neighbors(5, kinds="all"), c.range((0, 0, 0, 99, 99, 99))
+    png = c.tile("z", 1000, 2, 1, 3, color="vs")
 """
 
 import ctypes
 import ctypes.util
+import json
 import os
+import urllib.error
+import urllib.parse
+import urllib.request
 from collections import namedtuple
 
-__all__ = ["Database", "WeaverError", "Hit", "Element", "Node", "Neighbor"]
+__all__ = ["Database", "Client", "WeaverError", "Hit", "Element", "Node", "Neighbor"]
 
 
 class WeaverError(RuntimeError):
@@ -256,3 +270,73 @@ class Database:
                 yield _node(n)
         finally:
             self._lib.weaver_node_iter_free(it)
+
+
+class Client:
+    """The JSON API of `weaver serve` at url; each method one request, its
+    answer as Python values.  A server's error is a WeaverError with its
+    message (and .status, the HTTP status)."""
+
+    def __init__(self, url="http://127.0.0.1:8080", timeout=60):
+        self.url = url.rstrip("/")
+        self.timeout = timeout
+
+    def _get(self, path, params=None, body=None, raw=False):
+        query = urllib.parse.urlencode({k: v for k, v in (params or {}).items() if v is not None})
+        request = urllib.request.Request(self.url + path + ("?" + query if query else ""),
+                                         data=body, method="POST" if body is not None else "GET")
+        try:
+            with urllib.request.urlopen(request, timeout=self.timeout) as r:
+                data = r.read()
+        except urllib.error.HTTPError as e:
+            try:
+                message = json.loads(e.read())["error"]
+            except (ValueError, KeyError):
+                message = str(e)
+            error = WeaverError(message)
+            error.status = e.code
+            raise error from None
+        return data if raw else json.loads(data)
+
+    def stat(self):
+        return self._get("/api/stat")
+
+    def locate(self, x, y, z, units=None, geo=False):
+        return self._get("/api/locate", {"x": x, "y": y, "z": z, "units": units,
+                                         "geo": 1 if geo else None})
+
+    def points(self, points, query="locate", units=None, geo=False):
+        """Rows for many points at once, in input order ("status" says
+        inside, outside or bad)."""
+        body = json.dumps([list(p) for p in points]).encode()
+        return self._get("/api/points", {"query": query, "units": units,
+                                         "geo": 1 if geo else None}, body)
+
+    def element(self, element_id, units=None):
+        return self._get(f"/api/element/{int(element_id)}", {"units": units})
+
+    def node(self, node_id, units=None):
+        return self._get(f"/api/node/{int(node_id)}", {"units": units})
+
+    def neighbors(self, element_id, kinds=None, units=None):
+        """kinds: "faces" (default), "edges", "corners" or "all", or several
+        joined by commas."""
+        return self._get(f"/api/neighbors/{int(element_id)}", {"kinds": kinds, "units": units})
+
+    def node_elements(self, node_id, units=None):
+        return self._get(f"/api/node-elements/{int(node_id)}", {"units": units})
+
+    def depends(self, node_id, units=None):
+        return self._get(f"/api/depends/{int(node_id)}", {"units": units})
+
+    def range(self, box, listed=False, units=None):
+        return self._get("/api/range", {"box": ",".join(str(v) for v in box),
+                                        "list": 1 if listed else None, "units": units})
+
+    def section(self, axis, position, color="level"):
+        return self._get(f"/api/section/{axis}/{position}", {"color": color})
+
+    def tile(self, axis, position, zoom, x, y, color="level", lo=None, hi=None):
+        """The PNG bytes of one tile."""
+        return self._get(f"/api/tile/{axis}/{position}/{zoom}/{x}/{y}.png",
+                         {"color": color, "min": lo, "max": hi}, raw=True)
