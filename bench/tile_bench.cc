@@ -71,7 +71,7 @@ int tile_main(int argc, char** argv) {
                      {"png bytes", std::to_string(bytes)}});
   };
   emit("section (domain extent)", -1, {section_s}, 0);
-  emit("colour range (512x512)", -1, {range_s}, 0);
+  emit("colour range (256x256)", -1, {range_s}, 0);
   std::mt19937_64 rng(7);
   for (const int zoom : {0, 3, 6, 9}) {
     std::vector<double> secs;

@@ -25,6 +25,7 @@ Status LeafWindow::page_for(uint64_t key, Page** page, uint64_t* leaf_rank) {
     if (pages_[i].used < pages_[oldest].used) oldest = i;
   }
   Page& p = pages_[oldest];
+  ++decodes_;
   WEAVER_RETURN_IF_ERROR(
       table_.leaf_keys(key, &p.keys, &p.first_rank, payloads_ ? &p.payloads : nullptr));
   p.used = ++clock_;

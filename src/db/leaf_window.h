@@ -40,6 +40,9 @@ class LeafWindow {
   // decoding whole leaves.  For a few keys (one question) that is cheaper;
   // for a batch that lands many keys in each leaf, the decoded leaf is.
   void set_sparse(bool sparse) { sparse_ = sparse; }
+  bool sparse() const { return sparse_; }
+  // Leaf pages decoded so far: with the keys asked, how dense a batch is.
+  uint64_t decodes() const { return decodes_; }
 
  private:
   // One decoded leaf: its keys, and every key in [keys.front(), covers_to]
@@ -64,7 +67,8 @@ class LeafWindow {
   bool sparse_ = false;
   std::array<Page, kPages> pages_;
   uint64_t clock_ = 0;
-  size_t last_ = 0;                // the page used last: tried first
+  size_t last_ = 0;  // the page used last: tried first
+  uint64_t decodes_ = 0;
   std::vector<std::byte> single_;  // a payload read outside the pages
 };
 

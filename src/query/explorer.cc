@@ -12,6 +12,14 @@ namespace {
 // mode): a few questions land in different leaves, and decoding a whole
 // leaf for each costs more than two descents.
 constexpr size_t kDenseBatch = 64;
+// A larger batch starts dense, and is watched a window of points at a time:
+// when a window needed a page decoded for fewer than 8 points on average
+// (points spread over a huge table: a map tile of a whole section, a
+// million random points in a billion leaves), decoding whole pages costs
+// more than two descents a point (175 against 50 ms for a zoom-0 tile of
+// the 2 Hz basin), and the rest of the batch is asked key by key.
+constexpr size_t kDensityWindow = 1024;
+constexpr uint64_t kSparseDecodes = kDensityWindow / 8;
 
 }  // namespace
 
@@ -48,6 +56,7 @@ void Explorer::sort_points(const Coord* p, size_t n, Hit* out, Valid valid, KeyO
 Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
   sort_points(p, n, out, pixel_is_valid, pixel_key);
   octant_window_->set_sparse(n < kDenseBatch);
+  uint64_t decodes_before = octant_window_->decodes();
   LeafWindow::Floor f;
   MeshElement m;
   // The walk reads only the sorted pairs: the points themselves, in input
@@ -57,6 +66,11 @@ Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
   for (size_t k = 0; k < order_.size(); ++k) {
     const auto [key, i] = order_[k];
     if (k + kAhead < order_.size()) __builtin_prefetch(&out[order_[k + kAhead].second], 1);
+    if (k % kDensityWindow == kDensityWindow - 1 && !octant_window_->sparse()) {
+      const uint64_t decodes = octant_window_->decodes();
+      if (decodes - decodes_before > kSparseDecodes) octant_window_->set_sparse(true);
+      decodes_before = decodes;
+    }
     WEAVER_RETURN_IF_ERROR(octant_window_->floor(key, &f));
     // The floor leaf holds the pixel if the pixel's key is in its subtree;
     // if not, the pixel is in a hole of the domain.

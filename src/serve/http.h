@@ -54,7 +54,7 @@ struct ServerOptions {
   uint64_t max_body = 64ull << 20;  // a POST of more is refused (413)
   int timeout_ms = 10000;           // to read a request, and to write its answer
   int idle_ms = 1000;               // a kept-alive connection idle longer is closed
-  int max_requests = 1000;          // on one connection
+  int max_requests = 100000;        // on one connection
 };
 
 class Server {

@@ -46,7 +46,7 @@ struct FieldRange {
   double min = 0, max = 0;
   uint64_t samples = 0;  // points of the section that hit an element
 };
-// The range of a field over the section, sampled on a 512 x 512 grid: the
+// The range of a field over the section, sampled on a 256 x 256 grid: the
 // colour scale every tile of the section shares.
 Status field_range(Explorer& ex, const Section& s, const std::string& field, FieldRange* r);
 
