@@ -39,7 +39,7 @@ table{border-collapse:collapse}td{padding:1px 6px 1px 0;vertical-align:top}
 const $ = id => document.getElementById(id);
 const map = $("map"), axesCanvas = $("axes");
 let stat = null, sec = null;
-const view = {axis: "z", at: 0, color: "level", zoom: 0, cu: 0.5, cv: 0.5};
+const view = {axis: "z", at: 0, color: "level", zoom: 0, cu: 0.5, cv: 0.5, sel: ""};
 const VIRIDIS = [[68,1,84],[72,40,120],[62,74,137],[49,104,142],[38,130,142],[31,158,137],[53,183,121],[110,206,88],[181,222,43],[253,231,37]];
 const units = {level: "", edge: "m", vp: "m/s", vs: "m/s", rho: "kg/m^3", qp: "", qs: ""};
 
@@ -55,7 +55,7 @@ function readHash() {
 }
 function writeHash(push) {
   const h = new URLSearchParams();
-  for (const [k, v] of Object.entries(view)) h.set(k, typeof v === "number" ? +v.toPrecision(8) : v);
+  for (const [k, v] of Object.entries(view)) if (v !== "") h.set(k, typeof v === "number" ? +v.toPrecision(8) : v);
   const url = "#" + h.toString();
   if (url !== location.hash) (push ? history.pushState : history.replaceState).call(history, null, "", url);
 }
@@ -144,10 +144,11 @@ function worldAt(px, py) {
 }
 function fmt(p) { return p.map(v => (+v.toFixed(2)).toString()).join(", "); }
 async function select(id) {
+  view.sel = String(id); writeHash(false);
   try {
     const e = await json(`/api/element/${id}?units=m`);
     const nb = await json(`/api/neighbors/${id}?units=m`);
-    let html = `<h3>element ${e.element}</h3><table>`;
+    let html = `<h3 id="selected">element ${e.element}</h3><table id="element">`;
     for (const [k, v] of Object.entries(e)) if (k !== "element") html += `<tr><td>${k}</td><td>${Array.isArray(v) ? v.join(" ") : v}</td></tr>`;
     html += `</table><p>face neighbours:</p><table>`;
     for (const n of nb) html += `<tr><td>${n.across}</td><td><span class="id" data-id="${n.element}">${n.element}</span></td><td>level ${n.level}</td></tr>`;
@@ -200,7 +201,7 @@ $("at").onchange = () => { view.at = Number($("at").value); loadSection(true); }
 $("at").oninput = () => { $("atn").value = $("at").value; };
 $("atn").onchange = () => { view.at = Number($("atn").value); loadSection(true); };
 $("color").onchange = () => { view.color = $("color").value; loadSection(true); };
-window.addEventListener("popstate", () => { readHash(); loadSection(false); });
+window.addEventListener("popstate", () => { readHash(); loadSection(false).then(() => { if (view.sel !== "") select(view.sel); }); });
 window.addEventListener("resize", draw);
 (async () => {
   try { stat = await json("/api/stat"); } catch (e) { $("info").textContent = e.message; return; }
@@ -209,7 +210,8 @@ window.addEventListener("resize", draw);
   readHash();
   if (!stat.fields.includes(view.color)) view.color = stat.fields.includes("vs") ? "vs" : "level";
   if (!location.hash) view.color = stat.fields.includes("vs") ? "vs" : "level";
-  loadSection(false);
+  await loadSection(false);
+  if (view.sel !== "") select(view.sel);  // a shared link's selected element
 })();
 </script></body></html>
 )PAGE";
