@@ -69,6 +69,10 @@ class BTree final : public Store {
 
   // rank() and get() in one descent: the key's position, and whether it is there.
   Status rank_exact(uint64_t key, uint64_t* rank, bool* present);
+  // floor() and the rank of the key it finds in one descent (a point query
+  // that wants the element's id and material: half the descents of the two).
+  Status floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
+                    bool* found);
 
   // The leaf where key is or would be: all its keys, decoded, and the rank of
   // its first record.  For callers that rank many nearby keys at once

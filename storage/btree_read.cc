@@ -191,6 +191,54 @@ Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, boo
   return Status::Ok();
 }
 
+Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
+                         bool* found) {
+  if (shards_) {  // each shard ranks its own keys: the set adds them up
+    WEAVER_RETURN_IF_ERROR(shards_->floor(key, key_out, payload_out, found));
+    return *found ? shards_->rank_exact(*key_out, rank, found) : Status::Ok();
+  }
+  *found = false;
+  seal_tail();
+  if (height_ == 0) return Status::Ok();
+  uint32_t dir_leaf = 0, ub = 0;
+  if (const std::byte* d = peek_plain_leaf(key, &dir_leaf)) {
+    const page::LeafView v = leaf(d);
+    ub = page::upper_bound(v.key_at(0), page::count(d), key);
+    if (ub > 0) {
+      *found = true;
+      *key_out = v.key(ub - 1);
+      *rank = dir_.first_rank(dir_leaf) + ub - 1;
+      if (payload_out != nullptr) std::memcpy(payload_out, v.value(ub - 1), payload_);
+      return Status::Ok();
+    }
+  }
+  PageRef lf;
+  uint64_t below = 0, before = 0;  // the key at ub - 1; the records before the leaf
+  WEAVER_RETURN_IF_ERROR(locate(key, false, &lf, &dir_leaf, &before));
+  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, true, &ub, &below, nullptr, payload_out != nullptr));
+  if (ub == 0) {
+    // The floor ends the preceding leaf (or there is none): its rank is the
+    // one just before this leaf's first record.
+    if (before == 0) return Status::Ok();
+    lf.reset();
+    bool first_leaf = false;
+    WEAVER_RETURN_IF_ERROR(preceding_leaf(key, dir_leaf, &lf, &first_leaf));
+    if (first_leaf) return Status::Ok();
+    ub = page::count(lf.data());
+    WEAVER_RETURN_IF_ERROR(leaf_key(lf, ub - 1, &below));
+    *found = true;
+    *key_out = below;
+    *rank = before - 1;
+    if (payload_out != nullptr) return leaf_payload(lf, ub - 1, payload_out);
+    return Status::Ok();
+  }
+  *found = true;
+  *key_out = below;
+  *rank = before + ub - 1;
+  if (payload_out != nullptr) return leaf_payload(lf, ub - 1, payload_out);
+  return Status::Ok();
+}
+
 Status BTree::preceding_leaf(uint64_t key, uint32_t dir_leaf, PageRef* lf, bool* first_leaf) {
   *first_leaf = false;
   if (dir_leaf != kNoDirLeaf) {

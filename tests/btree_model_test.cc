@@ -76,6 +76,17 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
       ASSERT_EQ(got_key, it->first);
       ASSERT_TRUE(std::equal(it->second.begin(), it->second.end(), buf.begin()));
     }
+    // floor_rank: the same floor, and its rank in the model.
+    uint64_t rank = 0, rank_key = 0;
+    bool rank_found = false;
+    std::vector<std::byte> rank_buf(GetParam().payload + 1);
+    ASSERT_OK(tree_->floor_rank(k, &rank_key, rank_buf.data(), &rank, &rank_found));
+    ASSERT_EQ(rank_found, found) << "floor_rank " << k;
+    if (found) {
+      ASSERT_EQ(rank_key, got_key) << "floor_rank " << k;
+      ASSERT_EQ(rank, order_.order_of_key(got_key)) << "floor_rank " << k;
+      ASSERT_TRUE(std::equal(it->second.begin(), it->second.end(), rank_buf.begin()));
+    }
   }
 
   // A cursor, and a keys-only cursor beside it.

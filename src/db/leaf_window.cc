@@ -44,11 +44,10 @@ Status LeafWindow::page_for(uint64_t key, Page** page, uint64_t* leaf_rank) {
 
 Status LeafWindow::sparse_floor(uint64_t key, Floor* out) {
   single_.resize(table_.payload_size() + 1);
-  WEAVER_RETURN_IF_ERROR(
-      table_.floor(key, &out->key, payloads_ ? single_.data() : nullptr, &out->found));
-  if (!out->found) return Status::Ok();
-  out->payload = payloads_ ? single_.data() : nullptr;
-  return table_.rank(out->key, &out->rank);
+  WEAVER_RETURN_IF_ERROR(table_.floor_rank(key, &out->key, payloads_ ? single_.data() : nullptr,
+                                           &out->rank, &out->found));
+  out->payload = out->found && payloads_ ? single_.data() : nullptr;
+  return Status::Ok();
 }
 
 Status LeafWindow::floor(uint64_t key, Floor* out) {
