@@ -157,38 +157,8 @@ Status BTree::get(uint64_t key, std::byte* payload_out, bool* found) {
 
 Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, bool* found) {
   if (shards_) return shards_->floor(key, key_out, payload_out, found);
-  *found = false;
-  seal_tail();
-  if (height_ == 0) return Status::Ok();
-  uint32_t dir_leaf = 0, ub = 0;
-  if (const std::byte* d = peek_plain_leaf(key, &dir_leaf)) {
-    const page::LeafView v = leaf(d);
-    ub = page::upper_bound(v.key_at(0), page::count(d), key);
-    if (ub > 0) {
-      *found = true;
-      *key_out = v.key(ub - 1);
-      if (payload_out != nullptr) std::memcpy(payload_out, v.value(ub - 1), payload_);
-      return Status::Ok();
-    }
-  }
-  PageRef lf;
-  uint64_t below = 0;  // the key at ub - 1
-  WEAVER_RETURN_IF_ERROR(locate(key, false, &lf, &dir_leaf));
-  WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, true, &ub, &below, nullptr, payload_out != nullptr));
-  if (ub == 0) {
-    // Every key here is > key (a separator went stale when its key was
-    // erased): the floor is the last record of the preceding leaf.
-    lf.reset();
-    bool first_leaf = false;
-    WEAVER_RETURN_IF_ERROR(preceding_leaf(key, dir_leaf, &lf, &first_leaf));
-    if (first_leaf) return Status::Ok();
-    ub = page::count(lf.data());
-    WEAVER_RETURN_IF_ERROR(leaf_key(lf, ub - 1, &below));
-  }
-  *found = true;
-  *key_out = below;
-  if (payload_out != nullptr) return leaf_payload(lf, ub - 1, payload_out);
-  return Status::Ok();
+  uint64_t rank = 0;  // counted on the way down anyway
+  return floor_rank(key, key_out, payload_out, &rank, found);
 }
 
 Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
