@@ -32,6 +32,7 @@ constexpr char kUsage[] =
     "  /api/range?box=X0,Y0,Z0,X1,Y1,Z1[&list=1]\n"
     "  /api/section/AXIS/POSITION?color=F  a section's extent and colour range\n"
     "  /api/tile/AXIS/POSITION/ZOOM/X/Y.png?color=F[&min=&max=]\n"
+    "  /api/export.vtu?box=X0,Y0,Z0,X1,Y1,Z1  a region (metres) as weaver export writes it\n"
     "Example: weaver serve basin.db, then open http://127.0.0.1:8080/\n";
 
 serve::Server* g_server = nullptr;

@@ -108,6 +108,9 @@ bool respond(int fd, const Response& r, bool keep_alive) {
   head += "Content-Type: " + r.content_type + "\r\n";
   head += "Content-Length: " + std::to_string(r.body.size()) + "\r\n";
   head += "Cache-Control: " + r.cache_control + "\r\n";
+  if (!r.attachment.empty()) {
+    head += "Content-Disposition: attachment; filename=\"" + r.attachment + "\"\r\n";
+  }
   head += "X-Content-Type-Options: nosniff\r\n";
   head += keep_alive ? "Connection: keep-alive\r\n\r\n" : "Connection: close\r\n\r\n";
   // One send for a small answer: two would wait on the client's delayed ACK.

@@ -38,10 +38,18 @@ inline constexpr size_t kMaxHeaders = 32 << 10;
 Status parse_request_head(const std::string& head, Request* r, bool* too_large);
 
 struct Response {
-  int status = 200;
-  std::string content_type = "application/json";
+  Response(int status_ = 200, std::string type = "application/json", std::string body_ = "",
+           std::string cache = "no-store", std::string attachment_ = "")
+      : status(status_),
+        content_type(std::move(type)),
+        body(std::move(body_)),
+        cache_control(std::move(cache)),
+        attachment(std::move(attachment_)) {}
+  int status;
+  std::string content_type;
   std::string body;
-  std::string cache_control = "no-store";
+  std::string cache_control;
+  std::string attachment;  // a file name: the browser saves the body as that file
 };
 
 // A response with status and a JSON body {"error": message}.

@@ -33,7 +33,7 @@ table{border-collapse:collapse}td{padding:1px 6px 1px 0;vertical-align:top}
 <span id="where"></span>
 </header>
 <main><div id="map"><canvas id="axes"></canvas></div>
-<aside><div id="info"></div><canvas id="bar" width="300" height="46"></canvas><div id="note"></div><div id="sel">Click the map to select an element.</div></aside></main>
+<aside><div id="info"></div><canvas id="bar" width="300" height="46"></canvas><div id="note"></div><div id="sel">Click the map to select an element; shift and drag to download a region as vtu.</div></aside></main>
 <script>
 "use strict";
 const $ = id => document.getElementById(id);
@@ -156,11 +156,39 @@ async function select(id) {
   } catch (err) { $("sel").textContent = err.message; }
 }
 $("sel").addEventListener("click", ev => { const id = ev.target.dataset && ev.target.dataset.id; if (id) select(id); });
-let drag = null, moved = false;
-map.addEventListener("pointerdown", ev => { drag = {x: ev.clientX, y: ev.clientY, cu: view.cu, cv: view.cv}; moved = false; map.setPointerCapture(ev.pointerId); });
+let drag = null, moved = false, boxing = null;
+const boxDiv = document.createElement("div");
+boxDiv.style.cssText = "position:absolute;border:2px dashed #d00;pointer-events:none;display:none";
+map.appendChild(boxDiv);
+map.addEventListener("pointerdown", ev => {
+  map.setPointerCapture(ev.pointerId);
+  const r = map.getBoundingClientRect();
+  if (ev.shiftKey) { boxing = {x: ev.clientX - r.left, y: ev.clientY - r.top}; return; }
+  drag = {x: ev.clientX, y: ev.clientY, cu: view.cu, cv: view.cv}; moved = false;
+});
+// Shift and drag: the elements the box cuts on this plane, downloaded as vtu.
+async function exportBox(a, b) {
+  const p = worldAt(a.x, a.y), q = worldAt(b.x, b.y);
+  const box = [0, 1, 2].map(i => [Math.min(p[i], q[i]), Math.max(p[i], q[i])]);
+  const url = `/api/export.vtu?box=${box.map(v => v[0]).join(",")},${box.map(v => v[1]).join(",")}`;
+  $("sel").textContent = "exporting the region ...";
+  try {
+    const r = await fetch(url);
+    if (!r.ok) throw new Error((await r.json()).error);
+    const a = document.createElement("a");
+    a.href = URL.createObjectURL(await r.blob()); a.download = "region.vtu"; a.click();
+    $("sel").textContent = `region.vtu: (${fmt(box.map(v => v[0]))}) to (${fmt(box.map(v => v[1]))}) m`;
+  } catch (err) { $("sel").textContent = err.message; }
+}
 map.addEventListener("pointermove", ev => {
   const r = map.getBoundingClientRect();
   if (sec) $("where").textContent = `(${fmt(worldAt(ev.clientX - r.left, ev.clientY - r.top))}) m`;
+  if (boxing) {
+    const x = ev.clientX - r.left, y = ev.clientY - r.top;
+    Object.assign(boxDiv.style, {display: "block", left: Math.min(x, boxing.x) + "px", top: Math.min(y, boxing.y) + "px",
+      width: Math.abs(x - boxing.x) + "px", height: Math.abs(y - boxing.y) + "px"});
+    return;
+  }
   if (!drag) return;
   const full = 256 * 2 ** view.zoom;
   if (Math.abs(ev.clientX - drag.x) + Math.abs(ev.clientY - drag.y) > 3) moved = true;
@@ -168,6 +196,12 @@ map.addEventListener("pointermove", ev => {
   draw();
 });
 map.addEventListener("pointerup", async ev => {
+  if (boxing) {
+    const r = map.getBoundingClientRect(), b = {x: ev.clientX - r.left, y: ev.clientY - r.top};
+    const a = boxing; boxing = null; boxDiv.style.display = "none";
+    if (Math.abs(b.x - a.x) + Math.abs(b.y - a.y) > 4) exportBox(a, b);
+    return;
+  }
   drag = null;
   if (moved) return writeHash(false);
   const r = map.getBoundingClientRect(), p = worldAt(ev.clientX - r.left, ev.clientY - r.top);

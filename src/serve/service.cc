@@ -1,11 +1,16 @@
 #include "serve/service.h"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 
+#include "export/export.h"
 #include "serve/tiles.h"
 #include "util/json_string.h"
 
@@ -53,6 +58,16 @@ std::string number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
+}
+
+// A query's "weaver serve: message (see ...)" as the message alone.
+std::string query_message(const std::string& err) {
+  std::string message = err.substr(0, err.find('\n'));
+  const size_t colon = message.find(": ");
+  if (colon != std::string::npos) message = message.substr(colon + 2);
+  const size_t see = message.find(" (see .help");
+  if (see != std::string::npos) message = message.substr(0, see);
+  return message;
 }
 
 Response status_response(const Status& st) {
@@ -129,6 +144,7 @@ Response Service::api(const Request& r, Explorer& ex) {
   if (what == "stat" && parts.size() == 2) return stat(ex);
   if (what == "section") return section(ex, parts, r);
   if (what == "tile") return tile(ex, parts, r);
+  if (what == "export.vtu" && parts.size() == 2) return export_vtu(ex, r);
   if (what == "locate" && parts.size() == 2) {
     for (const char* c : {"x", "y", "z"}) {
       if (!r.query.count(c)) return error_response(400, "locate takes x, y and z");
@@ -169,12 +185,7 @@ Response Service::run(Explorer& ex, std::vector<std::string> words, const Reques
   words.insert(words.end(), {"--format", "json"});
   std::string out, err;
   const int code = query_(ex, words, points, &out, &err);
-  // "weaver serve: message (see ...)" as the message alone.
-  std::string message = err.substr(0, err.find('\n'));
-  const size_t colon = message.find(": ");
-  if (colon != std::string::npos) message = message.substr(colon + 2);
-  const size_t see = message.find(" (see .help");
-  if (see != std::string::npos) message = message.substr(0, see);
+  const std::string message = query_message(err);
   if (code == 0 || (code == 1 && !out.empty())) return {200, "application/json", out};
   if (code == 2) return error_response(400, message);
   const bool missing = message.find("does not exist") != std::string::npos ||
@@ -257,6 +268,47 @@ Response Service::tile(Explorer& ex, const std::vector<std::string>& parts, cons
   if (st.ok()) st = render_tile(ex, s, color, range.min, range.max, int(zoom), x, y, &bytes);
   if (!st.ok()) return status_response(st);
   return {200, "image/png", std::move(bytes)};
+}
+
+Response Service::export_vtu(Explorer& ex, const Request& r) {
+  if (!r.query.count("box")) return error_response(400, "export takes box=X0,Y0,Z0,X1,Y1,Z1");
+  const std::vector<std::string> words = split(r.query.at("box"), ',');
+  ExportOptions o;
+  bool ok = words.size() == 6;
+  for (size_t i = 0; ok && i < 6; ++i) ok = parse_number(words[i], &o.box[i]);
+  if (!ok) return error_response(400, "box is six numbers in metres: X0,Y0,Z0,X1,Y1,Z1");
+  // How many elements first: the answer is held whole.
+  std::vector<std::string> count = {"range"};
+  count.insert(count.end(), words.begin(), words.end());
+  count.insert(count.end(), {"--units", "m", "--format", "json"});
+  std::string out, err;
+  if (query_(ex, count, "", &out, &err) != 0) return error_response(400, query_message(err));
+  const size_t at = out.find("\"count\": ");
+  const uint64_t n = at == std::string::npos ? 0 : std::strtoull(out.c_str() + at + 9, nullptr, 10);
+  if (n == 0) return error_response(404, "no element shares a point with the box");
+  if (n > kMaxExportElements) {
+    return error_response(413, std::to_string(n) + " elements share a point with the box, more " +
+                                   "than " + std::to_string(kMaxExportElements) +
+                                   ": use weaver export --format vtu --box");
+  }
+  // Written by the exporter into a scratch directory of its own, read back.
+  char dir[] = "/tmp/weaver-serve-XXXXXX";
+  if (::mkdtemp(dir) == nullptr) return error_response(500, "cannot make a scratch directory");
+  o.format = ExportFormat::kVtu;
+  o.out = std::string(dir) + "/region.vtu";
+  o.has_box = true;
+  o.memory = memory_;
+  ExportResult result;
+  Status st = export_mesh(db_, o, &result);
+  Response res{200, "application/xml", "", "no-store", "region.vtu"};
+  if (st.ok()) {
+    std::ifstream in(o.out, std::ios::binary);
+    res.body.assign(std::istreambuf_iterator<char>(in), {});
+    if (!in.good() && !in.eof()) st = Status::IOError("reading " + o.out);
+  }
+  std::error_code ec;
+  std::filesystem::remove_all(dir, ec);
+  return st.ok() ? res : status_response(st);
 }
 
 }  // namespace weaver::serve

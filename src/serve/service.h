@@ -16,6 +16,10 @@
 //   GET  /api/section/AXIS/POSITION?color=F   the section's extent and the
 //                                  colour range its tiles share
 //   GET  /api/tile/AXIS/POSITION/ZOOM/X/Y.png?color=F[&min=&max=]
+//   GET  /api/export.vtu?box=X0,Y0,Z0,X1,Y1,Z1   (metres) the elements that
+//                                  share a point with the box, as `weaver
+//                                  export --format vtu --box` writes them
+//                                  (at most kMaxExportElements)
 #pragma once
 
 #include <functional>
@@ -54,11 +58,16 @@ class Service {
   Response stat(Explorer& ex);
   Response section(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
   Response tile(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
+  Response export_vtu(Explorer& ex, const Request& r);
 
   std::string db_;
   MemoryBudget memory_;
   QueryRunner query_;
 };
+
+// A region downloaded as vtu is held in memory whole: at most this many
+// elements (about 100 MB of vtu); larger ones are for `weaver export`.
+inline constexpr uint64_t kMaxExportElements = 1000000;
 
 // The page: one HTML document with its script and style, nothing fetched
 // from elsewhere.

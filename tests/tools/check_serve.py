@@ -1,6 +1,6 @@
 """weaver serve as a client sees it, on 127.0.0.1 only, in loops bounded in
 count and time: every JSON route answers what `weaver query --format json`
-prints; tiles are 256 x 256 PNGs whose pixels have the colour of the element
+prints, and a region as vtu what `weaver export --box` writes; tiles are 256 x 256 PNGs whose pixels have the colour of the element
 at their centre, in the documented tiling; bad requests get the right status
 and one JSON error; clients running while a writer re-meshes the database
 see the old mesh or the new one, never a mix, and the new one once it is
@@ -142,6 +142,16 @@ try:
             matched += 1
         if matched < len(samples) // 2:
             fail(f"tile {zoom}/{tx}/{ty}: only {matched} of {len(samples)} pixels checked")
+
+    # A region as vtu: what weaver export --box writes, byte for byte.
+    box = "20000,30000,0,35000,41000,1500"
+    status, kind, vtu = request("GET", f"/api/export.vtu?box={box}")
+    mine = os.path.join(work, "region.vtu")
+    run("export", db, "--format", "vtu", "--box", box, "--out", mine)
+    if status != 200 or kind != "application/xml" or vtu != open(mine, "rb").read():
+        fail(f"/api/export.vtu: status {status}, {kind}, {len(vtu)} bytes against "
+             f"{os.path.getsize(mine)} from weaver export")
+    api("/api/export.vtu?box=1,2,3", status=400)
 
     # Bad requests: a status and one JSON error each; never a crash.
     for path, status in (("/api/element/99999999", 404), ("/api/element/x", 400),
