@@ -156,10 +156,22 @@ Status parse_request_head(const std::string& head, Request* r, bool* too_large) 
     return Status::InvalidArgument("the headers are longer than 32 KiB");
   }
   const std::string line = head.substr(0, line_end);
+  // METHOD SP TARGET SP VERSION: a method of capitals, a target without
+  // spaces or control bytes.
   const size_t sp1 = line.find(' '), sp2 = line.rfind(' ');
-  if (sp1 == std::string::npos || sp2 <= sp1) return Status::InvalidArgument("malformed request");
+  if (sp1 == 0 || sp1 == std::string::npos || sp2 <= sp1 + 1) {
+    return Status::InvalidArgument("malformed request line");
+  }
   r->method = line.substr(0, sp1);
   const std::string target = line.substr(sp1 + 1, sp2 - sp1 - 1);
+  for (const char c : r->method) {
+    if (c < 'A' || c > 'Z') return Status::InvalidArgument("malformed request method");
+  }
+  for (const char c : target) {
+    if (static_cast<unsigned char>(c) <= 0x20 || c == 0x7f) {
+      return Status::InvalidArgument("malformed request target");
+    }
+  }
   const std::string version = line.substr(sp2 + 1);
   if (version != "HTTP/1.1" && version != "HTTP/1.0") {
     return Status::InvalidArgument("not HTTP/1.0 or HTTP/1.1");

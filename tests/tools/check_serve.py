@@ -197,6 +197,8 @@ try:
     if two.count(b"HTTP/1.1 200 OK") != 2 or b"Connection: keep-alive" not in two:
         fail(f"two pipelined requests: {two[:300]!r}")
     for data, want in ((b"GARBAGE\r\n\r\n", b" 400 "),
+                       (b" /api/stat HTTP/1.1\r\n\r\n", b" 400 "),  # found by the fuzzer
+                       (b"GET /api/st at HTTP/1.1\r\n\r\n", b" 400 "),
                        (b"GET /api/stat HTTP/2.0\r\n\r\n", b" 400 "),
                        (b"GET " + b"/a" * 5000 + b" HTTP/1.1\r\n\r\n", b" 431 "),
                        (b"GET / HTTP/1.1\r\n" + b"X-Long: " + b"y" * 40000 + b"\r\n\r\n",
