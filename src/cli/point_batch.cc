@@ -172,7 +172,7 @@ class BatchRunner {
 
   // Parses one line: false when it is malformed (*why says how).
   bool add(const char* s, size_t n, std::string* why) {
-    if (points_.empty()) reserve();
+    if (points_.size() == points_.capacity()) grow();
     double v[3];
     int count = 0;
     size_t i = 0;
@@ -198,15 +198,18 @@ class BatchRunner {
     bad_.push_back(false);
     return true;
   }
-  void reserve() {
-    const size_t n = ex_.batch_points();
+  // Room for more points: a batch's arrays grow by fourfold steps up to the
+  // batch's size, so that one point (a request of `weaver serve`) does not
+  // reserve, and fault in huge pages for, a million.
+  void grow() {
+    const size_t n = std::min(ex_.batch_points(), std::max<size_t>(4096, 4 * points_.size()));
     reserve_huge(points_, n);
     if (o_.metres) reserve_huge(values_, n);
     reserve_huge(hits_, o_.query == PointQuery::kNodeAt ? 0 : n);
     reserve_huge(nodes_, o_.query == PointQuery::kNodeAt ? n : 0);
   }
   void add_bad() {
-    if (points_.empty()) reserve();
+    if (points_.size() == points_.capacity()) grow();
     points_.push_back({kFar, kFar, kFar});
     if (o_.metres) values_.push_back({NAN, NAN, NAN});
     bad_.push_back(true);

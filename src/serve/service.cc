@@ -77,11 +77,15 @@ Response status_response(const Status& st) {
                         st.message());
 }
 
-// A JSON array of points ([[x, y, z], ...]) as text lines; other bodies
-// pass as they are (text lines already).
+// Whether a body of points is a JSON array ([[x, y, z], ...]) rather than
+// text lines.
+bool is_json_array(const std::string& body) {
+  const size_t at = body.find_first_not_of(" \t\r\n");
+  return at != std::string::npos && body[at] == '[';
+}
+
+// A JSON array of points as text lines.  REQUIRES: is_json_array(body).
 std::string points_text(const std::string& body) {
-  size_t at = body.find_first_not_of(" \t\r\n");
-  if (at == std::string::npos || body[at] != '[') return body;
   std::string out;
   int depth = 0;
   for (const char c : body) {
@@ -156,6 +160,8 @@ Response Service::api(const Request& r, Explorer& ex) {
     if (q != "locate" && q != "material" && q != "node-at") {
       return error_response(400, "query is locate, material or node-at, not '" + q + "'");
     }
+    // Text lines go to the batch as they came; a JSON array becomes lines.
+    if (!is_json_array(r.body)) return run(ex, {q, "--points", "-"}, r, r.body);
     return run(ex, {q, "--points", "-"}, r, points_text(r.body));
   }
   const bool by_id = what == "element" || what == "node" || what == "neighbors" ||
@@ -186,7 +192,7 @@ Response Service::run(Explorer& ex, std::vector<std::string> words, const Reques
   std::string out, err;
   const int code = query_(ex, words, points, &out, &err);
   const std::string message = query_message(err);
-  if (code == 0 || (code == 1 && !out.empty())) return {200, "application/json", out};
+  if (code == 0 || (code == 1 && !out.empty())) return {200, "application/json", std::move(out)};
   if (code == 2) return error_response(400, message);
   const bool missing = message.find("does not exist") != std::string::npos ||
                        message.find("no mesh yet") != std::string::npos ||
