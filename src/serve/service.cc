@@ -24,8 +24,21 @@ struct Snapshot {
   ino_t ino = 0;
   timespec ctime{};
   std::unique_ptr<Explorer> ex;
+  double extent[3] = {0, 0, 0};  // the domain's, ticks: found once a snapshot
+  bool extent_known = false;
 };
 thread_local Snapshot t_snapshot;
+
+// The domain's extents in this thread's snapshot (ex is its Explorer).
+Status snapshot_extent(Explorer& ex, const double** extent) {
+  Snapshot& s = t_snapshot;
+  if (!s.extent_known) {
+    WEAVER_RETURN_IF_ERROR(domain_extent(ex, s.extent));
+    s.extent_known = true;
+  }
+  *extent = s.extent;
+  return Status::Ok();
+}
 
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out;
@@ -119,6 +132,7 @@ Status Service::explorer(Explorer** out) {
   if (!s.ex || s.db != db_ || s.ino != st.st_ino || s.ctime.tv_sec != st.st_ctim.tv_sec ||
       s.ctime.tv_nsec != st.st_ctim.tv_nsec) {
     s.ex.reset();
+    s.extent_known = false;
     // Split the budget among the threads that may each hold one.
     WEAVER_RETURN_IF_ERROR(Explorer::open(db_, memory_, &s.ex));
     s.db = db_, s.ino = st.st_ino, s.ctime = st.st_ctim;
@@ -202,8 +216,8 @@ Response Service::run(Explorer& ex, std::vector<std::string> words, const Reques
 }
 
 Response Service::stat(Explorer& ex) {
-  double extent[3];
-  const Status st = domain_extent(ex, extent);
+  const double* extent = nullptr;
+  const Status st = snapshot_extent(ex, &extent);
   if (!st.ok()) return status_response(st);
   const Units& u = ex.units();
   std::string j = "{\"database\": " + json_string(db_) +
@@ -228,7 +242,9 @@ Response Service::section(Explorer& ex, const std::vector<std::string>& parts, c
   Section s;
   FieldRange range;
   Status st = check_field(ex, color);
-  if (st.ok()) st = section_of(ex, axis_of(parts[2]), at, &s);
+  const double* extent = nullptr;
+  if (st.ok()) st = snapshot_extent(ex, &extent);
+  if (st.ok()) st = section_of(ex, extent, axis_of(parts[2]), at, &s);
   if (st.ok()) st = field_range(ex, s, color, &range);
   if (!st.ok()) return status_response(st);
   const Units& u = ex.units();
@@ -262,7 +278,9 @@ Response Service::tile(Explorer& ex, const std::vector<std::string>& parts, cons
   const std::string color = r.query.count("color") ? r.query.at("color") : "level";
   Section s;
   Status st = check_field(ex, color);
-  if (st.ok()) st = section_of(ex, axis_of(parts[2]), at, &s);
+  const double* extent = nullptr;
+  if (st.ok()) st = snapshot_extent(ex, &extent);
+  if (st.ok()) st = section_of(ex, extent, axis_of(parts[2]), at, &s);
   FieldRange range;
   const bool given = r.query.count("min") && r.query.count("max");
   if (given && (!parse_number(r.query.at("min"), &range.min) ||

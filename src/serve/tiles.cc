@@ -73,13 +73,19 @@ Status domain_extent(Explorer& ex, double extent[3]) {
 }
 
 Status section_of(Explorer& ex, int axis, double at_m, Section* s) {
+  double extent[3];
+  WEAVER_RETURN_IF_ERROR(domain_extent(ex, extent));
+  return section_of(ex, extent, axis, at_m, s);
+}
+
+Status section_of(Explorer& ex, const double extent[3], int axis, double at_m, Section* s) {
   if (axis < 0 || axis > 2) return Status::InvalidArgument("axis is x, y or z");
   *s = Section{};
+  for (int a = 0; a < 3; ++a) s->extent[a] = extent[a];
   s->axis = axis;
   s->u = axis == 0 ? 1 : 0;
   s->v = axis == 2 ? 1 : 2;
   s->down = axis != 2;
-  WEAVER_RETURN_IF_ERROR(domain_extent(ex, s->extent));
   const Units& u = ex.units();
   const double t = std::floor((at_m - u.origin_m[axis]) / u.tick_m);
   if (!(t >= 0 && t < s->extent[axis])) {

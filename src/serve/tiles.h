@@ -37,6 +37,8 @@ Status domain_extent(Explorer& ex, double extent[3]);
 // The section through `at_m` metres along axis (InvalidArgument when the
 // plane misses the domain or the axis is not 0..2).
 Status section_of(Explorer& ex, int axis, double at_m, Section* s);
+// The same with the domain's extents already known (domain_extent's).
+Status section_of(Explorer& ex, const double extent[3], int axis, double at_m, Section* s);
 
 // The colour fields: level, edge, vp, vs, rho, qp, qs.  InvalidArgument
 // naming them for another name, or for a field the mesh lacks.
