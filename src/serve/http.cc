@@ -35,7 +35,10 @@ const char* reason(int status) {
 // A connection's bytes, read as requests arrive (pipelined ones included).
 class Reader {
  public:
-  explicit Reader(int fd) : fd_(fd) {}
+  // Waits for bytes at most timeout_ms at a time, and gives up as soon as
+  // the server stops.
+  Reader(int fd, int timeout_ms, const std::atomic<bool>& stopping)
+      : fd_(fd), timeout_ms_(timeout_ms), stopping_(stopping) {}
   // The next request's head; false on close, timeout (*status 408) or a head
   // past the limits (431).
   bool head(std::string* out, int* status) {
@@ -64,6 +67,13 @@ class Reader {
 
  private:
   bool more() {
+    for (int waited = 0;; waited += 200) {
+      if (stopping_ || waited >= timeout_ms_) return false;
+      pollfd p{fd_, POLLIN, 0};
+      const int ready = ::poll(&p, 1, 200);
+      if (ready > 0) break;
+      if (ready < 0 && errno != EINTR) return false;
+    }
     char chunk[1 << 16];
     const ssize_t n = ::recv(fd_, chunk, sizeof chunk, 0);
     if (n <= 0) return false;
@@ -71,6 +81,8 @@ class Reader {
     return true;
   }
   int fd_;
+  int timeout_ms_;
+  const std::atomic<bool>& stopping_;
   std::string buf_;
 };
 
@@ -253,7 +265,7 @@ void Server::worker(const Handler& handler) {
 }
 
 void Server::answer(int fd, const Handler& handler) {
-  Reader in(fd);
+  Reader in(fd, o_.timeout_ms, stopping_);
   for (int served = 0; served < o_.max_requests && !stopping_; ++served) {
     // Between two requests a client may idle only a little: the thread is
     // what the next connection waits for.
