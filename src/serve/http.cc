@@ -59,6 +59,11 @@ class Reader {
     while (buf_.size() < n) {
       if (!more()) return false;
     }
+    if (buf_.size() == n) {  // the usual case: no copy of a large body
+      out->swap(buf_);
+      buf_.clear();
+      return true;
+    }
     out->assign(buf_, 0, n);
     buf_.erase(0, n);
     return true;
