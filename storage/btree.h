@@ -96,6 +96,10 @@ class BTree final : public Store {
   uint32_t page_count() const { return page_count_; }
   // Leaves in the lookup directory: 0 until it is built, and after a change.
   uint32_t directory_leaves() const { return dir_.size(); }
+  // Builds the lookup directory now, where the budget allows it, rather than
+  // after the first page count's eighth of lookups: a server about to answer
+  // lookups pays for it before its first request, not during it.
+  Status prepare_lookups();
   uint64_t file_bytes() const {
     return uint64_t{shard_headers_ == 0 ? 1 : shard_headers_} * page::kFileHeaderBytes +
            uint64_t{page_count_} * options_.page_size;

@@ -73,6 +73,12 @@ const std::byte* BTree::peek_plain_leaf(uint64_t key, uint32_t* dir_leaf) {
   return d;
 }
 
+Status BTree::prepare_lookups() {
+  if (shards_ != nullptr || !dir_.empty() || directory_threshold() == 0) return Status::Ok();
+  seal_tail();
+  return build_directory();
+}
+
 Status BTree::build_directory() {
   dir_.clear();
   dir_.reserve(page_count_);  // bounds the leaves, and fits the budget (directory_threshold)

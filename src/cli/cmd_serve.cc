@@ -103,7 +103,7 @@ int cmd_serve(int argc, char** argv) {
   std::printf("weaver serve: %s on http://%s:%d/ (%d threads; Ctrl-C stops)\n", db.c_str(),
               o.bind.c_str(), server.port(), o.threads);
   std::fflush(stdout);
-  server.serve([&](const serve::Request& r) { return service.handle(r); });
+  server.serve([&](const serve::Request& r) { return service.handle(r); }, [&] { service.warm(); });
   g_server = nullptr;
   std::printf("weaver serve: stopped\n");
   return 0;

@@ -246,13 +246,14 @@ Server::~Server() {
   if (listen_fd_ >= 0) ::close(listen_fd_);
 }
 
-void Server::serve(const Handler& handler) {
+void Server::serve(const Handler& handler, const std::function<void()>& on_start) {
   std::vector<std::thread> pool;
-  for (int i = 0; i < o_.threads; ++i) pool.emplace_back([&] { worker(handler); });
+  for (int i = 0; i < o_.threads; ++i) pool.emplace_back([&] { worker(handler, on_start); });
   for (auto& t : pool) t.join();
 }
 
-void Server::worker(const Handler& handler) {
+void Server::worker(const Handler& handler, const std::function<void()>& on_start) {
+  if (on_start) on_start();
   while (!stopping_) {
     // Wait a little at a time, so that stop() is noticed.
     pollfd p{listen_fd_, POLLIN, 0};

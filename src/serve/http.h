@@ -75,12 +75,13 @@ class Server {
   int port() const { return port_; }
   // Runs the pool until stop() (from a signal handler too: it only sets a
   // flag and the threads notice within a fraction of a second).
-  void serve(const Handler& handler);
+  // Each thread first runs on_start (if any): its warm-up.
+  void serve(const Handler& handler, const std::function<void()>& on_start = nullptr);
   void stop() { stopping_ = true; }
   ~Server();
 
  private:
-  void worker(const Handler& handler);
+  void worker(const Handler& handler, const std::function<void()>& on_start);
   void answer(int fd, const Handler& handler);
 
   ServerOptions o_;

@@ -122,6 +122,13 @@ Status Service::check() {
   return explorer(&ex);
 }
 
+void Service::warm() {
+  Explorer* ex = nullptr;
+  if (!explorer(&ex).ok()) return;  // the first request will say why
+  (void)ex->mesh().octants().prepare_lookups();
+  if (ex->has_nodes()) (void)ex->mesh().nodes().prepare_lookups();
+}
+
 Status Service::explorer(Explorer** out) {
   struct stat st {};
   const std::string manifest = db_ + "/MANIFEST";
