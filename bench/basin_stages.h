@@ -3,9 +3,11 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <string>
 
 #include "balance/balance.h"
+#include "bench_util.h"
 #include "construct/construct.h"
 #include "util/memory_budget.h"
 
@@ -35,6 +37,22 @@ inline bool balance_db(const std::string& db, uint64_t memory, uint64_t* input, 
   *input = r.input_leaves;
   *output = r.output_leaves;
   return true;
+}
+
+// The basin's mesh at freq Hz in /tmp/weaver-tile-bench, built by `weaver
+// mesh` unless it is there already (the serve benchmarks share it); "" if
+// it cannot be built.
+inline std::string basin_mesh(double freq) {
+  const std::string dir = "/tmp/weaver-tile-bench";
+  std::filesystem::create_directories(dir);
+  const std::string db = dir + "/basin-" + fmt(freq) + "Hz.db";
+  uint64_t peak = 0;
+  if (std::filesystem::exists(db + "/MANIFEST")) return db;
+  return run_program(
+             {WEAVER_BINARY, "mesh", db, "--model", "basin", "--freq", fmt(freq), "--quiet"}, &peak)
+                 .empty()
+             ? ""
+             : db;
 }
 
 }  // namespace weaver::bench

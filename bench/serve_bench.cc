@@ -24,6 +24,7 @@
 #include <thread>
 #include <vector>
 
+#include "basin_stages.h"
 #include "bench_util.h"
 
 namespace weaver::bench {
@@ -102,18 +103,10 @@ int serve_main(int argc, char** argv) {
       return 2;
     }
   }
-  if (db.empty()) {
-    const std::string dir = "/tmp/weaver-tile-bench";
-    std::filesystem::create_directories(dir);
-    db = dir + "/basin-" + fmt(freq) + "Hz.db";
-    uint64_t peak = 0;
-    if (!std::filesystem::exists(db + "/MANIFEST") &&
-        run_program({WEAVER_BINARY, "mesh", db, "--model", "basin", "--freq", fmt(freq), "--quiet"},
-                    &peak)
-            .empty()) {
-      return std::fprintf(stderr, "cannot build %s\n", db.c_str()), 1;
-    }
+  if (db.empty() && (db = basin_mesh(freq)).empty()) {
+    return std::fprintf(stderr, "cannot build the %g Hz basin mesh\n", freq), 1;
   }
+
   // The server, and the port it says.
   pid_t server = -1;
   int port = given_port;

@@ -34,18 +34,10 @@ int tile_main(int argc, char** argv) {
     }
   }
   const uint64_t memory = 256ull << 20;
-  if (db.empty()) {
-    const std::string dir = "/tmp/weaver-tile-bench";
-    std::filesystem::create_directories(dir);
-    db = dir + "/basin-" + fmt(freq) + "Hz.db";
-    uint64_t peak = 0;
-    if (!std::filesystem::exists(db + "/MANIFEST") &&
-        run_program({WEAVER_BINARY, "mesh", db, "--model", "basin", "--freq", fmt(freq), "--quiet"},
-                    &peak)
-            .empty()) {
-      return std::fprintf(stderr, "cannot build %s\n", db.c_str()), 1;
-    }
+  if (db.empty() && (db = basin_mesh(freq)).empty()) {
+    return std::fprintf(stderr, "cannot build the %g Hz basin mesh\n", freq), 1;
   }
+
   std::unique_ptr<Explorer> ex;
   serve::Section s;
   serve::FieldRange range;

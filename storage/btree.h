@@ -71,6 +71,7 @@ class BTree final : public Store {
   Status rank_exact(uint64_t key, uint64_t* rank, bool* present);
   // floor() and the rank of the key it finds in one descent (a point query
   // that wants the element's id and material: half the descents of the two).
+  // rank may be null: then nothing is counted, and this is floor().
   Status floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
                     bool* found);
 

@@ -157,8 +157,7 @@ Status BTree::get(uint64_t key, std::byte* payload_out, bool* found) {
 
 Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, bool* found) {
   if (shards_) return shards_->floor(key, key_out, payload_out, found);
-  uint64_t rank = 0;  // counted on the way down anyway
-  return floor_rank(key, key_out, payload_out, &rank, found);
+  return floor_rank(key, key_out, payload_out, nullptr, found);
 }
 
 Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
@@ -177,19 +176,19 @@ Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out
     if (ub > 0) {
       *found = true;
       *key_out = v.key(ub - 1);
-      *rank = dir_.first_rank(dir_leaf) + ub - 1;
+      if (rank != nullptr) *rank = dir_.first_rank(dir_leaf) + ub - 1;
       if (payload_out != nullptr) std::memcpy(payload_out, v.value(ub - 1), payload_);
       return Status::Ok();
     }
   }
   PageRef lf;
   uint64_t below = 0, before = 0;  // the key at ub - 1; the records before the leaf
-  WEAVER_RETURN_IF_ERROR(locate(key, false, &lf, &dir_leaf, &before));
+  // The records before the leaf are counted on the way down only when asked.
+  WEAVER_RETURN_IF_ERROR(locate(key, false, &lf, &dir_leaf, rank != nullptr ? &before : nullptr));
   WEAVER_RETURN_IF_ERROR(leaf_bound(lf, key, true, &ub, &below, nullptr, payload_out != nullptr));
   if (ub == 0) {
     // The floor ends the preceding leaf (or there is none): its rank is the
     // one just before this leaf's first record.
-    if (before == 0) return Status::Ok();
     lf.reset();
     bool first_leaf = false;
     WEAVER_RETURN_IF_ERROR(preceding_leaf(key, dir_leaf, &lf, &first_leaf));
@@ -198,13 +197,13 @@ Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out
     WEAVER_RETURN_IF_ERROR(leaf_key(lf, ub - 1, &below));
     *found = true;
     *key_out = below;
-    *rank = before - 1;
+    if (rank != nullptr) *rank = before - 1;
     if (payload_out != nullptr) return leaf_payload(lf, ub - 1, payload_out);
     return Status::Ok();
   }
   *found = true;
   *key_out = below;
-  *rank = before + ub - 1;
+  if (rank != nullptr) *rank = before + ub - 1;
   if (payload_out != nullptr) return leaf_payload(lf, ub - 1, payload_out);
   return Status::Ok();
 }

@@ -39,7 +39,7 @@ bool is_model_only(const std::string& db) {
 Status check_target_kind(const std::string& db, bool mesh) {
   std::unique_ptr<Database> d;
   if (!Database::open(db, Database::Mode::kRead, false, &d).ok()) return Status::Ok();
-  if (mesh && is_model_only(db)) {
+  if (mesh && !d->has_table(kOctantTable) && d->has_table(kModelTable)) {  // is_model_only
     return Status::InvalidArgument(db + " is a model database, not a mesh: give the mesh a " +
                                    "database of its own (--model db:" + db + " reads the model)");
   }
