@@ -68,6 +68,19 @@ TEST(ParentAsks, ChildrenAskForTheNeighboursTheyTouch) {
   EXPECT_FALSE(octant_key_is_valid(parent_asks::children_tag(0x5a)));
 }
 
+// Up to 300 random leaves in a domain of up to 4 x 4 x 4 blocks, as deep
+// as 9 levels below them.
+GenOptions random_small_octree(std::mt19937_64& rng) {
+  GenOptions g;
+  g.seed = rng();
+  g.block_level = static_cast<int>(rng() % 3);
+  const uint32_t per_axis = 1u << g.block_level;
+  for (int a = 0; a < 3; ++a) g.blocks[a] = 1 + rng() % per_axis;
+  g.leaves = 10 + rng() % 300;
+  g.max_level = g.block_level + 1 + static_cast<int>(rng() % 9);
+  return g;
+}
+
 class BalanceTest : public ::testing::Test {
  protected:
   std::string import(const std::vector<Octant>& leaves) {
@@ -84,7 +97,8 @@ class BalanceTest : public ::testing::Test {
   }
   // Checks, balances and checks again one octree, against the reference;
   // returns whether it needed refinement.
-  bool balances_as_the_reference(const std::vector<Octant>& leaves, const BalanceOptions& o) {
+  bool balances_as_the_reference(const std::vector<Octant>& leaves, const BalanceOptions& o,
+                                 BalanceResult* result = nullptr) {
     const std::vector<Octant> want = reference::balance(leaves);
     const std::string db = import(leaves);
     BalanceOptions check;
@@ -101,26 +115,60 @@ class BalanceTest : public ::testing::Test {
     BalanceResult after;
     EXPECT_OK(balance_octree(db, check, &after));
     EXPECT_TRUE(after.balanced) << after.violation;
+    if (result != nullptr) *result = r;
     return want != leaves;
   }
   testing::TempDir dir_;
   int count_ = 0;
 };
 
+// Windows of every length, cut in two where they outgrow a tiny memory,
+// each against its insulation layer, or given up for the closure where a
+// layer outweighs its window: the reference's table every time.
+TEST_F(BalanceTest, WindowsOfAnyLengthMatchTheReference) {
+  std::mt19937_64 rng(11);
+  const int cases = static_cast<int>(testing::scaled(200, 30));
+  int gave_up = 0, kept = 0;
+  for (int t = 0; t < cases; ++t) {
+    std::vector<Octant> leaves;
+    ASSERT_OK(generate_octree(random_small_octree(rng), &leaves));
+    BalanceOptions o;
+    o.window_leaves = 1 + rng() % 64;
+    o.threads = 1 + t % 3;
+    // Auto on several threads gives up windows whose layer outweighs them,
+    // for the closure: the same table.
+    o.algorithm =
+        t % 5 == 4 ? BalanceOptions::Algorithm::kAuto : BalanceOptions::Algorithm::kWindows;
+    if (t % 5 == 4) o.threads = 2 + t % 2;  // auto on one thread is the closure
+    if (t % 4 == 3) o.memory = MemoryBudget(64 << 10);
+    SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) +
+                 " leaves, windows of " + std::to_string(o.window_leaves) + ", " +
+                 std::to_string(o.threads) + " threads");
+    BalanceResult r;
+    balances_as_the_reference(leaves, o, &r);
+    ASSERT_FALSE(HasFailure());
+    if (o.algorithm == BalanceOptions::Algorithm::kWindows) {
+      // Windows that do not fit in a tiny memory, even as one leaf, fall back.
+      if (t % 4 != 3) {
+        EXPECT_TRUE(r.by_windows);
+      }
+    } else {
+      gave_up += !r.by_windows;
+      kept += r.by_windows;
+    }
+  }
+  // Random refinement has coarse leaves among fine ones: both happen.
+  EXPECT_GT(gave_up, 0);
+  EXPECT_GT(kept, 0);
+}
+
 TEST_F(BalanceTest, MatchesReferenceOnRandomUnbalancedOctrees) {
   std::mt19937_64 rng(5);
   const int cases = static_cast<int>(testing::scaled(250, 40));
   int unbalanced = 0;
   for (int t = 0; t < cases; ++t) {
-    GenOptions g;
-    g.seed = rng();
-    g.block_level = static_cast<int>(rng() % 3);
-    const uint32_t per_axis = 1u << g.block_level;
-    for (int a = 0; a < 3; ++a) g.blocks[a] = 1 + rng() % per_axis;
-    g.leaves = 10 + rng() % 300;
-    g.max_level = g.block_level + 1 + static_cast<int>(rng() % 9);
     std::vector<Octant> leaves;
-    ASSERT_OK(generate_octree(g, &leaves));
+    ASSERT_OK(generate_octree(random_small_octree(rng), &leaves));
     SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) + " leaves");
     BalanceOptions o;
     o.memory = MemoryBudget((t % 3 == 0) ? (64 << 10) : (64 << 20));  // tiny: sorts spill
@@ -128,6 +176,9 @@ TEST_F(BalanceTest, MatchesReferenceOnRandomUnbalancedOctrees) {
       o.threads = 2 + t % 3;
       o.parallel_chunk = 1;
     }
+    o.algorithm = t % 4 < 2
+                      ? BalanceOptions::Algorithm::kWindows  // else the closure (their fallback)
+                      : BalanceOptions::Algorithm::kClosure;
     unbalanced += balances_as_the_reference(leaves, o);
     ASSERT_FALSE(HasFailure());
   }
@@ -154,6 +205,7 @@ TEST_F(BalanceTest, MatchesReferenceOnDomainsFinerThanTheDomainMap) {
     o.memory = MemoryBudget(64 << 10);
     o.threads = 1 + t % 2;
     o.parallel_chunk = 1;
+    o.algorithm = BalanceOptions::Algorithm::kClosure;  // its domain map is what this tries
     balances_as_the_reference(leaves, o);
     ASSERT_FALSE(HasFailure());
   }
@@ -178,16 +230,19 @@ TEST_F(BalanceTest, MatchesReferenceWhereLeavesDoNotFillTheirParents) {
     o.memory = MemoryBudget((t % 2 == 0) ? (64 << 10) : (64 << 20));  // the map coarse or fine
     o.threads = 1 + t % 3;
     o.parallel_chunk = 1;
+    o.algorithm =
+        t % 4 < 2 ? BalanceOptions::Algorithm::kWindows : BalanceOptions::Algorithm::kClosure;
     unbalanced += balances_as_the_reference(leaves, o);
     ASSERT_FALSE(HasFailure());
   }
   EXPECT_GT(unbalanced, cases / 3);
 }
 
-// The basin's octree and a random one, balanced on 1 to 3 threads, with
-// chunks shared among them from the default size down to a handful of
-// parents, and budgets that spill the sorters or not: the same table, byte
-// for byte, and balanced.
+// The basin's octree and a random one, balanced on 1 to 3 threads, in
+// windows as long as the memory allows or a few thousand leaves, or by the
+// closure with chunks shared among the threads from the default size down
+// to a handful of parents, and budgets that spill the sorters or not: the
+// same table, byte for byte, and balanced.
 TEST(BalanceThreads, AnyThreadCountWritesTheSameTable) {
   testing::TempDir dir;
   ConstructOptions co;
@@ -210,27 +265,36 @@ TEST(BalanceThreads, AnyThreadCountWritesTheSameTable) {
     int threads;
     size_t chunk;
     uint64_t budget;
+    bool windows;
+    uint64_t window_leaves;
   };
   // Under the sanitizers: one thread against three, sharing small chunks
   // with a spilling budget.
-  const std::vector<Run> runs =
-      testing::small_scale() ? std::vector<Run>{{1, size_t{1} << 15, 64 << 20}, {3, 64, 256 << 10}}
-                             : std::vector<Run>{{1, size_t{1} << 15, 64 << 20},
-                                                {2, size_t{1} << 15, 64 << 20},
-                                                {3, 1000, 64 << 20},
-                                                {2, 64, 256 << 10},
-                                                {1, 64, 256 << 10}};
+  const std::vector<Run> runs = testing::small_scale()
+                                    ? std::vector<Run>{{1, size_t{1} << 15, 64 << 20, true, 0},
+                                                       {3, 64, 256 << 10, false, 0},
+                                                       {3, 64, 256 << 10, true, 3000}}
+                                    : std::vector<Run>{{1, size_t{1} << 15, 64 << 20, true, 0},
+                                                       {2, size_t{1} << 15, 64 << 20, true, 0},
+                                                       {3, 1000, 64 << 20, false, 0},
+                                                       {2, 64, 256 << 10, true, 5000},
+                                                       {2, 64, 256 << 10, false, 0},
+                                                       {1, 64, 256 << 10, false, 0}};
   for (const char* name : {"basin", "random"}) {
     std::string first;
     for (const Run& run : runs) {
       SCOPED_TRACE(std::string(name) + ", " + std::to_string(run.threads) + " threads, chunk " +
-                   std::to_string(run.chunk) + ", budget " + std::to_string(run.budget));
+                   std::to_string(run.chunk) + ", budget " + std::to_string(run.budget) +
+                   (run.windows ? ", windows" : ", closure"));
       const std::string db = dir.file(std::string(name) + "-" + std::to_string(&run - &runs[0]));
       std::filesystem::copy(dir.file(name), db);
       BalanceOptions o;
       o.threads = run.threads;
       o.parallel_chunk = run.chunk;
       o.memory = MemoryBudget(run.budget);
+      o.algorithm =
+          run.windows ? BalanceOptions::Algorithm::kWindows : BalanceOptions::Algorithm::kClosure;
+      o.window_leaves = run.window_leaves;
       BalanceResult r;
       ASSERT_OK(balance_octree(db, o, &r));
       EXPECT_GT(r.split, 0u);

@@ -340,9 +340,11 @@ TEST(ShardedDatabase, ExtractOnRanksRefusesAnOctreeUnbalancedAcrossRanks) {
   }
 }
 
-// Balances db on `ranks` threads as weaver-mpi's ranks do, and commits the
-// octant shards.
-void balance_sharded(const std::string& db, int ranks) {
+// Balances db on `ranks` threads as weaver-mpi's ranks do (in windows of
+// at most window_leaves, or by the exchanges and the closure), and commits
+// the octant shards.
+void balance_sharded(const std::string& db, int ranks, bool windows = true,
+                     uint64_t window_leaves = 0) {
   std::unique_ptr<Database> writer;
   ASSERT_OK(Database::open(db, Database::Mode::kWrite, false, &writer));
   const uint64_t number = writer->reserve_file_number();
@@ -355,6 +357,9 @@ void balance_sharded(const std::string& db, int ranks) {
       BalanceShardResult br;
       BalanceOptions o;
       o.memory = MemoryBudget(16 << 20);
+      o.algorithm =
+          windows ? BalanceOptions::Algorithm::kWindows : BalanceOptions::Algorithm::kClosure;
+      o.window_leaves = window_leaves;
       status[r] = balance_shard(
           db, o, r, ranks, shard_file_name(kOctantTable, number, r),
           [&](const std::vector<std::string>& out, std::vector<std::string>* in) {
@@ -376,7 +381,8 @@ void balance_sharded(const std::string& db, int ranks) {
 // A parallel balance writes, shard by shard, the serial run's balanced
 // table: on the basin (built sharded or not) and on random octrees with
 // holes, deep grading and a non-cube domain, on up to more ranks than some
-// stretches have leaves.
+// stretches have leaves; each rank in windows (long or a few hundred
+// leaves) or by the exchanges and the closure.
 TEST(ShardedDatabase, BalanceOnRanksCompactsToTheSerialTable) {
   TempDir dir;
   std::vector<std::string> octrees;
@@ -396,16 +402,20 @@ TEST(ShardedDatabase, BalanceOnRanksCompactsToTheSerialTable) {
     BalanceResult br;
     ASSERT_OK(balance_octree(serial, BalanceOptions{}, &br));
     const std::string want = slurp(table_file(serial, kOctantTable));
-    for (int ranks : {1, 2, 3, 4, 7}) {
-      SCOPED_TRACE(db + " on " + std::to_string(ranks) + " ranks");
-      const std::string run = db + ".b" + std::to_string(ranks);
+    for (int ranks : {1, 2, 3, 4, 7, -2, -7}) {
+      // Negative: as many ranks, the other way.
+      const bool windows = ranks > 0;
+      ranks = std::abs(ranks);
+      SCOPED_TRACE(db + " on " + std::to_string(ranks) + " ranks" +
+                   (windows ? ", windows" : ", closure"));
+      const std::string run = db + ".b" + std::to_string(ranks) + (windows ? "w" : "c");
       std::filesystem::remove_all(run);
       if (db == basin_db && ranks == 3) {
         construct_sharded(run, basin(0.1), 2);  // sharded input, cut elsewhere
       } else {
         std::filesystem::copy(db, run);
       }
-      balance_sharded(run, ranks);
+      balance_sharded(run, ranks, windows, ranks == 4 ? 300 : 0);
       std::unique_ptr<Database> d;
       ASSERT_OK(Database::open(run, Database::Mode::kRead, false, &d));
       ASSERT_EQ(d->shards_of(kOctantTable).empty(), false);

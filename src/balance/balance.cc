@@ -9,6 +9,7 @@
 #include "balance/balance_progress.h"
 #include "balance/closure.h"
 #include "balance/refinement.h"
+#include "balance/window_balance.h"
 #include "db/database.h"
 #include "model/velocity_model.h"
 #include "modeldb/open_model.h"
@@ -29,11 +30,7 @@ std::unique_ptr<VelocityModel> model_of(const std::string& metadata, MemoryBudge
   return m;
 }
 
-// New leaves of a table built from a model get the model's vp, vs and rho
-// (and qp, qs where the table has them) at their centre, where the table's
-// schema has those fields; other tables (and other fields) keep the
-// parent's values.
-FillPayload material_fill(const VelocityModel* model, const TableOptions& table) {
+FillPayload fill_from(const VelocityModel* model, const TableOptions& table) {
   const Field* vp = table.schema.find("vp");
   const Field* vs = table.schema.find("vs");
   const Field* rho = table.schema.find("rho");
@@ -55,6 +52,12 @@ FillPayload material_fill(const VelocityModel* model, const TableOptions& table)
 }
 
 }  // namespace
+
+FillPayload model_material_fill(const TableOptions& table, MemoryBudget memory, int threads,
+                                std::unique_ptr<VelocityModel>* model) {
+  *model = model_of(table.metadata, memory, std::max(1, threads));
+  return fill_from(model->get(), table);
+}
 
 BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
   // The closure reads the leaves in order with one cursor per level, and
@@ -78,6 +81,8 @@ BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
   second_reader = plan.take("second reader's pool", 1, 64, 1ull << 20);
   // A model database's readers, for the material of new leaves.
   model = plan.take_budget("model readers", 1, 32);
+  // Windows run instead of the closure, never beside it.
+  windows = parent_chunk + candidate_sort;
 }
 
 int finest_level_bound(BTree& leaves) {
@@ -85,6 +90,32 @@ int finest_level_bound(BTree& leaves) {
   return levels_from_metadata(leaves.options().metadata, &levels) ? finest_level(levels)
                                                                   : kMaxLevel;
 }
+
+namespace {
+
+// The windows' way (window_balance.h): false in *fitted if a leaf alone
+// outgrew the memory, and then nothing is written.
+Status balance_by_windows(Database& db, BTree& leaves, const BalanceOptions& o,
+                          const BalanceMemory& memory, const TableOptions& topt,
+                          const FillPayload& fill, BalanceResult* r, bool* fitted) {
+  std::vector<std::unique_ptr<BTree>> more;
+  WindowOptions wo;
+  WEAVER_RETURN_IF_ERROR(window_options(db, leaves, o, memory, &more, &wo));
+  wo.progress = o.progress;
+  std::unique_ptr<BTree> out;
+  std::string file;
+  WEAVER_RETURN_IF_ERROR(db.create_table(kOctantTable, topt, memory.output_pool, &out, &file));
+  Status st = balance_in_windows(wo, fill, *out, r, fitted);
+  if (st.ok() && !*fitted) {
+    db.publish(kOctantTable, file, out, Status::Internal("a window outgrew the memory"));
+    *r = BalanceResult{};
+    return Status::Ok();
+  }
+  if (st.ok()) out->set_metadata(with_levels(topt.metadata, r->levels));
+  return db.publish(kOctantTable, file, out, st);
+}
+
+}  // namespace
 
 Status balance_octree(const std::string& db_dir, const BalanceOptions& o, BalanceResult* r) {
   *r = BalanceResult{};
@@ -99,6 +130,18 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   if (o.check_only) {
     return check_balance(*leaves, o, std::filesystem::temp_directory_path().string(), r);
   }
+  TableOptions topt = leaves->options();
+  if (o.output_packed >= 0) topt.packed = o.output_packed == 1;
+  std::unique_ptr<VelocityModel> model;
+  const FillPayload fill = model_material_fill(topt, memory.model, o.threads, &model);
+  using Algorithm = BalanceOptions::Algorithm;
+  const bool windows =
+      o.algorithm == Algorithm::kWindows || (o.algorithm == Algorithm::kAuto && o.threads > 1);
+  if (windows && o.keep_from == 0 && o.keep_to == UINT64_MAX) {
+    bool fitted = false;
+    WEAVER_RETURN_IF_ERROR(balance_by_windows(*db, *leaves, o, memory, topt, fill, r, &fitted));
+    if (fitted) return Status::Ok();
+  }
   ScratchDir scratch{db_dir + "/tmp-balance-" + std::to_string(::getpid())};
   std::unique_ptr<BalanceProgress> progress;
   if (o.progress) {
@@ -112,15 +155,11 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   }
   Closure closure(*leaves, memory, scratch.path, o, progress.get(), r, second_reader.get());
   WEAVER_RETURN_IF_ERROR(closure.build(finest_level_bound(*leaves), true));
-  TableOptions topt = leaves->options();
-  if (o.output_packed >= 0) topt.packed = o.output_packed == 1;
   std::unique_ptr<BTree> out;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, topt, memory.output_pool, &out, &file));
-  const std::unique_ptr<VelocityModel> model =
-      model_of(topt.metadata, memory.model, std::max(1, o.threads));
-  const Status st = write_refinement(*leaves, closure.required(), material_fill(model.get(), topt),
-                                     *out, o.threads, progress.get(), r, o.keep_from, o.keep_to);
+  const Status st = write_refinement(*leaves, closure.required(), fill, *out, o.threads,
+                                     progress.get(), r, o.keep_from, o.keep_to);
   if (st.ok()) out->set_metadata(with_levels(topt.metadata, r->levels));
   return db->publish(kOctantTable, file, out, st);
 }

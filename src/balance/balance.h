@@ -37,6 +37,17 @@ struct BalanceOptions {
   // are split into) are written: one rank's part of a parallel balance,
   // whose other leaves are its neighbours' (balance_shard.h).
   uint64_t keep_from = 0, keep_to = UINT64_MAX;
+  // How: in windows (window_balance.h), or by the closure (closure.h).
+  // Auto takes windows on more than one thread or rank, where the threads
+  // share no pass (at 1 Hz the second thread gives 1.97x), and gives up
+  // for the closure when a window's layer outweighs its own leaves (coarse
+  // leaves among fine ones, as in random refinement); on one thread the
+  // closure, which is faster there.  Windows that do not fit in the
+  // memory, even as one leaf, fall back to the closure too.  The table is
+  // the same every way.
+  enum class Algorithm { kAuto, kWindows, kClosure };
+  Algorithm algorithm = Algorithm::kAuto;
+  uint64_t window_leaves = 0;  // tests: windows at most this long (0: as the memory allows)
   // The output's page format: as the input's (-1), packed (1) or plain (0).
   // A parallel balance reads its scratch input from plain pages (its many
   // aggregate hits along a ragged boundary decode no packed leaves) and
@@ -59,16 +70,21 @@ struct BalanceMemory {
   uint64_t candidate_sort = 0;  // the sorter of a level's candidates
   uint64_t domain_map = 0;      // which coarse cells the leaves cover (domain_map.h)
   uint64_t second_reader = 0;   // the pool of the first scan's second reader (threads > 1)
+  uint64_t windows = 0;         // the windows in flight (the closure's chunk and sorter shares)
   MemoryBudget model;           // a model database's readers (modeldb/db_model.h)
 };
 
 struct BalanceResult {
   uint64_t input_leaves = 0, output_leaves = 0;
-  uint64_t required = 0;  // distinct required octants in the domain
-  uint64_t split = 0;     // input leaves that were split
-  LevelCounts levels{};   // of the output
-  bool balanced = true;   // check_only: the verdict
-  std::string violation;  // check_only: the first violation, named
+  // The closure: distinct required octants in the domain; windows: the
+  // octants created inside the leaves (those strictly inside one).
+  uint64_t required = 0;
+  bool by_windows = false;    // balanced in windows, not by the closure
+  uint64_t layer_leaves = 0;  // windows: leaves read around them (their layers)
+  uint64_t split = 0;         // input leaves that were split
+  LevelCounts levels{};       // of the output
+  bool balanced = true;       // check_only: the verdict
+  std::string violation;      // check_only: the first violation, named
 };
 
 Status balance_octree(const std::string& db_dir, const BalanceOptions& options,

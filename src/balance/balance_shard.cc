@@ -9,6 +9,8 @@
 #include <cstring>
 #include <filesystem>
 
+#include "balance/window_balance.h"
+#include "db/table_files.h"
 #include "schema/octant.h"
 #include "util/octant_key_stream.h"
 
@@ -210,6 +212,45 @@ Status adopt_shard(const std::string& db_dir, const std::string& scratch, const 
   return t->select(t->size() - 1, &entry->last_key, nullptr);
 }
 
+// The windows' way: this rank's leaves balanced window by window against
+// layers read from the table itself, which every rank sees: no exchange,
+// no scratch copy.  *fitted false if a window outgrew the memory (nothing
+// is kept then).
+Status shard_by_windows(Database& db, BTree& t, const Cut& cut, const BalanceOptions& o, int rank,
+                        const std::string& file, BalanceShardResult* r, ShardEntry* entry,
+                        bool* fitted) {
+  *fitted = true;
+  const BalanceMemory memory(o.memory);
+  std::vector<std::unique_ptr<BTree>> more;
+  WindowOptions wo;
+  WEAVER_RETURN_IF_ERROR(window_options(db, t, o, memory, &more, &wo));
+  wo.first_leaf = t.size();
+  wo.end_leaf = t.size();
+  if (cut.key[rank] != UINT64_MAX) WEAVER_RETURN_IF_ERROR(t.rank(cut.key[rank], &wo.first_leaf));
+  if (cut.key[rank + 1] != UINT64_MAX) {
+    WEAVER_RETURN_IF_ERROR(t.rank(cut.key[rank + 1], &wo.end_leaf));
+  }
+  std::unique_ptr<VelocityModel> model;
+  const FillPayload fill = model_material_fill(t.options(), memory.model, o.threads, &model);
+  std::unique_ptr<BTree> out;
+  WEAVER_RETURN_IF_ERROR(create_shard_table(db.dir(), file, t.options(), memory.output_pool, &out));
+  Status st = balance_in_windows(wo, fill, *out, &r->balance, fitted);
+  if (st.ok() && !*fitted) st = Status::Internal("a window outgrew the memory");
+  if (st.ok()) out->set_metadata(with_levels(t.options().metadata, r->balance.levels));
+  const Status done =
+      finish_shard(db.dir(), out, st, shard_place_among(cut.key, rank), entry, &r->table_bytes);
+  return *fitted ? done : Status::Ok();
+}
+
+// Whether every rank's windows fitted (one all-to-all of a byte).
+Status all_fitted(const RankExchange& exchange, int ranks, bool mine, bool* all) {
+  std::vector<std::string> received;
+  WEAVER_RETURN_IF_ERROR(exchange(std::vector<std::string>(ranks, mine ? "1" : "0"), &received));
+  *all =
+      std::all_of(received.begin(), received.end(), [](const std::string& b) { return b == "1"; });
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status balance_shard(const std::string& db_dir, const BalanceOptions& options, int rank, int ranks,
@@ -225,6 +266,18 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   Status st = Database::open(db_dir, Database::Mode::kRead, false, &db);
   if (st.ok()) st = db->open_table(kOctantTable, 16 << 20, &t);
   if (st.ok()) st = cut_equal_runs(*t, ranks, &cut.key, &cut.lo);
+  if (options.algorithm != BalanceOptions::Algorithm::kClosure) {
+    bool fitted = false, all = false;
+    if (st.ok()) st = shard_by_windows(*db, *t, cut, options, rank, file, r, entry, &fitted);
+    // Every rank takes part in the exchange, whatever happened to it; if
+    // one failed or did not fit, all go the way of the exchanges (where an
+    // error takes part too, and is returned at the end).
+    WEAVER_RETURN_IF_ERROR(all_fitted(exchange, ranks, st.ok() && fitted, &all));
+    if (all) return Status::Ok();
+    if (st.ok() && entry->records > 0) std::remove((db_dir + "/" + file).c_str());
+    *r = BalanceShardResult{};
+    *entry = ShardEntry{file};
+  }
   if (st.ok()) st = insulation_queries(*t, cut, rank, &queries);
   std::vector<std::string> blobs(ranks), received;
   for (int s = 0; st.ok() && s < ranks; ++s) {

@@ -5,6 +5,7 @@
 #include <bit>
 #include <filesystem>
 
+#include "balance/forward_floor.h"
 #include "schema/octant.h"
 #include "sort/external_sort.h"
 #include "util/key_set.h"
@@ -14,20 +15,15 @@
 namespace weaver {
 namespace {
 
-// Walks the octant table alongside a nondecreasing stream of keys and tells
-// whether each octant overlaps the domain (the union of the leaves).  Where
-// the stream is sparse (coarse levels have few candidates) it jumps ahead
-// by a search instead of reading every leaf between: a level's pass then
-// costs its candidates, not the whole table.
-//
-// The domain map answers first; the table is asked only about octants in
-// the map's cells that the leaves cover in part.
+// Tells whether each of a nondecreasing stream of octants overlaps the
+// domain (the union of the leaves).  The domain map answers first; the
+// table is asked (forward_floor.h) only about octants in the map's cells
+// that the leaves cover in part.
 class DomainProbe {
  public:
   Status open(BTree& leaves, const DomainMap& map) {
-    leaves_ = &leaves;
     map_ = &map;
-    return leaves.seek_keys(0, &cursor_);
+    return floor_.open(leaves);
   }
   Status overlaps(uint64_t key, bool* yes) {
     const DomainMap::Answer a = map_->overlaps(key);
@@ -35,58 +31,24 @@ class DomainProbe {
       *yes = a == DomainMap::Answer::kYes;
       return Status::Ok();
     }
-    WEAVER_RETURN_IF_ERROR(advance_to(key));
+    WEAVER_RETURN_IF_ERROR(floor_.advance_to(key));
     // A leaf equal to or containing the octant, or a leaf inside it.
-    *yes = (has_last_ && key < octant_key_subtree_end(last_)) ||
-           (cursor_.valid() && cursor_.key() < octant_key_subtree_end(key));
+    *yes = (floor_.has_last() && key < octant_key_subtree_end(floor_.last())) ||
+           (floor_.has_next() && floor_.next_key() < octant_key_subtree_end(key));
     return Status::Ok();
   }
 
   // Whether the octant lies in one leaf bigger than itself (the keys asked,
   // here and of overlaps, nondecreasing).
   Status strictly_inside_a_leaf(uint64_t key, bool* yes) {
-    WEAVER_RETURN_IF_ERROR(advance_to(key));
-    *yes = has_last_ && last_ != key && key < octant_key_subtree_end(last_);
+    WEAVER_RETURN_IF_ERROR(floor_.advance_to(key));
+    *yes = floor_.has_last() && floor_.last() != key && key < octant_key_subtree_end(floor_.last());
     return Status::Ok();
   }
 
  private:
-  // last_ := the last leaf <= key; the cursor at the first leaf > key.
-  Status advance_to(uint64_t key) {
-    for (int steps = 0; cursor_.valid() && cursor_.key() <= key; ++steps) {
-      if (steps == kWalk) return jump_to(key);
-      last_ = cursor_.key();
-      has_last_ = true;
-      WEAVER_RETURN_IF_ERROR(cursor_.next());
-    }
-    return Status::Ok();
-  }
-
-  // Leaves read one by one before jumping.  A jump within the leaf the
-  // cursor holds is a search of keys decoded already; one past it, two
-  // searches from the root, decoding the new leaf whole.
-  static constexpr int kWalk = 64;
-
-  Status jump_to(uint64_t key) {
-    if (cursor_.skip_in_leaf(key, &last_)) {
-      has_last_ = true;
-      return Status::Ok();
-    }
-    uint64_t floor = 0;
-    bool hit = false;
-    WEAVER_RETURN_IF_ERROR(leaves_->floor(key, &floor, nullptr, &hit));
-    if (hit) {
-      last_ = floor;
-      has_last_ = true;
-    }
-    return leaves_->seek_keys(key + 1, &cursor_);
-  }
-
-  BTree* leaves_ = nullptr;
   const DomainMap* map_ = nullptr;
-  BTreeCursor cursor_;
-  uint64_t last_ = 0;
-  bool has_last_ = false;
+  ForwardFloor floor_;
 };
 
 // Reads a sorted source, skipping repeated keys.

@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 
 #include "balance/balance.h"
 #include "balance/balance_progress.h"
@@ -13,12 +14,23 @@
 #include "schema/status.h"
 #include "sort/key_tag.h"
 #include "storage/btree.h"
+#include "util/memory_budget.h"
 
 namespace weaver {
+
+class VelocityModel;
 
 // Fills the payload of new leaf o (holding a copy of its parent's) with o's
 // own values, e.g. the material of a velocity model at its centre.
 using FillPayload = std::function<void(const Octant& o, std::byte* payload)>;
+
+// The material of new leaves of a table built from a model (the one its
+// metadata names, opened into *model within `memory` for `threads`
+// threads): the model's vp, vs and rho (and qp, qs) at the leaf's centre,
+// where the schema has those fields; empty for other tables, whose new
+// leaves keep their parent's values.
+FillPayload model_material_fill(const TableOptions& table, MemoryBudget memory, int threads,
+                                std::unique_ptr<VelocityModel>* model);
 
 // Writes the refinement of `leaves` by `required` (key order, as from
 // Closure::required) into `out`, which has the payload size of `leaves`.

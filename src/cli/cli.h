@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "balance/balance.h"
 #include "schema/status.h"
 #include "util/args.h"
 #include "util/memory_budget.h"
@@ -80,6 +81,8 @@ Status memory_option(const ParsedArgs& args, MemoryBudget* budget);
 // (default: no, it takes the nearest model cell's values).
 Status outside_option(const ParsedArgs& args, bool* error);
 Status threads_option(const ParsedArgs& args, int default_threads, int* threads);
+// --algorithm auto|windows|closure of balance (weaver's and weaver-mpi's).
+Status balance_algorithm_option(const ParsedArgs& args, BalanceOptions::Algorithm* algorithm);
 // The number of cores (at least 1): the default of every --threads.
 int default_threads();
 

@@ -9,7 +9,8 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver balance DB [--memory BYTES] [--threads N] [--check] [--quiet]\n"
+    "usage: weaver balance DB [--algorithm auto|windows|closure] [--memory BYTES]\n"
+    "                         [--threads N] [--check] [--quiet]\n"
     "\n"
     "Replaces the octant table of DB by its minimal face+edge 2:1 balanced\n"
     "refinement: every leaf is kept or split, and nothing is split unless the\n"
@@ -17,14 +18,29 @@ constexpr char kUsage[] =
     "need not fill their parents).  Out of core; split children take their\n"
     "material from the model that built the table, or from their parent.\n"
     "The new table keeps the old one's leaf page format (packed or plain).\n"
+    "  --algorithm A    how; every way writes the same table:\n"
+    "                   windows: the leaves in runs of consecutive keys, each\n"
+    "                     balanced in memory, on its own thread, against the\n"
+    "                     leaves around it (its insulation layer), read from\n"
+    "                     the table; a run that does not fit in the memory,\n"
+    "                     even as one leaf, falls back to the closure\n"
+    "                   closure: the octants the balance requires, level by\n"
+    "                     level from fine to coarse, each level sorted out of\n"
+    "                     core, then one pass splitting the leaves\n"
+    "                   auto (default): windows on more than one thread, the\n"
+    "                     closure on one (faster there) or where a window's\n"
+    "                     layer outweighs the window (coarse leaves among fine\n"
+    "                     ones)\n"
     "  --check          only verify; name the first violation (exit status 1 if\n"
     "                   the octree is not balanced)\n"
-    "  --memory BYTES   memory budget (default 256M): the table caches, the\n"
-    "                   buffers and sorter of the out-of-core closure\n"
-    "  --threads N      threads for the closure's neighbour generation and sorts,\n"
-    "                   and (N > 1) one more writing the new table beside the\n"
-    "                   final pass (default: the number of cores); 1 runs on\n"
-    "                   one thread; the table is the same for every N\n"
+    "  --memory BYTES   memory budget (default 256M): the table caches, and the\n"
+    "                   windows in flight (half of it: their leaves, layers and\n"
+    "                   refinements), or the buffers and sorter of the closure\n"
+    "  --threads N      windows balanced at once, the table written beside\n"
+    "                   them; or threads for the closure's neighbour generation\n"
+    "                   and sorts, and (N > 1) one more writing the new table\n"
+    "                   beside its final pass (default: the number of cores);\n"
+    "                   the table is the same for every N\n"
     "  --quiet          no progress line on stderr (default: one that updates\n"
     "                   itself on a terminal, a line every 10 s otherwise; its\n"
     "                   percent weighs the first pass over the leaves 13%, the\n"
@@ -35,7 +51,8 @@ constexpr char kUsage[] =
 
 int cmd_balance(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory", "threads"}, {"check", "quiet"}, &args);
+  Status st =
+      parse_args(argc, argv, 2, {"algorithm", "memory", "threads"}, {"check", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("balance", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("balance", "expected one DB", kUsage);
@@ -43,6 +60,7 @@ int cmd_balance(int argc, char** argv) {
   o.check_only = args.flags.count("check") != 0;
   st = memory_option(args, &o.memory);
   if (st.ok()) st = threads_option(args, default_threads(), &o.threads);
+  if (st.ok()) st = balance_algorithm_option(args, &o.algorithm);
   if (!st.ok()) return usage_error("balance", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "balance", "leaves");
@@ -61,11 +79,17 @@ int cmd_balance(int argc, char** argv) {
                 (unsigned long long)r.input_leaves, secs);
     return 0;
   }
-  std::printf(
-      "balanced %llu leaves into %llu (%llu split, %llu required octants) in %.2fs "
-      "(%.0f leaves/s)\n",
-      (unsigned long long)r.input_leaves, (unsigned long long)r.output_leaves,
-      (unsigned long long)r.split, (unsigned long long)r.required, secs, r.input_leaves / secs);
+  char how[96];
+  if (r.by_windows) {
+    std::snprintf(how, sizeof how, "in windows, %llu leaves read around them",
+                  (unsigned long long)r.layer_leaves);
+  } else {
+    std::snprintf(how, sizeof how, "by the closure of %llu required octants",
+                  (unsigned long long)r.required);
+  }
+  std::printf("balanced %llu leaves into %llu (%llu split, %s) in %.2fs (%.0f leaves/s)\n",
+              (unsigned long long)r.input_leaves, (unsigned long long)r.output_leaves,
+              (unsigned long long)r.split, how, secs, r.input_leaves / secs);
   return 0;
 }
 

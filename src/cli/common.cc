@@ -62,6 +62,21 @@ Status threads_option(const ParsedArgs& args, int default_threads, int* threads)
   return Status::Ok();
 }
 
+Status balance_algorithm_option(const ParsedArgs& args, BalanceOptions::Algorithm* algorithm) {
+  using Algorithm = BalanceOptions::Algorithm;
+  *algorithm = Algorithm::kAuto;
+  if (!args.values.count("algorithm")) return Status::Ok();
+  const std::string& a = args.values.at("algorithm");
+  if (a == "windows") {
+    *algorithm = Algorithm::kWindows;
+  } else if (a == "closure") {
+    *algorithm = Algorithm::kClosure;
+  } else if (a != "auto") {
+    return Status::InvalidArgument("--algorithm must be auto, windows or closure");
+  }
+  return Status::Ok();
+}
+
 int default_threads() {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }

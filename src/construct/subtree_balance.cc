@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cstring>
 
-#include "util/parent_asks.h"
 #include "util/resolve_split.h"
 
 namespace weaver {
@@ -20,24 +18,6 @@ bool meets(const Octant& x, const int64_t lo[3], const int64_t hi[3]) {
   }
   return true;
 }
-
-// By child position: the face and edge directions (a bit each, as in
-// kFaceAndEdgeDirections) whose neighbour lies outside the parent.
-constexpr std::array<uint32_t, 8> leaving_parent_table() {
-  std::array<uint32_t, 8> t{};
-  for (int c = 0; c < 8; ++c) {
-    for (size_t i = 0; i < kFaceAndEdgeDirections.size(); ++i) {
-      const Direction d = kFaceAndEdgeDirections[i];
-      const int step[3] = {d.dx, d.dy, d.dz};
-      for (int a = 0; a < 3; ++a) {
-        const bool far = (c >> a) & 1;
-        if ((step[a] > 0 && far) || (step[a] < 0 && !far)) t[c] |= 1u << i;
-      }
-    }
-  }
-  return t;
-}
-constexpr std::array<uint32_t, 8> kLeavingParent = leaving_parent_table();
 
 bool inside(const Octant& x, const Octant& root) {
   return x.level >= root.level && octant_ancestor(x, root.level) == root;
@@ -79,11 +59,11 @@ void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
   local_.resize(collected_.size() + leaves->keys.size());
   std::merge(collected_.begin(), collected_.end(), leaves->keys.begin(), leaves->keys.end(),
              local_.begin());
-  ripple();
+  ripple_.run(local_, &created_);
   // Nothing created inside the subtree (most subtrees): its leaves stand.
   const auto inside_root = std::lower_bound(created_.begin(), created_.end(), octant_key(root));
   if (inside_root == created_.end() || *inside_root >= octant_key_subtree_end(root)) return;
-  refine(root, leaves);
+  refine(leaves);
 }
 
 // The subtree's box grown on each side by the edge of the largest own leaf
@@ -139,122 +119,22 @@ void SubtreeBalancer::collect(const Octant& x, const float* samples, const Octan
   }
 }
 
-// The created octants (strictly inside a local leaf, required by the
-// balance), into created_ in key order.
-//
-// A leaf of level l asks for octants of level l - 1, which lie strictly
-// inside a leaf only if that leaf's level is l - 2 or coarser.  So only the
-// leaves two levels finer than the coarsest ask (a subtree graded by one
-// level at most has nothing to do), and only the leaves two levels coarser
-// than the finest go into the map as leaves: the others are found resolved
-// all the same, since their parents are inner.
-void SubtreeBalancer::ripple() {
-  created_.clear();
-  LevelCounts count{};
-  for (uint64_t key : local_) ++count[octant_key_level(key)];
-  int coarsest = 0, finest = kMaxLevel;
-  while (count[coarsest] == 0) ++coarsest;
-  while (count[finest] == 0) --finest;
-  if (finest - coarsest < 2) return;
-  map_.reset(local_.size() / 4 + 64);
-  uint64_t last_parent = ~uint64_t{0};
-  for (uint64_t key : local_) {
-    const int level = octant_key_level(key);
-    if (level <= finest - 2) map_.add(key, OctantMap::kLeaf);
-    if (level == 0) continue;
-    const uint64_t parent = octant_key_parent(key);
-    if (level >= coarsest + 2) add_ask(level, parent, 1u << octant_key_child_id(key));
-    if (parent == last_parent) continue;
-    last_parent = parent;
-    for (uint64_t q = parent; map_.add(q, OctantMap::kInner) && octant_key_level(q) > 0;) {
-      q = octant_key_parent(q);
-    }
-  }
-  for (int l = finest; l >= 1; --l) ask_level(l);
-  std::sort(created_.begin(), created_.end());
-}
-
-// A leaf's ask, merged with its siblings' (they come one after another
-// among the leaves of their level).
-void SubtreeBalancer::add_ask(int level, uint64_t parent, unsigned child_bit) {
-  std::vector<Ask>& asks = asks_[level];
-  if (!asks.empty() && asks.back().parent == parent) {
-    asks.back().children |= child_bit;
-  } else {
-    asks.push_back({parent, child_bit, false});
-  }
-}
-
-// The asks of level l's parents: each neighbour one level coarser that is
-// strictly inside a leaf (its nearest octant in the map, going up, is a
-// leaf or created) is created, and its parent asks in turn at level l - 1.
-// A neighbour whose nearest octant is inner lies where no local leaf is.
-void SubtreeBalancer::ask_level(int l) {
-  std::vector<Ask>& asks = asks_[l];
-  if (unsorted_[l]) {
-    std::sort(asks.begin(), asks.end(),
-              [](const Ask& a, const Ask& b) { return a.parent < b.parent; });
-    size_t n = 0;
-    for (const Ask& a : asks) {
-      if (n > 0 && asks[n - 1].parent == a.parent) {
-        asks[n - 1].children |= a.children;
-        asks[n - 1].created |= a.created;
-      } else {
-        asks[n++] = a;
-      }
-    }
-    asks.resize(n);
-    unsorted_[l] = false;
-  }
-  for (const Ask& a : asks) {
-    uint32_t asked = parent_asks::kTouchedBy[a.children];
-    // The parent's siblings are there (leaves or inner) when its own parent
-    // is inner, as it is above a leaf of the input: only the neighbours
-    // outside it are asked about.
-    if (!a.created && l >= 2) asked &= kLeavingParent[octant_key_child_id(a.parent)];
-    for (uint32_t bits = asked; bits != 0; bits &= bits - 1) {
-      uint64_t nb = 0;
-      if (!octant_key_neighbour(a.parent, kFaceAndEdgeDirections[std::countr_zero(bits)], &nb)) {
-        continue;
-      }
-      if (map_.find(nb) != OctantMap::kAbsent) continue;  // resolved, or created already
-      OctantMap::Kind above = OctantMap::kAbsent;
-      for (uint64_t q = nb; above == OctantMap::kAbsent;) {
-        q = octant_key_parent(q);
-        above = map_.find(q);
-      }
-      if (above == OctantMap::kInner) continue;
-      map_.add(nb, OctantMap::kCreated);
-      created_.push_back(nb);
-      if (l - 1 > 0) {
-        asks_[l - 1].push_back({octant_key_parent(nb), 255, true});
-        unsorted_[l - 1] = true;
-      }
-    }
-  }
-  asks.clear();
-}
-
 // Each own leaf split just enough to resolve the created octants inside it.
-void SubtreeBalancer::refine(const Octant& root, SubtreeLeaves* leaves) {
+void SubtreeBalancer::refine(SubtreeLeaves* leaves) {
   out_.clear();
   const size_t bytes = descent_.payload_bytes();
-  size_t pos =
-      std::lower_bound(created_.begin(), created_.end(), octant_key(root)) - created_.begin();
-  for (size_t i = 0; i < leaves->keys.size(); ++i) {
-    const uint64_t key = leaves->keys[i];
-    const std::byte* payload = leaves->payloads.data() + i * bytes;
-    while (pos < created_.size() && created_[pos] <= key) ++pos;
-    if (pos == created_.size() || created_[pos] >= octant_key_subtree_end(key)) {
-      out_.keys.push_back(key);
-      out_.payloads.insert(out_.payloads.end(), payload, payload + bytes);
-      ++out_.levels[octant_key_level(key)];
-      continue;
-    }
-    split_to_resolve(
-        octant_from_key(key), false, created_.size(), [&](size_t j) { return created_[j]; }, &pos,
-        [&](const Octant& o, bool is_new) { return emit_leaf(o, is_new, payload); });
-  }
+  resolve_leaves(
+      leaves->keys.data(), leaves->keys.size(), created_,
+      [&](size_t i) {
+        const std::byte* payload = leaves->payloads.data() + i * bytes;
+        out_.keys.push_back(leaves->keys[i]);
+        out_.payloads.insert(out_.payloads.end(), payload, payload + bytes);
+        ++out_.levels[octant_key_level(leaves->keys[i])];
+        return Status::Ok();
+      },
+      [&](size_t i, const Octant& o, bool is_new) {
+        return emit_leaf(o, is_new, leaves->payloads.data() + i * bytes);
+      });
   out_.elements = out_.keys.size();
   int coarsest = 0;
   while (out_.levels[coarsest] == 0) ++coarsest;

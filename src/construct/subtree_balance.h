@@ -35,8 +35,8 @@
 #include <vector>
 
 #include "construct/descent.h"
-#include "construct/octant_map.h"
 #include "schema/octant.h"
+#include "util/local_ripple.h"
 
 namespace weaver {
 
@@ -55,19 +55,10 @@ class SubtreeBalancer {
   uint64_t neighbours_collected() const { return collected_count_; }
 
  private:
-  struct Ask {
-    uint64_t parent;
-    unsigned children;  // a bit for each child that asks (255: all)
-    bool created;       // a created child asks (its grandparent may be a leaf)
-  };
-
   void grow_box(const Octant& root, const SubtreeLeaves& leaves);
   void collect(const Octant& x, const float* samples, const Octant& root);
   bool wanted(const Octant& x, const Octant& root) const;
-  void add_ask(int level, uint64_t parent, unsigned child_bit);
-  void ripple();
-  void ask_level(int level);
-  void refine(const Octant& root, SubtreeLeaves* leaves);
+  void refine(SubtreeLeaves* leaves);
   Status emit_leaf(const Octant& o, bool is_new, const std::byte* parent_payload);
 
   const Descent& descent_;
@@ -76,9 +67,7 @@ class SubtreeBalancer {
   std::vector<Octant> blocks_;               // the blocks the grown box meets, in key order
   std::vector<uint64_t> collected_;          // leaves around the subtree, in key order
   std::vector<uint64_t> local_;              // those and the subtree's leaves, in key order
-  OctantMap map_;
-  std::array<std::vector<Ask>, kMaxLevel + 1> asks_;  // by the level of the children
-  std::array<bool, kMaxLevel + 1> unsorted_{};        // created octants added to asks_
+  LocalRipple ripple_;
   std::vector<uint64_t> created_;
   SubtreeLeaves out_;
   uint64_t collected_count_ = 0;

@@ -1,8 +1,8 @@
 // weaver-mpi balance: the 2:1 balanced refinement of DB's octant table, one
-// shard a rank, in two message rounds (balance/balance_shard.h: each rank
-// asks the others for the leaves in its leaves' insulation layers, then
-// balances its own leaves with them), committed by rank 0, which holds the
-// database's writer lock throughout.
+// shard a rank (balance/balance_shard.h: each rank balances its own run of
+// leaves in windows against their insulation layers, read from the table,
+// or asks the others for those layers in two message rounds), committed by
+// rank 0, which holds the database's writer lock throughout.
 #include <chrono>
 #include <cstdio>
 #include <sstream>
@@ -16,17 +16,26 @@ namespace weaver::mpi {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: mpirun -np N weaver-mpi balance DB [--memory BYTES] [--threads N]\n"
+    "usage: mpirun -np N weaver-mpi balance DB [--algorithm auto|windows|closure]\n"
+    "                                        [--memory BYTES] [--threads N]\n"
     "\n"
     "The minimal face+edge 2:1 balanced refinement of DB's octant table (sharded\n"
     "or not), as 'weaver balance' writes it, as a table of one shard a rank.\n"
-    "Rank r takes the r-th of N equal runs of leaves.  In two message rounds,\n"
-    "whatever the levels, each rank asks the others for their leaves that meet\n"
-    "its leaves' insulation layers (the 3 x 3 x 3 block of octants of a leaf's\n"
-    "size around it, as p4est's balance) and gets them; then it balances its\n"
-    "own leaves with those by the serial out-of-core balance, in a scratch\n"
-    "database in DB, and keeps its own.  DB must be on a file system every rank\n"
-    "sees.  'weaver compact DB' joins the shards into the serial balance's file.\n"
+    "Rank r takes the r-th of N equal runs of leaves.  A leaf's refinement\n"
+    "depends only on the leaves that meet its insulation layer (the 3 x 3 x 3\n"
+    "block of octants of its size around it, as in p4est's balance).\n"
+    "  --algorithm windows  each rank balances its run in windows, each against\n"
+    "                   the leaves of its layer read from DB's table: no message\n"
+    "                   but one byte a rank (did every window fit?)\n"
+    "  --algorithm closure  in two message rounds, whatever the levels, each rank\n"
+    "                   asks the others for their leaves in its leaves' layers\n"
+    "                   and gets them, then balances its own with those by the\n"
+    "                   closure, in a scratch database in DB\n"
+    "  --algorithm auto  windows (default), all ranks taking the closure's way\n"
+    "                   when a window on any rank does not fit in the memory or\n"
+    "                   its layer outweighs it\n"
+    "DB must be on a file system every rank sees.  'weaver compact DB' joins the\n"
+    "shards into the serial balance's file.\n"
     "\n"
     "  --memory BYTES   each rank's budget (default 256M), cut as weaver balance's\n"
     "  --threads N      threads a rank (default 1)\n";
@@ -35,13 +44,14 @@ constexpr char kUsage[] =
 
 int balance(const Comm& comm, int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory", "threads"}, {"quiet"}, &args);
+  Status st = parse_args(argc, argv, 2, {"algorithm", "memory", "threads"}, {"quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return cli::usage_error("balance", st.message(), kUsage);
   if (args.positional.size() != 1) return cli::usage_error("balance", "expected one DB", kUsage);
   BalanceOptions o;
   st = cli::memory_option(args, &o.memory);
   if (st.ok()) st = cli::threads_option(args, 1, &o.threads);
+  if (st.ok()) st = cli::balance_algorithm_option(args, &o.algorithm);
   if (!st.ok()) return cli::usage_error("balance", st.message(), kUsage);
   return run_balance(comm, args.positional[0], o);
 }

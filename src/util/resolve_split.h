@@ -4,8 +4,10 @@
 // both split their leaves this way.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "schema/octant.h"
 #include "schema/status.h"
@@ -29,6 +31,30 @@ Status split_to_resolve(const Octant& o, bool is_new, size_t count, const KeyOf&
     return Status::Ok();
   }
   return emit(o, is_new);
+}
+
+// Each of n leaves (keys in key order) resolved against `created` (key
+// order, octants required strictly inside the leaves): copy(i) for a leaf
+// with none inside it, as it is; else emit(i, leaf, is_new) for each leaf
+// of its split, in key order.
+template <typename Copy, typename Emit>
+Status resolve_leaves(const uint64_t* keys, size_t n, const std::vector<uint64_t>& created,
+                      const Copy& copy, const Emit& emit) {
+  size_t pos = created.empty() || n == 0
+                   ? created.size()
+                   : std::lower_bound(created.begin(), created.end(), keys[0]) - created.begin();
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t key = keys[i];
+    while (pos < created.size() && created[pos] <= key) ++pos;
+    if (pos == created.size() || created[pos] >= octant_key_subtree_end(key)) {
+      WEAVER_RETURN_IF_ERROR(copy(i));
+      continue;
+    }
+    WEAVER_RETURN_IF_ERROR(split_to_resolve(
+        octant_from_key(key), false, created.size(), [&](size_t j) { return created[j]; }, &pos,
+        [&](const Octant& o, bool is_new) { return emit(i, o, is_new); }));
+  }
+  return Status::Ok();
 }
 
 }  // namespace weaver

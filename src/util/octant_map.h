@@ -33,6 +33,8 @@ class OctantMap {
     const uint64_t s = slots_[probe(key)];
     return s == kEmpty ? kAbsent : static_cast<Kind>((s & kKindBits) >> kKindShift);
   }
+  // Starts loading the slot where a find of key begins.
+  void prefetch(uint64_t key) const { __builtin_prefetch(&slots_[home(key)]); }
   // Adds key as `kind` unless it is present; true if it was added.
   bool add(uint64_t key, Kind kind) {
     uint64_t& s = slots_[probe(key)];
@@ -53,9 +55,13 @@ class OctantMap {
   // fill whole blocks, and the probes run long.)
   size_t probe(uint64_t key) const {
     const size_t mask = slots_.size() - 1;
-    size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ULL) >> shift_);
+    size_t i = home(key);
     while (slots_[i] != kEmpty && (slots_[i] & ~kKindBits) != key) i = (i + 1) & mask;
     return i;
+  }
+
+  size_t home(uint64_t key) const {
+    return static_cast<size_t>((key * 0x9E3779B97F4A7C15ULL) >> shift_);
   }
 
   void grow() {

@@ -1,0 +1,396 @@
+#include "balance/window_balance.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cstring>
+#include <deque>
+#include <memory>
+#include <thread>
+
+#include "balance/forward_floor.h"
+#include "schema/octant.h"
+#include "util/local_ripple.h"
+#include "util/resolve_split.h"
+#include "util/work_queue.h"
+
+namespace weaver {
+namespace {
+
+// One window on its way from a worker to the table: the leaves with ranks
+// [first, first + count), whose keys lie in [from, to), and their
+// refinement.
+struct Window {
+  uint64_t first = 0, count = 0;
+  uint64_t from = 0, to = 0;
+  std::vector<uint64_t> keys;  // the refinement
+  std::vector<std::byte> payloads;
+  LevelCounts levels{};
+  uint64_t split = 0, created = 0, layer = 0;
+  bool fitted = true;  // false: one of its leaves outgrew the memory alone
+  Status status;
+  bool done = false;  // set by the worker (WorkQueue)
+};
+
+// Whether [key, end of its subtree) lies in [from, to).
+bool within(uint64_t key, uint64_t from, uint64_t to) {
+  return key >= from && octant_key_subtree_end(key) <= to;
+}
+
+// Whether the 3 x 3 x 3 block of leaf `key` lies inside its ancestor at
+// level `a` (the leaf touches none of the ancestor's sides): along each
+// axis, its coordinate's bits between the two levels are neither all 0 nor
+// all 1.  Read from the Morton code, without decoding.
+bool block_inside(uint64_t key, int a) {
+  const int l = octant_key_level(key);
+  if (l == a) return false;
+  const uint64_t m = octant_key_morton(key);
+  const uint64_t range =
+      ((uint64_t{1} << (3 * (kMaxLevel - a))) - 1) & ~((uint64_t{1} << (3 * (kMaxLevel - l))) - 1);
+  for (int axis = 0; axis < 3; ++axis) {
+    const uint64_t bits = (uint64_t{0x9249249249249249} << axis) & range;
+    const uint64_t mine = m & bits;
+    if (mine == 0 || mine == bits) return false;
+  }
+  return true;
+}
+
+// A worker: reads a window's leaves through its own handle on the table,
+// then balances them against their layer, cutting the window in two while
+// it does not fit in `bytes`.
+class WindowWorker {
+ public:
+  WindowWorker(BTree& leaves, uint64_t bytes, const FillPayload& fill, double layer_limit,
+               uint64_t layer_window)
+      : leaves_(leaves),
+        bytes_(bytes),
+        payload_(leaves.payload_size()),
+        fill_(fill),
+        layer_limit_(layer_limit),
+        layer_window_(layer_window) {}
+
+  // Set by any worker whose window gives up: the others stop too.
+  void share_giving_up(std::atomic<bool>* flag) { given_up_ = flag; }
+
+  void run(Window* w) {
+    if (given_up_ != nullptr && given_up_->load()) {
+      w->fitted = false;
+      return;
+    }
+    w->status = read(*w);
+    if (w->status.ok()) w->status = balance(0, keys_.size(), w->from, w->to, w);
+    if (outweighed_) {
+      w->fitted = false;
+      if (given_up_ != nullptr) given_up_->store(true);
+    }
+  }
+
+ private:
+  Status read(const Window& w) {
+    keys_.clear();
+    payloads_.clear();
+    BTreeCursor c;
+    WEAVER_RETURN_IF_ERROR(leaves_.seek_cursor(w.from, &c));
+    for (uint64_t i = 0; i < w.count && c.valid(); ++i) {
+      keys_.push_back(c.key());
+      payloads_.insert(payloads_.end(), c.payload(), c.payload() + payload_);
+      WEAVER_RETURN_IF_ERROR(c.next());
+    }
+    if (keys_.size() != w.count)
+      return Status::Corruption("the octant table changed under balance");
+    return Status::Ok();
+  }
+
+  // Own leaves [i0, i1), keys in [from, to), into w's refinement.
+  Status balance(size_t i0, size_t i1, uint64_t from, uint64_t to, Window* w) {
+    bool fits = false;
+    WEAVER_RETURN_IF_ERROR(try_balance(i0, i1, from, to, w, &fits));
+    if (fits || outweighed_) return Status::Ok();
+    if (i1 - i0 == 1) {
+      w->fitted = false;
+      return Status::Ok();
+    }
+    const size_t mid = i0 + (i1 - i0) / 2;
+    WEAVER_RETURN_IF_ERROR(balance(i0, mid, from, keys_[mid], w));
+    return w->fitted ? balance(mid, i1, keys_[mid], to, w) : Status::Ok();
+  }
+
+  // What the window holds beyond its own leaves: the layer, the local set,
+  // the ripple's map (about 24 bytes a local leaf) and what it created.
+  uint64_t held(uint64_t out_leaves) const {
+    return keys_.size() * (8 + payload_) + 8 * layer_.size() + 32 * local_.size() +
+           24 * created_.size() + out_leaves * (8 + payload_);
+  }
+
+  Status try_balance(size_t i0, size_t i1, uint64_t from, uint64_t to, Window* w, bool* fits) {
+    *fits = false;
+    WEAVER_RETURN_IF_ERROR(collect_layer(i0, i1, from, to, fits));
+    if (!*fits) return Status::Ok();
+    local_.clear();
+    local_.insert(local_.end(), layer_.begin(), layer_.begin() + layer_before_);
+    local_.insert(local_.end(), keys_.begin() + i0, keys_.begin() + i1);
+    local_.insert(local_.end(), layer_.begin() + layer_before_, layer_.end());
+    ripple_.run(local_, &created_);
+    if (held(i1 - i0) > bytes_) {
+      *fits = false;
+      return Status::Ok();
+    }
+    return refine(i0, i1, from, to, w, fits);
+  }
+
+  // The leaves outside [from, to) that meet the block of an own leaf, in
+  // key order, into layer_ (those before the window first).  An own leaf
+  // whose block lies inside the coarsest octant of the window holding it
+  // asks for nothing.
+  Status collect_layer(size_t i0, size_t i1, uint64_t from, uint64_t to, bool* fits) {
+    asked_.clear();
+    uint64_t anc = 0, anc_end = 0;  // the coarsest octant inside the window holding the leaf
+    for (size_t i = i0; i < i1; ++i) {
+      const uint64_t key = keys_[i];
+      if (key < anc || key >= anc_end) {
+        anc = key;
+        while (octant_key_level(anc) > 0 && within(octant_key_parent(anc), from, to)) {
+          anc = octant_key_parent(anc);
+        }
+        anc_end = octant_key_subtree_end(anc);
+      }
+      if (block_inside(key, octant_key_level(anc))) continue;
+      for (const Direction d : kAllDirections) {
+        uint64_t nb = 0;
+        if (octant_key_neighbour(key, d, &nb) && !within(nb, from, to)) asked_.push_back(nb);
+      }
+    }
+    std::sort(asked_.begin(), asked_.end());
+    // Keep the outermost of nested octants (an ancestor's key comes first).
+    size_t kept = 0;
+    uint64_t covered = 0;
+    for (uint64_t k : asked_) {
+      if (kept > 0 && k < covered) continue;
+      asked_[kept++] = k;
+      covered = octant_key_subtree_end(k);
+    }
+    asked_.resize(kept);
+    layer_.clear();
+    uint64_t cap = bytes_ / 8;
+    const uint64_t own = i1 - i0;
+    const bool whole = own == keys_.size() && own >= layer_window_;
+    if (layer_limit_ > 0 && whole) cap = std::min<uint64_t>(cap, layer_limit_ * double(own));
+    // Past the cap: a whole window outweighed gives up, others are cut.
+    auto over = [&] {
+      outweighed_ = layer_limit_ > 0 && whole && layer_.size() > layer_limit_ * double(own);
+      return Status::Ok();
+    };
+    ForwardFloor before, after;
+    WEAVER_RETURN_IF_ERROR(before.open(leaves_));
+    for (uint64_t k : asked_) {
+      if (k >= from) break;
+      WEAVER_RETURN_IF_ERROR(
+          collect_range(before, k, std::min(octant_key_subtree_end(k), from), from, to));
+      if (layer_.size() > cap) return over();
+    }
+    layer_before_ = layer_.size();
+    WEAVER_RETURN_IF_ERROR(after.open(leaves_, to));
+    for (uint64_t k : asked_) {
+      const uint64_t end = octant_key_subtree_end(k);
+      if (end <= to) continue;
+      WEAVER_RETURN_IF_ERROR(collect_range(after, std::max(k, to), end, from, to));
+      if (layer_.size() > cap) return over();
+    }
+    *fits = true;
+    return Status::Ok();
+  }
+
+  // The leaves meeting [lo, hi) (the one holding lo, and those with keys in
+  // it) outside [from, to), into layer_.  Calls come in key order.
+  Status collect_range(ForwardFloor& f, uint64_t lo, uint64_t hi, uint64_t from, uint64_t to) {
+    auto keep = [&](uint64_t key) {
+      if ((key < from || key >= to) && (layer_.empty() || layer_.back() != key)) {
+        layer_.push_back(key);
+      }
+    };
+    WEAVER_RETURN_IF_ERROR(f.advance_to(lo));
+    if (f.has_last() && lo < octant_key_subtree_end(f.last())) keep(f.last());
+    while (f.has_next() && f.next_key() < hi) {
+      WEAVER_RETURN_IF_ERROR(f.advance_to(f.next_key()));
+      keep(f.last());
+    }
+    return Status::Ok();
+  }
+
+  // Own leaves [i0, i1) split just enough to resolve created_, appended to
+  // w's refinement; undone if the refinement outgrows the memory.
+  Status refine(size_t i0, size_t i1, uint64_t from, uint64_t to, Window* w, bool* fits) {
+    *fits = false;
+    const size_t at = w->keys.size();
+    const uint64_t limit = bytes_ > held(0) ? (bytes_ - held(0)) / (8 + payload_) : 0;
+    uint64_t split = 0;
+    bool over = false;
+    auto add = [&](uint64_t key, size_t i) {
+      w->keys.push_back(key);
+      const std::byte* p = payloads_.data() + (i0 + i) * payload_;
+      w->payloads.insert(w->payloads.end(), p, p + payload_);
+      if (w->keys.size() - at > limit) over = true;
+    };
+    size_t last_split = SIZE_MAX;
+    const Status st = resolve_leaves(
+        keys_.data() + i0, i1 - i0, created_,
+        [&](size_t i) {
+          add(keys_[i0 + i], i);
+          return Status::Ok();
+        },
+        [&](size_t i, const Octant& o, bool is_new) {
+          if (i != last_split) last_split = i, ++split;
+          add(octant_key(o), i);
+          if (is_new && fill_ && payload_ > 0) fill_(o, &*(w->payloads.end() - payload_));
+          return over ? Status::Internal("the window outgrew its memory") : Status::Ok();
+        });
+    if (over) {  // stopped: undone, to be cut in two
+      w->keys.resize(at);
+      w->payloads.resize(at * payload_);
+      return Status::Ok();
+    }
+    WEAVER_RETURN_IF_ERROR(st);
+    for (size_t j = at; j < w->keys.size(); ++j) ++w->levels[octant_key_level(w->keys[j])];
+    w->split += split;
+    w->created += std::lower_bound(created_.begin(), created_.end(), to) -
+                  std::lower_bound(created_.begin(), created_.end(), from);
+    w->layer += layer_.size();
+    *fits = true;
+    return Status::Ok();
+  }
+
+  BTree& leaves_;
+  const uint64_t bytes_;
+  const size_t payload_;
+  const FillPayload& fill_;
+  const double layer_limit_;
+  const uint64_t layer_window_;  // windows shorter are cut, never given up
+  bool outweighed_ = false;      // a whole window's layer outweighed it: the run gives up
+  std::atomic<bool>* given_up_ = nullptr;
+  std::vector<uint64_t> keys_;  // the window's own leaves
+  std::vector<std::byte> payloads_;
+  std::vector<uint64_t> asked_;  // octants whose leaves the layer holds
+  std::vector<uint64_t> layer_;  // before the window, then after it
+  size_t layer_before_ = 0;
+  std::vector<uint64_t> local_, created_;
+  LocalRipple ripple_;
+};
+
+}  // namespace
+
+Status window_options(Database& db, BTree& leaves, const BalanceOptions& o,
+                      const BalanceMemory& memory, std::vector<std::unique_ptr<BTree>>* more,
+                      WindowOptions* wo) {
+  wo->readers = {&leaves};
+  for (int i = 1; i < o.threads; ++i) {
+    more->emplace_back();
+    WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.leaf_pool, &more->back()));
+    wo->readers.push_back(more->back().get());
+  }
+  wo->memory = memory.windows;
+  wo->window_leaves = o.window_leaves;
+  // Auto gives windows up where their layers outweigh them.
+  wo->layer_limit = o.algorithm == BalanceOptions::Algorithm::kAuto ? 1.0 : 0.0;
+  if (o.window_leaves > 0) wo->layer_window = std::min(wo->layer_window, o.window_leaves);
+  return Status::Ok();
+}
+
+Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree& out,
+                          BalanceResult* r, bool* fitted) {
+  *fitted = true;
+  BTree& first = *o.readers.at(0);
+  const uint64_t total = first.size();
+  const uint64_t lo = std::min(o.first_leaf, total), hi = std::min(o.end_leaf, total);
+  const uint64_t n = hi - lo;
+  if (n == 0) return Status::Ok();
+  const int threads = static_cast<int>(o.readers.size());
+  // Workers run ahead of the writer by a window each.
+  const size_t in_flight = threads == 1 ? 1 : 2 * size_t(threads);
+  const uint64_t slot_bytes = o.memory / in_flight;
+  // A window's own leaves, read, and their refinement, about four times as
+  // many, beside the ripple's map and the layer.
+  uint64_t leaves_per =
+      std::max<uint64_t>(1024, slot_bytes / (4 * (8 + first.payload_size()) + 64));
+  if (o.window_leaves > 0) leaves_per = std::min(leaves_per, o.window_leaves);
+  uint64_t windows = std::max<uint64_t>(1, (n + leaves_per - 1) / leaves_per);
+  if (threads > 1) windows = std::max<uint64_t>(windows, 4 * uint64_t(threads));
+  windows = std::min(windows, std::max<uint64_t>(n, 1));
+
+  std::vector<std::unique_ptr<WindowWorker>> workers;
+  for (BTree* reader : o.readers) {
+    workers.push_back(
+        std::make_unique<WindowWorker>(*reader, slot_bytes, fill, o.layer_limit, o.layer_window));
+  }
+  // Where the windows part, found before the workers use the first handle.
+  std::vector<uint64_t> starts(windows + 1, 0);
+  for (uint64_t i = 0; i <= windows; ++i) {
+    const uint64_t at = lo + n * i / windows;
+    if (at == 0 || at >= total) {
+      starts[i] = at == 0 ? 0 : UINT64_MAX;
+    } else {
+      WEAVER_RETURN_IF_ERROR(first.select(at, &starts[i], nullptr));
+    }
+  }
+  std::atomic<bool> given_up{false};
+  for (auto& w : workers) w->share_giving_up(&given_up);
+  WorkQueue<Window> queue;
+  std::vector<std::thread> pool;
+  if (threads > 1) {
+    for (int i = 0; i < threads; ++i) {
+      pool.emplace_back([&, i] {
+        while (Window* w = queue.pop()) {
+          workers[i]->run(w);
+          queue.finish(w);
+        }
+      });
+    }
+  }
+  uint64_t next = 0;
+  auto add = [&](std::deque<std::unique_ptr<Window>>* flight) {
+    auto w = std::make_unique<Window>();
+    w->first = lo + n * next / windows;
+    w->count = lo + n * (next + 1) / windows - w->first;
+    w->from = starts[next];
+    w->to = starts[next + 1];
+    ++next;
+    if (threads > 1) queue.push(w.get());
+    flight->push_back(std::move(w));
+  };
+  std::deque<std::unique_ptr<Window>> flight;  // key order
+  Status st;
+  uint64_t read = 0;
+  while (st.ok()) {
+    while (flight.size() < in_flight && next < windows) add(&flight);
+    if (flight.empty()) break;
+    Window* head = flight.front().get();
+    if (threads > 1) {
+      queue.wait_done(head);
+    } else {
+      workers[0]->run(head);
+    }
+    st = head->status;
+    if (st.ok() && !head->fitted) {
+      *fitted = false;
+      break;
+    }
+    if (st.ok()) st = out.append_batch(head->keys.data(), head->payloads.data(), head->keys.size());
+    if (!st.ok()) break;
+    for (int l = 0; l <= kMaxLevel; ++l) r->levels[l] += head->levels[l];
+    r->output_leaves += head->keys.size();
+    r->split += head->split;
+    r->required += head->created;
+    r->layer_leaves += head->layer;
+    read += head->count;
+    if (o.progress) o.progress(read, double(read) / std::max<uint64_t>(n, 1));
+    flight.pop_front();
+  }
+  r->input_leaves = read;
+  r->by_windows = *fitted;
+  if (threads > 1) {
+    for (auto& w : flight) queue.wait_done(w.get());
+    queue.stop();
+    for (auto& t : pool) t.join();
+  }
+  return st;
+}
+
+}  // namespace weaver
