@@ -1,7 +1,9 @@
 #include "balance/window_balance.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
+#include <bit>
 #include <cstring>
 #include <deque>
 #include <memory>
@@ -10,6 +12,7 @@
 #include "balance/forward_floor.h"
 #include "schema/octant.h"
 #include "util/local_ripple.h"
+#include "util/radix_sort.h"
 #include "util/resolve_split.h"
 #include "util/work_queue.h"
 
@@ -36,23 +39,45 @@ bool within(uint64_t key, uint64_t from, uint64_t to) {
   return key >= from && octant_key_subtree_end(key) <= to;
 }
 
-// Whether the 3 x 3 x 3 block of leaf `key` lies inside its ancestor at
-// level `a` (the leaf touches none of the ancestor's sides): along each
-// axis, its coordinate's bits between the two levels are neither all 0 nor
-// all 1.  Read from the Morton code, without decoding.
-bool block_inside(uint64_t key, int a) {
+// The sides of its ancestor at level `a` that leaf `key` touches: bit 2k
+// the low side along axis k, bit 2k + 1 the high one (all six when the
+// leaf is the ancestor).  Along each axis, the leaf's coordinate bits
+// between the two levels are all 0 or all 1 there; read from the Morton
+// code, without decoding.  None: the leaf's 3 x 3 x 3 block lies inside.
+unsigned touched_sides(uint64_t key, int a) {
   const int l = octant_key_level(key);
-  if (l == a) return false;
+  if (l == a) return 63;
   const uint64_t m = octant_key_morton(key);
-  const uint64_t range =
-      ((uint64_t{1} << (3 * (kMaxLevel - a))) - 1) & ~((uint64_t{1} << (3 * (kMaxLevel - l))) - 1);
+  const uint64_t range = ((uint64_t{1} << (3 * (kMaxLevel - a))) - 1) &
+                         ~((uint64_t{1} << (3 * (kMaxLevel - l))) - 1);
+  unsigned sides = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const uint64_t bits = (uint64_t{0x9249249249249249} << axis) & range;
     const uint64_t mine = m & bits;
-    if (mine == 0 || mine == bits) return false;
+    if (mine == 0) sides |= 1u << (2 * axis);
+    if (mine == bits) sides |= 1u << (2 * axis + 1);
   }
-  return true;
+  return sides;
 }
+
+// By the sides touched: the directions (a bit each, as in kAllDirections)
+// whose neighbour crosses one of them.
+constexpr std::array<uint32_t, 64> crossing_table() {
+  std::array<uint32_t, 64> t{};
+  for (unsigned sides = 0; sides < 64; ++sides) {
+    for (size_t i = 0; i < kAllDirections.size(); ++i) {
+      const int step[3] = {kAllDirections[i].dx, kAllDirections[i].dy, kAllDirections[i].dz};
+      for (int axis = 0; axis < 3; ++axis) {
+        if ((step[axis] < 0 && (sides >> (2 * axis) & 1)) ||
+            (step[axis] > 0 && (sides >> (2 * axis + 1) & 1))) {
+          t[sides] |= 1u << i;
+        }
+      }
+    }
+  }
+  return t;
+}
+constexpr std::array<uint32_t, 64> kCrossing = crossing_table();
 
 // A worker: reads a window's leaves through its own handle on the table,
 // then balances them against their layer, cutting the window in two while
@@ -153,13 +178,16 @@ class WindowWorker {
         }
         anc_end = octant_key_subtree_end(anc);
       }
-      if (block_inside(key, octant_key_level(anc))) continue;
-      for (const Direction d : kAllDirections) {
+      const uint32_t crossing = kCrossing[touched_sides(key, octant_key_level(anc))];
+      for (uint32_t bits = crossing; bits != 0; bits &= bits - 1) {
         uint64_t nb = 0;
-        if (octant_key_neighbour(key, d, &nb) && !within(nb, from, to)) asked_.push_back(nb);
+        if (octant_key_neighbour(key, kAllDirections[std::countr_zero(bits)], &nb) &&
+            !within(nb, from, to)) {
+          asked_.push_back(nb);
+        }
       }
     }
-    std::sort(asked_.begin(), asked_.end());
+    radix_sort_by(asked_, scratch_, [](uint64_t k) { return k; });
     // Keep the outermost of nested octants (an ancestor's key comes first).
     size_t kept = 0;
     uint64_t covered = 0;
@@ -269,6 +297,7 @@ class WindowWorker {
   std::vector<uint64_t> keys_;  // the window's own leaves
   std::vector<std::byte> payloads_;
   std::vector<uint64_t> asked_;  // octants whose leaves the layer holds
+  std::vector<uint64_t> scratch_;
   std::vector<uint64_t> layer_;  // before the window, then after it
   size_t layer_before_ = 0;
   std::vector<uint64_t> local_, created_;

@@ -4,6 +4,7 @@
 #include <bit>
 
 #include "util/parent_asks.h"
+#include "util/radix_sort.h"
 
 namespace weaver {
 namespace {
@@ -42,11 +43,19 @@ void LocalRipple::run(const std::vector<uint64_t>& local, std::vector<uint64_t>*
   while (coarsest <= kMaxLevel && count[coarsest] == 0) ++coarsest;
   while (finest >= 0 && count[finest] == 0) --finest;
   if (finest - coarsest < 2) return;
-  map_.reset(local.size() / 4 + 64);
+  // Room for the leaves it holds and their ancestors (a seventh as many,
+  // where families are whole), and some created octants, without growing.
+  size_t held = 0;
+  for (int l = coarsest; l <= finest - 2; ++l) held += count[l];
+  map_.reset(held + local.size() / 4 + 64);
   uint64_t last_parent = ~uint64_t{0};
   constexpr size_t kAhead = 16;  // map slots prefetched this many leaves ahead
   for (size_t i = 0; i < local.size(); ++i) {
-    if (i + kAhead < local.size()) map_.prefetch(local[i + kAhead]);
+    if (i + kAhead < local.size()) {
+      const uint64_t ahead = local[i + kAhead];
+      map_.prefetch(ahead);
+      if (octant_key_level(ahead) > 0) map_.prefetch(octant_key_parent(ahead));
+    }
     const uint64_t key = local[i];
     const int level = octant_key_level(key);
     if (level <= finest - 2) map_.add(key, OctantMap::kLeaf);
@@ -60,7 +69,7 @@ void LocalRipple::run(const std::vector<uint64_t>& local, std::vector<uint64_t>*
     }
   }
   for (int l = finest; l >= 1; --l) ask_level(l, created);
-  std::sort(created->begin(), created->end());
+  radix_sort_by(*created, scratch_, [](uint64_t k) { return k; });
 }
 
 // Neighbour nb of a level-l parent: created if it lies strictly inside a
@@ -98,8 +107,7 @@ void LocalRipple::add_ask(int level, uint64_t parent, unsigned child_bit) {
 void LocalRipple::ask_level(int l, std::vector<uint64_t>* created) {
   std::vector<Ask>& asks = asks_[l];
   if (unsorted_[l]) {
-    std::sort(asks.begin(), asks.end(),
-              [](const Ask& a, const Ask& b) { return a.parent < b.parent; });
+    radix_sort_by(asks, ask_scratch_, [](const Ask& a) { return a.parent; });
     size_t n = 0;
     for (const Ask& a : asks) {
       if (n > 0 && asks[n - 1].parent == a.parent) {

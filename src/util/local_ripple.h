@@ -41,6 +41,8 @@ class LocalRipple {
   OctantMap map_;
   std::array<std::vector<Ask>, kMaxLevel + 1> asks_;  // by the level of the children
   std::array<bool, kMaxLevel + 1> unsorted_{};        // created octants added to asks_
+  std::vector<uint64_t> scratch_;                     // the radix sorts' other buffers
+  std::vector<Ask> ask_scratch_;
 };
 
 }  // namespace weaver
