@@ -139,7 +139,6 @@ TEST_F(BalanceTest, WindowsOfAnyLengthMatchTheReference) {
     // for the closure: the same table.
     o.algorithm =
         t % 5 == 4 ? BalanceOptions::Algorithm::kAuto : BalanceOptions::Algorithm::kWindows;
-    if (t % 5 == 4) o.threads = 2 + t % 2;  // auto on one thread is the closure
     if (t % 4 == 3) o.memory = MemoryBudget(64 << 10);
     SCOPED_TRACE("case " + std::to_string(t) + ": " + std::to_string(leaves.size()) +
                  " leaves, windows of " + std::to_string(o.window_leaves) + ", " +

@@ -134,9 +134,7 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   if (o.output_packed >= 0) topt.packed = o.output_packed == 1;
   std::unique_ptr<VelocityModel> model;
   const FillPayload fill = model_material_fill(topt, memory.model, o.threads, &model);
-  using Algorithm = BalanceOptions::Algorithm;
-  const bool windows =
-      o.algorithm == Algorithm::kWindows || (o.algorithm == Algorithm::kAuto && o.threads > 1);
+  const bool windows = o.algorithm != BalanceOptions::Algorithm::kClosure;
   if (windows && o.keep_from == 0 && o.keep_to == UINT64_MAX) {
     bool fitted = false;
     WEAVER_RETURN_IF_ERROR(balance_by_windows(*db, *leaves, o, memory, topt, fill, r, &fitted));

@@ -38,13 +38,12 @@ struct BalanceOptions {
   // whose other leaves are its neighbours' (balance_shard.h).
   uint64_t keep_from = 0, keep_to = UINT64_MAX;
   // How: in windows (window_balance.h), or by the closure (closure.h).
-  // Auto takes windows on more than one thread or rank, where the threads
-  // share no pass (at 1 Hz the second thread gives 1.97x), and gives up
-  // for the closure when a window's layer outweighs its own leaves (coarse
-  // leaves among fine ones, as in random refinement); on one thread the
-  // closure, which is faster there.  Windows that do not fit in the
-  // memory, even as one leaf, fall back to the closure too.  The table is
-  // the same every way.
+  // Auto takes windows, whose threads share no pass (at 1 Hz the second
+  // gives 1.7x), and gives up for the closure when a window's layer
+  // outweighs its own leaves (coarse leaves among fine ones, as in random
+  // refinement: the layers would be read again and again).  Windows that
+  // do not fit in the memory even when short fall back to the closure
+  // too.  The table is the same every way.
   enum class Algorithm { kAuto, kWindows, kClosure };
   Algorithm algorithm = Algorithm::kAuto;
   uint64_t window_leaves = 0;  // tests: windows at most this long (0: as the memory allows)

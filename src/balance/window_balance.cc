@@ -48,8 +48,8 @@ unsigned touched_sides(uint64_t key, int a) {
   const int l = octant_key_level(key);
   if (l == a) return 63;
   const uint64_t m = octant_key_morton(key);
-  const uint64_t range = ((uint64_t{1} << (3 * (kMaxLevel - a))) - 1) &
-                         ~((uint64_t{1} << (3 * (kMaxLevel - l))) - 1);
+  const uint64_t range =
+      ((uint64_t{1} << (3 * (kMaxLevel - a))) - 1) & ~((uint64_t{1} << (3 * (kMaxLevel - l))) - 1);
   unsigned sides = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const uint64_t bits = (uint64_t{0x9249249249249249} << axis) & range;
@@ -84,14 +84,14 @@ constexpr std::array<uint32_t, 64> kCrossing = crossing_table();
 // it does not fit in `bytes`.
 class WindowWorker {
  public:
-  WindowWorker(BTree& leaves, uint64_t bytes, const FillPayload& fill, double layer_limit,
-               uint64_t layer_window)
+  WindowWorker(BTree& leaves, uint64_t bytes, const FillPayload& fill, const WindowOptions& o)
       : leaves_(leaves),
         bytes_(bytes),
         payload_(leaves.payload_size()),
         fill_(fill),
-        layer_limit_(layer_limit),
-        layer_window_(layer_window) {}
+        layer_limit_(o.layer_limit),
+        layer_window_(o.layer_window),
+        least_cut_(o.least_cut) {}
 
   // Set by any worker whose window gives up: the others stop too.
   void share_giving_up(std::atomic<bool>* flag) { given_up_ = flag; }
@@ -130,7 +130,7 @@ class WindowWorker {
     bool fits = false;
     WEAVER_RETURN_IF_ERROR(try_balance(i0, i1, from, to, w, &fits));
     if (fits || outweighed_) return Status::Ok();
-    if (i1 - i0 == 1) {
+    if (i1 - i0 <= least_cut_) {  // short, and still too much: give up
       w->fitted = false;
       return Status::Ok();
     }
@@ -139,11 +139,12 @@ class WindowWorker {
     return w->fitted ? balance(mid, i1, keys_[mid], to, w) : Status::Ok();
   }
 
-  // What the window holds beyond its own leaves: the layer, the local set,
-  // the ripple's map (about 24 bytes a local leaf) and what it created.
+  // What the window holds: its own leaves, what it asked for, the layer,
+  // the local set, the ripple's map, asks and what it created, and the
+  // refinement.
   uint64_t held(uint64_t out_leaves) const {
-    return keys_.size() * (8 + payload_) + 8 * layer_.size() + 32 * local_.size() +
-           24 * created_.size() + out_leaves * (8 + payload_);
+    return keys_.size() * (8 + payload_) + 16 * asked_.size() + 8 * layer_.size() +
+           8 * local_.size() + ripple_.bytes(created_) + out_leaves * (8 + payload_);
   }
 
   Status try_balance(size_t i0, size_t i1, uint64_t from, uint64_t to, Window* w, bool* fits) {
@@ -154,7 +155,11 @@ class WindowWorker {
     local_.insert(local_.end(), layer_.begin(), layer_.begin() + layer_before_);
     local_.insert(local_.end(), keys_.begin() + i0, keys_.begin() + i1);
     local_.insert(local_.end(), layer_.begin() + layer_before_, layer_.end());
-    ripple_.run(local_, &created_);
+    const uint64_t before = held(i1 - i0) - ripple_.bytes(created_);
+    if (!ripple_.run(local_, &created_, before < bytes_ ? bytes_ - before : 0)) {
+      *fits = false;
+      return Status::Ok();
+    }
     if (held(i1 - i0) > bytes_) {
       *fits = false;
       return Status::Ok();
@@ -168,6 +173,9 @@ class WindowWorker {
   // asks for nothing.
   Status collect_layer(size_t i0, size_t i1, uint64_t from, uint64_t to, bool* fits) {
     asked_.clear();
+    // The octants asked, with the sort's buffer, within a quarter of the
+    // memory: compacted when they reach it, the window cut if that fails.
+    const size_t ask_cap = std::max<uint64_t>(1024, bytes_ / 64);
     uint64_t anc = 0, anc_end = 0;  // the coarsest octant inside the window holding the leaf
     for (size_t i = i0; i < i1; ++i) {
       const uint64_t key = keys_[i];
@@ -186,19 +194,14 @@ class WindowWorker {
           asked_.push_back(nb);
         }
       }
+      if (asked_.size() >= ask_cap) {
+        compact_asked();
+        if (asked_.size() >= ask_cap / 2) return Status::Ok();  // too many: cut the window
+      }
     }
-    radix_sort_by(asked_, scratch_, [](uint64_t k) { return k; });
-    // Keep the outermost of nested octants (an ancestor's key comes first).
-    size_t kept = 0;
-    uint64_t covered = 0;
-    for (uint64_t k : asked_) {
-      if (kept > 0 && k < covered) continue;
-      asked_[kept++] = k;
-      covered = octant_key_subtree_end(k);
-    }
-    asked_.resize(kept);
+    compact_asked();
     layer_.clear();
-    uint64_t cap = bytes_ / 8;
+    uint64_t cap = bytes_ / 64;  // each layer leaf: in the layer, the local set and the map
     const uint64_t own = i1 - i0;
     const bool whole = own == keys_.size() && own >= layer_window_;
     if (layer_limit_ > 0 && whole) cap = std::min<uint64_t>(cap, layer_limit_ * double(own));
@@ -225,6 +228,20 @@ class WindowWorker {
     }
     *fits = true;
     return Status::Ok();
+  }
+
+  // asked_ sorted, once each, keeping the outermost of nested octants (an
+  // ancestor's key comes first).
+  void compact_asked() {
+    radix_sort_by(asked_, scratch_, [](uint64_t k) { return k; });
+    size_t kept = 0;
+    uint64_t covered = 0;
+    for (uint64_t k : asked_) {
+      if (kept > 0 && k < covered) continue;
+      asked_[kept++] = k;
+      covered = octant_key_subtree_end(k);
+    }
+    asked_.resize(kept);
   }
 
   // The leaves meeting [lo, hi) (the one holding lo, and those with keys in
@@ -291,7 +308,8 @@ class WindowWorker {
   const size_t payload_;
   const FillPayload& fill_;
   const double layer_limit_;
-  const uint64_t layer_window_;  // windows shorter are cut, never given up
+  const uint64_t layer_window_;  // whole windows this long give up when outweighed
+  const uint64_t least_cut_;     // windows this short that do not fit give up
   bool outweighed_ = false;      // a whole window's layer outweighed it: the run gives up
   std::atomic<bool>* given_up_ = nullptr;
   std::vector<uint64_t> keys_;  // the window's own leaves
@@ -317,9 +335,17 @@ Status window_options(Database& db, BTree& leaves, const BalanceOptions& o,
   }
   wo->memory = memory.windows;
   wo->window_leaves = o.window_leaves;
-  // Auto gives windows up where their layers outweigh them.
-  wo->layer_limit = o.algorithm == BalanceOptions::Algorithm::kAuto ? 1.0 : 0.0;
-  if (o.window_leaves > 0) wo->layer_window = std::min(wo->layer_window, o.window_leaves);
+  // Auto gives windows up where their layers outweigh them; windows asked
+  // for, where their layers are many times as long (cut after cut would
+  // read them again and again).
+  const bool auto_way = o.algorithm == BalanceOptions::Algorithm::kAuto;
+  wo->layer_limit = auto_way ? 1.0 : 16.0;
+  // Tests' short windows: auto gives them up when outweighed; all are cut
+  // down to one leaf.
+  if (o.window_leaves > 0) {
+    if (auto_way) wo->layer_window = std::min(wo->layer_window, o.window_leaves);
+    wo->least_cut = 1;
+  }
   return Status::Ok();
 }
 
@@ -336,9 +362,9 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
   const size_t in_flight = threads == 1 ? 1 : 2 * size_t(threads);
   const uint64_t slot_bytes = o.memory / in_flight;
   // A window's own leaves, read, and their refinement, about four times as
-  // many, beside the ripple's map and the layer.
+  // many, beside the local set, the ripple's map and what it creates.
   uint64_t leaves_per =
-      std::max<uint64_t>(1024, slot_bytes / (4 * (8 + first.payload_size()) + 64));
+      std::max<uint64_t>(1024, slot_bytes / (4 * (8 + first.payload_size()) + 160));
   if (o.window_leaves > 0) leaves_per = std::min(leaves_per, o.window_leaves);
   uint64_t windows = std::max<uint64_t>(1, (n + leaves_per - 1) / leaves_per);
   if (threads > 1) windows = std::max<uint64_t>(windows, 4 * uint64_t(threads));
@@ -346,8 +372,7 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
 
   std::vector<std::unique_ptr<WindowWorker>> workers;
   for (BTree* reader : o.readers) {
-    workers.push_back(
-        std::make_unique<WindowWorker>(*reader, slot_bytes, fill, o.layer_limit, o.layer_window));
+    workers.push_back(std::make_unique<WindowWorker>(*reader, slot_bytes, fill, o));
   }
   // Where the windows part, found before the workers use the first handle.
   std::vector<uint64_t> starts(windows + 1, 0);

@@ -13,9 +13,10 @@
 // is read once, plus the layers; nothing goes through a sort on disk.
 //
 // A window whose layer, ripple or refinement outgrows its share of memory
-// is cut in two, and so on.  A single leaf that still does (a very coarse
-// leaf beside very many fine ones) gives up: *fitted is false, `out` holds
-// a part, and the caller balances by the closure instead.
+// is cut in two, and so on.  A short window that still does (a very coarse
+// leaf beside very many fine ones), or a layer that outweighs its window
+// many times, gives up: *fitted is false, `out` holds a part, and the
+// caller balances by the closure instead.
 #pragma once
 
 #include <cstdint>
@@ -41,10 +42,11 @@ struct WindowOptions {
   // are written (one rank's part of weaver-mpi balance); the layers come
   // from the whole table all the same.
   uint64_t first_leaf = 0, end_leaf = UINT64_MAX;
-  // Give up (*fitted false) when a window of at least layer_window leaves
-  // has a layer more than layer_limit times as long (0: never).
+  // Give up (*fitted false) when a whole window of at least layer_window
+  // leaves has a layer more than layer_limit times as long (0: never), or
+  // when a window of at most least_cut leaves does not fit.
   double layer_limit = 0;
-  uint64_t layer_window = 4096;
+  uint64_t layer_window = 4096, least_cut = 4096;
 };
 
 // The windows' options as balance's ask (its algorithm, memory share and

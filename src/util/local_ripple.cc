@@ -35,14 +35,15 @@ constexpr std::array<uint32_t, 8> kLeavingParent = leaving_parent_table();
 // do; and only the leaves two levels coarser than the finest go into the
 // map as leaves: the others are found resolved all the same, since their
 // parents are inner.
-void LocalRipple::run(const std::vector<uint64_t>& local, std::vector<uint64_t>* created) {
+bool LocalRipple::run(const std::vector<uint64_t>& local, std::vector<uint64_t>* created,
+                      size_t max_bytes) {
   created->clear();
   LevelCounts count{};
   for (uint64_t key : local) ++count[octant_key_level(key)];
   int coarsest = 0, finest = kMaxLevel;
   while (coarsest <= kMaxLevel && count[coarsest] == 0) ++coarsest;
   while (finest >= 0 && count[finest] == 0) --finest;
-  if (finest - coarsest < 2) return;
+  if (finest - coarsest < 2) return true;
   // Room for the leaves it holds and their ancestors (a seventh as many,
   // where families are whole), and some created octants, without growing.
   size_t held = 0;
@@ -68,8 +69,21 @@ void LocalRipple::run(const std::vector<uint64_t>& local, std::vector<uint64_t>*
       q = octant_key_parent(q);
     }
   }
-  for (int l = finest; l >= 1; --l) ask_level(l, created);
+  for (int l = finest; l >= 1; --l) {
+    if (!ask_level(l, created, max_bytes)) {
+      for (auto& asks : asks_) asks.clear();
+      unsorted_ = {};
+      return false;
+    }
+  }
   radix_sort_by(*created, scratch_, [](uint64_t k) { return k; });
+  return true;
+}
+
+size_t LocalRipple::bytes(const std::vector<uint64_t>& created) const {
+  size_t n = map_.bytes() + created.capacity() * sizeof(uint64_t);
+  for (const auto& asks : asks_) n += asks.capacity() * sizeof(Ask);
+  return n;
 }
 
 // Neighbour nb of a level-l parent: created if it lies strictly inside a
@@ -104,7 +118,7 @@ void LocalRipple::add_ask(int level, uint64_t parent, unsigned child_bit) {
 // The asks of level l's parents: each neighbour one level coarser that is
 // strictly inside a leaf (its nearest octant in the map, going up, is a
 // leaf or created) is created, and its parent asks in turn at level l - 1.
-void LocalRipple::ask_level(int l, std::vector<uint64_t>* created) {
+bool LocalRipple::ask_level(int l, std::vector<uint64_t>* created, size_t max_bytes) {
   std::vector<Ask>& asks = asks_[l];
   if (unsorted_[l]) {
     radix_sort_by(asks, ask_scratch_, [](const Ask& a) { return a.parent; });
@@ -144,8 +158,10 @@ void LocalRipple::ask_level(int l, std::vector<uint64_t>* created) {
       }
     }
     for (size_t k = 0; k < n; ++k) consider(near[k], l, created);
+    if ((b & 255) == 0 && bytes(*created) > max_bytes) return false;
   }
   asks.clear();
+  return true;
 }
 
 }  // namespace weaver

@@ -24,8 +24,12 @@ namespace weaver {
 class LocalRipple {
  public:
   // local: leaves in key order.  *created: the octants required strictly
-  // inside a local leaf, in key order.
-  void run(const std::vector<uint64_t>& local, std::vector<uint64_t>* created);
+  // inside a local leaf, in key order.  False (and *created incomplete)
+  // once its map, asks and *created would take more than max_bytes.
+  bool run(const std::vector<uint64_t>& local, std::vector<uint64_t>* created,
+           size_t max_bytes = SIZE_MAX);
+  // What its map and asks hold, and `created`.
+  size_t bytes(const std::vector<uint64_t>& created) const;
 
  private:
   struct Ask {
@@ -35,7 +39,7 @@ class LocalRipple {
   };
 
   void add_ask(int level, uint64_t parent, unsigned child_bit);
-  void ask_level(int level, std::vector<uint64_t>* created);
+  bool ask_level(int level, std::vector<uint64_t>* created, size_t max_bytes);
   void consider(uint64_t nb, int level, std::vector<uint64_t>* created);
 
   OctantMap map_;

@@ -21,7 +21,9 @@ class OctantMap {
   void reset(size_t keys) {
     count_ = 0;
     const size_t slots = std::bit_ceil(std::max<size_t>(128, 2 * keys));
-    if (slots_.size() != slots) {
+    if (slots_.capacity() > 4 * slots) {
+      slots_ = std::vector<uint64_t>(slots, kEmpty);  // give back what a larger set took
+    } else if (slots_.size() != slots) {
       slots_.assign(slots, kEmpty);
     } else {
       std::fill(slots_.begin(), slots_.end(), kEmpty);
@@ -33,6 +35,7 @@ class OctantMap {
     const uint64_t s = slots_[probe(key)];
     return s == kEmpty ? kAbsent : static_cast<Kind>((s & kKindBits) >> kKindShift);
   }
+  size_t bytes() const { return slots_.capacity() * sizeof(uint64_t); }
   // Starts loading the slot where a find of key begins.
   void prefetch(uint64_t key) const { __builtin_prefetch(&slots_[home(key)]); }
   // Adds key as `kind` unless it is present; true if it was added.
