@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <string>
@@ -174,6 +175,27 @@ inline std::string run_program(const std::vector<std::string>& args, uint64_t* p
   }
   close(fds[1]);
   return collect_child(pid, fds[0], peak_rss);
+}
+
+// The file of db's octant table (its first, for a sharded one).
+inline std::string octant_table(const std::string& db) {
+  for (const auto& e : std::filesystem::directory_iterator(db)) {
+    if (e.path().filename().string().rfind("octants-", 0) == 0) return e.path().string();
+  }
+  return "";
+}
+
+// Whether two files hold the same bytes.
+inline bool same_bytes(const std::string& a, const std::string& b) {
+  std::ifstream fa(a, std::ios::binary), fb(b, std::ios::binary);
+  std::vector<char> x(1 << 20), y(1 << 20);
+  while (fa && fb) {
+    fa.read(x.data(), x.size());
+    fb.read(y.data(), y.size());
+    if (fa.gcount() != fb.gcount() || !std::equal(x.begin(), x.begin() + fa.gcount(), y.begin()))
+      return false;
+  }
+  return !fa && !fb;
 }
 
 // Parses the flat objects Json::str() writes: {"k": value, ...}.

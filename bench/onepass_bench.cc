@@ -52,25 +52,6 @@ uint64_t peak_disk_while(const std::string& dir, Fn fn) {
   return std::max<uint64_t>(peak, directory_bytes(dir));
 }
 
-std::string octant_table(const std::string& db) {
-  for (const auto& e : std::filesystem::directory_iterator(db)) {
-    if (e.path().filename().string().rfind("octants-", 0) == 0) return e.path().string();
-  }
-  return "";
-}
-
-bool same_bytes(const std::string& a, const std::string& b) {
-  std::ifstream fa(a, std::ios::binary), fb(b, std::ios::binary);
-  std::vector<char> x(1 << 20), y(1 << 20);
-  while (fa && fb) {
-    fa.read(x.data(), x.size());
-    fb.read(y.data(), y.size());
-    if (fa.gcount() != fb.gcount() || !std::equal(x.begin(), x.begin() + fa.gcount(), y.begin()))
-      return false;
-  }
-  return !fa && !fb;
-}
-
 // The seconds a stage line of `weaver mesh` gives ("construct  N leaves  12.3s ...").
 double stage_seconds(const std::string& out, const std::string& stage) {
   std::istringstream in(out);
