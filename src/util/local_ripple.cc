@@ -49,6 +49,7 @@ bool LocalRipple::run(const std::vector<uint64_t>& local, std::vector<uint64_t>*
   size_t held = 0;
   for (int l = coarsest; l <= finest - 2; ++l) held += count[l];
   map_.reset(held + local.size() / 4 + 64);
+  within_ = within_end_ = 0;
   uint64_t last_parent = ~uint64_t{0};
   constexpr size_t kAhead = 16;  // map slots prefetched this many leaves ahead
   for (size_t i = 0; i < local.size(); ++i) {
@@ -90,12 +91,20 @@ size_t LocalRipple::bytes(const std::vector<uint64_t>& created) const {
 // leaf and is not there already.
 void LocalRipple::consider(uint64_t nb, int l, std::vector<uint64_t>* created) {
   if (map_.find(nb) != OctantMap::kAbsent) return;  // resolved, or created already
-  OctantMap::Kind above = OctantMap::kAbsent;
-  for (uint64_t q = nb; above == OctantMap::kAbsent;) {
-    q = octant_key_parent(q);
-    above = map_.find(q);
+  // Inside the leaf (or created octant) the last walk ended at: nothing
+  // inner lies between (inner octants hold leaves), so nb is created too.
+  // Neighbours come in key order, so the walk is mostly saved.
+  if (nb <= within_ || nb >= within_end_) {
+    OctantMap::Kind above = OctantMap::kAbsent;
+    uint64_t q = nb;
+    while (above == OctantMap::kAbsent) {
+      q = octant_key_parent(q);
+      above = map_.find(q);
+    }
+    if (above == OctantMap::kInner) return;
+    within_ = q;
+    within_end_ = octant_key_subtree_end(q);
   }
-  if (above == OctantMap::kInner) return;
   map_.add(nb, OctantMap::kCreated);
   created->push_back(nb);
   if (l - 1 > 0) {

@@ -43,6 +43,7 @@ class LocalRipple {
   void consider(uint64_t nb, int level, std::vector<uint64_t>* created);
 
   OctantMap map_;
+  uint64_t within_ = 0, within_end_ = 0;  // the leaf or created octant consider() last found
   std::array<std::vector<Ask>, kMaxLevel + 1> asks_;  // by the level of the children
   std::array<bool, kMaxLevel + 1> unsorted_{};        // created octants added to asks_
   std::vector<uint64_t> scratch_;                     // the radix sorts' other buffers
