@@ -1,13 +1,15 @@
 #!/usr/bin/env python3
 """weaver-mpi against weaver in one process on the same machine.
 
-For the basin at --freq (default 1 Hz): each stage (construct, balance,
-extract) by `weaver STAGE --threads T` and by `mpirun -np N weaver-mpi STAGE`
-(one thread a rank), each a fresh process, --repeat times.  Prints one JSON
-object per run, then a table of medians: wall time per stage and in all, the
-ratio MPI / threads, and per rank: time, records, bytes and messages sent and
-received (the exchanged ghost and insulation layers), bytes written, and
-their ratio, and peak RSS.
+For the basin at --freq (default 1 Hz): each stage of the two-pass
+pipeline (construct --unbalanced, balance, extract) by `weaver STAGE
+--threads T` and by `mpirun -np N weaver-mpi STAGE` (one thread a rank),
+then `mesh` (the balanced construct and extract, one commit) both ways, each
+a fresh process, --repeat times.  Prints one JSON object per run, then a
+table of medians: wall time per stage and of mesh, the ratio MPI / threads,
+and per rank: time, records, bytes and messages sent and received (the
+exchanged ghost layers, and the one byte a rank that tells whether every
+window of balance fitted), bytes written, and their ratio, and peak RSS.
 
     python3 bench/mpi_bench.py --np 2 --threads 2 --freq 1 --repeat 3
 """
@@ -36,8 +38,13 @@ def run(cmd, env=None):
     return time.monotonic() - t0, out, rss
 
 
+def stage_options(args, stage):
+    model = ["--model", "basin", "--freq", str(args.freq)]
+    return {"construct": model + ["--unbalanced"], "mesh": model}.get(stage, [])
+
+
 def serial(args, db, stage):
-    opts = {"construct": ["--model", "basin", "--freq", str(args.freq)]}.get(stage, [])
+    opts = stage_options(args, stage)
     cmd = [args.weaver, stage, db] + opts + ["--threads", str(args.threads), "--quiet",
                                              "--memory", args.memory]
     secs, _, _ = run(cmd)
@@ -45,7 +52,7 @@ def serial(args, db, stage):
 
 
 def parallel(args, db, stage):
-    opts = {"construct": ["--model", "basin", "--freq", str(args.freq)]}.get(stage, [])
+    opts = stage_options(args, stage)
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
     cmd = ["mpirun", "--oversubscribe", "-np", str(args.np), args.mpi, stage, db] + opts + \
         ["--quiet", "--memory", args.memory]
@@ -79,7 +86,9 @@ def main():
             db = os.path.join(args.dir, mode + ".db")
             shutil.rmtree(db, ignore_errors=True)
             os.makedirs(args.dir, exist_ok=True)
-            for stage in ("construct", "balance", "extract"):
+            for stage in ("construct", "balance", "extract", "mesh"):
+                if stage == "mesh":
+                    shutil.rmtree(db, ignore_errors=True)
                 r = fn(args, db, stage)
                 r["freq"] = args.freq
                 print(json.dumps(r), flush=True)
@@ -99,11 +108,13 @@ def main():
         total_t += t
         total_m += m
         print(f"{stage:10} {t:10.2f} {m:8.2f} {m / t:12.2f}")
-    print(f"{'mesh':10} {total_t:10.2f} {total_m:8.2f} {total_m / total_t:12.2f}")
+    print(f"{'3 stages':10} {total_t:10.2f} {total_m:8.2f} {total_m / total_t:12.2f}")
+    t, m = med("threads", "mesh"), med("mpi", "mesh")
+    print(f"{'mesh':10} {t:10.2f} {m:8.2f} {m / t:12.2f}")
     print(f"\nper rank (last run): records, time, exchanged bytes against written, peak RSS")
     print(f"{'stage':9} {'rank':>4} {'records':>11} {'s':>7} {'sent B':>10} {'msgs':>5} "
           f"{'recv B':>10} {'written B':>11} {'exch/wr':>8} {'RSS MB':>7}")
-    for r in runs[-3:]:
+    for r in runs[-4:-1]:
         for k in r.get("ranks", []):
             ratio = (k["bytes_sent"] + k["bytes_received"]) / max(1, k["bytes_written"])
             print(f"{r['stage']:9} {k['rank']:4} {k['records']:11} {k['seconds']:7.2f} "

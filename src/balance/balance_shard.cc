@@ -273,6 +273,8 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
     // one failed or did not fit, all go the way of the exchanges (where an
     // error takes part too, and is returned at the end).
     WEAVER_RETURN_IF_ERROR(all_fitted(exchange, ranks, st.ok() && fitted, &all));
+    r->bytes_sent += ranks - 1;  // a byte to each other rank, and from each
+    r->bytes_received += ranks - 1;
     if (all) return Status::Ok();
     if (st.ok() && entry->records > 0) std::remove((db_dir + "/" + file).c_str());
     *r = BalanceShardResult{};
