@@ -113,8 +113,8 @@ int main(int argc, char** argv) {
   }
   std::printf("\nmedians of %d runs a way, in rotating order; --memory %s\n", repeat,
               memory.c_str());
-  print_table(rows, {"freq", "closure 1/2 s", "windows 1/2 s", "2nd thread closure",
-                     "2nd thread windows", "closure 1 / windows 2", "RSS MB c1/c2/w1/w2",
-                     "same table", "note"});
+  print_table(rows,
+              {"freq", "closure 1/2 s", "windows 1/2 s", "2nd thread closure", "2nd thread windows",
+               "closure 1 / windows 2", "RSS MB c1/c2/w1/w2", "same table", "note"});
   return 0;
 }
