@@ -11,6 +11,7 @@
 
 #include "balance/window_balance.h"
 #include "db/table_files.h"
+#include "model/velocity_model.h"
 #include "schema/octant.h"
 #include "util/octant_key_stream.h"
 

@@ -56,19 +56,38 @@ class Basin final : public VelocityModel {
     const double rho = 1700 + 0.29 * vs;
     return {static_cast<float>(vp), static_cast<float>(vs), static_cast<float>(rho)};
   }
-  // The bowl depth once per column of the lattice, an inclusion cell's hash
-  // once per run of points in the same cell (a small octant's points share
-  // one), and Vs only.
+  // The bowl depth once per column of the lattice; Vs of sediment and of
+  // rock, and the inclusion cell's index, once per depth; an inclusion
+  // cell's hash once per run of points in the same cell (a small octant's
+  // points share one); Vs only.  The values are at()'s, to the bit.
   void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                      float* out) const override {
+    if (n > kLatticeMax) return VelocityModel::vs_on_lattice(xs, ys, zs, n, out);
+    float sediment_vs[kLatticeMax], rock_vs[kLatticeMax];
+    uint64_t cell_of[3][kLatticeMax];
+    const double* axes[3] = {xs, ys, zs};
+    for (int k = 0; k < n; ++k) {
+      sediment_vs[k] = static_cast<float>(vs_of(zs[k], true, false));
+      rock_vs[k] = static_cast<float>(vs_of(zs[k], false, false));
+    }
+    for (int a = 0; a < 3; ++a) {
+      for (int i = 0; i < n; ++i) cell_of[a][i] = InclusionCell::index(axes[a][i]);
+    }
     InclusionCell cell;
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
         const double depth = sediment_depth(xs[i], ys[j]);
+        const bool may_hold = xs[i] >= 0 && ys[j] >= 0;
         for (int k = 0; k < n; ++k) {
-          const bool sediment = zs[k] < depth;
-          const bool inclusion = !sediment && cell.holds(xs[i], ys[j], zs[k]);
-          out[(k * n + j) * n + i] = static_cast<float>(vs_of(zs[k], sediment, inclusion));
+          float vs = rock_vs[k];
+          if (zs[k] < depth) {
+            vs = sediment_vs[k];
+          } else if (may_hold && zs[k] >= 0 && zs[k] < kInclusionDepth &&
+                     cell.holds_in(cell_of[0][i], cell_of[1][j], cell_of[2][k], xs[i], ys[j],
+                                   zs[k])) {
+            vs = static_cast<float>(kInclusionVs);
+          }
+          out[(k * n + j) * n + i] = vs;
         }
       }
     }
@@ -96,6 +115,7 @@ class Basin final : public VelocityModel {
   static constexpr double kRockVs0 = 2600, kRockGradient = 0.2, kRockVsMax = 3900;
   static constexpr double kInclusionVs = 100, kInclusionRadius = 40;
   static constexpr double kInclusionCell = 600, kInclusionShare = 0.25, kInclusionDepth = 5000;
+  static constexpr int kLatticeMax = 8;
 
   static double vs_at(double x, double y, double z, bool sediment) {
     return vs_of(z, sediment, !sediment && InclusionCell().holds(x, y, z));
@@ -112,8 +132,9 @@ class Basin final : public VelocityModel {
   static double sediment_depth(double x, double y) {
     double d = 0;
     for (const Bowl& b : kBowls) {
-      const double dx = x - b.cx, dy = y - b.cy;
-      const double q = (dx * dx + dy * dy) / (b.radius * b.radius);
+      const double dx = x - b.cx, dy = y - b.cy, r2 = b.radius * b.radius;
+      if (dx * dx + dy * dy >= r2) continue;  // outside the rim: q >= 1, no division
+      const double q = (dx * dx + dy * dy) / r2;
       if (q < 1) d = std::max(d, b.depth * (1 - q) * (1 - q));
     }
     return d;
@@ -134,11 +155,18 @@ class Basin final : public VelocityModel {
    public:
     bool holds(double x, double y, double z) {
       if (z >= kInclusionDepth || x < 0 || y < 0 || z < 0) return false;
-      const uint64_t i = axis_.cell(0, x), j = axis_.cell(1, y), k = axis_.cell(2, z);
+      return holds_in(axis_.cell(0, x), axis_.cell(1, y), axis_.cell(2, z), x, y, z);
+    }
+    // The same for a point whose cell (i, j, k) is known; REQUIRES: the
+    // point is inside the inclusions' layer (what holds() checks first).
+    bool holds_in(uint64_t i, uint64_t j, uint64_t k, double x, double y, double z) {
       if (!known_ || i != i_ || j != j_ || k != k_) locate(i, j, k);
       if (!has_) return false;
       const double dx = x - cx_, dy = y - cy_, dz = z - cz_;
       return dx * dx + dy * dy + dz * dz < kInclusionRadius * kInclusionRadius;
+    }
+    static uint64_t index(double v) {
+      return v < 0 ? 0 : static_cast<uint64_t>(v / kInclusionCell);
     }
 
    private:
@@ -157,7 +185,7 @@ class Basin final : public VelocityModel {
     // lattice repeats its coordinates).
     struct Axes {
       uint64_t cell(int a, double v) {
-        if (v != at[a]) at[a] = v, index[a] = static_cast<uint64_t>(v / kInclusionCell);
+        if (v != at[a]) at[a] = v, index[a] = InclusionCell::index(v);
         return index[a];
       }
       double at[3] = {-1, -1, -1};

@@ -38,7 +38,7 @@ constexpr std::array<uint32_t, 8> kLeavingParent = leaving_parent_table();
 bool LocalRipple::run(const std::vector<uint64_t>& local, std::vector<uint64_t>* created,
                       size_t max_bytes) {
   created->clear();
-  LevelCounts count{};
+  std::array<uint64_t, kMaxLevel + 1> count{};  // leaves by level
   for (uint64_t key : local) ++count[octant_key_level(key)];
   int coarsest = 0, finest = kMaxLevel;
   while (coarsest <= kMaxLevel && count[coarsest] == 0) ++coarsest;
