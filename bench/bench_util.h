@@ -177,6 +177,18 @@ inline std::string run_program(const std::vector<std::string>& args, uint64_t* p
   return collect_child(pid, fds[0], peak_rss);
 }
 
+// "0.5,1,2" as numbers (a --freq list).
+inline std::vector<double> number_list(const std::string& text) {
+  std::vector<double> out;
+  size_t at = 0;
+  while (at <= text.size()) {
+    const size_t comma = std::min(text.find(',', at), text.size());
+    out.push_back(std::stod(text.substr(at, comma - at)));
+    at = comma + 1;
+  }
+  return out;
+}
+
 // The file of db's octant table (its first, for a sharded one).
 inline std::string octant_table(const std::string& db) {
   for (const auto& e : std::filesystem::directory_iterator(db)) {

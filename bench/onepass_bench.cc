@@ -83,9 +83,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--freq" && i + 1 < argc) {
-      freqs.clear();
-      std::istringstream list(argv[++i]);
-      for (std::string f; std::getline(list, f, ',');) freqs.push_back(std::stod(f));
+      freqs = number_list(argv[++i]);
     } else if (a == "--repeat" && i + 1 < argc) {
       repeat = std::stoi(argv[++i]);
     } else if (a == "--threads" && i + 1 < argc) {

@@ -19,17 +19,16 @@
 namespace weaver {
 namespace {
 
-// One window on its way from a worker to the table: the leaves with ranks
-// [first, first + count), whose keys lie in [from, to), and their
-// refinement.
+// One window on its way from a worker to the table: the `count` leaves
+// whose keys lie in [from, to), and their refinement.
 struct Window {
-  uint64_t first = 0, count = 0;
+  uint64_t count = 0;
   uint64_t from = 0, to = 0;
   std::vector<uint64_t> keys;  // the refinement
   std::vector<std::byte> payloads;
   LevelCounts levels{};
   uint64_t split = 0, created = 0, layer = 0;
-  bool fitted = true;  // false: one of its leaves outgrew the memory alone
+  bool fitted = true;  // false: it gave up (too short to cut, or outweighed by its layer)
   Status status;
   bool done = false;  // set by the worker (WorkQueue)
 };
@@ -401,8 +400,7 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
   uint64_t next = 0;
   auto add = [&](std::deque<std::unique_ptr<Window>>* flight) {
     auto w = std::make_unique<Window>();
-    w->first = lo + n * next / windows;
-    w->count = lo + n * (next + 1) / windows - w->first;
+    w->count = n * (next + 1) / windows - n * next / windows;
     w->from = starts[next];
     w->to = starts[next + 1];
     ++next;
