@@ -33,6 +33,7 @@ int cmd_slice(int argc, char** argv);
 int cmd_verify(int argc, char** argv);
 int cmd_recover(int argc, char** argv);
 int cmd_compact(int argc, char** argv);
+int cmd_aggregate(int argc, char** argv);
 int cmd_model(int argc, char** argv);
 int cmd_serve(int argc, char** argv);
 

@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 
+#include "db/aggregate_table.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "db/partition_table.h"
@@ -52,7 +53,8 @@ std::string join(const std::vector<std::string>& names) {
 }  // namespace
 
 std::string table_source(const std::string& name) {
-  return name == kNodeTable || name == kPartitionTable ? kOctantTable : "";
+  return name == kNodeTable || name == kPartitionTable || name == kAggregateTable ? kOctantTable
+                                                                                  : "";
 }
 
 Database::~Database() {

@@ -2,6 +2,7 @@
 
 #include <cstdlib>
 
+#include "db/aggregate_table.h"
 #include "db/node_table.h"
 #include "db/partition_table.h"
 
@@ -38,6 +39,9 @@ Status Mesh::open(const std::string& db_dir, uint64_t octant_pool, uint64_t node
     if (m->partition_parts_ == 0) {
       return Status::Corruption(m->partition_->file_name() + ": no part count in its metadata");
     }
+  }
+  if (m->db_->has_table(kAggregateTable)) {
+    WEAVER_RETURN_IF_ERROR(m->db_->open_table(kAggregateTable, octant_pool / 8, &m->aggregates_));
   }
   *out = std::move(m);
   return Status::Ok();

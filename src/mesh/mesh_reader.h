@@ -63,6 +63,9 @@ class Mesh {
   const std::string& partition_method() const { return partition_method_; }
   Status partition(PartMap* out) { return PartMap::of_table(*partition_, partition_parts_, out); }
   BTree& partition_table() { return *partition_; }
+  // The aggregate table (`weaver aggregate`, query/aggregates.h), if any.
+  bool has_aggregates() const { return aggregates_ != nullptr; }
+  BTree& aggregates() { return *aggregates_; }
 
   // Element `id` (InvalidArgument past the last) with its material and,
   // when with_nodes and the mesh has nodes, its corners' node ids.
@@ -89,7 +92,7 @@ class Mesh {
   Units units_;
   RecordSchema schema_;
   const Field *vp_ = nullptr, *vs_ = nullptr, *rho_ = nullptr, *qp_ = nullptr, *qs_ = nullptr;
-  std::unique_ptr<BTree> partition_;
+  std::unique_ptr<BTree> partition_, aggregates_;
   uint32_t partition_parts_ = 0;
   std::string partition_method_;
 };

@@ -32,6 +32,12 @@ Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
   if (e->mesh_->has_nodes()) {
     e->node_window_ = std::make_unique<LeafWindow>(e->mesh_->nodes(), true);
   }
+  if (e->mesh_->has_aggregates()) {
+    BTree& t = e->mesh_->aggregates();
+    WEAVER_RETURN_IF_ERROR(AggregateLayout::of_table(t, &e->aggregate_layout_));
+    e->aggregate_window_ = std::make_unique<LeafWindow>(t, true);
+    e->aggregate_finest_ = weaver::aggregate_finest(t);
+  }
   // A point costs its coordinate (12 bytes), its sort pair (16) and its
   // answer (40): about 80 bytes with the caller's own buffers.
   e->batch_points_ = size_t(std::clamp<uint64_t>(shares.batch / 80, 4096, 1 << 22));
@@ -81,6 +87,71 @@ Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
     h.leaf = octant_from_key(f.key);
     mesh_->fill_material(f.payload, &m);
     h.vp = m.vp, h.vs = m.vs, h.rho = m.rho, h.qp = m.qp, h.qs = m.qs;
+  }
+  return Status::Ok();
+}
+
+Status Explorer::aggregate_batch(const Coord* p, size_t n, int level, AggregateHit* out) {
+  if (level < 0 || level > aggregate_finest_) {
+    return Status::InvalidArgument("the aggregate table has no level " + std::to_string(level));
+  }
+  const auto key_of = [level](Coord c) {
+    return octant_key(octant_ancestor({c.x, c.y, c.z, kMaxLevel}, level));
+  };
+  sort_points(p, n, out, pixel_is_valid, key_of);
+  aggregate_window_->set_sparse(n < kDenseBatch);
+  uint64_t last = UINT64_MAX;
+  const std::byte* payload = nullptr;
+  bool found = false;
+  for (const auto& [key, i] : order_) {
+    // Points of one pixel's octant come together: one lookup serves them.
+    if (key != last) WEAVER_RETURN_IF_ERROR(aggregate_window_->get(key, &payload, &found));
+    last = key;
+    if (!found) continue;
+    out[i].found = true;
+    aggregate_layout_.decode(payload, &out[i].a);
+  }
+  return Status::Ok();
+}
+
+Status Explorer::summarise_batch(const Coord* p, size_t n, int level, uint64_t max_leaves,
+                                 AggregateHit* out) {
+  if (level < 0 || level >= kMaxLevel) return Status::InvalidArgument("no octants inside level 20");
+  const auto key_of = [level](Coord c) {
+    return octant_key(octant_ancestor({c.x, c.y, c.z, kMaxLevel}, level));
+  };
+  sort_points(p, n, out, pixel_is_valid, key_of);
+  BTree& octants = mesh_->octants();
+  const LeafFields fields(octants);
+  BTreeCursor c;
+  uint64_t read = 0, last = UINT64_MAX, skipped = 0;
+  bool started = false;
+  AggregateHit hit;
+  float values[5] = {};
+  for (const auto& [key, i] : order_) {
+    if (key != last && read < max_leaves) {
+      last = key;
+      // The first leaf at or past key: where the cursor stands, or further
+      // on in the leaf page it holds, else found by a search.
+      if (!started || (c.valid() && c.key() < key && !c.skip_in_leaf(key - 1, &skipped))) {
+        WEAVER_RETURN_IF_ERROR(octants.seek_cursor(key, &c));
+        started = true;
+      }
+      SummaryBuilder sum;
+      const uint64_t end = octant_key_subtree_end(key);
+      // A leaf with the octant's own key is the octant: nothing inside.
+      const bool leaf = c.valid() && c.key() == key;
+      for (; !leaf && c.valid() && c.key() < end; ++read) {
+        fields.read(c.payload(), values);
+        sum.add_leaf(octant_key_level(c.key()), values, fields.count());
+        WEAVER_RETURN_IF_ERROR(c.next());
+      }
+      hit.found = sum.leaves() > 0;
+      if (hit.found) hit.a = sum.result(fields.count());
+    } else if (key != last) {
+      break;  // past the budget: the rest stay not found
+    }
+    out[i] = hit;
   }
   return Status::Ok();
 }

@@ -13,6 +13,7 @@
 
 #include "db/leaf_window.h"
 #include "mesh/mesh_reader.h"
+#include "query/aggregates.h"
 #include "schema/octant.h"
 #include "schema/status.h"
 #include "util/memory_budget.h"
@@ -85,6 +86,16 @@ class Explorer {
   // The same for n points in any order: sorted by Morton code inside, then
   // answered in one forward walk over the octant table.  out[i] answers p[i].
   Status locate_batch(const Coord* p, size_t n, PointHit* out);
+  // The finest level of the aggregate table (query/aggregates.h), -1
+  // without one.
+  int aggregate_finest() const { return aggregate_finest_; }
+  // The summaries of the octants of `level` (0 to aggregate_finest()) that
+  // hold the points p[0..n), in any order; out[i] answers p[i].
+  Status aggregate_batch(const Coord* p, size_t n, int level, AggregateHit* out);
+  // The same worked out from the leaves (any level), reading at most
+  // max_leaves leaves in all: the octants past that are not found.
+  Status summarise_batch(const Coord* p, size_t n, int level, uint64_t max_leaves,
+                         AggregateHit* out);
   // The nodes at n points (any coordinates; past the far side is no node).
   Status node_at_batch(const Coord* p, size_t n, NodeHit* out);
 
@@ -121,7 +132,9 @@ class Explorer {
   Status visit_across(const Octant& o, Direction d, const Octant& r, std::vector<Neighbor>* out);
 
   std::unique_ptr<Mesh> mesh_;
-  std::unique_ptr<LeafWindow> octant_window_, node_window_;
+  std::unique_ptr<LeafWindow> octant_window_, node_window_, aggregate_window_;
+  AggregateLayout aggregate_layout_{false, false};
+  int aggregate_finest_ = -1;
   size_t batch_points_ = 1 << 20;
   // Sorting scratch for the batches: (key, input index).
   std::vector<std::pair<uint64_t, uint64_t>> order_, scratch_;

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "db/aggregate_table.h"
 #include "db/octant_table.h"
 #include "schema/node.h"
 #include "schema/octant.h"
@@ -64,7 +65,7 @@ std::string stats_to_text(const TableStats& s) {
                 s.page_size, s.schema.empty() ? "(none)" : s.schema.c_str());
   out += buf;
   if (s.key_kind == KeyKind::kOctant) {
-    out += "  leaves per level\n";
+    out += s.name == kAggregateTable ? "  octants summarised per level\n" : "  leaves per level\n";
     for (int l = 0; l <= 20; ++l) {
       if (s.per_level[l] == 0) continue;
       std::snprintf(buf, sizeof buf, "    level %2d  %llu\n", l,

@@ -30,6 +30,7 @@ table{border-collapse:collapse}td{padding:1px 6px 1px 0;vertical-align:top}
 <label>axis <select id="axis"><option>x</option><option>y</option><option selected>z</option></select></label>
 <label>at <input id="at" type="range" step="any" style="width:220px"> <input id="atn" type="number" step="any" style="width:90px"> m</label>
 <label>colour <select id="color"></select></label>
+<label id="sumlabel" hidden>pixel <select id="summary"><option value="">own</option><option value="min">least</option><option value="max">greatest</option><option value="mean">mean</option><option value="centre">centre</option></select></label>
 <span id="where"></span>
 </header>
 <main><div id="map"><canvas id="axes"></canvas></div>
@@ -39,7 +40,7 @@ table{border-collapse:collapse}td{padding:1px 6px 1px 0;vertical-align:top}
 const $ = id => document.getElementById(id);
 const map = $("map"), axesCanvas = $("axes");
 let stat = null, sec = null;
-const view = {axis: "z", at: 0, color: "level", zoom: 0, cu: 0.5, cv: 0.5, sel: ""};
+const view = {axis: "z", at: 0, color: "level", summary: "", zoom: 0, cu: 0.5, cv: 0.5, sel: ""};
 const VIRIDIS = [[68,1,84],[72,40,120],[62,74,137],[49,104,142],[38,130,142],[31,158,137],[53,183,121],[110,206,88],[181,222,43],[253,231,37]];
 const units = {level: "", edge: "m", vp: "m/s", vs: "m/s", rho: "kg/m^3", qp: "", qs: ""};
 
@@ -66,12 +67,14 @@ async function loadSection(push) {
   $("at").min = $("atn").min = lo; $("at").max = $("atn").max = hi;
   if (!(view.at >= lo && view.at < hi)) view.at = lo + (hi - lo) / (view.axis === "z" ? 20 : 2);
   $("at").value = $("atn").value = view.at;
-  $("axis").value = view.axis; $("color").value = view.color;
-  try { sec = await json(`/api/section/${view.axis}/${view.at}?color=${view.color}`); }
+  $("axis").value = view.axis; $("color").value = view.color; $("summary").value = view.summary;
+  try { sec = await json(`/api/section/${view.axis}/${view.at}?${paintQuery()}`); }
   catch (e) { $("note").textContent = e.message; return; }
   writeHash(push);
   drawBar(); draw();
 }
+// The colour and what a pixel of many elements shows, as the API takes them.
+function paintQuery() { return `color=${view.color}` + (view.summary ? `&summary=${view.summary}` : ""); }
 function tileSize() { return 256; }
 function worldPerPixel() { return sec.side_m / (256 * 2 ** view.zoom); }
 function draw() {
@@ -82,7 +85,7 @@ function draw() {
   const want = new Set();
   for (let ty = Math.max(0, Math.floor(-top / 256)); ty < Math.min(n, Math.ceil((h - top) / 256)); ty++)
     for (let tx = Math.max(0, Math.floor(-left / 256)); tx < Math.min(n, Math.ceil((w - left) / 256)); tx++) {
-      const src = `/api/tile/${view.axis}/${view.at}/${z}/${tx}/${ty}.png?color=${view.color}&min=${sec.min}&max=${sec.max}`;
+      const src = `/api/tile/${view.axis}/${view.at}/${z}/${tx}/${ty}.png?${paintQuery()}&min=${sec.min}&max=${sec.max}`;
       want.add(src);
       let img = map.querySelector(`img[data-src="${CSS.escape(src)}"]`);
       if (!img) { img = new Image(); img.dataset.src = src; img.src = src; img.draggable = false; map.insertBefore(img, axesCanvas); }
@@ -132,7 +135,7 @@ function drawBar() {
   const u = units[view.color] ? " " + units[view.color] : "";
   g.fillText(`${+sec.min.toPrecision(5)}${u}`, 0, 36);
   const t = `${+sec.max.toPrecision(5)}${u}`; g.fillText(t, 300 - g.measureText(t).width, 36);
-  $("note").textContent = `${view.color} on the ${view.axis} = ${+sec.at_m.toPrecision(8)} m plane; each pixel shows the element at its centre; colour range sampled over the section (${sec.samples} points)`;
+  $("note").textContent = `${sec.caption}, on the ${view.axis} = ${+sec.at_m.toPrecision(8)} m plane; colour range over the section (${sec.samples} pixels)`;
 }
 function worldAt(px, py) {
   const full = 256 * 2 ** view.zoom, perPx = sec.side_m / full;
@@ -160,12 +163,40 @@ let drag = null, moved = false, boxing = null;
 const boxDiv = document.createElement("div");
 boxDiv.style.cssText = "position:absolute;border:2px dashed #d00;pointer-events:none;display:none";
 map.appendChild(boxDiv);
+// Two fingers pinch: the zoom steps by one each time their distance doubles
+// or halves, about the point between them.
+const touches = new Map();
+let pinch = null;
+function pinchState() {
+  const [a, b] = [...touches.values()];
+  return {d: Math.hypot(a.x - b.x, a.y - b.y), x: (a.x + b.x) / 2, y: (a.y + b.y) / 2};
+}
 map.addEventListener("pointerdown", ev => {
   map.setPointerCapture(ev.pointerId);
   const r = map.getBoundingClientRect();
+  touches.set(ev.pointerId, {x: ev.clientX - r.left, y: ev.clientY - r.top});
+  if (touches.size === 2) { pinch = {...pinchState(), zoom: view.zoom}; drag = null; return; }
   if (ev.shiftKey) { boxing = {x: ev.clientX - r.left, y: ev.clientY - r.top}; return; }
   drag = {x: ev.clientX, y: ev.clientY, cu: view.cu, cv: view.cv}; moved = false;
 });
+// The pointer's place in metres and, on a georeferenced mesh, its longitude
+// and latitude: asked of the server at most every 100 ms.
+let geoWanted = null, geoBusy = false;
+function showWhere(p) {
+  $("where").textContent = `(${fmt(p)}) m`;
+  if (!stat.geo) return;
+  geoWanted = p;
+  if (geoBusy) return;
+  geoBusy = true;
+  setTimeout(async () => {
+    const q = geoWanted;
+    try {
+      const g = await json(`/api/geo?x=${q[0]}&y=${q[1]}`);
+      if (q === geoWanted) $("where").textContent = `(${fmt(q)}) m, ${g.lon.toFixed(5)}° ${g.lat.toFixed(5)}°, depth ${+q[2].toPrecision(6)} m`;
+    } catch (e) { /* the metres stay */ }
+    geoBusy = false;
+  }, 100);
+}
 // Shift and drag: the elements the box cuts on this plane, downloaded as vtu.
 async function exportBox(a, b) {
   const p = worldAt(a.x, a.y), q = worldAt(b.x, b.y);
@@ -182,7 +213,13 @@ async function exportBox(a, b) {
 }
 map.addEventListener("pointermove", ev => {
   const r = map.getBoundingClientRect();
-  if (sec) $("where").textContent = `(${fmt(worldAt(ev.clientX - r.left, ev.clientY - r.top))}) m`;
+  if (touches.has(ev.pointerId)) touches.set(ev.pointerId, {x: ev.clientX - r.left, y: ev.clientY - r.top});
+  if (pinch && touches.size === 2) {
+    const now = pinchState(), z = pinch.zoom + Math.round(Math.log2(now.d / pinch.d));
+    if (z !== view.zoom) zoomAt(z - view.zoom, now.x, now.y);
+    return;
+  }
+  if (sec) showWhere(worldAt(ev.clientX - r.left, ev.clientY - r.top));
   if (boxing) {
     const x = ev.clientX - r.left, y = ev.clientY - r.top;
     Object.assign(boxDiv.style, {display: "block", left: Math.min(x, boxing.x) + "px", top: Math.min(y, boxing.y) + "px",
@@ -195,7 +232,10 @@ map.addEventListener("pointermove", ev => {
   view.cu = drag.cu - (ev.clientX - drag.x) / full; view.cv = drag.cv - (ev.clientY - drag.y) / full;
   draw();
 });
+map.addEventListener("pointercancel", ev => { touches.delete(ev.pointerId); pinch = null; drag = null; });
 map.addEventListener("pointerup", async ev => {
+  touches.delete(ev.pointerId);
+  if (pinch) { if (touches.size < 2) { pinch = null; writeHash(false); } return; }
   if (boxing) {
     const r = map.getBoundingClientRect(), b = {x: ev.clientX - r.left, y: ev.clientY - r.top};
     const a = boxing; boxing = null; boxDiv.style.display = "none";
@@ -235,12 +275,14 @@ $("at").onchange = () => { view.at = Number($("at").value); loadSection(true); }
 $("at").oninput = () => { $("atn").value = $("at").value; };
 $("atn").onchange = () => { view.at = Number($("atn").value); loadSection(true); };
 $("color").onchange = () => { view.color = $("color").value; loadSection(true); };
+$("summary").onchange = () => { view.summary = $("summary").value; loadSection(true); };
 window.addEventListener("popstate", () => { readHash(); loadSection(false).then(() => { if (view.sel !== "") select(view.sel); }); });
 window.addEventListener("resize", draw);
 (async () => {
   try { stat = await json("/api/stat"); } catch (e) { $("info").textContent = e.message; return; }
   $("info").innerHTML = `<b>${stat.database.replace(/[&<>]/g, "")}</b><br>${stat.elements} elements, ${stat.nodes} nodes`;
   for (const f of stat.fields) $("color").add(new Option(f, f));
+  $("sumlabel").hidden = stat.aggregates === null;  // summaries need the aggregate table
   readHash();
   if (!stat.fields.includes(view.color)) view.color = stat.fields.includes("vs") ? "vs" : "level";
   if (!location.hash) view.color = stat.fields.includes("vs") ? "vs" : "level";

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "export/export.h"
+#include "model/geo_frame.h"
 #include "serve/tiles.h"
 #include "util/json_string.h"
 
@@ -83,6 +84,15 @@ std::string query_message(const std::string& err) {
   return message;
 }
 
+// The paint a request asks for: ?color= (level) and ?summary= (the
+// field's own).
+Status paint_from(Explorer& ex, const Request& r, Paint* out) {
+  const auto arg = [&r](const char* k, const char* none) {
+    return r.query.count(k) ? r.query.at(k) : std::string(none);
+  };
+  return paint_of(ex, arg("color", "level"), arg("summary", ""), out);
+}
+
 Response status_response(const Status& st) {
   return error_response(st.is_invalid_argument() ? 400
                         : st.is_not_found()      ? 404
@@ -127,6 +137,7 @@ void Service::warm() {
   if (!explorer(&ex).ok()) return;  // the first request will say why
   (void)ex->mesh().octants().prepare_lookups();
   if (ex->has_nodes()) (void)ex->mesh().nodes().prepare_lookups();
+  if (ex->mesh().has_aggregates()) (void)ex->mesh().aggregates().prepare_lookups();
 }
 
 Status Service::explorer(Explorer** out) {
@@ -170,6 +181,7 @@ Response Service::api(const Request& r, Explorer& ex) {
   if (what == "section") return section(ex, parts, r);
   if (what == "tile") return tile(ex, parts, r);
   if (what == "export.vtu" && parts.size() == 2) return export_vtu(ex, r);
+  if (what == "geo" && parts.size() == 2) return geo(ex, r);
   if (what == "locate" && parts.size() == 2) {
     for (const char* c : {"x", "y", "z"}) {
       if (!r.query.count(c)) return error_response(400, "locate takes x, y and z");
@@ -237,7 +249,10 @@ Response Service::stat(Explorer& ex) {
   j += "], \"geo\": " + json_string(u.geo) + ", \"fields\": [\"level\", \"edge\"";
   if (ex.mesh().has_material()) j += ", \"vp\", \"vs\", \"rho\"";
   if (ex.mesh().has_q()) j += ", \"qp\", \"qs\"";
-  return {200, "application/json", j + "]}\n"};
+  // The finest level the aggregate table summarises (null without one).
+  j += "], \"aggregates\": ";
+  j += ex.aggregate_finest() < 0 ? "null" : std::to_string(ex.aggregate_finest());
+  return {200, "application/json", j + "}\n"};
 }
 
 Response Service::section(Explorer& ex, const std::vector<std::string>& parts, const Request& r) {
@@ -245,14 +260,14 @@ Response Service::section(Explorer& ex, const std::vector<std::string>& parts, c
   if (parts.size() != 4 || axis_of(parts[2]) < 0 || !parse_number(parts[3], &at)) {
     return error_response(400, "a section is /api/section/AXIS/POSITION (x, y or z; metres)");
   }
-  const std::string color = r.query.count("color") ? r.query.at("color") : "level";
   Section s;
   FieldRange range;
-  Status st = check_field(ex, color);
+  Paint paint;
+  Status st = paint_from(ex, r, &paint);
   const double* extent = nullptr;
   if (st.ok()) st = snapshot_extent(ex, &extent);
   if (st.ok()) st = section_of(ex, extent, axis_of(parts[2]), at, &s);
-  if (st.ok()) st = field_range(ex, s, color, &range);
+  if (st.ok()) st = field_range(ex, s, paint, &range);
   if (!st.ok()) return status_response(st);
   const Units& u = ex.units();
   std::string j =
@@ -261,9 +276,10 @@ Response Service::section(Explorer& ex, const std::vector<std::string>& parts, c
       "xyz"[s.v] + "\", \"down\": " + (s.down ? "true" : "false") +
       ", \"side_m\": " + number(s.side * u.tick_m) + ", \"origin_m\": [" + number(u.origin_m[s.u]) +
       ", " + number(u.origin_m[s.v]) + "], \"extent_m\": [" + number(s.extent[s.u] * u.tick_m) +
-      ", " + number(s.extent[s.v] * u.tick_m) + "], \"color\": " + json_string(color) +
-      ", \"min\": " + number(range.min) + ", \"max\": " + number(range.max) +
-      ", \"samples\": " + std::to_string(range.samples) + "}\n";
+      ", " + number(s.extent[s.v] * u.tick_m) + "], \"color\": " + json_string(paint.field) +
+      ", \"summary\": \"" + summary_name(paint.summary) +
+      "\", \"caption\": " + json_string(paint_caption(paint)) + ", \"min\": " + number(range.min) +
+      ", \"max\": " + number(range.max) + ", \"samples\": " + std::to_string(range.samples) + "}\n";
   return {200, "application/json", j};
 }
 
@@ -282,9 +298,9 @@ Response Service::tile(Explorer& ex, const std::vector<std::string>& parts, cons
     return error_response(404, "zoom " + std::to_string(zoom) + " has tiles 0 to " +
                                    std::to_string(n - 1) + " across and down");
   }
-  const std::string color = r.query.count("color") ? r.query.at("color") : "level";
   Section s;
-  Status st = check_field(ex, color);
+  Paint paint;
+  Status st = paint_from(ex, r, &paint);
   const double* extent = nullptr;
   if (st.ok()) st = snapshot_extent(ex, &extent);
   if (st.ok()) st = section_of(ex, extent, axis_of(parts[2]), at, &s);
@@ -294,11 +310,28 @@ Response Service::tile(Explorer& ex, const std::vector<std::string>& parts, cons
                 !parse_number(r.query.at("max"), &range.max))) {
     return error_response(400, "min and max are numbers");
   }
-  if (st.ok() && !given) st = field_range(ex, s, color, &range);
+  if (st.ok() && !given) st = field_range(ex, s, paint, &range);
   std::string bytes;
-  if (st.ok()) st = render_tile(ex, s, color, range.min, range.max, int(zoom), x, y, &bytes);
+  if (st.ok()) st = render_tile(ex, s, paint, range.min, range.max, int(zoom), x, y, &bytes);
   if (!st.ok()) return status_response(st);
   return {200, "image/png", std::move(bytes)};
+}
+
+Response Service::geo(Explorer& ex, const Request& r) {
+  double x = 0, y = 0;
+  if (!r.query.count("x") || !r.query.count("y") || !parse_number(r.query.at("x"), &x) ||
+      !parse_number(r.query.at("y"), &y)) {
+    return error_response(400, "geo takes x and y in metres");
+  }
+  GeoFrame frame;
+  if (ex.units().geo.empty()) return error_response(404, "this database is not georeferenced");
+  const Status st = GeoFrame::parse(ex.units().geo, &frame);
+  if (!st.ok()) return status_response(st);
+  double lon = 0, lat = 0;
+  frame.to_geo(x, y, &lon, &lat);
+  return {200, "application/json",
+          "{\"x\": " + number(x) + ", \"y\": " + number(y) + ", \"lon\": " + number(lon) +
+              ", \"lat\": " + number(lat) + "}\n"};
 }
 
 Response Service::export_vtu(Explorer& ex, const Request& r) {

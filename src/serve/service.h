@@ -13,9 +13,13 @@
 //   GET  /api/element/ID, /api/node/ID, /api/neighbors/ID[?kinds=all]
 //   GET  /api/node-elements/ID, /api/depends/ID
 //   GET  /api/range?box=X0,Y0,Z0,X1,Y1,Z1[&list=1][&units=]
-//   GET  /api/section/AXIS/POSITION?color=F   the section's extent and the
-//                                  colour range its tiles share
-//   GET  /api/tile/AXIS/POSITION/ZOOM/X/Y.png?color=F[&min=&max=]
+//   GET  /api/section/AXIS/POSITION?color=F[&summary=S]   the section's
+//                                  extent, the colour range its tiles share
+//                                  and what a pixel of many elements shows
+//   GET  /api/tile/AXIS/POSITION/ZOOM/X/Y.png?color=F[&summary=S][&min=&max=]
+//                                  (S: min, max, mean or centre; serve/tiles.h)
+//   GET  /api/geo?x=&y=            metres in the frame as WGS84 lon, lat
+//                                  (a georeferenced mesh only)
 //   GET  /api/export.vtu?box=X0,Y0,Z0,X1,Y1,Z1   (metres) the elements that
 //                                  share a point with the box, as `weaver
 //                                  export --format vtu --box` writes them
@@ -63,6 +67,7 @@ class Service {
   Response section(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
   Response tile(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
   Response export_vtu(Explorer& ex, const Request& r);
+  Response geo(Explorer& ex, const Request& r);
 
   std::string db_;
   MemoryBudget memory_;

@@ -10,8 +10,6 @@
 namespace weaver::serve {
 namespace {
 
-constexpr int kTile = 256;
-
 // How far the domain reaches along axis a from the origin corner: the first
 // tick where a point on that edge is outside (a binary search by locate).
 // A domain without its origin corner is taken as the whole root.
@@ -46,6 +44,24 @@ double value_of(const PointHit& h, const std::string& field, double tick_m) {
   return h.qs;
 }
 
+// A material field's index in the aggregate records (-1 for level, edge).
+int aggregate_index(const std::string& field) {
+  for (size_t f = 0; f < kAggregateFields.size(); ++f) {
+    if (field == kAggregateFields[f]) return int(f);
+  }
+  return -1;
+}
+
+// The summary s of field over an aggregate's leaves.
+double value_of(const Aggregate& a, const std::string& field, Paint::Summary s, double tick_m) {
+  using S = Paint::Summary;
+  if (field == "level") return s == S::kMin ? a.level_min : a.level_max;
+  // The least edge is that of the finest level.
+  if (field == "edge") return octant_edge(s == S::kMin ? a.level_max : a.level_min) * tick_m;
+  const int f = aggregate_index(field);
+  return s == S::kMin ? a.min[f] : s == S::kMax ? a.max[f] : a.mean[f];
+}
+
 // The points at the centres of an n x n grid over the square of side
 // `span` ticks whose top-left corner is (u0, v0) on the page.
 std::vector<Coord> grid(const Section& s, double u0, double v0, double span, int n) {
@@ -63,6 +79,65 @@ std::vector<Coord> grid(const Section& s, double u0, double v0, double span, int
     }
   }
   return pts;
+}
+
+// The level whose octants are as wide as a pixel of `pixel` ticks or less.
+int pixel_level(double pixel) {
+  int level = 0;
+  while (level < kMaxLevel && octant_edge(level) > pixel) ++level;
+  return level;
+}
+
+// The pixels of an n x n grid over the square of side `span` ticks whose
+// top-left corner is (u0, v0) on the page.
+Status sample(Explorer& ex, const Section& s, const Paint& paint, double u0, double v0, double span,
+              int n, std::vector<TilePixel>* out) {
+  const std::vector<Coord> pts = grid(s, u0, v0, span, n);
+  std::vector<PointHit> hits(pts.size());
+  WEAVER_RETURN_IF_ERROR(ex.locate_batch(pts.data(), pts.size(), hits.data()));
+  const double tick_m = ex.units().tick_m;
+  out->assign(pts.size(), TilePixel{});
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const PointHit& h = hits[i];
+    if (!h.inside) continue;
+    const double v = value_of(h, paint.field, tick_m);
+    (*out)[i] = {true, h.id, octant_edge(h.leaf), v, v, v};
+  }
+  const int level = pixel_level(span / n);
+  if (paint.summary == Paint::Summary::kCentre || level >= kMaxLevel) return Status::Ok();
+  // The pixels whose element is smaller than they are show their octant's
+  // summary.
+  std::vector<Coord> many;
+  std::vector<size_t> at;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    if (hits[i].inside && hits[i].leaf.level > level) many.push_back(pts[i]), at.push_back(i);
+  }
+  std::vector<AggregateHit> sums(many.size());
+  const int finest = ex.aggregate_finest();
+  if (level <= finest) {
+    WEAVER_RETURN_IF_ERROR(ex.aggregate_batch(many.data(), many.size(), level, sums.data()));
+  } else {
+    // Finer than the table: from the leaves, as far as the budget goes;
+    // the rest from the table's finest octants, wider than the pixel.
+    WEAVER_RETURN_IF_ERROR(
+        ex.summarise_batch(many.data(), many.size(), level, kOnTheFlyLeaves, sums.data()));
+    std::vector<Coord> rest;
+    std::vector<size_t> where;
+    for (size_t k = 0; k < many.size(); ++k) {
+      if (!sums[k].found) rest.push_back(many[k]), where.push_back(k);
+    }
+    std::vector<AggregateHit> wide(rest.size());
+    WEAVER_RETURN_IF_ERROR(ex.aggregate_batch(rest.data(), rest.size(), finest, wide.data()));
+    for (size_t k = 0; k < rest.size(); ++k) sums[where[k]] = wide[k];
+  }
+  for (size_t k = 0; k < many.size(); ++k) {
+    if (!sums[k].found) continue;  // cannot happen: the element lies inside the octant
+    TilePixel& p = (*out)[at[k]];
+    p.value = value_of(sums[k].a, paint.field, paint.summary, tick_m);
+    p.lo = value_of(sums[k].a, paint.field, Paint::Summary::kMin, tick_m);
+    p.hi = value_of(sums[k].a, paint.field, Paint::Summary::kMax, tick_m);
+  }
+  return Status::Ok();
 }
 
 }  // namespace
@@ -100,7 +175,8 @@ Status section_of(Explorer& ex, const double extent[3], int axis, double at_m, S
   return Status::Ok();
 }
 
-Status check_field(Explorer& ex, const std::string& field) {
+Status paint_of(Explorer& ex, const std::string& field, const std::string& summary, Paint* out) {
+  using S = Paint::Summary;
   const bool material = field == "vp" || field == "vs" || field == "rho";
   const bool q = field == "qp" || field == "qs";
   if (!material && !q && field != "level" && field != "edge") {
@@ -111,46 +187,76 @@ Status check_field(Explorer& ex, const std::string& field) {
     return Status::InvalidArgument("this mesh has no material (it was not built from a model)");
   }
   if (q && !ex.mesh().has_q()) return Status::InvalidArgument("this mesh has no qp and qs");
+  out->field = field;
+  if (summary.empty()) {
+    out->summary = field == "rho" ? S::kMean : field == "level" ? S::kMax : S::kMin;
+  } else if (summary == "min" || summary == "max" || summary == "mean") {
+    out->summary = summary == "min" ? S::kMin : summary == "max" ? S::kMax : S::kMean;
+    if (out->summary == S::kMean && !material && !q) {
+      return Status::InvalidArgument("summary=mean is for vp, vs, rho, qp and qs, not " + field);
+    }
+  } else if (summary == "centre" || summary == "center") {
+    out->summary = S::kCentre;
+  } else {
+    return Status::InvalidArgument("summary is min, max, mean or centre, not '" + summary + "'");
+  }
+  if (ex.aggregate_finest() < 0) out->summary = S::kCentre;
   return Status::Ok();
 }
 
-Status field_range(Explorer& ex, const Section& s, const std::string& field, FieldRange* r) {
-  constexpr int kGrid = 256;  // as many points as a tile: as fast as one
-  const std::vector<Coord> pts = grid(s, 0, s.down ? 0 : s.side, s.side, kGrid);
-  std::vector<PointHit> hits(pts.size());
-  WEAVER_RETURN_IF_ERROR(ex.locate_batch(pts.data(), pts.size(), hits.data()));
+const char* summary_name(Paint::Summary s) {
+  using S = Paint::Summary;
+  return s == S::kMin ? "min" : s == S::kMax ? "max" : s == S::kMean ? "mean" : "centre";
+}
+
+std::string paint_caption(const Paint& p) {
+  using S = Paint::Summary;
+  if (p.summary == S::kCentre) return p.field + " of the element at each pixel's centre";
+  const bool level = p.field == "level";
+  const char* how = p.summary == S::kMean  ? "mean"
+                    : p.summary == S::kMin ? (level ? "coarsest" : "least")
+                                           : (level ? "finest" : "greatest");
+  return std::string(how) + " " + p.field + " of the elements in each pixel" +
+         (p.summary == S::kMean ? " (by volume)" : "");
+}
+
+Status tile_pixels(Explorer& ex, const Section& s, const Paint& paint, int zoom, int64_t x,
+                   int64_t y, std::vector<TilePixel>* out) {
+  if (zoom < 0 || zoom > 30) return Status::InvalidArgument("zoom is 0 to 30");
+  const double span = s.side / std::ldexp(1.0, zoom);
+  const double u0 = x * span, v0 = s.down ? y * span : s.side - y * span;
+  return sample(ex, s, paint, u0, v0, span, kTile, out);
+}
+
+Status field_range(Explorer& ex, const Section& s, const Paint& paint, FieldRange* r) {
+  std::vector<TilePixel> pixels;  // those of zoom 0: as fast as its tile
+  WEAVER_RETURN_IF_ERROR(tile_pixels(ex, s, paint, 0, 0, 0, &pixels));
   *r = FieldRange{INFINITY, -INFINITY, 0};
-  for (const PointHit& h : hits) {
-    if (!h.inside) continue;
-    const double v = value_of(h, field, ex.units().tick_m);
-    r->min = std::min(r->min, v), r->max = std::max(r->max, v);
+  for (const TilePixel& p : pixels) {
+    if (!p.inside) continue;
+    r->min = std::min(r->min, p.lo), r->max = std::max(r->max, p.hi);
     ++r->samples;
   }
   if (r->samples == 0) r->min = r->max = 0;
   return Status::Ok();
 }
 
-Status render_tile(Explorer& ex, const Section& s, const std::string& field, double lo, double hi,
+Status render_tile(Explorer& ex, const Section& s, const Paint& paint, double lo, double hi,
                    int zoom, int64_t x, int64_t y, std::string* png) {
-  if (zoom < 0 || zoom > 30) return Status::InvalidArgument("zoom is 0 to 30");
-  const double span = s.side / std::ldexp(1.0, zoom);
-  const double u0 = x * span, v0 = s.down ? y * span : s.side - y * span;
-  const std::vector<Coord> pts = grid(s, u0, v0, span, kTile);
-  std::vector<PointHit> hits(pts.size());
-  WEAVER_RETURN_IF_ERROR(ex.locate_batch(pts.data(), pts.size(), hits.data()));
+  std::vector<TilePixel> pixels;
+  WEAVER_RETURN_IF_ERROR(tile_pixels(ex, s, paint, zoom, x, y, &pixels));
   Image image(kTile, kTile, Rgb{255, 255, 255});
-  const double pixel = span / kTile;  // ticks a pixel
+  const double pixel = s.side / std::ldexp(1.0, zoom) / kTile;  // ticks a pixel
   for (int j = 0; j < kTile; ++j) {
     for (int i = 0; i < kTile; ++i) {
-      const PointHit& h = hits[size_t(j) * kTile + i];
+      const TilePixel& h = pixels[size_t(j) * kTile + i];
       if (!h.inside) continue;
-      const double t = hi > lo ? (value_of(h, field, ex.units().tick_m) - lo) / (hi - lo) : 0.5;
+      const double t = hi > lo ? (h.value - lo) / (hi - lo) : 0.5;
       Rgb c = colormap(std::clamp(t, 0.0, 1.0));
       // An outline where an element is at least 6 pixels wide and the pixel
       // before (left or above) lies in another element.
-      if (octant_edge(h.leaf) >= 6 * pixel &&
-          ((i > 0 && hits[size_t(j) * kTile + i - 1].id != h.id) ||
-           (j > 0 && hits[size_t(j - 1) * kTile + i].id != h.id))) {
+      if (h.edge >= 6 * pixel && ((i > 0 && pixels[size_t(j) * kTile + i - 1].id != h.id) ||
+                                  (j > 0 && pixels[size_t(j - 1) * kTile + i].id != h.id))) {
         c = kOutline;
       }
       image.set(i, j, c);

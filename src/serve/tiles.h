@@ -5,15 +5,22 @@
 // the right and y down as the page shows them: north up in a map view
 // (a z plane), depth down in a section (x or y plane).
 //
-// A tile never reads more than its pixels: each pixel shows the element at
-// its centre, found by one sorted batch of point lookups (Explorer's
-// locate_batch, one forward walk), so a tile costs the same on a thousand
-// elements or on a billion.  Where an element is many pixels wide its
-// outline is drawn.
+// A tile never reads more than its pixels, so it costs the same on a
+// thousand elements or on a billion: one sorted batch of point lookups finds
+// the element at each pixel's centre (Explorer's locate_batch, one forward
+// walk).  Where that element is smaller than the pixel and the database has
+// an aggregate table (query/aggregates.h), the pixel shows instead a summary
+// of the elements in the octant of the pixel's size around its centre (the
+// least vs, say): a second batch, of aggregate hits, or, for pixels finer
+// than the table's finest level, worked out from the leaves inside (at
+// most kOnTheFlyLeaves of them a tile; past that, from the table's finest
+// octant around the pixel, wider than it).  Where an element is
+// many pixels wide its outline is drawn.
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "query/explorer.h"
 #include "schema/status.h"
@@ -40,21 +47,57 @@ Status section_of(Explorer& ex, int axis, double at_m, Section* s);
 // The same with the domain's extents already known (domain_extent's).
 Status section_of(Explorer& ex, const double extent[3], int axis, double at_m, Section* s);
 
-// The colour fields: level, edge, vp, vs, rho, qp, qs.  InvalidArgument
-// naming them for another name, or for a field the mesh lacks.
-Status check_field(Explorer& ex, const std::string& field);
+// What a pixel shows: a field (level, edge, vp, vs, rho, qp, qs) and, where
+// the pixel holds many elements, which summary of them.
+struct Paint {
+  enum class Summary { kCentre, kMin, kMax, kMean };
+  std::string field = "level";
+  Summary summary = Summary::kCentre;  // kCentre: the element at the centre
+};
+
+// The paint of field with summary "min", "max", "mean" or "centre" ("":
+// the field's own: the least vp, vs, qp, qs and edge, the mean rho, the
+// finest level).  Without an aggregate table every summary is kCentre.
+// InvalidArgument naming the choices for another name, for a field the mesh
+// lacks, or for the mean of level or edge.
+Status paint_of(Explorer& ex, const std::string& field, const std::string& summary, Paint* out);
+// "min", "max", "mean" or "centre".
+const char* summary_name(Paint::Summary s);
+// The colour bar's words: "least vs of the elements in each pixel" or "vs
+// of the element at each pixel's centre".
+std::string paint_caption(const Paint& p);
 
 struct FieldRange {
   double min = 0, max = 0;
   uint64_t samples = 0;  // points of the section that hit an element
 };
-// The range of a field over the section, sampled on a 256 x 256 grid: the
+// The range of the paint's field over the section, from the 256 x 256
+// pixels of zoom 0 (their least and greatest values where summarised): the
 // colour scale every tile of the section shares.
-Status field_range(Explorer& ex, const Section& s, const std::string& field, FieldRange* r);
+Status field_range(Explorer& ex, const Section& s, const Paint& paint, FieldRange* r);
 
-// Tile (zoom, x, y) of the section as PNG bytes, coloured by field over
+inline constexpr int kTile = 256;  // pixels across and down
+// A tile past the aggregate table's finest level reads at most this many
+// leaves to summarise its pixels (some 10 ms).
+inline constexpr uint64_t kOnTheFlyLeaves = 1 << 20;
+
+// One pixel of a tile: the element at its centre, and the value the pixel
+// shows with the least and greatest values under it (all three the
+// element's unless summarised).
+struct TilePixel {
+  bool inside = false;  // false: outside the domain
+  uint64_t id = 0;
+  uint32_t edge = 0;  // of the element at the centre, ticks
+  double value = 0, lo = 0, hi = 0;
+};
+// The kTile x kTile pixels of tile (zoom, x, y), row by row from the top of
+// the page.
+Status tile_pixels(Explorer& ex, const Section& s, const Paint& paint, int zoom, int64_t x,
+                   int64_t y, std::vector<TilePixel>* out);
+
+// Tile (zoom, x, y) of the section as PNG bytes, coloured by paint over
 // [lo, hi] on the viridis scale; outside the domain is transparent white.
-Status render_tile(Explorer& ex, const Section& s, const std::string& field, double lo, double hi,
+Status render_tile(Explorer& ex, const Section& s, const Paint& paint, double lo, double hi,
                    int zoom, int64_t x, int64_t y, std::string* png);
 
 }  // namespace weaver::serve

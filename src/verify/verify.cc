@@ -7,12 +7,14 @@
 #include <memory>
 
 #include "balance/balance.h"
+#include "db/aggregate_table.h"
 #include "db/database.h"
 #include "db/leaf_reader.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "modeldb/import_source.h"
 #include "modeldb/model_table.h"
+#include "query/aggregates.h"
 #include "storage/btree.h"
 #include "util/parallel.h"
 #include "verify/mesh_check.h"
@@ -103,7 +105,9 @@ Status check_table(const Database& db, const std::string& name, uint64_t pool_by
   r->records += t->size();
   r->pages += t->page_count();
   const size_t before = r->problems.size();
-  if (t->options().key_kind == KeyKind::kOctant) {
+  if (name == kAggregateTable) {
+    // Nested octants, not leaves: checked against the octant table below.
+  } else if (t->options().key_kind == KeyKind::kOctant) {
     WEAVER_RETURN_IF_ERROR(scan_octants(*t, name, problems));
     if (name == kModelTable) WEAVER_RETURN_IF_ERROR(scan_model(*t, name, problems));
   } else if (name == kNodeTable) {
@@ -153,6 +157,23 @@ Status check_nodes(const Database& db, const VerifyMemory& memory, const VerifyO
     r->corners += s.report.corners;
   }
   return check_corner_total(*shares[0].octants, *shares[0].nodes, problems, r);
+}
+
+// The aggregate table against a summary of the octant table made again.
+Status check_aggregate_table(const Database& db, const VerifyMemory& memory, Problems& problems) {
+  std::unique_ptr<BTree> octants, aggregates;
+  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &octants));
+  WEAVER_RETURN_IF_ERROR(db.open_table(kAggregateTable, memory.table_pool, &aggregates));
+  std::vector<std::string> found;
+  const Status st = check_aggregates(*octants, *aggregates, 20, &found);
+  if (!st.ok()) {
+    if (st.code() == Status::Code::kIOError) return st;
+    found.push_back("table aggregates: " + st.message());
+  }
+  for (std::string& p : found) problems.add(std::move(p));
+  problems.progress(std::string("table aggregates: summaries of the leaves: ") +
+                    (found.empty() ? "ok" : "PROBLEMS"));
+  return Status::Ok();
 }
 
 Status check_mesh(const Database& db, const VerifyMemory& memory, const VerifyOptions& o,
@@ -205,10 +226,15 @@ Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyRep
   }
   const VerifyMemory memory(o.memory);
   bool mesh_usable = o.mesh && db->has_table(kOctantTable) && db->has_table(kNodeTable);
+  bool octants_usable = db->has_table(kOctantTable);
   for (const std::string& name : db->table_names()) {
     bool usable = false;
     WEAVER_RETURN_IF_ERROR(check_table(*db, name, memory.table_pool, problems, r, &usable));
     if (!usable && (name == kOctantTable || name == kNodeTable)) mesh_usable = false;
+    if (!usable && name == kOctantTable) octants_usable = false;
+  }
+  if (octants_usable && db->has_table(kAggregateTable) && !problems.full()) {
+    WEAVER_RETURN_IF_ERROR(check_aggregate_table(*db, memory, problems));
   }
   if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, memory, o, problems, r));
   return Status::Ok();

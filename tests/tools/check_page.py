@@ -123,7 +123,8 @@ try:
         info = doc.text.get("info", "")
         if f"{stat['elements']} elements" not in info:
             fail(f"{name}: the panel says {info!r}, not {stat['elements']} elements")
-        if f"{view['color']} on the {view['axis']} =" not in doc.text.get("note", ""):
+        note = doc.text.get("note", "")
+        if f" {view['color']} " not in f" {note} " or f"on the {view['axis']} =" not in note:
             fail(f"{name}: the note says {doc.text.get('note')!r}")
         if "sel" in view:
             shown = doc.text.get("element", "").split()
