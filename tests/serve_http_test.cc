@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
+#include <filesystem>
 #include <string>
 #include <thread>
 #include <vector>
@@ -156,6 +158,131 @@ TEST(ServeThreads, StopEndsThePoolWithClientsConnected) {
   pool.join();  // returns: the test would hang (and time out) otherwise
   ::close(idle);
   ::close(asking);
+}
+
+// A server on its own thread for one test, stopped at the end.
+class Running {
+ public:
+  explicit Running(
+      ServerOptions o,
+      Server::Handler h = [](const Request& r) { return Response(200, "text/plain", r.path); }) {
+    o.port = 0;
+    EXPECT_TRUE(server_.listen(o).ok());
+    thread_ = std::thread([this, h] { server_.serve(h); });
+  }
+  ~Running() {
+    server_.stop();
+    thread_.join();
+  }
+  Server& server() { return server_; }
+  int connect() { return connect_local(server_.port()); }
+
+ private:
+  Server server_;
+  std::thread thread_;
+};
+
+// The open descriptors of this process.
+int open_descriptors() {
+  int n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator("/proc/self/fd")) ++n;
+  return n;
+}
+
+// Waits (at most 5 s, in 10 ms steps) until the server holds n connections.
+bool wait_for_connections(Server& s, int n) {
+  for (int i = 0; i < 500 && s.connections() != n; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return s.connections() == n;
+}
+
+// Slow clients hold a connection each, never a thread: with one worker and
+// ten clients halfway through their requests, another client is answered
+// before any of them finishes, and then each of them is answered too.
+TEST(ServeThreads, SlowClientsDoNotHoldUpOthers) {
+  ServerOptions o;
+  o.threads = 1;
+  o.timeout_ms = 60000;  // the old thread-per-connection server would wait this long
+  Running run(o);
+  std::vector<int> slow;
+  for (int i = 0; i < 10; ++i) {
+    slow.push_back(run.connect());
+    ASSERT_GE(slow.back(), 0);
+    const std::string part = "GET /slow" + std::to_string(i) + " HTTP/1.1\r\nHost:";
+    ASSERT_EQ(::send(slow.back(), part.data(), part.size(), MSG_NOSIGNAL), ssize_t(part.size()));
+  }
+  ASSERT_TRUE(wait_for_connections(run.server(), 10));
+  const int fast = run.connect();
+  EXPECT_NE(ask(fast, "GET /fast HTTP/1.1\r\n\r\n").find("\r\n\r\n/fast"), std::string::npos);
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_NE(ask(slow[i], " x\r\n\r\n").find("\r\n\r\n/slow" + std::to_string(i)),
+              std::string::npos);
+    ::close(slow[i]);
+  }
+  ::close(fast);
+  EXPECT_TRUE(wait_for_connections(run.server(), 0));
+}
+
+// A request that does not arrive in time is answered 408 and closed.
+TEST(ServeThreads, ARequestTooSlowToArriveGets408) {
+  ServerOptions o;
+  o.timeout_ms = 200;
+  Running run(o);
+  const int fd = run.connect();
+  const std::string part = "GET / HTTP/1.1\r\n";
+  ASSERT_EQ(::send(fd, part.data(), part.size(), MSG_NOSIGNAL), ssize_t(part.size()));
+  char buf[512];
+  const ssize_t n = ::recv(fd, buf, sizeof buf, 0);  // waits for the server's answer
+  ASSERT_GT(n, 0);
+  EXPECT_EQ(std::string(buf, size_t(n)).rfind("HTTP/1.1 408 ", 0), 0u);
+  ::close(fd);
+  EXPECT_TRUE(wait_for_connections(run.server(), 0));
+}
+
+// Past max_connections a new connection is answered 503 and closed; once
+// others close, new ones are served again.  No descriptor is left open.
+TEST(ServeThreads, ConnectionsPastTheLimitGet503AndNoneLeaks) {
+  const int before = open_descriptors();
+  {
+    ServerOptions o;
+    o.max_connections = 8;
+    Running run(o);
+    std::vector<int> held;
+    for (int i = 0; i < 8; ++i) held.push_back(run.connect());
+    ASSERT_TRUE(wait_for_connections(run.server(), 8));
+    const int extra = run.connect();
+    EXPECT_NE(ask(extra, "GET / HTTP/1.1\r\n\r\n").find(" 503 "), std::string::npos);
+    ::close(extra);
+    for (int fd : held) ::close(fd);
+    ASSERT_TRUE(wait_for_connections(run.server(), 0));
+    const int again = run.connect();
+    EXPECT_NE(ask(again, "GET /again HTTP/1.1\r\n\r\n").find(" 200 "), std::string::npos);
+    ::close(again);
+    EXPECT_TRUE(wait_for_connections(run.server(), 0));
+  }
+  EXPECT_EQ(open_descriptors(), before);
+}
+
+// Bodies still arriving count against max_buffered: a second one that
+// would pass it is refused (503) while the first is taken whole.
+TEST(ServeThreads, BodiesHeldAtOnceAreBounded) {
+  ServerOptions o;
+  o.max_buffered = 1000;
+  Running run(o, [](const Request& r) { return Response(200, "text/plain", r.body); });
+  const int first = run.connect(), second = run.connect();
+  const std::string head = "POST / HTTP/1.1\r\nContent-Length: 800\r\n\r\n";
+  ASSERT_EQ(::send(first, (head + "abc").data(), head.size() + 3, MSG_NOSIGNAL),
+            ssize_t(head.size() + 3));
+  for (int i = 0; i < 500 && run.server().held_bytes() == 0; ++i) {  // the first is read
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(run.server().held_bytes(), 800u);
+  EXPECT_NE(ask(second, head + "x").find(" 503 "), std::string::npos);
+  const std::string got = ask(first, std::string(797, 'y'));
+  EXPECT_NE(got.find("\r\n\r\nabc" + std::string(797, 'y')), std::string::npos);
+  ::close(first);
+  ::close(second);
 }
 
 }  // namespace

@@ -1,11 +1,14 @@
-// A small HTTP/1.1 server on POSIX sockets, for `weaver serve`: a listening
-// socket and a pool of threads, each accepting a connection and answering
-// its requests (request line, headers, a body of Content-Length bytes) one
-// after another while the client keeps it alive.  Bounded everywhere: the
-// request line (8 KiB), the headers (32 KiB), the body, the requests a
-// connection may make, the connections served at once (the threads; the
-// rest wait in the kernel's queue), and how long a client may take to send
-// a request or stay idle between two.
+// A small HTTP/1.1 server on POSIX sockets, for `weaver serve`.  One thread
+// polls the listening socket and every open connection, and reads requests
+// (request line, headers, a body of Content-Length bytes) as their bytes
+// arrive; a whole request goes to a pool of worker threads, which answer it
+// and hand the connection back for its next request (keep-alive and
+// pipelining).  So a slow or idle client holds no thread, only a
+// connection.  Bounded everywhere: the request line (8 KiB), the headers
+// (32 KiB), a body, the bodies held at once, the requests a connection may
+// make, the connections open at once (past them a new one is answered 503
+// and closed), and how long a client may take to send a request (408) or
+// stay idle between two.
 #pragma once
 
 #include <atomic>
@@ -54,15 +57,23 @@ struct Response {
 
 // A response with status and a JSON body {"error": message}.
 Response error_response(int status, const std::string& message);
+// The status line and headers of r.
+std::string response_head(const Response& r, bool keep_alive);
+// The body length a parsed request announces: its Content-Length, 0 without
+// one.  An error response (400 for a bad length or a chunked body, 413 past
+// max_body) when it cannot be taken.
+bool body_length(const Request& r, uint64_t max_body, uint64_t* length, Response* error);
 
 struct ServerOptions {
   std::string bind = "127.0.0.1";
   int port = 8080;  // 0: any free port (Server::port() says which)
   int threads = 4;
-  uint64_t max_body = 64ull << 20;  // a POST of more is refused (413)
-  int timeout_ms = 10000;           // to read a request, and to write its answer
-  int idle_ms = 1000;               // a kept-alive connection idle longer is closed
-  int max_requests = 100000;        // on one connection
+  uint64_t max_body = 64ull << 20;       // a POST of more is refused (413)
+  int timeout_ms = 10000;                // to read a request, and to write its answer
+  int idle_ms = 5000;                    // a kept-alive connection idle longer is closed
+  int max_requests = 100000;             // on one connection
+  int max_connections = 64;              // open at once; past them 503 and closed
+  uint64_t max_buffered = 256ull << 20;  // request bodies held at once; past it 503
 };
 
 class Server {
@@ -78,16 +89,19 @@ class Server {
   // Each thread first runs on_start (if any): its warm-up.
   void serve(const Handler& handler, const std::function<void()>& on_start = nullptr);
   void stop() { stopping_ = true; }
+  // Connections open now (for the tests: none leaks).
+  int connections() const { return open_; }
+  // Body bytes of requests still arriving, counted against max_buffered.
+  uint64_t held_bytes() const { return held_; }
   ~Server();
 
  private:
-  void worker(const Handler& handler, const std::function<void()>& on_start);
-  void answer(int fd, const Handler& handler);
-
   ServerOptions o_;
   int listen_fd_ = -1;
   int port_ = 0;
   std::atomic<bool> stopping_{false};
+  std::atomic<int> open_{0};
+  std::atomic<uint64_t> held_{0};
 };
 
 // "%41" and "+" decoded; InvalidArgument for a bad escape.

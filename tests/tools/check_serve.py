@@ -255,7 +255,34 @@ try:
                 errors.append(str(x))
                 return
 
+    # Slow clients (a request a few bytes at a time) and malformed ones mixed
+    # in: each gets its own answer, and none holds up the others.
+    slow_errors = []
+
+    def slow_client(i):
+        request = f"GET /api/element/{i} HTTP/1.1\r\nConnection: close\r\n\r\n".encode()
+        try:
+            with socket.create_connection(("127.0.0.1", port), timeout=20) as so:
+                for k in range(0, len(request), 7):
+                    so.sendall(request[k:k + 7])
+                    time.sleep(0.02)
+                got = b""
+                while chunk := so.recv(65536):
+                    got += chunk
+            if b" 200 " not in got.split(b"\r\n")[0] or f'"element": {i},'.encode() not in got:
+                slow_errors.append(got[:200])
+        except OSError as e:
+            slow_errors.append(str(e))
+
+    def malformed_client():
+        for _ in range(20):
+            if b" 400 " not in raw(b"NOT HTTP AT ALL\r\n\r\n").split(b"\r\n")[0]:
+                slow_errors.append("malformed request not answered 400")
+
+    descriptors = len(os.listdir(f"/proc/{server.pid}/fd"))
     clients = [threading.Thread(target=client) for _ in range(3)]
+    clients += [threading.Thread(target=slow_client, args=(i,)) for i in range(6)]
+    clients += [threading.Thread(target=malformed_client) for _ in range(2)]
     for t in clients:
         t.start()
     run("mesh", db, "--model", "basin", "--freq", "0.08", "--quiet")
@@ -267,6 +294,17 @@ try:
     if new == old or errors or mixed or not seen <= {old, new}:
         fail(f"re-mesh while serving: old {old}, new {new}, seen {seen}, errors {errors[:2]}, "
              f"mixed {mixed[:2]}")
+    if slow_errors:
+        fail(f"slow or malformed clients beside the others: {slow_errors[:2]}")
+    # Every connection closed by its client is closed by the server: as many
+    # descriptors as before the clients (waiting out the idle timeout).
+    for _ in range(100):
+        if len(os.listdir(f"/proc/{server.pid}/fd")) <= descriptors:
+            break
+        time.sleep(0.1)
+    else:
+        fail(f"{len(os.listdir(f'/proc/{server.pid}/fd'))} descriptors open, {descriptors} "
+             "before the clients came")
 finally:
     server.send_signal(signal.SIGTERM)
     try:
