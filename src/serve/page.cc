@@ -11,7 +11,7 @@ namespace weaver::serve {
 const char kPage[] = R"PAGE(<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
-<title>weaver serve</title>
+<title>weaver serve</title><link rel="icon" href="data:,">
 <style>
 body{margin:0;font:14px system-ui,sans-serif;display:flex;flex-direction:column;height:100vh}
 header{display:flex;gap:12px;align-items:center;padding:6px 10px;background:#f3f3f3;flex-wrap:wrap}
@@ -41,6 +41,7 @@ const $ = id => document.getElementById(id);
 const map = $("map"), axesCanvas = $("axes");
 let stat = null, sec = null;
 const view = {axis: "z", at: 0, color: "level", summary: "", zoom: 0, cu: 0.5, cv: 0.5, sel: ""};
+const DEFAULTS = {...view};
 const VIRIDIS = [[68,1,84],[72,40,120],[62,74,137],[49,104,142],[38,130,142],[31,158,137],[53,183,121],[110,206,88],[181,222,43],[253,231,37]];
 const units = {level: "", edge: "m", vp: "m/s", vs: "m/s", rho: "kg/m^3", qp: "", qs: ""};
 
@@ -52,7 +53,8 @@ async function json(url) {
 }
 function readHash() {
   const h = new URLSearchParams(location.hash.slice(1));
-  for (const k of Object.keys(view)) if (h.has(k)) view[k] = typeof view[k] === "number" ? Number(h.get(k)) : h.get(k);
+  // A key the URL leaves out has its default (writeHash leaves out the empty ones).
+  for (const k of Object.keys(view)) view[k] = !h.has(k) ? DEFAULTS[k] : typeof DEFAULTS[k] === "number" ? Number(h.get(k)) : h.get(k);
 }
 function writeHash(push) {
   const h = new URLSearchParams();
@@ -276,7 +278,8 @@ $("at").oninput = () => { $("atn").value = $("at").value; };
 $("atn").onchange = () => { view.at = Number($("atn").value); loadSection(true); };
 $("color").onchange = () => { view.color = $("color").value; loadSection(true); };
 $("summary").onchange = () => { view.summary = $("summary").value; loadSection(true); };
-window.addEventListener("popstate", () => { readHash(); loadSection(false).then(() => { if (view.sel !== "") select(view.sel); }); });
+const HINT = $("sel").textContent;
+window.addEventListener("popstate", () => { readHash(); loadSection(false).then(() => { if (view.sel !== "") select(view.sel); else $("sel").textContent = HINT; }); });
 window.addEventListener("resize", draw);
 (async () => {
   try { stat = await json("/api/stat"); } catch (e) { $("info").textContent = e.message; return; }
