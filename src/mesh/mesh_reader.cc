@@ -4,6 +4,7 @@
 
 #include "db/aggregate_table.h"
 #include "db/node_table.h"
+#include "db/model_table_name.h"
 #include "db/partition_table.h"
 
 namespace weaver {
@@ -17,7 +18,9 @@ Status Mesh::open(const std::string& db_dir, uint64_t octant_pool, uint64_t node
   } else if (!octree_only_ok) {
     return Status::NotFound(db_dir + ": no mesh yet (run 'weaver extract' first)");
   }
-  WEAVER_RETURN_IF_ERROR(m->db_->open_table(kOctantTable, octant_pool, &m->octants_));
+  m->model_ = octree_only_ok && !m->db_->has_table(kOctantTable) && m->db_->has_table(kModelTable);
+  WEAVER_RETURN_IF_ERROR(
+      m->db_->open_table(m->model_ ? kModelTable : kOctantTable, octant_pool, &m->octants_));
   const TableOptions& t = m->octants_->options();
   units_from_metadata(t.metadata, &m->units_);
   m->schema_ = t.schema;

@@ -42,13 +42,17 @@ class Mesh {
  public:
   // Opens the mesh of db_dir read-only.  NotFound when there is no node table
   // yet (the octree was never extracted), unless octree_only_ok: then the
-  // octree alone is open and has_nodes() is false.
+  // octree alone is open and has_nodes() is false.  With octree_only_ok a
+  // model database (`weaver model import`: no octant table, a model table)
+  // opens too, its cells as the octree's leaves (is_model()).
   static Status open(const std::string& db_dir, uint64_t octant_pool, uint64_t node_pool,
                      std::unique_ptr<Mesh>* out, bool octree_only_ok = false);
 
   BTree& octants() { return *octants_; }
   BTree& nodes() { return *nodes_; }  // REQUIRES: has_nodes()
   bool has_nodes() const { return nodes_ != nullptr; }
+  // Whether the leaves are a model database's cells (open's octree_only_ok).
+  bool is_model() const { return model_; }
   uint64_t element_count() const { return octants_->size(); }
   uint64_t node_count() const { return nodes_ ? nodes_->size() : 0; }
   const Units& units() const { return units_; }
@@ -93,6 +97,7 @@ class Mesh {
   RecordSchema schema_;
   const Field *vp_ = nullptr, *vs_ = nullptr, *rho_ = nullptr, *qp_ = nullptr, *qs_ = nullptr;
   std::unique_ptr<BTree> partition_, aggregates_;
+  bool model_ = false;
   uint32_t partition_parts_ = 0;
   std::string partition_method_;
 };

@@ -13,6 +13,7 @@
 #include <array>
 #include <string>
 
+#include "db/model_table_name.h"
 #include "model/etree_file.h"
 #include "model/velocity_model.h"
 #include "schema/record_schema.h"
@@ -20,7 +21,6 @@
 
 namespace weaver {
 
-inline constexpr char kModelTable[] = "model";
 
 struct ModelInfo {
   double tick_m = 1;                           // metres per tick (the root's edge / 2^20)

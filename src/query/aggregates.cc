@@ -281,6 +281,9 @@ Status build_aggregates(const std::string& db_dir, const AggregateOptions& o,
   const uint64_t pool = plan.take("octant table pool", 1, 4);
   const uint64_t level_pools = plan.take("the levels' table files", 1, 2);
   const uint64_t write_pool = plan.take("aggregate table pool", 1, 8);
+  if (!db->has_table(kOctantTable)) {
+    return Status::InvalidArgument(db_dir + " has no octant table to summarise");
+  }
   std::unique_ptr<Mesh> mesh;
   WEAVER_RETURN_IF_ERROR(Mesh::open(db_dir, pool, 1 << 20, &mesh, true));
   BTree& octants = mesh->octants();

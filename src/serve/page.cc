@@ -283,7 +283,8 @@ window.addEventListener("popstate", () => { readHash(); loadSection(false).then(
 window.addEventListener("resize", draw);
 (async () => {
   try { stat = await json("/api/stat"); } catch (e) { $("info").textContent = e.message; return; }
-  $("info").innerHTML = `<b>${stat.database.replace(/[&<>]/g, "")}</b><br>${stat.elements} elements, ${stat.nodes} nodes`;
+  const counts = stat.kind === "model" ? `${stat.elements} cells of a velocity model` : `${stat.elements} elements, ${stat.nodes} nodes`;
+  $("info").innerHTML = `<b>${stat.database.replace(/[&<>]/g, "")}</b><br>${counts}`;
   for (const f of stat.fields) $("color").add(new Option(f, f));
   $("sumlabel").hidden = stat.aggregates === null;  // summaries need the aggregate table
   readHash();

@@ -239,7 +239,8 @@ Response Service::stat(Explorer& ex) {
   const Status st = snapshot_extent(ex, &extent);
   if (!st.ok()) return status_response(st);
   const Units& u = ex.units();
-  std::string j = "{\"database\": " + json_string(db_) +
+  const char* kind = ex.mesh().is_model() ? "model" : ex.has_nodes() ? "mesh" : "octree";
+  std::string j = "{\"database\": " + json_string(db_) + ", \"kind\": \"" + kind + "\"" +
                   ", \"elements\": " + std::to_string(ex.element_count()) +
                   ", \"nodes\": " + std::to_string(ex.node_count()) +
                   ", \"tick_m\": " + number(u.tick_m) + ", \"origin_m\": [";

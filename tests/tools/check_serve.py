@@ -314,5 +314,37 @@ finally:
         fail("the server did not stop on SIGTERM")
 if code != 0:
     fail(f"the server exited {code}: {server.stderr.read()}")
-print(f"check_serve: JSON routes as weaver query, tiles by pixel, bad requests, a re-mesh "
+
+# A model database (weaver model import of the etree fixture): its cells as
+# the octree, the material of a point as `weaver model material` gives it,
+# its tiles, and no nodes.
+model = os.path.join(work, "model.db")
+fixture = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "etree", "cmu.e")
+run("model", "import", model, "--from", "etree:" + fixture)
+server = subprocess.Popen([weaver_bin, "serve", model, "--port", "0"], stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True)
+try:
+    port = int(server.stdout.readline().split("http://127.0.0.1:")[1].split("/")[0])
+    stat = api("/api/stat")
+    if stat["kind"] != "model" or stat["nodes"] != 0 or "vs" not in stat["fields"]:
+        fail(f"a model database's /api/stat: {stat}")
+    points = [(1000 + 7919 * i % 90000, 500 + 3571 * i % 90000, 100 + 997 * i % 9000)
+              for i in range(20)]
+    hits = api("/api/points?query=material&units=m", "POST",
+               "".join(f"{x} {y} {z}\n" for x, y, z in points))
+    for (x, y, z), hit in zip(points, hits):
+        want = run("model", "material", model, str(x), str(y), str(z)).stdout.split()
+        if hit["status"] != "inside" or \
+                any(abs(hit[k] - float(want[3 + i])) > 1e-3 * abs(float(want[3 + i]))
+                    for i, k in enumerate(("vp", "vs", "rho"))):
+            fail(f"a model's material at ({x}, {y}, {z}): {hit}, weaver model material {want}")
+    status, kind, png = request("GET", "/api/tile/z/1000/1/0/0.png?color=vs")
+    if status != 200 or read_png(png)[:2] != (256, 256):
+        fail(f"a model's tile: {status}")
+    api("/api/node/0", status=404)
+finally:
+    server.send_signal(signal.SIGTERM)
+    server.wait(timeout=10)
+print(f"check_serve: JSON routes as weaver query, tiles by pixel, bad requests, a model "
+      f"database, a re-mesh "
       f"seen whole ({len(seen)} states), stopped by SIGTERM")
