@@ -3,8 +3,8 @@
 #include <cstdlib>
 
 #include "db/aggregate_table.h"
-#include "db/node_table.h"
 #include "db/model_table_name.h"
+#include "db/node_table.h"
 #include "db/partition_table.h"
 
 namespace weaver {
