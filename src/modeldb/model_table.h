@@ -21,7 +21,6 @@
 
 namespace weaver {
 
-
 struct ModelInfo {
   double tick_m = 1;                           // metres per tick (the root's edge / 2^20)
   std::array<double, 3> origin_m = {0, 0, 0};  // where tick 0 is, in model metres
