@@ -76,6 +76,13 @@ Status LeafWindow::floor(uint64_t key, Floor* out) {
 
 Status LeafWindow::get(uint64_t key, const std::byte** payload, bool* found) {
   *found = false;
+  if (sparse_) {
+    Floor f;
+    WEAVER_RETURN_IF_ERROR(sparse_floor(key, &f));
+    *found = f.found && f.key == key;
+    if (*found && payload != nullptr) *payload = f.payload;
+    return Status::Ok();
+  }
   Page* p = nullptr;
   uint64_t leaf_rank = 0;
   WEAVER_RETURN_IF_ERROR(page_for(key, &p, &leaf_rank));

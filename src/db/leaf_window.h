@@ -36,7 +36,7 @@ class LeafWindow {
   // Whether key is in the table and, if so and with payloads, where its
   // payload is (valid until the next call).
   Status get(uint64_t key, const std::byte** payload, bool* found);
-  // Sparse: answer each floor by its own floor and rank descents, without
+  // Sparse: answer each floor (and get) by its own descent, without
   // decoding whole leaves.  For a few keys (one question) that is cheaper;
   // for a batch that lands many keys in each leaf, the decoded leaf is.
   void set_sparse(bool sparse) { sparse_ = sparse; }

@@ -21,6 +21,26 @@ constexpr size_t kDenseBatch = 64;
 constexpr size_t kDensityWindow = 1024;
 constexpr uint64_t kSparseDecodes = kDensityWindow / 8;
 
+// The watch over one batch's lookups in a window: dense at first (unless
+// the batch is small), key by key once a window of points proves sparse.
+class DensityWatch {
+ public:
+  DensityWatch(LeafWindow& w, size_t n) : w_(w), before_(w.decodes()) {
+    w.set_sparse(n < kDenseBatch);
+  }
+  // Before the k-th lookup of the batch.
+  void at(size_t k) {
+    if (k % kDensityWindow != kDensityWindow - 1 || w_.sparse()) return;
+    const uint64_t decodes = w_.decodes();
+    if (decodes - before_ > kSparseDecodes) w_.set_sparse(true);
+    before_ = decodes;
+  }
+
+ private:
+  LeafWindow& w_;
+  uint64_t before_;
+};
+
 }  // namespace
 
 Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
@@ -61,8 +81,7 @@ void Explorer::sort_points(const Coord* p, size_t n, Hit* out, Valid valid, KeyO
 
 Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
   sort_points(p, n, out, pixel_is_valid, pixel_key);
-  octant_window_->set_sparse(n < kDenseBatch);
-  uint64_t decodes_before = octant_window_->decodes();
+  DensityWatch density(*octant_window_, n);
   LeafWindow::Floor f;
   MeshElement m;
   // The walk reads only the sorted pairs: the points themselves, in input
@@ -72,11 +91,7 @@ Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
   for (size_t k = 0; k < order_.size(); ++k) {
     const auto [key, i] = order_[k];
     if (k + kAhead < order_.size()) __builtin_prefetch(&out[order_[k + kAhead].second], 1);
-    if (k % kDensityWindow == kDensityWindow - 1 && !octant_window_->sparse()) {
-      const uint64_t decodes = octant_window_->decodes();
-      if (decodes - decodes_before > kSparseDecodes) octant_window_->set_sparse(true);
-      decodes_before = decodes;
-    }
+    density.at(k);
     WEAVER_RETURN_IF_ERROR(octant_window_->floor(key, &f));
     // The floor leaf holds the pixel if the pixel's key is in its subtree;
     // if not, the pixel is in a hole of the domain.
@@ -99,11 +114,13 @@ Status Explorer::aggregate_batch(const Coord* p, size_t n, int level, AggregateH
     return octant_key(octant_ancestor({c.x, c.y, c.z, kMaxLevel}, level));
   };
   sort_points(p, n, out, pixel_is_valid, key_of);
-  aggregate_window_->set_sparse(n < kDenseBatch);
+  DensityWatch density(*aggregate_window_, n);
   uint64_t last = UINT64_MAX;
   const std::byte* payload = nullptr;
   bool found = false;
-  for (const auto& [key, i] : order_) {
+  for (size_t k = 0; k < order_.size(); ++k) {
+    const auto [key, i] = order_[k];
+    density.at(k);
     // Points of one pixel's octant come together: one lookup serves them.
     if (key != last) WEAVER_RETURN_IF_ERROR(aggregate_window_->get(key, &payload, &found));
     last = key;
