@@ -31,6 +31,7 @@ table{border-collapse:collapse}td{padding:1px 6px 1px 0;vertical-align:top}
 <label>at <input id="at" type="range" step="any" style="width:220px"> <input id="atn" type="number" step="any" style="width:90px"> m</label>
 <label>colour <select id="color"></select></label>
 <label id="sumlabel" hidden>pixel <select id="summary"><option value="">own</option><option value="min">least</option><option value="max">greatest</option><option value="mean">mean</option><option value="centre">centre</option></select></label>
+<label id="danglabel" title="the dangling nodes on the plane: red edge-dangling, white face-dangling; only a plane on element faces (z = 0, say) has nodes on it"><input type="checkbox" id="dang"> dangling nodes</label>
 <span id="where"></span>
 </header>
 <main><div id="map"><canvas id="axes"></canvas></div>
@@ -40,7 +41,7 @@ table{border-collapse:collapse}td{padding:1px 6px 1px 0;vertical-align:top}
 const $ = id => document.getElementById(id);
 const map = $("map"), axesCanvas = $("axes");
 let stat = null, sec = null;
-const view = {axis: "z", at: 0, color: "level", summary: "", zoom: 0, cu: 0.5, cv: 0.5, sel: ""};
+const view = {axis: "z", at: 0, color: "level", summary: "", dang: "", zoom: 0, cu: 0.5, cv: 0.5, sel: ""};
 const DEFAULTS = {...view};
 const VIRIDIS = [[68,1,84],[72,40,120],[62,74,137],[49,104,142],[38,130,142],[31,158,137],[53,183,121],[110,206,88],[181,222,43],[253,231,37]];
 const units = {level: "", edge: "m", vp: "m/s", vs: "m/s", rho: "kg/m^3", qp: "", qs: ""};
@@ -70,6 +71,7 @@ async function loadSection(push) {
   if (!(view.at >= lo && view.at < hi)) view.at = lo + (hi - lo) / (view.axis === "z" ? 20 : 2);
   $("at").value = $("atn").value = view.at;
   $("axis").value = view.axis; $("color").value = view.color; $("summary").value = view.summary;
+  $("dang").checked = view.dang !== "";
   try { sec = await json(`/api/section/${view.axis}/${view.at}?${paintQuery()}`); }
   catch (e) { $("note").textContent = e.message; return; }
   writeHash(push);
@@ -77,6 +79,7 @@ async function loadSection(push) {
 }
 // The colour and what a pixel of many elements shows, as the API takes them.
 function paintQuery() { return `color=${view.color}` + (view.summary ? `&summary=${view.summary}` : ""); }
+function tileQuery() { return paintQuery() + `&min=${sec.min}&max=${sec.max}` + (view.dang ? "&danglings=1" : ""); }
 function tileSize() { return 256; }
 function worldPerPixel() { return sec.side_m / (256 * 2 ** view.zoom); }
 function draw() {
@@ -87,7 +90,7 @@ function draw() {
   const want = new Set();
   for (let ty = Math.max(0, Math.floor(-top / 256)); ty < Math.min(n, Math.ceil((h - top) / 256)); ty++)
     for (let tx = Math.max(0, Math.floor(-left / 256)); tx < Math.min(n, Math.ceil((w - left) / 256)); tx++) {
-      const src = `/api/tile/${view.axis}/${view.at}/${z}/${tx}/${ty}.png?${paintQuery()}&min=${sec.min}&max=${sec.max}`;
+      const src = `/api/tile/${view.axis}/${view.at}/${z}/${tx}/${ty}.png?${tileQuery()}`;
       want.add(src);
       let img = map.querySelector(`img[data-src="${CSS.escape(src)}"]`);
       if (!img) { img = new Image(); img.dataset.src = src; img.src = src; img.draggable = false; map.insertBefore(img, axesCanvas); }
@@ -137,7 +140,8 @@ function drawBar() {
   const u = units[view.color] ? " " + units[view.color] : "";
   g.fillText(`${+sec.min.toPrecision(5)}${u}`, 0, 36);
   const t = `${+sec.max.toPrecision(5)}${u}`; g.fillText(t, 300 - g.measureText(t).width, 36);
-  $("note").textContent = `${sec.caption}, on the ${view.axis} = ${+sec.at_m.toPrecision(8)} m plane; colour range over the section (${sec.samples} pixels)`;
+  $("note").textContent = `${sec.caption}, on the ${view.axis} = ${+sec.at_m.toPrecision(8)} m plane; colour range over the section (${sec.samples} pixels)` +
+    (view.dang ? "; dangling nodes on the plane marked on elements 6 pixels wide or more (red: edge, white: face)" : "");
 }
 function worldAt(px, py) {
   const full = 256 * 2 ** view.zoom, perPx = sec.side_m / full;
@@ -278,6 +282,7 @@ $("at").oninput = () => { $("atn").value = $("at").value; };
 $("atn").onchange = () => { view.at = Number($("atn").value); loadSection(true); };
 $("color").onchange = () => { view.color = $("color").value; loadSection(true); };
 $("summary").onchange = () => { view.summary = $("summary").value; loadSection(true); };
+$("dang").onchange = () => { view.dang = $("dang").checked ? "1" : ""; writeHash(true); drawBar(); draw(); };
 const HINT = $("sel").textContent;
 window.addEventListener("popstate", () => { readHash(); loadSection(false).then(() => { if (view.sel !== "") select(view.sel); else $("sel").textContent = HINT; }); });
 window.addEventListener("resize", draw);
@@ -287,6 +292,7 @@ window.addEventListener("resize", draw);
   $("info").innerHTML = `<b>${stat.database.replace(/[&<>]/g, "")}</b><br>${counts}`;
   for (const f of stat.fields) $("color").add(new Option(f, f));
   $("sumlabel").hidden = stat.aggregates === null;  // summaries need the aggregate table
+  $("danglabel").hidden = stat.nodes === 0;  // a mesh's nodes
   readHash();
   if (!stat.fields.includes(view.color)) view.color = stat.fields.includes("vs") ? "vs" : "level";
   if (!location.hash) view.color = stat.fields.includes("vs") ? "vs" : "level";

@@ -313,7 +313,10 @@ Response Service::tile(Explorer& ex, const std::vector<std::string>& parts, cons
   }
   if (st.ok() && !given) st = field_range(ex, s, paint, &range);
   std::string bytes;
-  if (st.ok()) st = render_tile(ex, s, paint, range.min, range.max, int(zoom), x, y, &bytes);
+  const bool danglings = r.query.count("danglings") && r.query.at("danglings") != "0";
+  if (st.ok()) {
+    st = render_tile(ex, s, paint, range.min, range.max, int(zoom), x, y, &bytes, danglings);
+  }
   if (!st.ok()) return status_response(st);
   return {200, "image/png", std::move(bytes)};
 }

@@ -17,6 +17,7 @@
 //                                  extent, the colour range its tiles share
 //                                  and what a pixel of many elements shows
 //   GET  /api/tile/AXIS/POSITION/ZOOM/X/Y.png?color=F[&summary=S][&min=&max=]
+//                                  [&danglings=1]
 //                                  (S: min, max, mean or centre; serve/tiles.h)
 //   GET  /api/geo?x=&y=            metres in the frame as WGS84 lon, lat
 //                                  (a georeferenced mesh only)

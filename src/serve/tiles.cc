@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <vector>
 
 #include "slice/canvas.h"
@@ -101,7 +102,7 @@ Status sample(Explorer& ex, const Section& s, const Paint& paint, double u0, dou
     const PointHit& h = hits[i];
     if (!h.inside) continue;
     const double v = value_of(h, paint.field, tick_m);
-    (*out)[i] = {true, h.id, octant_edge(h.leaf), v, v, v};
+    (*out)[i] = {true, h.id, h.leaf, v, v, v};
   }
   const int level = pixel_level(span / n);
   if (paint.summary == Paint::Summary::kCentre || level >= kMaxLevel) return Status::Ok();
@@ -136,6 +137,46 @@ Status sample(Explorer& ex, const Section& s, const Paint& paint, double u0, dou
     p.value = value_of(sums[k].a, paint.field, paint.summary, tick_m);
     p.lo = value_of(sums[k].a, paint.field, Paint::Summary::kMin, tick_m);
     p.hi = value_of(sums[k].a, paint.field, Paint::Summary::kMax, tick_m);
+  }
+  return Status::Ok();
+}
+
+// The dangling nodes on the plane: those on the faces that the elements at
+// least 6 pixels wide have in it (their corners, edge midpoints and
+// centres), found by one batch of node lookups; each a 5 x 5 square.
+Status mark_danglings(Explorer& ex, const Section& s, const std::vector<TilePixel>& pixels,
+                      double u0, double v0, double pixel, Image* image) {
+  std::set<uint64_t> seen;
+  std::vector<Coord> points;
+  for (const TilePixel& p : pixels) {
+    const uint32_t edge = octant_edge(p.leaf);
+    const uint32_t corner[3] = {p.leaf.x, p.leaf.y, p.leaf.z};
+    if (!p.inside || edge < 6 * pixel || corner[s.axis] != s.at || !seen.insert(p.id).second) {
+      continue;
+    }
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) {
+        uint32_t c[3] = {corner[0], corner[1], corner[2]};
+        c[s.u] += uint32_t(a) * (edge / 2), c[s.v] += uint32_t(b) * (edge / 2);
+        points.push_back({c[0], c[1], c[2]});
+      }
+    }
+  }
+  std::vector<NodeHit> hits(points.size());
+  WEAVER_RETURN_IF_ERROR(ex.node_at_batch(points.data(), points.size(), hits.data()));
+  for (size_t k = 0; k < points.size(); ++k) {
+    if (!hits[k].found || hits[k].kind == NodeKind::kAnchored) continue;
+    const uint32_t c[3] = {points[k].x, points[k].y, points[k].z};
+    const int i = int(std::floor((c[s.u] - u0) / pixel));
+    const int j = int(std::floor(s.down ? (c[s.v] - v0) / pixel : (v0 - c[s.v]) / pixel));
+    const Rgb fill = hits[k].kind == NodeKind::kEdge ? Rgb{220, 30, 30} : Rgb{255, 255, 255};
+    for (int dj = -2; dj <= 2; ++dj) {
+      for (int di = -2; di <= 2; ++di) {
+        if (i + di < 0 || i + di >= kTile || j + dj < 0 || j + dj >= kTile) continue;
+        const bool rim = std::abs(di) == 2 || std::abs(dj) == 2;
+        image->set(i + di, j + dj, rim ? kOutline : fill);
+      }
+    }
   }
   return Status::Ok();
 }
@@ -242,11 +283,12 @@ Status field_range(Explorer& ex, const Section& s, const Paint& paint, FieldRang
 }
 
 Status render_tile(Explorer& ex, const Section& s, const Paint& paint, double lo, double hi,
-                   int zoom, int64_t x, int64_t y, std::string* png) {
+                   int zoom, int64_t x, int64_t y, std::string* png, bool danglings) {
   std::vector<TilePixel> pixels;
   WEAVER_RETURN_IF_ERROR(tile_pixels(ex, s, paint, zoom, x, y, &pixels));
   Image image(kTile, kTile, Rgb{255, 255, 255});
-  const double pixel = s.side / std::ldexp(1.0, zoom) / kTile;  // ticks a pixel
+  const double span = s.side / std::ldexp(1.0, zoom);
+  const double pixel = span / kTile;  // ticks a pixel
   for (int j = 0; j < kTile; ++j) {
     for (int i = 0; i < kTile; ++i) {
       const TilePixel& h = pixels[size_t(j) * kTile + i];
@@ -255,12 +297,17 @@ Status render_tile(Explorer& ex, const Section& s, const Paint& paint, double lo
       Rgb c = colormap(std::clamp(t, 0.0, 1.0));
       // An outline where an element is at least 6 pixels wide and the pixel
       // before (left or above) lies in another element.
-      if (h.edge >= 6 * pixel && ((i > 0 && pixels[size_t(j) * kTile + i - 1].id != h.id) ||
-                                  (j > 0 && pixels[size_t(j - 1) * kTile + i].id != h.id))) {
+      if (octant_edge(h.leaf) >= 6 * pixel &&
+          ((i > 0 && pixels[size_t(j) * kTile + i - 1].id != h.id) ||
+           (j > 0 && pixels[size_t(j - 1) * kTile + i].id != h.id))) {
         c = kOutline;
       }
       image.set(i, j, c);
     }
+  }
+  if (danglings && ex.has_nodes()) {
+    const double u0 = x * span, v0 = s.down ? y * span : s.side - y * span;
+    WEAVER_RETURN_IF_ERROR(mark_danglings(ex, s, pixels, u0, v0, pixel, &image));
   }
   *png = encode_png(image, {});
   return Status::Ok();

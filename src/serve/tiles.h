@@ -87,7 +87,7 @@ inline constexpr uint64_t kOnTheFlyLeaves = 1 << 20;
 struct TilePixel {
   bool inside = false;  // false: outside the domain
   uint64_t id = 0;
-  uint32_t edge = 0;  // of the element at the centre, ticks
+  Octant leaf;  // the element at the centre
   double value = 0, lo = 0, hi = 0;
 };
 // The kTile x kTile pixels of tile (zoom, x, y), row by row from the top of
@@ -97,7 +97,11 @@ Status tile_pixels(Explorer& ex, const Section& s, const Paint& paint, int zoom,
 
 // Tile (zoom, x, y) of the section as PNG bytes, coloured by paint over
 // [lo, hi] on the viridis scale; outside the domain is transparent white.
+// With danglings, the dangling nodes that lie on the plane are marked as
+// `weaver slice --danglings` marks them (edge-dangling red, face-dangling
+// white), on elements at least 6 pixels wide: only a plane on element
+// faces (z = 0, say) has nodes on it.
 Status render_tile(Explorer& ex, const Section& s, const Paint& paint, double lo, double hi,
-                   int zoom, int64_t x, int64_t y, std::string* png);
+                   int zoom, int64_t x, int64_t y, std::string* png, bool danglings = false);
 
 }  // namespace weaver::serve

@@ -143,6 +143,45 @@ try:
         if matched < len(samples) // 2:
             fail(f"tile {zoom}/{tx}/{ty}: only {matched} of {len(samples)} pixels checked")
 
+    # Dangling nodes on request: on the z = 0 plane (the elements' top
+    # faces), in a tile at zoom 5, where every element is over 6 pixels wide,
+    # every edge- or face-dangling node is marked at its pixel, red or white,
+    # as weaver export's nodes.csv says.
+    csv_dir = os.path.join(work, "csv")
+    run("export", db, "--format", "csv", "--out", csv_dir)
+    side_ticks = api("/api/section/z/0?color=vs")["side_m"] / stat["tick_m"]
+    with open(os.path.join(csv_dir, "nodes.csv")) as f:
+        next(f)
+        top = [(int(x), int(y), k) for _, x, y, z, k, *_ in (line.split(",") for line in f)
+               if int(z) == 0 and k != "anchored"]
+    zoom = 5
+    span = side_ticks / 2 ** zoom
+    px = span / 256
+    # The tile with the most such nodes off its edges (nodes lie on octant
+    # boundaries, and so do tiles' edges).
+    counts = {}
+    for x, y, _ in top:
+        t = (int(x // span), int((side_ticks - y) // span))
+        if 2 <= (x - t[0] * span) / px < 254 and 2 <= (side_ticks - t[1] * span - y) / px < 254:
+            counts[t] = counts.get(t, 0) + 1
+    tx, ty = max(counts, key=counts.get)
+    u0, v0 = tx * span, side_ticks - ty * span
+    status, kind, png = request("GET", f"/api/tile/z/0/{zoom}/{tx}/{ty}.png?color=vs"
+                                f"&min=0&max=5000&danglings=1")
+    _, _, rows, _ = read_png(png)
+    marked = 0
+    for x, y, node_kind in top:
+        i, j = int((x - u0) // px), int((v0 - y) // px)
+        if not (2 <= i < 254 and 2 <= j < 254):
+            continue
+        want = (220, 30, 30) if node_kind == "edge" else (255, 255, 255)
+        if pixel(rows, i, j) != want:
+            fail(f"the {node_kind}-dangling node ({x}, {y}, 0) is not marked at pixel ({i}, {j}) "
+                 f"of tile 5/{tx}/{ty}: {pixel(rows, i, j)}")
+        marked += 1
+    if marked < 3:
+        fail(f"only {marked} dangling nodes in tile 5/{tx}/{ty} to check")
+
     # A region as vtu: what weaver export --box writes, byte for byte.
     box = "20000,30000,0,35000,41000,1500"
     status, kind, vtu = request("GET", f"/api/export.vtu?box={box}")
@@ -345,6 +384,7 @@ try:
 finally:
     server.send_signal(signal.SIGTERM)
     server.wait(timeout=10)
-print(f"check_serve: JSON routes as weaver query, tiles by pixel, bad requests, a model "
+print(f"check_serve: JSON routes as weaver query, tiles by pixel, {marked} dangling nodes "
+      f"marked, bad requests, a model "
       f"database, a re-mesh "
       f"seen whole ({len(seen)} states), stopped by SIGTERM")

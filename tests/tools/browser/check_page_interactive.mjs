@@ -139,6 +139,11 @@ try {
   });
   await page.goForward();
   await step("forward", (h) => (h.summary !== "centre" ? "forward to summary=centre" : ""));
+  await page.click("#dang");
+  await step("danglings", async (h, t) => {
+    if (h.dang !== "1" || !t.every((s) => s.includes("&danglings=1"))) return "tiles with the dangling nodes";
+    if (!(await text("note")).includes("dangling nodes on the plane")) return "the note";
+  });
 
   // A click selects the element there: the one `weaver query locate`
   // finds, shown as `weaver query element` says.
