@@ -83,13 +83,22 @@ try {
     return imgs.length > 0 && imgs.every((i) => i.complete && i.naturalWidth === 256);
   }, { timeout: 30000 });
   let shot = 0;
+  // After an action the page fetches and draws on its own time (slowly under
+  // the sanitizers): the check is asked again until it holds, for 20 s.
   const step = async (name, check) => {
-    await loaded();
+    const until = Date.now() + 20000;
+    for (;;) {
+      await loaded();
+      const h = await hash(), t = await tiles();
+      const wrong = await check(h, t);
+      if (!wrong) {
+        console.log(`check_page_interactive: ${name}: ${t.length} tiles, ok`);
+        break;
+      }
+      if (Date.now() > until) fail(`${name}: ${wrong}; URL ${JSON.stringify(h)}, tiles ${t.slice(0, 2)}`);
+      await new Promise((r) => setTimeout(r, 50));
+    }
     await page.screenshot({ path: path.join(work, `${String(++shot).padStart(2, "0")}-${name}.png`) });
-    const h = await hash(), t = await tiles();
-    const wrong = await check(h, t);
-    if (wrong) fail(`${name}: ${wrong}; URL ${JSON.stringify(h)}, tiles ${t.slice(0, 2)}`);
-    console.log(`check_page_interactive: ${name}: ${t.length} tiles, ok`);
   };
   const close = (a, b) => Math.abs(Number(a) - b) < 1e-6;
 
