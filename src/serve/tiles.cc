@@ -129,7 +129,10 @@ Status sample(Explorer& ex, const Section& s, const Paint& paint, double u0, dou
     }
     std::vector<AggregateHit> wide(rest.size());
     WEAVER_RETURN_IF_ERROR(ex.aggregate_batch(rest.data(), rest.size(), finest, wide.data()));
-    for (size_t k = 0; k < rest.size(); ++k) sums[where[k]] = wide[k];
+    for (size_t k = 0; k < rest.size(); ++k) {
+      sums[where[k]] = wide[k];
+      (*out)[at[where[k]]].wide = true;
+    }
   }
   for (size_t k = 0; k < many.size(); ++k) {
     if (!sums[k].found) continue;  // cannot happen: the element lies inside the octant

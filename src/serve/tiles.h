@@ -89,6 +89,9 @@ struct TilePixel {
   uint64_t id = 0;
   Octant leaf;  // the element at the centre
   double value = 0, lo = 0, hi = 0;
+  // Summarised from an octant wider than the pixel: past the table's
+  // finest level and past kOnTheFlyLeaves.
+  bool wide = false;
 };
 // The kTile x kTile pixels of tile (zoom, x, y), row by row from the top of
 // the page.
