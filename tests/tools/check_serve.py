@@ -182,6 +182,8 @@ try:
     if marked < 3:
         fail(f"only {marked} dangling nodes in tile 5/{tx}/{ty} to check")
 
+    api("/api/geo?x=1&y=2", status=404)  # not georeferenced
+
     # A region as vtu: what weaver export --box writes, byte for byte.
     box = "20000,30000,0,35000,41000,1500"
     status, kind, vtu = request("GET", f"/api/export.vtu?box={box}")
@@ -384,7 +386,27 @@ try:
 finally:
     server.send_signal(signal.SIGTERM)
     server.wait(timeout=10)
+
+# A georeferenced mesh: /api/geo's longitude and latitude (the page's hover)
+# are where `weaver query --geo` puts the same point back.
+geo_db = os.path.join(work, "geo.db")
+run("mesh", geo_db, "--model", "basin", "--freq", "0.05", "--origin-geo", "-118.7,33.58",
+    "--azimuth", "30", "--quiet")
+server = subprocess.Popen([weaver_bin, "serve", geo_db, "--port", "0"], stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True)
+try:
+    port = int(server.stdout.readline().split("http://127.0.0.1:")[1].split("/")[0])
+    for x, y in ((40000, 51000), (1000, 99000), (75500.5, 20000)):
+        g = api(f"/api/geo?x={x}&y={y}")
+        back = json.loads(run("query", geo_db, "locate", repr(g["lon"]), repr(g["lat"]), "100",
+                              "--geo", "--format", "json").stdout)
+        if abs(back["x"] - x) > 1e-3 or abs(back["y"] - y) > 1e-3:
+            fail(f"/api/geo?x={x}&y={y} gave {g}; weaver query --geo puts it at {back}")
+    api("/api/geo?x=1&y=oops", status=400)
+finally:
+    server.send_signal(signal.SIGTERM)
+    server.wait(timeout=10)
 print(f"check_serve: JSON routes as weaver query, tiles by pixel, {marked} dangling nodes "
       f"marked, bad requests, a model "
-      f"database, a re-mesh "
+      f"database, /api/geo as weaver query --geo, a re-mesh "
       f"seen whole ({len(seen)} states), stopped by SIGTERM")
