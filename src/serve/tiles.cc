@@ -91,57 +91,87 @@ int pixel_level(double pixel) {
 
 // The pixels of an n x n grid over the square of side `span` ticks whose
 // top-left corner is (u0, v0) on the page.
+// A pixel that shows the summary a of the elements in its octant.
+void summarise(TilePixel* p, const Aggregate& a, const Paint& paint, double tick_m) {
+  p->value = value_of(a, paint.field, paint.summary, tick_m);
+  p->lo = value_of(a, paint.field, Paint::Summary::kMin, tick_m);
+  p->hi = value_of(a, paint.field, Paint::Summary::kMax, tick_m);
+}
+
+// The pixels finer than the aggregate table's finest level whose element is
+// smaller than they are: summarised from the leaves, as far as the budget
+// goes; the rest from the table's finest octants, wider than the pixel.
+Status summarise_finer(Explorer& ex, const Paint& paint, int level, const std::vector<Coord>& pts,
+                       const std::vector<size_t>& at, std::vector<TilePixel>* out) {
+  std::vector<AggregateHit> sums(pts.size());
+  WEAVER_RETURN_IF_ERROR(
+      ex.summarise_batch(pts.data(), pts.size(), level, kOnTheFlyLeaves, sums.data()));
+  std::vector<Coord> rest;
+  std::vector<size_t> where;
+  for (size_t k = 0; k < pts.size(); ++k) {
+    if (!sums[k].found) rest.push_back(pts[k]), where.push_back(k);
+  }
+  std::vector<AggregateHit> wide(rest.size());
+  WEAVER_RETURN_IF_ERROR(
+      ex.aggregate_batch(rest.data(), rest.size(), ex.aggregate_finest(), wide.data()));
+  for (size_t k = 0; k < rest.size(); ++k) {
+    sums[where[k]] = wide[k];
+    (*out)[at[where[k]]].wide = true;
+  }
+  for (size_t k = 0; k < pts.size(); ++k) {
+    if (sums[k].found) summarise(&(*out)[at[k]], sums[k].a, paint, ex.units().tick_m);
+  }
+  return Status::Ok();
+}
+
+// The pixels of an n x n grid over the square of side `span` ticks whose
+// top-left corner is (u0, v0) on the page.
 Status sample(Explorer& ex, const Section& s, const Paint& paint, double u0, double v0, double span,
               int n, std::vector<TilePixel>* out) {
   const std::vector<Coord> pts = grid(s, u0, v0, span, n);
-  std::vector<PointHit> hits(pts.size());
-  WEAVER_RETURN_IF_ERROR(ex.locate_batch(pts.data(), pts.size(), hits.data()));
   const double tick_m = ex.units().tick_m;
   out->assign(pts.size(), TilePixel{});
-  for (size_t i = 0; i < pts.size(); ++i) {
-    const PointHit& h = hits[i];
+  const int level = pixel_level(span / n);
+  const bool summaries = paint.summary != Paint::Summary::kCentre && level < kMaxLevel;
+  const bool from_table = summaries && level <= ex.aggregate_finest();
+  // Where the table holds the pixels' level, it goes first: a pixel whose
+  // octant has a record holds many elements and shows their summary; it
+  // needs no element of its own (no outline is drawn on it).
+  std::vector<size_t> open;
+  if (from_table) {
+    std::vector<AggregateHit> sums(pts.size());
+    WEAVER_RETURN_IF_ERROR(ex.aggregate_batch(pts.data(), pts.size(), level, sums.data()));
+    for (size_t i = 0; i < pts.size(); ++i) {
+      if (!sums[i].found) {
+        open.push_back(i);
+        continue;
+      }
+      const Octant o = octant_ancestor({pts[i].x, pts[i].y, pts[i].z, kMaxLevel}, level);
+      TilePixel& p = (*out)[i];
+      p.inside = true, p.id = ~octant_key(o), p.leaf = o;  // ids no element has
+      summarise(&p, sums[i].a, paint, tick_m);
+    }
+  } else {
+    for (size_t i = 0; i < pts.size(); ++i) open.push_back(i);
+  }
+  // The element at the centre of each other pixel.
+  std::vector<Coord> rest(open.size());
+  for (size_t k = 0; k < open.size(); ++k) rest[k] = pts[open[k]];
+  std::vector<PointHit> hits(rest.size());
+  WEAVER_RETURN_IF_ERROR(ex.locate_batch(rest.data(), rest.size(), hits.data()));
+  std::vector<Coord> finer;
+  std::vector<size_t> at;
+  for (size_t k = 0; k < rest.size(); ++k) {
+    const PointHit& h = hits[k];
     if (!h.inside) continue;
     const double v = value_of(h, paint.field, tick_m);
-    (*out)[i] = {true, h.id, h.leaf, v, v, v};
-  }
-  const int level = pixel_level(span / n);
-  if (paint.summary == Paint::Summary::kCentre || level >= kMaxLevel) return Status::Ok();
-  // The pixels whose element is smaller than they are show their octant's
-  // summary.
-  std::vector<Coord> many;
-  std::vector<size_t> at;
-  for (size_t i = 0; i < pts.size(); ++i) {
-    if (hits[i].inside && hits[i].leaf.level > level) many.push_back(pts[i]), at.push_back(i);
-  }
-  std::vector<AggregateHit> sums(many.size());
-  const int finest = ex.aggregate_finest();
-  if (level <= finest) {
-    WEAVER_RETURN_IF_ERROR(ex.aggregate_batch(many.data(), many.size(), level, sums.data()));
-  } else {
-    // Finer than the table: from the leaves, as far as the budget goes;
-    // the rest from the table's finest octants, wider than the pixel.
-    WEAVER_RETURN_IF_ERROR(
-        ex.summarise_batch(many.data(), many.size(), level, kOnTheFlyLeaves, sums.data()));
-    std::vector<Coord> rest;
-    std::vector<size_t> where;
-    for (size_t k = 0; k < many.size(); ++k) {
-      if (!sums[k].found) rest.push_back(many[k]), where.push_back(k);
-    }
-    std::vector<AggregateHit> wide(rest.size());
-    WEAVER_RETURN_IF_ERROR(ex.aggregate_batch(rest.data(), rest.size(), finest, wide.data()));
-    for (size_t k = 0; k < rest.size(); ++k) {
-      sums[where[k]] = wide[k];
-      (*out)[at[where[k]]].wide = true;
+    (*out)[open[k]] = {true, h.id, h.leaf, v, v, v};
+    if (summaries && !from_table && h.leaf.level > level) {
+      finer.push_back(rest[k]), at.push_back(open[k]);
     }
   }
-  for (size_t k = 0; k < many.size(); ++k) {
-    if (!sums[k].found) continue;  // cannot happen: the element lies inside the octant
-    TilePixel& p = (*out)[at[k]];
-    p.value = value_of(sums[k].a, paint.field, paint.summary, tick_m);
-    p.lo = value_of(sums[k].a, paint.field, Paint::Summary::kMin, tick_m);
-    p.hi = value_of(sums[k].a, paint.field, Paint::Summary::kMax, tick_m);
-  }
-  return Status::Ok();
+  if (finer.empty()) return Status::Ok();
+  return summarise_finer(ex, paint, level, finer, at, out);
 }
 
 // The dangling nodes on the plane: those on the faces that the elements at
