@@ -14,6 +14,7 @@
 #include <map>
 #include <random>
 
+#include "cli_run.h"
 #include "construct/construct.h"
 #include "db/database.h"
 #include "mesh/mesh_reader.h"
@@ -357,6 +358,42 @@ TEST(Aggregates, VerifyFindsARecordThatDiffersFromItsLeaves) {
   ASSERT_EQ(vr.problems.size(), 1u);
   EXPECT_NE(vr.problems[0].find("table aggregates: the record of octant"), std::string::npos)
       << vr.problems[0];
+}
+
+// The command: its errors are one line and exit 2 (usage) or 1; a
+// --max-records keeps fewer levels; a model database has nothing to
+// summarise.
+TEST(Aggregates, CommandKeepsTheLevelsAskedForAndRefusesBadInput) {
+  testing::TempDir dir;
+  const std::string db = testing::random_octree(dir, "db", 11, 8, false, 20000);
+  for (const std::string& bad :
+       std::vector<std::string>{"", db + " --max-records 0", db + " --max-records lots",
+                                db + " --levels 3", db + " " + db}) {
+    const testing::CommandRun r = testing::run("aggregate " + bad);
+    EXPECT_EQ(r.code, 2) << bad;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  const testing::CommandRun all = testing::run("aggregate " + db + " --quiet");
+  ASSERT_EQ(all.code, 0) << all.err;
+  std::unique_ptr<Database> d;
+  std::unique_ptr<BTree> t;
+  ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &d));
+  ASSERT_OK(d->open_table(kAggregateTable, 1 << 20, &t));
+  const int finest = aggregate_finest(*t), records = int(t->size());
+  t.reset(), d.reset();
+  const testing::CommandRun fewer = testing::run("aggregate " + db + " --max-records 500 --quiet");
+  ASSERT_EQ(fewer.code, 0) << fewer.err;
+  ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &d));
+  ASSERT_OK(d->open_table(kAggregateTable, 1 << 20, &t));
+  EXPECT_LT(aggregate_finest(*t), finest);
+  EXPECT_LT(int(t->size()), records);
+  EXPECT_LE(t->size(), 500u);
+  const std::string model = dir.file("model");
+  const std::string fixture = std::string(WEAVER_SOURCE_DIR) + "/tests/data/etree/cmu.e";
+  ASSERT_EQ(testing::run("model import " + model + " --from etree:" + fixture).code, 0);
+  const testing::CommandRun refused = testing::run("aggregate " + model);
+  EXPECT_EQ(refused.code, 1);
+  EXPECT_NE(refused.err.find("has no octant table"), std::string::npos) << refused.err;
 }
 
 }  // namespace

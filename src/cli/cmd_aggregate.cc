@@ -8,7 +8,7 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver aggregate DB [--memory BYTES] [--quiet]\n"
+    "usage: weaver aggregate DB [--max-records N] [--memory BYTES] [--quiet]\n"
     "\n"
     "Builds the aggregate table of database DB: for each octant of the coarse\n"
     "levels that holds elements, how many, their coarsest and finest levels and\n"
@@ -19,6 +19,10 @@ constexpr char kUsage[] =
     "Replacing the octant table (a new mesh) drops the aggregate table; 'weaver\n"
     "verify' computes it again and compares.\n"
     "\n"
+    "  --max-records N  keep the levels 0 to the finest whose octants number at\n"
+    "                   most N (default: a 64th of the leaves, at least 4M); each\n"
+    "                   level more holds up to 8 times the one before, and shows\n"
+    "                   one more zoom of serve's maps from the table\n"
     "  --memory BYTES   bounds the table caches and the levels' spool buffers\n"
     "                   (256M; past them the records wait in scratch files)\n"
     "  --quiet          no progress line on stderr\n";
@@ -27,12 +31,17 @@ constexpr char kUsage[] =
 
 int cmd_aggregate(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory"}, {"quiet"}, &args);
+  Status st = parse_args(argc, argv, 2, {"memory", "max-records"}, {"quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("aggregate", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("aggregate", "expected one DB", kUsage);
   AggregateOptions o;
   st = memory_option(args, &o.memory);
+  if (st.ok() && args.values.count("max-records")) {
+    st = parse_count(args.values.at("max-records"), "--max-records", &o.max_records);
+    if (st.ok() && o.max_records == 0)
+      st = Status::InvalidArgument("--max-records must be positive");
+  }
   if (!st.ok()) return usage_error("aggregate", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   AggregateReport r;
