@@ -98,6 +98,22 @@ function draw() {
     }
   for (const img of [...map.querySelectorAll("img")]) if (!want.has(img.dataset.src)) img.remove();
   drawAxes(left, top, full);
+  drawMark(left, top, full);
+}
+// The selected element's outline, where it meets the plane.
+let selected = null;  // its corner and edge, metres: {x, y, z, edge}
+const mark = document.createElement("div");
+mark.id = "mark";
+mark.style.cssText = "position:absolute;border:2px solid #e00;pointer-events:none;display:none;box-sizing:border-box";
+map.appendChild(mark);
+function drawMark(left, top, full) {
+  const e = selected, a = view.axis;
+  if (!e || !sec || !(sec.at_m >= e[a] && sec.at_m < e[a] + e.edge)) return void (mark.style.display = "none");
+  const px = full / sec.side_m;  // pixels a metre
+  const x = left + (e[sec.u] - sec.origin_m[0]) * px;
+  const v0 = sec.down ? e[sec.v] - sec.origin_m[1] : sec.origin_m[1] + sec.side_m - e[sec.v] - e.edge;
+  const size = Math.max(e.edge * px, 4);
+  Object.assign(mark.style, {display: "block", left: x + "px", top: top + v0 * px + "px", width: size + "px", height: size + "px"});
 }
 function niceStep(span, n) {
   const raw = span / n, p = 10 ** Math.floor(Math.log10(raw));
@@ -157,6 +173,8 @@ async function select(id) {
   try {
     const e = await json(`/api/element/${id}?units=m`);
     const nb = await json(`/api/neighbors/${id}?units=m`);
+    selected = {x: e.x, y: e.y, z: e.z, edge: e.edge};
+    draw();
     let html = `<h3 id="selected">element ${e.element}</h3><table id="element">`;
     for (const [k, v] of Object.entries(e)) if (k !== "element") html += `<tr><td>${k}</td><td>${Array.isArray(v) ? v.join(" ") : v}</td></tr>`;
     html += `</table><p>face neighbours:</p><table>`;
@@ -284,7 +302,7 @@ $("color").onchange = () => { view.color = $("color").value; loadSection(true); 
 $("summary").onchange = () => { view.summary = $("summary").value; loadSection(true); };
 $("dang").onchange = () => { view.dang = $("dang").checked ? "1" : ""; writeHash(true); drawBar(); draw(); };
 const HINT = $("sel").textContent;
-window.addEventListener("popstate", () => { readHash(); loadSection(false).then(() => { if (view.sel !== "") select(view.sel); else $("sel").textContent = HINT; }); });
+window.addEventListener("popstate", () => { readHash(); loadSection(false).then(() => { if (view.sel !== "") select(view.sel); else { $("sel").textContent = HINT; selected = null; draw(); } }); });
 window.addEventListener("resize", draw);
 (async () => {
   try { stat = await json("/api/stat"); } catch (e) { $("info").textContent = e.message; return; }

@@ -173,7 +173,15 @@ try {
     }
   };
   await expectElement(hit.element);
-  await step("clicked", (h) => (h.sel !== String(hit.element) ? "the selection in the URL" : ""));
+  // The selected element is outlined on the map, around the point clicked.
+  const around = () => page.$eval("#mark", (m, x, y) => {
+    const r = m.getBoundingClientRect();
+    return getComputedStyle(m).display !== "none" && r.left <= x + 1 && x <= r.right + 1 && r.top <= y + 1 && y <= r.bottom + 1;
+  }, cx, cy);
+  await step("clicked", async (h) => {
+    if (h.sel !== String(hit.element)) return "the selection in the URL";
+    if (!(await around())) return "the selected element's outline around the point clicked";
+  });
   const neighbour = await page.$eval("#sel .id", (e) => e.dataset.id);
   await page.click("#sel .id");
   await expectElement(neighbour);
