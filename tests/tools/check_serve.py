@@ -279,7 +279,18 @@ try:
     # Clients while a writer re-meshes the served database: each answer is
     # the old mesh's or the new one's, and after the commit the new one's.
     old = (stat["elements"], stat["nodes"])
-    seen, mixed, errors = set(), [], []
+    # Element 100 of the old mesh and of the new one (built the same way in
+    # a twin database first), as weaver query prints them: its octant comes
+    # from one table and its corners' node ids from the other, so an answer
+    # that mixed two states would be neither.
+    probe = 100
+    want_old = json.loads(run("query", db, "element", str(probe), "--format", "json").stdout)
+    twin = os.path.join(work, "twin.db")
+    run("mesh", twin, "--model", "basin", "--freq", "0.08", "--quiet")
+    want_new = json.loads(run("query", twin, "element", str(probe), "--format", "json").stdout)
+    if want_old == want_new:
+        fail(f"element {probe} is the same in both meshes: it cannot tell them apart")
+    seen, mixed, errors, answers = set(), [], [], set()
     stop = threading.Event()
 
     def client():
@@ -288,11 +299,15 @@ try:
                 return
             try:
                 s = api("/api/stat")
-                e = api(f"/api/element/{s['elements'] - 1}")
+                e = api(f"/api/element/{probe}")
                 seen.add((s["elements"], s["nodes"]))
-                if e["element"] != s["elements"] - 1:
-                    mixed.append((s, e))
-            except SystemExit as x:  # an element past the snapshot's end: a mix
+                if e == want_old:
+                    answers.add("old")
+                elif e == want_new:
+                    answers.add("new")
+                else:
+                    mixed.append(e)
+            except SystemExit as x:
                 errors.append(str(x))
                 return
 
@@ -332,6 +347,8 @@ try:
     for t in clients:
         t.join(timeout=60)
     new = tuple(api("/api/stat")[k] for k in ("elements", "nodes"))
+    if api(f"/api/element/{probe}") != want_new:
+        fail(f"after the re-mesh, element {probe} is not the new mesh's")
     if new == old or errors or mixed or not seen <= {old, new}:
         fail(f"re-mesh while serving: old {old}, new {new}, seen {seen}, errors {errors[:2]}, "
              f"mixed {mixed[:2]}")
@@ -409,4 +426,4 @@ finally:
 print(f"check_serve: JSON routes as weaver query, tiles by pixel, {marked} dangling nodes "
       f"marked, bad requests, a model "
       f"database, /api/geo as weaver query --geo, a re-mesh "
-      f"seen whole ({len(seen)} states), stopped by SIGTERM")
+      f"seen whole ({len(seen)} states, element {probe} as the {' or the '.join(sorted(answers))} mesh has it), stopped by SIGTERM")
