@@ -275,13 +275,19 @@ constexpr int octant_key_level(uint64_t key) {
   return slot >= kKeyLevel20Slot ? kMaxLevel : static_cast<int>(slot);
 }
 
+// The key of the octant's ancestor at `level`, without decoding
+// (octant_ancestor's answer, for scans of every leaf).
+// REQUIRES: octant_key_is_valid(key), 0 <= level < its level.
+constexpr uint64_t octant_key_ancestor(uint64_t key, int level) {
+  const uint64_t m = octant_key_morton(key) & ~((uint64_t{1} << (3 * (kMaxLevel - level))) - 1);
+  return ((m >> 3) << 7) | static_cast<uint64_t>(level);
+}
+
 // The key of the octant's parent, without decoding (octant_parent's answer,
 // for balance's scan of every leaf).
 // REQUIRES: octant_key_is_valid(key), its level above 0.
 constexpr uint64_t octant_key_parent(uint64_t key) {
-  const int level = octant_key_level(key) - 1;
-  const uint64_t m = octant_key_morton(key) & ~((uint64_t{1} << (3 * (kMaxLevel - level))) - 1);
-  return ((m >> 3) << 7) | static_cast<uint64_t>(level);
+  return octant_key_ancestor(key, octant_key_level(key) - 1);
 }
 
 // octant_from_key's answer written into *o one field at a time.  For an

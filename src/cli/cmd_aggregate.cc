@@ -23,8 +23,8 @@ constexpr char kUsage[] =
     "                   most N (default: a 64th of the leaves, at least 4M); each\n"
     "                   level more holds up to 8 times the one before, and shows\n"
     "                   one more zoom of serve's maps from the table\n"
-    "  --memory BYTES   bounds the table caches and the levels' spool buffers\n"
-    "                   (256M; past them the records wait in scratch files)\n"
+    "  --memory BYTES   bounds the table caches, the levels' files' among them\n"
+    "                   (default 256M)\n"
     "  --quiet          no progress line on stderr\n";
 
 }  // namespace

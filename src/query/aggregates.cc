@@ -1,7 +1,5 @@
 #include "query/aggregates.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -25,12 +23,6 @@ struct Open {
   void reset(uint64_t k) { key = k, sum.reset(); }
 };
 
-// The key of the octant of `level` holding Morton code m (level < 20).
-uint64_t ancestor_key(uint64_t m, int level) {
-  const int low = 3 * (kMaxLevel - level);
-  return (((m >> low) << low) >> 3) << 7 | uint64_t(level);
-}
-
 // The finest level whose octants share the one holding a and the one
 // holding b (-1 when not even the root does, which cannot happen).
 int common_level(uint64_t a, uint64_t b) {
@@ -47,16 +39,16 @@ class Summarizer {
   Summarizer(int finest, int fields, Emit emit) : finest_(finest), fields_(fields), emit_(emit) {}
 
   Status add(uint64_t key, const float* values) {
-    const Octant leaf = octant_from_key(key);
-    const uint64_t m = octant_morton(leaf);
-    const int top = std::min(int(leaf.level) - 1, finest_);  // its finest octant here
+    const uint64_t m = octant_key_morton(key);
+    const int level = octant_key_level(key);
+    const int top = std::min(level - 1, finest_);  // its finest octant here
     const int keep = std::min({open_, common_level(m, last_m_), top});
     WEAVER_RETURN_IF_ERROR(close_to(keep));
-    for (int l = open_ + 1; l <= top; ++l) stack_[l].reset(ancestor_key(m, l));
+    for (int l = open_ + 1; l <= top; ++l) stack_[l].reset(octant_key_ancestor(key, l));
     open_ = std::max(open_, top);
     last_m_ = m;
     if (top < 0) return Status::Ok();
-    stack_[top].sum.add_leaf(leaf.level, values, fields_);
+    stack_[top].sum.add_leaf(level, values, fields_);
     return Status::Ok();
   }
   Status finish() { return close_to(-1); }
@@ -179,7 +171,7 @@ void SummaryBuilder::reset() {
 }
 
 void SummaryBuilder::add_leaf(int level, const float* values, int fields) {
-  const double volume = std::ldexp(1.0, 3 * (kMaxLevel - level));
+  const double volume = double(uint64_t{1} << (3 * (kMaxLevel - level)));  // cubic ticks
   ++leaves_;
   level_min_ = std::min(level_min_, level);
   level_max_ = std::max(level_max_, level);
@@ -339,16 +331,16 @@ Status check_aggregates(BTree& octants, BTree& table, size_t max_problems,
   const auto problem = [&](const std::string& text) {
     if (problems->size() < max_problems) problems->push_back("table aggregates: " + text);
   };
+  std::vector<std::byte> expect(layout.record_size());
   Summarizer s(aggregate_finest(table), fields, [&](int, const Open& open) {
     const std::byte* stored = nullptr;
     bool found = false;
     WEAVER_RETURN_IF_ERROR(window.get(open.key, &stored, &found));
-    const std::string where = describe_octant(octant_from_key(open.key));
-    if (!found) return problem("no record for octant " + where), Status::Ok();
-    std::vector<std::byte> expect(layout.record_size());
+    const auto where = [&open] { return describe_octant(octant_from_key(open.key)); };
+    if (!found) return problem("no record for octant " + where()), Status::Ok();
     layout.encode(open.sum.result(fields), expect.data());
     if (std::memcmp(stored, expect.data(), expect.size()) != 0) {
-      problem("the record of octant " + where + " differs from its leaves' summary");
+      problem("the record of octant " + where() + " differs from its leaves' summary");
     }
     ++matched;
     return Status::Ok();

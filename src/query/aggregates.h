@@ -4,11 +4,13 @@
 // the octant of the pixel's size around it, as the least Vs, the finest
 // level or the mean of a field over the leaves inside it.
 //
-// One record per octant that holds at least one leaf strictly inside it (at
-// most a seventh as many as the leaves): an octant that is a leaf, lies
-// inside a leaf or lies outside the domain has none.  Keyed by the octant's
-// key, so in key order (preorder).  The metadata names the finest level
-// with records (";finest=F").
+// One record per octant of levels 0 to F that holds at least one leaf
+// strictly inside it (over all levels, at most a seventh as many as the
+// leaves): an octant that is a leaf, lies inside a leaf or lies outside the
+// domain has none.  F is the finest level whose records, estimated from
+// the leaves per level, number at most AggregateOptions::max_records.
+// Keyed by the octant's key, so in key order (preorder).  The metadata
+// names the finest level with records (";finest=F").
 // Payload, little-endian, the schema stored with the table:
 //   leaves:u64            leaves inside
 //   level_min:u8, level_max:u8   their coarsest and finest levels
@@ -18,11 +20,11 @@
 // The records are built by one scan of the octant table in key order, each
 // leaf added to its finest open octant and each octant's summary added to
 // its parent's when it closes.  A level's octants close in key order, but
-// after the finer ones inside them, so each level goes to a spool of its
-// own (a scratch file past its buffer) and the spools are merged into the
-// table by sorted append: memory does not grow with the mesh.  Derived from the octant table:
-// replacing the octants drops it (db/database.cc).  `weaver verify` computes it again and compares,
-// record by record.
+// after the finer ones inside them, so each level goes to a table file of
+// its own, and these are merged into the table by sorted append: memory
+// does not grow with the mesh.  Derived from the octant table: replacing
+// the octants drops it (db/database.cc).  `weaver verify` computes it again
+// and compares, record by record.
 #pragma once
 
 #include <array>

@@ -41,6 +41,9 @@ class DensityWatch {
   uint64_t before_;
 };
 
+// The key of the octant of `level` (below 20) that holds pixel c.
+uint64_t octant_key_at(Coord c, int level) { return octant_key_ancestor(pixel_key(c), level); }
+
 }  // namespace
 
 Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
@@ -110,10 +113,7 @@ Status Explorer::aggregate_batch(const Coord* p, size_t n, int level, AggregateH
   if (level < 0 || level > aggregate_finest_) {
     return Status::InvalidArgument("the aggregate table has no level " + std::to_string(level));
   }
-  const auto key_of = [level](Coord c) {
-    return octant_key(octant_ancestor({c.x, c.y, c.z, kMaxLevel}, level));
-  };
-  sort_points(p, n, out, pixel_is_valid, key_of);
+  sort_points(p, n, out, pixel_is_valid, [level](Coord c) { return octant_key_at(c, level); });
   DensityWatch density(*aggregate_window_, n);
   uint64_t last = UINT64_MAX;
   const std::byte* payload = nullptr;
@@ -134,10 +134,7 @@ Status Explorer::aggregate_batch(const Coord* p, size_t n, int level, AggregateH
 Status Explorer::summarise_batch(const Coord* p, size_t n, int level, uint64_t max_leaves,
                                  AggregateHit* out) {
   if (level < 0 || level >= kMaxLevel) return Status::InvalidArgument("no octants inside level 20");
-  const auto key_of = [level](Coord c) {
-    return octant_key(octant_ancestor({c.x, c.y, c.z, kMaxLevel}, level));
-  };
-  sort_points(p, n, out, pixel_is_valid, key_of);
+  sort_points(p, n, out, pixel_is_valid, [level](Coord c) { return octant_key_at(c, level); });
   BTree& octants = mesh_->octants();
   const LeafFields fields(octants);
   BTreeCursor c;

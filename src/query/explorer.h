@@ -92,8 +92,10 @@ class Explorer {
   // The summaries of the octants of `level` (0 to aggregate_finest()) that
   // hold the points p[0..n), in any order; out[i] answers p[i].
   Status aggregate_batch(const Coord* p, size_t n, int level, AggregateHit* out);
-  // The same worked out from the leaves (any level), reading at most
-  // max_leaves leaves in all: the octants past that are not found.
+  // The same worked out from the leaves (any level below 20), octant by
+  // octant in key order; once max_leaves leaves have been read no further
+  // octant is begun (the one under way is finished), and those not begun
+  // are not found.
   Status summarise_batch(const Coord* p, size_t n, int level, uint64_t max_leaves,
                          AggregateHit* out);
   // The nodes at n points (any coordinates; past the far side is no node).

@@ -89,8 +89,6 @@ int pixel_level(double pixel) {
   return level;
 }
 
-// The pixels of an n x n grid over the square of side `span` ticks whose
-// top-left corner is (u0, v0) on the page.
 // A pixel that shows the summary a of the elements in its octant.
 void summarise(TilePixel* p, const Aggregate& a, const Paint& paint, double tick_m) {
   p->value = value_of(a, paint.field, paint.summary, tick_m);
@@ -146,7 +144,7 @@ Status sample(Explorer& ex, const Section& s, const Paint& paint, double u0, dou
         open.push_back(i);
         continue;
       }
-      const Octant o = octant_ancestor({pts[i].x, pts[i].y, pts[i].z, kMaxLevel}, level);
+      const Octant o = octant_from_key(octant_key_ancestor(pixel_key(pts[i]), level));
       TilePixel& p = (*out)[i];
       p.inside = true, p.id = ~octant_key(o), p.leaf = o;  // ids no element has
       summarise(&p, sums[i].a, paint, tick_m);

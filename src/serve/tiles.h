@@ -11,11 +11,13 @@
 // walk).  Where that element is smaller than the pixel and the database has
 // an aggregate table (query/aggregates.h), the pixel shows instead a summary
 // of the elements in the octant of the pixel's size around its centre (the
-// least vs, say): a second batch, of aggregate hits, or, for pixels finer
-// than the table's finest level, worked out from the leaves inside (at
-// most kOnTheFlyLeaves of them a tile; past that, from the table's finest
-// octant around the pixel, wider than it).  Where an element is
-// many pixels wide its outline is drawn.
+// least vs, say).  Where the table holds the pixels' level, a batch of
+// aggregate hits goes first, and only the pixels it has no record for look
+// for their element; for pixels finer than the table's finest level the
+// summaries are worked out from the leaves inside (about kOnTheFlyLeaves of
+// them a tile; past that, from the table's finest octant around the pixel,
+// wider than it).  Where an element is many pixels wide its outline is
+// drawn.
 #pragma once
 
 #include <cstdint>
@@ -77,8 +79,8 @@ struct FieldRange {
 Status field_range(Explorer& ex, const Section& s, const Paint& paint, FieldRange* r);
 
 inline constexpr int kTile = 256;  // pixels across and down
-// A tile past the aggregate table's finest level reads at most this many
-// leaves to summarise its pixels (some 10 ms).
+// A tile past the aggregate table's finest level begins no further octant
+// once it has read this many leaves to summarise its pixels (some 10 ms).
 inline constexpr uint64_t kOnTheFlyLeaves = 1 << 20;
 
 // One pixel of a tile: the element at its centre, and the value the pixel
