@@ -46,27 +46,60 @@ int connect_to(int port) {
 }
 
 // Sends one request on fd and reads its whole response; the status, or -1.
-int exchange(int fd, const std::string& request, std::string* body) {
+// The body of a chunked answer, whole once got holds its last chunk: true
+// and *body (when asked) when it does.
+bool dechunk(const std::string& got, size_t from, std::string* body) {
+  std::string out;
+  for (size_t at = from;;) {
+    const size_t eol = got.find("\r\n", at);
+    if (eol == std::string::npos) return false;
+    const size_t n = std::stoull(got.substr(at, eol - at), nullptr, 16);
+    if (n == 0) {
+      if (got.size() < eol + 4) return false;
+      if (body != nullptr) *body = std::move(out);
+      return true;
+    }
+    if (got.size() < eol + 2 + n + 2) return false;
+    if (body != nullptr) out.append(got, eol + 2, n);
+    at = eol + 2 + n + 2;
+  }
+}
+
+// Sends request and reads its answer (Content-Length or chunked): the
+// status, and the body when asked.  expect: the bytes the answer will
+// about take, reserved at once (the client shares the cores it measures).
+int exchange(int fd, const std::string& request, std::string* body, size_t expect = 0) {
   if (::send(fd, request.data(), request.size(), MSG_NOSIGNAL) != ssize_t(request.size())) {
     return -1;
   }
   std::string got;
+  got.reserve(expect);
   char buf[1 << 16];
   size_t head_end = std::string::npos, length = 0;
+  bool chunked = false;
   for (;;) {
     if (head_end == std::string::npos) {
       head_end = got.find("\r\n\r\n");
       if (head_end != std::string::npos) {
         const size_t at = got.find("Content-Length: ");
         length = at < head_end ? std::stoull(got.substr(at + 16)) : 0;
+        chunked = got.find("Transfer-Encoding: chunked") < head_end;
       }
     }
-    if (head_end != std::string::npos && got.size() >= head_end + 4 + length) break;
+    if (head_end != std::string::npos && chunked) {
+      // Only the last few bytes tell whether the last chunk is in.
+      if (got.size() >= 5 && got.compare(got.size() - 5, 5, "0\r\n\r\n") == 0 &&
+          dechunk(got, head_end + 4, body)) {
+        break;
+      }
+    } else if (head_end != std::string::npos && got.size() >= head_end + 4 + length) {
+      if (body != nullptr) *body = got.substr(head_end + 4, length);
+      break;
+    }
     const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
     if (n <= 0) return -1;
     got.append(buf, size_t(n));
   }
-  if (body != nullptr) *body = got.substr(head_end + 4, length);
   return std::stoi(got.substr(9, 3));
 }
 
@@ -81,7 +114,8 @@ int serve_main(int argc, char** argv) {
   double freq = 0.5, seconds = 5;
   int clients = 2;
   uint64_t batch = 1000000;
-  int given_port = 0;  // a server already running there (for perf)
+  int given_port = 0;
+  std::string memory = "1G";  // a server already running there (for perf)
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--db" && i + 1 < argc) {
@@ -90,6 +124,8 @@ int serve_main(int argc, char** argv) {
       freq = std::stod(argv[++i]);
     } else if (a == "--seconds" && i + 1 < argc) {
       seconds = std::stod(argv[++i]);
+    } else if (a == "--memory" && i + 1 < argc) {
+      memory = argv[++i];
     } else if (a == "--clients" && i + 1 < argc) {
       clients = std::stoi(argv[++i]);
     } else if (a == "--points" && i + 1 < argc) {
@@ -99,6 +135,7 @@ int serve_main(int argc, char** argv) {
     } else {
       std::printf(
           "usage: serve_bench [--db DB | --freq F] [--seconds S] [--clients N] [--points N]\n"
+          "                   [--memory BYTES (the server's; default 1G)]\n"
           "                   [--port P (a server already running there)]\n");
       return 2;
     }
@@ -117,8 +154,8 @@ int serve_main(int argc, char** argv) {
     if (server == 0) {
       ::dup2(out[1], 1);
       ::close(out[0]);
-      ::execl(WEAVER_BINARY, WEAVER_BINARY, "serve", db.c_str(), "--port", "0", "--memory", "1G",
-              static_cast<char*>(nullptr));
+      ::execl(WEAVER_BINARY, WEAVER_BINARY, "serve", db.c_str(), "--port", "0", "--memory",
+              memory.c_str(), static_cast<char*>(nullptr));
       std::_Exit(127);
     }
     ::close(out[1]);
@@ -201,10 +238,17 @@ int serve_main(int argc, char** argv) {
       const int fd = connect_to(port);
       std::string answer;
       const double t0 = now_seconds();
-      const int status = exchange(fd, request, &answer);
+      const int status = exchange(fd, request, &answer, batch * 160);
       rates.push_back(batch / (now_seconds() - t0));
       ::close(fd);
       if (status != 200) return std::fprintf(stderr, "POST /api/points: %d\n", status), 1;
+      // Every point answered: one row a line.
+      const size_t rows = size_t(std::count(answer.begin(), answer.end(), '\n'));
+      if (rows != batch) {
+        return std::fprintf(stderr, "POST /api/points: %zu rows for %llu points\n", rows,
+                            (unsigned long long)batch),
+               1;
+      }
     }
     emit("POST /api/points with material", "points_per_s", median(rates),
          std::to_string(batch) + " points, median of 3");

@@ -101,6 +101,10 @@ class BTree final : public Store {
   // after the first page count's eighth of lookups: a server about to answer
   // lookups pays for it before its first request, not during it.
   Status prepare_lookups();
+  // What the lookup directory may take (by default a 32nd of the pool's
+  // bytes).  A tree asked mostly point lookups at random (an Explorer's)
+  // gains more from its directory than from as many bytes of cached pages.
+  void set_directory_budget(uint64_t bytes) { dir_budget_ = bytes; }
   uint64_t file_bytes() const {
     return uint64_t{shard_headers_ == 0 ? 1 : shard_headers_} * page::kFileHeaderBytes +
            uint64_t{page_count_} * options_.page_size;

@@ -2,6 +2,7 @@
 // in every output mode, bad lines, and the neighbourhood queries' rows.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -105,6 +106,77 @@ TEST_F(QueryCli, NodeAtFromStdinAndMetres) {
   const auto m = run("query " + db_ + " material 1 2 3");
   EXPECT_EQ(m.code, 1);
   EXPECT_NE(m.err.find("no material"), std::string::npos) << m.err;
+}
+
+// A batch shared among threads (an Explorer each, lookups split by input
+// order, rows formatted a slice a thread) prints what one thread prints,
+// byte for byte: batches of 100K points (several per file, each past the
+// size that is shared), slices of 32K rows, bad lines and points outside
+// mixed in; and its rows are the reference's.
+TEST_F(QueryCli, ThreadsShareABatchAndPrintTheSameRows) {
+  const std::string pts = dir_.file("many.txt");
+  std::vector<std::array<uint64_t, 3>> asked;
+  {
+    std::ofstream out(pts);
+    uint64_t state = 12345;
+    const auto next = [&state] {
+      return (state = state * 6364136223846793005ull + 1442695040888963407ull) >> 33;
+    };
+    for (size_t i = 0; i < 250000; ++i) {
+      if (i % 9973 == 0) {
+        out << "not a point\n";
+        continue;
+      }
+      // Every fourth point on a coarse lattice, where nodes are; some past the root.
+      const uint64_t c[3] = {next() % (kRootEdge + 4096), next() % kRootEdge, next() % kRootEdge};
+      const uint64_t mask = i % 4 == 0 ? ~uint64_t{0xFFFF} : ~uint64_t{0};
+      out << (c[0] & mask) << ' ' << (c[1] & mask) << ' ' << (c[2] & mask) << '\n';
+      asked.push_back({c[0] & mask, c[1] & mask, c[2] & mask});
+    }
+  }
+  for (const char* query : {"locate", "node-at"}) {
+    for (const char* mode : {"csv", "json", "jsonl", "text"}) {
+      std::string one;
+      for (const char* threads : {"1", "2", "3"}) {
+        const auto r = run("query " + db_ + " " + query + " --points " + pts + " --format " + mode +
+                           " --memory 64M --threads " + threads);
+        EXPECT_EQ(r.code, 1) << r.err;  // the bad lines
+        EXPECT_NE(r.err.find("26 of 250000 lines were not points"), std::string::npos) << r.err;
+        if (std::string(threads) == "1") {
+          one = r.out;
+          continue;
+        }
+        EXPECT_TRUE(r.out == one) << query << " " << mode << " at " << threads << " threads";
+      }
+      if (std::string(query) != "locate" || std::string(mode) != "csv") continue;
+      // Every 97th point's element against the reference.
+      std::vector<std::string> rows = split_lines(one);
+      rows.erase(rows.begin());
+      ASSERT_EQ(rows.size(), 250000u);
+      size_t k = 0;
+      for (size_t i = 0; i < rows.size(); ++i) {
+        if (i % 9973 == 0) continue;
+        const auto p = asked[k++];
+        if (k % 97 != 0) continue;
+        const int64_t id = containing(p[0], p[1], p[2]);
+        EXPECT_EQ(fields(rows[i], ',')[4], id < 0 ? "" : std::to_string(id)) << rows[i];
+      }
+    }
+  }
+}
+
+TEST_F(QueryCli, ARangeToTheFarFaceOfTheAddressSpaceIsTheWholeMesh) {
+  // A box drawn to the domain's far edge ends at tick 2^20, where no pixel
+  // is: it holds what a box to 2^20 - 1 holds, and one tick more is refused.
+  const auto whole = run("query " + db_ + " range 0 0 0 1048576 1048576 1048576");
+  ASSERT_EQ(whole.code, 0) << whole.err;
+  EXPECT_EQ(whole.out, std::to_string(leaves_.size()) + " leaves intersect the box\n");
+  const auto face = run("query " + db_ + " range 0 0 1048576 1048576 1048576 1048576");
+  const auto before = run("query " + db_ + " range 0 0 1048575 1048575 1048575 1048575");
+  EXPECT_EQ(face.out, before.out);
+  const auto past = run("query " + db_ + " range 0 0 0 1048577 1048576 1048576");
+  EXPECT_NE(past.code, 0);
+  EXPECT_NE(past.err.find("outside the address space"), std::string::npos) << past.err;
 }
 
 TEST_F(QueryCli, NeighbourhoodsPrintOneRowEach) {

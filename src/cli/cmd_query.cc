@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 
@@ -12,6 +13,7 @@ namespace {
 
 constexpr char kUsage[] =
     "usage: weaver query DB QUERY ARGS... [--units ticks|m] [--format MODE] [--memory BYTES]\n"
+    "                                     [--threads N]\n"
     "\n"
     "Answers one question about the mesh in DB (for many, use 'weaver shell DB'):\n"
     "\n";
@@ -19,6 +21,8 @@ constexpr char kUsage[] =
 constexpr char kUsageTail[] =
     "  --memory BYTES        memory budget (default 256M): the table caches and a points\n"
     "                        batch\n"
+    "  --threads N           threads that answer a --points batch (default: one a\n"
+    "                        core); each reads the tables with its share of --memory\n"
     "A model database (weaver model import) answers 'material X Y Z' and 'material\n"
     "--points FILE' in metres, as 'weaver model material' does.\n"
     "\n"
@@ -77,8 +81,8 @@ int cmd_query(int argc, char** argv) {
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--help" || a == "-h") help = true;
-    if (a == "--memory" && i + 1 < argc) {
-      args.values["memory"] = argv[++i];
+    if ((a == "--memory" || a == "--threads") && i + 1 < argc) {
+      args.values[a.substr(2)] = argv[++i];
       continue;
     }
     words.push_back(a);
@@ -90,6 +94,8 @@ int cmd_query(int argc, char** argv) {
   if (words.size() < 2) return usage_error("query", "expected DB and a query", kUsage);
   MemoryBudget memory;
   Status st = memory_option(args, &memory);
+  int threads = 1;
+  if (st.ok()) st = threads_option(args, default_threads(), &threads);
   const std::string db = words[0];
   words.erase(words.begin());
   if (st.ok() && is_model_only(db)) {
@@ -97,10 +103,20 @@ int cmd_query(int argc, char** argv) {
   }
   if (st.ok()) st = check_query(words);
   if (!st.ok()) return usage_error("query", st.message(), kUsage);
-  std::unique_ptr<Explorer> ex;
-  st = Explorer::open(db, memory, &ex);
-  if (!st.ok()) return report("query", st);
-  return run_query(*ex, words, QuerySettings{}, stdout, stderr, "weaver query");
+  // A batch of points shares its lookups among threads, an Explorer each
+  // with its share of the budget; one question takes the whole budget.
+  const bool batch = std::find(words.begin(), words.end(), "--points") != words.end();
+  if (!batch) threads = 1;
+  const MemoryBudget each(
+      std::max<uint64_t>(memory.bytes() / uint64_t(threads), MemoryBudget::kMinBytes));
+  std::vector<std::unique_ptr<Explorer>> explorers(static_cast<size_t>(threads));
+  QuerySettings settings;
+  for (auto& e : explorers) {
+    st = Explorer::open(db, each, &e);
+    if (!st.ok()) return report("query", st);
+    if (&e != &explorers[0]) settings.helpers.push_back(e.get());
+  }
+  return run_query(*explorers[0], words, settings, stdout, stderr, "weaver query");
 }
 
 }  // namespace weaver::cli

@@ -1,3 +1,5 @@
+#include <malloc.h>
+
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -5,6 +7,7 @@
 #include "cli/cli.h"
 #include "cli/query_commands.h"
 #include "serve/service.h"
+#include "serve/streams.h"
 
 namespace weaver::cli {
 namespace {
@@ -20,14 +23,17 @@ constexpr char kUsage[] =
     "aggregate table ('weaver aggregate DB') a map pixel that holds many\n"
     "elements shows their least vs (or another summary) rather than the one at\n"
     "its centre.  Limits: 64 connections (more get 503), a request's head 40 KiB\n"
-    "and body 64 MiB, 256 MiB of bodies at once, 10 s to send a request (408),\n"
-    "5 s idle between two.\n"
+    "and body 64 MiB, a quarter of --memory for the bodies at once (503 past it),\n"
+    "10 s to send a request (408), 5 s idle between two.  Answers past 1 MiB are\n"
+    "sent as they are written (chunked), so the server stays within --memory.\n"
     "  --port P        the TCP port (default 8080; 0 for any free one)\n"
     "  --bind ADDR     the IPv4 address to listen on (default 127.0.0.1: this\n"
     "                  machine only; 0.0.0.0 for every interface)\n"
     "  --threads N     requests answered at once (default 4); a slow or idle\n"
     "                  client holds a connection, never a thread\n"
-    "  --memory BYTES  memory budget, shared by the threads (default 256M)\n"
+    "  --memory BYTES  memory budget (default 256M): a quarter for request bodies,\n"
+    "                  the rest shared by the threads' table caches and directories\n"
+    "                  (a mesh of a billion elements answers fastest with 1G)\n"
     "Routes:\n"
     "  /                                  the page\n"
     "  /api/stat                          counts, units, extents, fields\n"
@@ -49,31 +55,18 @@ extern "C" void stop_serving(int) {
   if (g_server != nullptr) g_server->stop();
 }
 
-// A stdio stream that appends to a std::string: a query's answer lands in
-// the response without a copy (a million points are about 130 MB of JSON).
-std::FILE* string_stream(std::string* s) {
-  cookie_io_functions_t io{};
-  io.write = [](void* cookie, const char* data, size_t n) -> ssize_t {
-    static_cast<std::string*>(cookie)->append(data, n);
-    return ssize_t(n);
-  };
-  return fopencookie(s, "w", io);
-}
-
-// A query of `weaver query` on an open Explorer, its output captured.
-int run_captured(Explorer& ex, const std::vector<std::string>& words, const std::string& points,
-                 std::string* out, std::string* err) {
-  out->clear(), err->clear();
-  std::FILE* o = string_stream(out);
-  std::FILE* e = string_stream(err);
-  std::FILE* in = fmemopen(const_cast<char*>(points.empty() ? "" : points.data()),
-                           points.empty() ? 1 : points.size(), "r");
+// A query of `weaver query` on an open Explorer, its points read from
+// points, its answer printed to out and its errors captured.
+int run_query_on(Explorer& ex, const std::vector<Explorer*>& helpers,
+                 const std::vector<std::string>& words, std::FILE* points, std::FILE* out,
+                 std::string* err) {
+  err->clear();
+  std::FILE* e = serve::string_stream(err);
   QuerySettings settings;
-  settings.points_stdin = in;
-  const int code = o && e && in ? run_query(ex, words, settings, o, e, "weaver serve") : 1;
-  if (in) std::fclose(in);
-  if (o) std::fclose(o);  // flushes into *out
-  if (e) std::fclose(e);
+  settings.points_stdin = points;
+  settings.helpers = helpers;
+  const int code = e ? run_query(ex, words, settings, out, e, "weaver serve") : 1;
+  if (e) std::fclose(e);  // flushes into *err
   return code;
 }
 
@@ -96,9 +89,19 @@ int cmd_serve(int argc, char** argv) {
   if (st.ok()) st = memory_option(args, &memory);
   if (!st.ok()) return usage_error("serve", st.message(), kUsage);
   const std::string& db = args.positional[0];
-  // Each thread keeps an Explorer of its own: each gets its share.
-  const MemoryBudget each(std::max<uint64_t>(memory.bytes() / o.threads, MemoryBudget::kMinBytes));
-  serve::Service service(db, each, run_captured);
+  // A quarter of the budget holds request bodies (at most 64 MiB each); the
+  // rest is shared by the Explorers: one a worker, and the helper that a
+  // batch of points borrows.  Answers are streamed (serve/http.h), so they
+  // hold a megabyte or so each, whatever their size.
+  o.max_buffered = std::max<uint64_t>(memory.bytes() / 4, 1 << 20);
+  o.max_body = std::min(o.max_body, o.max_buffered);
+  const MemoryBudget each(std::max<uint64_t>(memory.bytes() / 4 * 3 / uint64_t(o.threads + 1),
+                                             MemoryBudget::kMinBytes));
+  // Large blocks (a request's body, a batch's arrays) go back to the system
+  // when freed: otherwise each thread's arena keeps the largest it has seen,
+  // and the process outgrows --memory after a few batches.
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
+  serve::Service service(db, each, run_query_on);
   st = service.check();
   if (!st.ok()) return report("serve", st);
   serve::Server server;

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <thread>
 #include <vector>
 
 #include "util/huge_pages.h"
@@ -59,6 +60,20 @@ class RowWriter {
     if (mode_ == OutputMode::kJson) raw(one_ && rows_ == 1 ? "\n" : "]\n");
   }
   size_t size() const { return len_; }
+  // A writer of the same columns for rows that follow `rows` rows of this
+  // document, into a buffer of its own: a slice formatted on another
+  // thread, written after those.
+  RowWriter continuation(uint64_t rows) const {
+    RowWriter w(mode_, one_);
+    w.columns_ = columns_;
+    w.rows_ = rows;
+    return w;
+  }
+  uint64_t rows() const { return rows_; }
+  // Forgets the rows held (they were written) and goes on after `rows` rows.
+  void resume(uint64_t rows) { rows_ = rows, len_ = 0; }
+  // Rows written by continuations count as this writer's.
+  void count_rows(uint64_t n) { rows_ += n; }
   // Writes the rows held to out and forgets them.
   Status flush(std::FILE* out) {
     if (len_ > 0 && std::fwrite(buf_.data(), 1, len_, out) != len_) {
@@ -111,11 +126,13 @@ class RowWriter {
   size_t len_ = 0;
 };
 
-// Lines of a stream, read a megabyte at a time (getline's per-line cost
-// shows at a million lines a second).  A line is valid until the next call.
+// Lines of a stream, read 64 KiB at a time (getline's per-line cost shows
+// at a million lines a second; a larger buffer gains nothing, and one point
+// asked through `weaver serve` would zero it).  A line is valid until the
+// next call.
 class LineReader {
  public:
-  explicit LineReader(std::FILE* in) : in_(in), buf_(1 << 20) {}
+  explicit LineReader(std::FILE* in) : in_(in), buf_(64 << 10) {}
   bool next(std::string_view* line) {
     for (;;) {
       const char* nl = static_cast<const char*>(std::memchr(&buf_[at_], '\n', len_ - at_));
@@ -219,18 +236,9 @@ class BatchRunner {
   // Answers the points held and writes their rows.
   Status answer(PointBatchResult* r) {
     const size_t n = points_.size();
-    if (o_.query == PointQuery::kNodeAt) {
-      nodes_.resize(n);
-      WEAVER_RETURN_IF_ERROR(ex_.node_at_batch(points_.data(), n, nodes_.data()));
-    } else {
-      hits_.resize(n);
-      WEAVER_RETURN_IF_ERROR(ex_.locate_batch(points_.data(), n, hits_.data()));
-    }
-    constexpr size_t kSlice = 32768;  // rows formatted, then written
-    for (size_t lo = 0; lo < n; lo += kSlice) {
-      format_rows(w_, lo, std::min(n, lo + kSlice), &r->missed);
-      WEAVER_RETURN_IF_ERROR(w_.flush(out_));
-    }
+    const size_t parts = n >= kParallelPoints ? 1 + o_.helpers.size() : 1;
+    WEAVER_RETURN_IF_ERROR(look_up(n, parts));
+    WEAVER_RETURN_IF_ERROR(write_rows(n, parts, &r->missed));
     r->points += n;
     points_.clear(), values_.clear(), bad_.clear();
     return Status::Ok();
@@ -242,6 +250,62 @@ class BatchRunner {
   }
 
  private:
+  // Below this many points a batch is answered on the calling thread alone.
+  static constexpr size_t kParallelPoints = 16384;
+  static constexpr size_t kSlice = 32768;  // rows formatted, then written
+
+  // Runs job(0 .. parts - 1), each part but the first on a thread of its own.
+  template <typename Job>
+  static void in_parallel(size_t parts, const Job& job) {
+    std::vector<std::thread> threads;
+    for (size_t i = 1; i < parts; ++i) threads.emplace_back(job, i);
+    job(0);
+    for (auto& t : threads) t.join();
+  }
+
+  // Each of `parts` Explorers (ex_, then the helpers) answers a run of the
+  // points in input order; each sorts its own run.
+  Status look_up(size_t n, size_t parts) {
+    const bool nodes = o_.query == PointQuery::kNodeAt;
+    (nodes ? nodes_.resize(n) : hits_.resize(n));
+    std::vector<Status> st(parts);
+    in_parallel(parts, [&](size_t i) {
+      Explorer& e = i == 0 ? ex_ : *o_.helpers[i - 1];
+      const size_t lo = n * i / parts, hi = n * (i + 1) / parts;
+      st[i] = nodes ? e.node_at_batch(points_.data() + lo, hi - lo, nodes_.data() + lo)
+                    : e.locate_batch(points_.data() + lo, hi - lo, hits_.data() + lo);
+    });
+    for (const Status& s : st) WEAVER_RETURN_IF_ERROR(s);
+    return Status::Ok();
+  }
+
+  // The rows in slices: `parts` slices formatted at once, a thread each,
+  // then written in input order.
+  Status write_rows(size_t n, size_t parts, uint64_t* missed) {
+    if (parts == 1) {
+      for (size_t lo = 0; lo < n; lo += kSlice) {
+        format_rows(w_, lo, std::min(n, lo + kSlice), missed);
+        WEAVER_RETURN_IF_ERROR(w_.flush(out_));
+      }
+      return Status::Ok();
+    }
+    WEAVER_RETURN_IF_ERROR(w_.flush(out_));  // the header, before the rows
+    std::vector<RowWriter> writers;
+    for (size_t i = 0; i < parts; ++i) writers.push_back(w_.continuation(0));
+    std::vector<uint64_t> missed_by(parts, 0);
+    for (size_t lo = 0; lo < n; lo += parts * kSlice) {
+      in_parallel(parts, [&](size_t i) {
+        const size_t a = std::min(n, lo + i * kSlice), b = std::min(n, a + kSlice);
+        writers[i].resume(w_.rows() + a);
+        if (a < b) format_rows(writers[i], a, b, &missed_by[i]);
+      });
+      for (RowWriter& w : writers) WEAVER_RETURN_IF_ERROR(w.flush(out_));
+    }
+    w_.count_rows(n);
+    for (const uint64_t m : missed_by) *missed += m;
+    return Status::Ok();
+  }
+
   bool parse(const char* b, const char* e, double* v) const {
     if (o_.metres) {
       const auto r = std::from_chars(b, e, *v);

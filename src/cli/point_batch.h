@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "cli/query_output.h"
 #include "query/explorer.h"
@@ -23,6 +24,9 @@ struct PointBatchOptions {
   OutputMode mode = OutputMode::kText;  // text and table print space-separated columns
   bool metres = false;                  // input and lengths in metres, not ticks
   bool one = false;  // one point asked on the command line: JSON prints an object
+  // More Explorers on the same committed state as the one asked: a large
+  // batch splits its lookups and its rows among them, a thread each.
+  std::vector<Explorer*> helpers;
 };
 
 struct PointBatchResult {

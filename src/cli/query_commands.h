@@ -20,6 +20,9 @@ struct QuerySettings {
   // Where `--points -` reads: the process's stdin unless set (the shell
   // hands it the lines that follow the command).
   std::FILE* points_stdin = nullptr;
+  // More Explorers on the same state, for a --points batch to share its
+  // work with (PointBatchOptions::helpers).
+  std::vector<Explorer*> helpers;
 };
 
 // Runs one query: words[0] is its name ("locate", "neighbors", ...), the

@@ -66,7 +66,8 @@ Status Query::to_frame_metres() {
 // locate, material and node-at: a points file, or one point.  Outside text
 // mode one point is a batch of one, so both print the same columns.
 int Query::run_points(PointQuery q) {
-  PointBatchOptions o{q, s.mode, s.metres};
+  PointBatchOptions o{q, s.mode, s.metres, false, {}};
+  o.helpers = s.helpers;
   PointBatchResult r;
   const bool from_file = args.values.count("points") != 0;
   if (from_file && args.positional.size() != 1) {

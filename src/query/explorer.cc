@@ -51,6 +51,8 @@ Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
   const ExplorerMemory shares(memory);
   std::unique_ptr<Explorer> e(new Explorer());
   WEAVER_RETURN_IF_ERROR(Mesh::open(db_dir, shares.octant_pool, shares.node_pool, &e->mesh_, true));
+  e->mesh_->octants().set_directory_budget(shares.octant_directory);
+  if (e->mesh_->has_nodes()) e->mesh_->nodes().set_directory_budget(shares.node_directory);
   e->octant_window_ = std::make_unique<LeafWindow>(e->mesh_->octants(), true);
   if (e->mesh_->has_nodes()) {
     e->node_window_ = std::make_unique<LeafWindow>(e->mesh_->nodes(), true);

@@ -75,8 +75,15 @@ Status locate(BTree& octants, Coord p, LocateResult* out) {
   return octants.rank(key, &out->element_id);
 }
 
-Status range_query(BTree& octants, const TickBox& box, uint64_t* count,
+Status range_query(BTree& octants, const TickBox& asked, uint64_t* count,
                    const std::function<void(const Octant&, uint64_t)>& on_leaf) {
+  // A box drawn to the domain's far edge ends on the address space's far
+  // face (tick 2^20), where no pixel is; every leaf that reaches that face
+  // holds the pixel before it, so the box may reach it.
+  TickBox box = asked;
+  for (uint32_t* c : {&box.lo.x, &box.lo.y, &box.lo.z, &box.hi.x, &box.hi.y, &box.hi.z}) {
+    if (*c == kRootEdge) *c = kRootEdge - 1;
+  }
   const uint32_t lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
   for (int a = 0; a < 3; ++a) {
     if (lo[a] > hi[a]) {

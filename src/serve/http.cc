@@ -44,10 +44,11 @@ Status parse_query(const std::string& qs, Request* r) {
 
 }  // namespace
 
-std::string response_head(const Response& r, bool keep_alive) {
+std::string response_head(const Response& r, bool keep_alive, bool chunked) {
   std::string head = "HTTP/1.1 " + std::to_string(r.status) + " " + reason(r.status) + "\r\n";
   head += "Content-Type: " + r.content_type + "\r\n";
-  head += "Content-Length: " + std::to_string(r.body.size()) + "\r\n";
+  head += chunked ? std::string("Transfer-Encoding: chunked\r\n")
+                  : "Content-Length: " + std::to_string(r.body.size()) + "\r\n";
   head += "Cache-Control: " + r.cache_control + "\r\n";
   if (!r.attachment.empty()) {
     head += "Content-Disposition: attachment; filename=\"" + r.attachment + "\"\r\n";

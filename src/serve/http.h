@@ -40,6 +40,26 @@ inline constexpr size_t kMaxHeaders = 32 << 10;
 // fuzz/http_request_fuzz.cc feeds.
 Status parse_request_head(const std::string& head, Request* r, bool* too_large);
 
+// Where a streamed answer writes its body (Response::stream).  The server
+// holds the first kStreamHold bytes; an answer that ends within them goes
+// out whole with its Content-Length, a longer one goes out as it is written,
+// in chunks (Transfer-Encoding: chunked), so that an answer of any size
+// holds at most kStreamHold bytes of memory.
+class BodySink {
+ public:
+  virtual ~BodySink() = default;
+  // False once the client is gone or too slow: the stream may stop.
+  virtual bool write(const char* data, size_t n) = 0;
+};
+inline constexpr size_t kStreamHold = 1 << 20;
+
+struct Response;
+// Writes an answer's body to the sink, and says how it ended: status 200
+// (its body unused) or an error response.  An error after the first bytes
+// went out closes the connection without the closing chunk, which the
+// client sees as a broken transfer.
+using BodyStream = std::function<Response(BodySink& sink)>;
+
 struct Response {
   Response(int status_ = 200, std::string type = "application/json", std::string body_ = "",
            std::string cache = "no-store", std::string attachment_ = "")
@@ -53,12 +73,14 @@ struct Response {
   std::string body;
   std::string cache_control;
   std::string attachment;  // a file name: the browser saves the body as that file
+  BodyStream stream;       // set: the body is written by it, not taken from body
 };
 
 // A response with status and a JSON body {"error": message}.
 Response error_response(int status, const std::string& message);
-// The status line and headers of r.
-std::string response_head(const Response& r, bool keep_alive);
+// The status line and headers of r; chunked: the body follows in chunks
+// rather than with a Content-Length.
+std::string response_head(const Response& r, bool keep_alive, bool chunked = false);
 // The body length a parsed request announces: its Content-Length, 0 without
 // one.  An error response (400 for a bad length or a chunked body, 413 past
 // max_body) when it cannot be taken.

@@ -6,6 +6,7 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
+#include <strings.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -13,6 +14,7 @@
 #include <cerrno>
 #include <chrono>
 #include <condition_variable>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <list>
@@ -45,7 +47,8 @@ struct Connection {
 // c.request), not yet one (*length: the body it announces, when its head
 // is in), or a mistake to answer (*refusal) before closing.
 enum class Take { kRequest, kMore, kRefuse };
-Take take_request(Connection& c, uint64_t max_body, uint64_t* length, Response* refusal) {
+Take take_request(Connection& c, uint64_t max_body, uint64_t* length, Response* refusal,
+                  bool* expects_continue = nullptr) {
   *length = 0;
   const size_t end = c.in.find("\r\n\r\n");
   if (end == std::string::npos) {
@@ -61,9 +64,25 @@ Take take_request(Connection& c, uint64_t max_body, uint64_t* length, Response* 
     return Take::kRefuse;
   }
   if (!body_length(r, max_body, length, refusal)) return Take::kRefuse;
-  if (c.in.size() < end + 4 + *length) return Take::kMore;
-  r.body.assign(c.in, end + 4, *length);
-  c.in.erase(0, end + 4 + *length);
+  if (c.in.size() < end + 4 + *length) {
+    if (expects_continue != nullptr) {
+      const auto e = r.headers.find("expect");
+      *expects_continue =
+          e != r.headers.end() && ::strcasecmp(e->second.c_str(), "100-continue") == 0;
+    }
+    c.in.reserve(end + 4 + *length);
+    return Take::kMore;
+  }
+  if (c.in.size() == end + 4 + *length && *length > (64 << 10)) {
+    // A large body that ends what arrived (the usual case): moved, not
+    // copied, and the connection keeps no buffer of its size.
+    r.body = std::move(c.in);
+    r.body.erase(0, end + 4);
+    c.in = std::string();
+  } else {
+    r.body.assign(c.in, end + 4, *length);
+    c.in.erase(0, end + 4 + *length);
+  }
   c.request = std::move(r);
   return Take::kRequest;
 }
@@ -107,7 +126,7 @@ bool send_all(int fd, const char* data, size_t n, int timeout_ms) {
   return true;
 }
 
-bool send_response(int fd, const Response& r, bool keep_alive, int timeout_ms) {
+bool send_whole(int fd, const Response& r, bool keep_alive, int timeout_ms) {
   const std::string head = response_head(r, keep_alive);
   // One send for a small answer: two would wait on the client's delayed ACK.
   if (r.body.size() < (256 << 10)) {
@@ -116,6 +135,81 @@ bool send_response(int fd, const Response& r, bool keep_alive, int timeout_ms) {
   }
   return send_all(fd, head.data(), head.size(), timeout_ms) &&
          send_all(fd, r.body.data(), r.body.size(), timeout_ms);
+}
+
+// A streamed answer's sink on a connection: it holds the first
+// kStreamHold bytes; past them it sends the head and then the body in
+// chunks of kChunk bytes.
+class SocketSink : public BodySink {
+ public:
+  SocketSink(int fd, const Response& head, bool keep_alive, int timeout_ms)
+      : fd_(fd), head_(head), keep_(keep_alive), timeout_ms_(timeout_ms) {}
+
+  bool write(const char* data, size_t n) override {
+    if (failed_) return false;
+    if (!started_ && held_.size() + n <= kStreamHold) return held_.append(data, n), true;
+    if (!started_) {
+      started_ = true;
+      const std::string head = response_head(head_, keep_, true);
+      failed_ = !send_all(fd_, head.data(), head.size(), timeout_ms_);
+      std::string held = std::move(held_);
+      held_.clear();
+      if (!failed_) add(held.data(), held.size());
+    }
+    add(data, n);
+    return !failed_;
+  }
+
+  // Ends the answer as the stream said (end): true if the connection may
+  // take another request.
+  bool finish(Response end) {
+    if (!started_) {
+      if (end.status != 200) return send_whole(fd_, end, keep_, timeout_ms_) && keep_;
+      Response whole = head_;
+      whole.stream = nullptr;
+      whole.body = std::move(held_);
+      return send_whole(fd_, whole, keep_, timeout_ms_) && keep_;
+    }
+    if (failed_ || end.status != 200) return false;  // cut short: the client sees it
+    send_chunk();
+    static constexpr char kLast[] = "0\r\n\r\n";
+    return send_all(fd_, kLast, sizeof kLast - 1, timeout_ms_) && keep_;
+  }
+
+ private:
+  static constexpr size_t kChunk = 256 << 10;
+  void add(const char* data, size_t n) {
+    while (n > 0 && !failed_) {
+      const size_t take = std::min(n, kChunk - chunk_.size());
+      chunk_.append(data, take);
+      data += take, n -= take;
+      if (chunk_.size() == kChunk) send_chunk();
+    }
+  }
+  void send_chunk() {
+    if (chunk_.empty() || failed_) return;
+    char size[24];
+    const int len = std::snprintf(size, sizeof size, "%zx\r\n", chunk_.size());
+    chunk_.insert(0, size, size_t(len));
+    chunk_ += "\r\n";
+    failed_ = !send_all(fd_, chunk_.data(), chunk_.size(), timeout_ms_);
+    chunk_.clear();
+  }
+
+  int fd_;
+  const Response& head_;
+  bool keep_;
+  int timeout_ms_;
+  bool started_ = false, failed_ = false;
+  std::string held_, chunk_;
+};
+
+// Sends r (running its stream, if it has one): true if the connection may
+// take another request.
+bool send_response(int fd, const Response& r, bool keep_alive, int timeout_ms) {
+  if (!r.stream) return send_whole(fd, r, keep_alive, timeout_ms) && keep_alive;
+  SocketSink sink(fd, r, keep_alive, timeout_ms);
+  return sink.finish(r.stream(sink));
 }
 
 // The work handed between the poller and the workers.
@@ -277,7 +371,8 @@ bool Poller::receive(Connection& c) {
 bool Poller::dispatch(Connection& c) {
   uint64_t length = 0;
   Response refusal;
-  switch (take_request(c, o_.max_body, &length, &refusal)) {
+  bool expects_continue = false;
+  switch (take_request(c, o_.max_body, &length, &refusal, &expects_continue)) {
     case Take::kRefuse: return refuse(c, refusal);
     case Take::kMore:
       // A body still coming counts against the bytes held at once.
@@ -286,6 +381,12 @@ bool Poller::dispatch(Connection& c) {
           return refuse(c, error_response(503, "too many request bodies at once: retry"));
         }
         c.reserved = length, buffered_ += length;
+        // A client that waits to be asked for its body (curl does, past
+        // 1 MB) is asked now, rather than after its own timeout of a second.
+        static constexpr char kContinue[] = "HTTP/1.1 100 Continue\r\n\r\n";
+        if (expects_continue && !send_all(c.fd, kContinue, sizeof kContinue - 1, 100)) {
+          return false;
+        }
       }
       return true;
     case Take::kRequest: break;
@@ -351,7 +452,7 @@ void Server::serve(const Handler& handler, const std::function<void()>& on_start
         do {
           const Request& r = c->request;
           keep = r.keep_alive && c->served + 1 < o_.max_requests && !stopping_;
-          keep = send_response(c->fd, handler(r), keep, o_.timeout_ms) && keep;
+          keep = send_response(c->fd, handler(r), keep, o_.timeout_ms);
           ++c->served;
         } while (keep && next_request_at_once(*c, o_.max_body));
         q.push_done(c, keep, wake[1]);

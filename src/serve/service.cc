@@ -7,11 +7,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include "export/export.h"
 #include "model/geo_frame.h"
+#include "serve/streams.h"
 #include "serve/tiles.h"
 #include "util/json_string.h"
 
@@ -100,31 +100,6 @@ Response status_response(const Status& st) {
                         st.message());
 }
 
-// Whether a body of points is a JSON array ([[x, y, z], ...]) rather than
-// text lines.
-bool is_json_array(const std::string& body) {
-  const size_t at = body.find_first_not_of(" \t\r\n");
-  return at != std::string::npos && body[at] == '[';
-}
-
-// A JSON array of points as text lines.  REQUIRES: is_json_array(body).
-std::string points_text(const std::string& body) {
-  std::string out;
-  int depth = 0;
-  for (const char c : body) {
-    if (c == '[') {
-      ++depth;
-    } else if (c == ']') {
-      if (depth-- == 2) out += '\n';
-    } else if (depth >= 2) {
-      out += c == ',' ? ' ' : c;
-    } else if (depth == 1 && c != ',' && c != ' ' && c != '\n' && c != '\r' && c != '\t') {
-      out += c;  // a bare value: left for the batch to call a bad line
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
 Status Service::check() {
@@ -157,6 +132,23 @@ Status Service::explorer(Explorer** out) {
   }
   *out = s.ex.get();
   return Status::Ok();
+}
+
+// A batch of fewer bytes (about 10K points) is answered by its worker alone.
+constexpr size_t kHelpedBody = 256 << 10;
+
+Explorer* Service::helper(std::unique_lock<std::mutex>* lock) {
+  *lock = std::unique_lock<std::mutex>(helper_mu_, std::try_to_lock);
+  if (!lock->owns_lock()) return nullptr;
+  const Snapshot& s = t_snapshot;  // the asking worker's: the helper reads the same
+  if (!helper_ || helper_ino_ != s.ino || helper_ctime_.tv_sec != s.ctime.tv_sec ||
+      helper_ctime_.tv_nsec != s.ctime.tv_nsec) {
+    helper_.reset();
+    if (!Explorer::open(db_, memory_, &helper_).ok()) return nullptr;  // the worker answers alone
+    (void)helper_->mesh().octants().prepare_lookups();
+    helper_ino_ = s.ino, helper_ctime_ = s.ctime;
+  }
+  return helper_.get();
 }
 
 Response Service::handle(const Request& r) {
@@ -193,9 +185,7 @@ Response Service::api(const Request& r, Explorer& ex) {
     if (q != "locate" && q != "material" && q != "node-at") {
       return error_response(400, "query is locate, material or node-at, not '" + q + "'");
     }
-    // Text lines go to the batch as they came; a JSON array becomes lines.
-    if (!is_json_array(r.body)) return run(ex, {q, "--points", "-"}, r, r.body);
-    return run(ex, {q, "--points", "-"}, r, points_text(r.body));
+    return run_batch(ex, {q, "--points", "-"}, r);
   }
   const bool by_id = what == "element" || what == "node" || what == "neighbors" ||
                      what == "node-elements" || what == "depends";
@@ -217,21 +207,65 @@ Response Service::api(const Request& r, Explorer& ex) {
   return error_response(404, "no such API route: " + r.path);
 }
 
-Response Service::run(Explorer& ex, std::vector<std::string> words, const Request& r,
-                      const std::string& points) {
+namespace {
+
+// The words of a query as the API's options ask: units, geo, JSON.
+std::vector<std::string> with_options(std::vector<std::string> words, const Request& r) {
   if (r.query.count("units")) words.insert(words.end(), {"--units", r.query.at("units")});
   if (r.query.count("geo") && r.query.at("geo") != "0") words.push_back("--geo");
   words.insert(words.end(), {"--format", "json"});
-  std::string out, err;
-  const int code = query_(ex, words, points, &out, &err);
+  return words;
+}
+
+// How a query that ended with code, having printed `printed` bytes and err,
+// is answered: 200 when it printed its answer (a batch with bad lines ends
+// 1 and still answers every row), 400 for a usage error, 404 for what does
+// not exist, 500 otherwise.
+Response outcome(int code, uint64_t printed, const std::string& err) {
   const std::string message = query_message(err);
-  if (code == 0 || (code == 1 && !out.empty())) return {200, "application/json", std::move(out)};
+  if (code == 0 || (code == 1 && printed > 0)) return Response(200);
   if (code == 2) return error_response(400, message);
   const bool missing = message.find("does not exist") != std::string::npos ||
                        message.find("no mesh yet") != std::string::npos ||
                        message.find("not georeferenced") != std::string::npos ||
                        message.find("has no material") != std::string::npos;
   return error_response(missing ? 404 : 500, message);
+}
+
+}  // namespace
+
+Response Service::run(Explorer& ex, std::vector<std::string> words, const Request& r) {
+  std::string out, err;
+  std::FILE* o = string_stream(&out);
+  std::FILE* in = points_stream("");
+  const int code = o && in ? query_(ex, {}, with_options(std::move(words), r), in, o, &err) : 1;
+  if (in) std::fclose(in);
+  if (o) std::fclose(o);  // flushes into out
+  Response res = outcome(code, out.size(), err);
+  if (res.status == 200) res.body = std::move(out);
+  return res;
+}
+
+Response Service::run_batch(Explorer& ex, std::vector<std::string> words, const Request& r) {
+  Response res(200, "application/json");
+  // Run by this worker as it sends the answer, before its next request:
+  // ex and r are still this request's.
+  res.stream = [this, &ex, &r, words = with_options(std::move(words), r)](BodySink& sink) {
+    uint64_t printed = 0;
+    std::string err;
+    std::FILE* o = sink_stream(&sink, &printed);
+    std::FILE* in = points_stream(r.body);
+    std::unique_lock<std::mutex> lock;
+    std::vector<Explorer*> helpers;
+    if (r.body.size() >= kHelpedBody) {
+      if (Explorer* h = helper(&lock)) helpers.push_back(h);
+    }
+    const int code = o && in ? query_(ex, helpers, words, in, o, &err) : 1;
+    if (in) std::fclose(in);
+    if (o && std::fclose(o) != 0 && code == 0) return error_response(500, "the client left");
+    return outcome(code, printed, err);
+  };
+  return res;
 }
 
 Response Service::stat(Explorer& ex) {
@@ -348,9 +382,10 @@ Response Service::export_vtu(Explorer& ex, const Request& r) {
   // How many elements first: the answer is held whole.
   std::vector<std::string> count = {"range"};
   count.insert(count.end(), words.begin(), words.end());
-  count.insert(count.end(), {"--units", "m", "--format", "json"});
-  std::string out, err;
-  if (query_(ex, count, "", &out, &err) != 0) return error_response(400, query_message(err));
+  count.insert(count.end(), {"--units", "m"});
+  const Response counted = run(ex, count, Request{});
+  if (counted.status != 200) return counted;
+  const std::string& out = counted.body;
   const size_t at = out.find("\"count\": ");
   const uint64_t n = at == std::string::npos ? 0 : std::strtoull(out.c_str() + at + 9, nullptr, 10);
   if (n == 0) return error_response(404, "no element shares a point with the box");
@@ -359,7 +394,8 @@ Response Service::export_vtu(Explorer& ex, const Request& r) {
                                    "than " + std::to_string(kMaxExportElements) +
                                    ": use weaver export --format vtu --box");
   }
-  // Written by the exporter into a scratch directory of its own, read back.
+  // Written by the exporter into a scratch directory of its own, opened,
+  // and removed at once: the open file is streamed, never held whole.
   char dir[] = "/tmp/weaver-serve-XXXXXX";
   if (::mkdtemp(dir) == nullptr) return error_response(500, "cannot make a scratch directory");
   o.format = ExportFormat::kVtu;
@@ -367,16 +403,25 @@ Response Service::export_vtu(Explorer& ex, const Request& r) {
   o.has_box = true;
   o.memory = memory_;
   ExportResult result;
-  Status st = export_mesh(db_, o, &result);
-  Response res{200, "application/xml", "", "no-store", "region.vtu"};
-  if (st.ok()) {
-    std::ifstream in(o.out, std::ios::binary);
-    res.body.assign(std::istreambuf_iterator<char>(in), {});
-    if (!in.good() && !in.eof()) st = Status::IOError("reading " + o.out);
-  }
+  const Status st = export_mesh(db_, o, &result);
+  std::shared_ptr<std::FILE> file(st.ok() ? std::fopen(o.out.c_str(), "rb") : nullptr,
+                                  [](std::FILE* f) {
+                                    if (f) std::fclose(f);
+                                  });
   std::error_code ec;
   std::filesystem::remove_all(dir, ec);
-  return st.ok() ? res : status_response(st);
+  if (!st.ok()) return status_response(st);
+  if (!file) return error_response(500, "cannot read the region written");
+  Response res{200, "application/xml", "", "no-store", "region.vtu"};
+  res.stream = [file](BodySink& sink) {
+    std::vector<char> buf(256 << 10);
+    for (size_t n; (n = std::fread(buf.data(), 1, buf.size(), file.get())) > 0;) {
+      if (!sink.write(buf.data(), n)) return error_response(500, "the client left");
+    }
+    return std::ferror(file.get()) ? error_response(500, "reading the region written")
+                                   : Response(200);
+  };
+  return res;
 }
 
 }  // namespace weaver::serve

@@ -27,7 +27,13 @@
 //                                  (at most kMaxExportElements)
 #pragma once
 
+#include <sys/types.h>
+
+#include <cstdio>
+#include <ctime>
 #include <functional>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -38,11 +44,13 @@
 namespace weaver::serve {
 
 // Runs one query of `weaver query` (words as the shell takes them, with
-// --format json among them) on ex: the exit status, and what it printed
-// to stdout and stderr.  The command line supplies it.
-using QueryRunner =
-    std::function<int(Explorer& ex, const std::vector<std::string>& words,
-                      const std::string& points, std::string* out, std::string* err)>;
+// --format json among them) on ex, with helpers (more Explorers on the same
+// state, which a batch of points shares its work with), reading a batch's
+// points (--points -) from points and printing to out: the exit status, and
+// what it printed to stderr.  The command line supplies it.
+using QueryRunner = std::function<int(Explorer& ex, const std::vector<Explorer*>& helpers,
+                                      const std::vector<std::string>& words, std::FILE* points,
+                                      std::FILE* out, std::string* err)>;
 
 class Service {
  public:
@@ -62,21 +70,36 @@ class Service {
   // This thread's Explorer on the newest committed state.
   Status explorer(Explorer** out);
   Response api(const Request& r, Explorer& ex);
-  Response run(Explorer& ex, std::vector<std::string> words, const Request& r,
-               const std::string& points = "");
+  // The query's answer held whole: for the questions of one thing.
+  Response run(Explorer& ex, std::vector<std::string> words, const Request& r);
+  // A batch of points from r's body, its answer streamed as it is printed
+  // (a million points are about 130 MB of JSON).
+  Response run_batch(Explorer& ex, std::vector<std::string> words, const Request& r);
   Response stat(Explorer& ex);
   Response section(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
   Response tile(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
   Response export_vtu(Explorer& ex, const Request& r);
   Response geo(Explorer& ex, const Request& r);
 
+  // The helper Explorer on this thread's snapshot, if no other batch has
+  // it (*lock then holds it); null otherwise.
+  Explorer* helper(std::unique_lock<std::mutex>* lock);
+
   std::string db_;
   MemoryBudget memory_;
   QueryRunner query_;
+  // One more Explorer, which a batch of points borrows to answer half of
+  // its points on a second thread; opened on the first batch, and again
+  // when the state it reads is no longer a worker's.
+  std::mutex helper_mu_;
+  std::unique_ptr<Explorer> helper_;
+  ino_t helper_ino_ = 0;
+  timespec helper_ctime_{};
 };
 
-// A region downloaded as vtu is held in memory whole: at most this many
-// elements (about 100 MB of vtu); larger ones are for `weaver export`.
+// A region downloaded as vtu is written to a scratch file first, then
+// streamed: at most this many elements (about 100 MB of vtu); larger ones
+// are for `weaver export`.
 inline constexpr uint64_t kMaxExportElements = 1000000;
 
 // The page: one HTML document with its script and style, nothing fetched

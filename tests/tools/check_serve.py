@@ -41,6 +41,16 @@ def run(*args, ok=True, stdin=None):
     return r
 
 
+def descriptors_back_to(descriptors, when, tries):
+    """Waits (0.1 s a try) until the server has no more descriptors open than
+    `descriptors`, counted `when`."""
+    for _ in range(tries):
+        if len(os.listdir(f"/proc/{server.pid}/fd")) <= descriptors:
+            return
+        time.sleep(0.1)
+    fail(f"{len(os.listdir(f'/proc/{server.pid}/fd'))} descriptors open, {descriptors} {when}")
+
+
 db = os.path.join(work, "basin.db")
 run("mesh", db, "--model", "basin", "--freq", "0.05", "--quiet")
 server = subprocess.Popen([weaver_bin, "serve", db, "--port", "0", "--threads", "3"],
@@ -356,13 +366,7 @@ try:
         fail(f"slow or malformed clients beside the others: {slow_errors[:2]}")
     # Every connection closed by its client is closed by the server: as many
     # descriptors as before the clients (waiting out the idle timeout).
-    for _ in range(100):
-        if len(os.listdir(f"/proc/{server.pid}/fd")) <= descriptors:
-            break
-        time.sleep(0.1)
-    else:
-        fail(f"{len(os.listdir(f'/proc/{server.pid}/fd'))} descriptors open, {descriptors} "
-             "before the clients came")
+    descriptors_back_to(descriptors, "before the clients came", tries=100)
 finally:
     server.send_signal(signal.SIGTERM)
     try:
@@ -423,7 +427,85 @@ try:
 finally:
     server.send_signal(signal.SIGTERM)
     server.wait(timeout=10)
+# The server's memory stays within --memory whatever the clients ask: four
+# clients post batches whose answers (about 20 MB of JSON each) together
+# are several times the budget, one leaves in the middle of its answer, and
+# one downloads a region; the answers come streamed (chunked) and whole,
+# and the peak resident size stays within the budget plus a fixed allowance
+# for the program itself (its code, libraries and thread stacks).
+BUDGET, ALLOWANCE = 48 << 20, 24 << 20
+server = subprocess.Popen([weaver_bin, "serve", db, "--port", "0", "--threads", "3",
+                           "--memory", "48M"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          text=True)
+try:
+    port = int(server.stdout.readline().split("http://127.0.0.1:")[1].split("/")[0])
+    n_points = 100000
+    batch = "".join(f"{(i * 7919) % 100000} {(i * 3571) % 100000} {(i * 997) % 37500}\n"
+                    for i in range(n_points))
+    # One batch first: it opens the helper that large batches share their
+    # work with (its table files stay open).
+    api("/api/points?units=m", "POST", batch)
+    descriptors = len(os.listdir(f"/proc/{server.pid}/fd"))
+    want_rows = json.loads(run("query", db, "locate", "--points", "-", "--units", "m",
+                               "--format", "json", stdin=batch).stdout)
+    answered, streamed, problems = [], [], []
+
+    def poster(k):
+        try:
+            for _ in range(2):
+                c = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+                c.request("POST", "/api/points?units=m", body=batch)
+                r = c.getresponse()
+                data = r.read()
+                c.close()
+                if r.status != 200:
+                    problems.append(f"client {k}: status {r.status}: {data[:200]!r}")
+                    return
+                streamed.append(r.getheader("Transfer-Encoding") == "chunked")
+                answered.append(len(data))
+                if k == 0 and json.loads(data) != want_rows:
+                    problems.append("a streamed batch differs from weaver query's answer")
+        except Exception as e:  # noqa: BLE001  (any failure is the check's)
+            problems.append(f"client {k}: {e!r}")
+
+    def leaver():
+        s = socket.create_connection(("127.0.0.1", port), timeout=30)
+        s.sendall(f"POST /api/points?units=m HTTP/1.1\r\nHost: x\r\n"
+                  f"Content-Length: {len(batch)}\r\n\r\n{batch}".encode())
+        s.recv(100000)  # a little of the answer, then gone
+        s.close()
+
+    threads = [threading.Thread(target=poster, args=(k,)) for k in range(4)]
+    threads.append(threading.Thread(target=leaver))
+    for t in threads:
+        t.start()
+    status, kind, vtu = request("GET", "/api/export.vtu?box=0,0,0,100000,100000,37500")
+    for t in threads:
+        t.join(timeout=120)
+    if problems:
+        fail("; ".join(problems))
+    if status != 200 or b"<VTKFile" not in vtu[:200] or not vtu.rstrip().endswith(b"</VTKFile>"):
+        fail(f"/api/export.vtu of the whole domain: status {status}, {len(vtu)} bytes")
+    if len(answered) != 8:
+        fail(f"{len(answered)} of 8 batches answered")
+    if sum(answered) < 3 * BUDGET:
+        fail(f"the answers ({sum(answered)} bytes) are too small to test the budget")
+    peak = 0
+    for line in open(f"/proc/{server.pid}/status"):
+        if line.startswith("VmHWM:"):
+            peak = int(line.split()[1]) * 1024
+    if peak > BUDGET + ALLOWANCE and not os.environ.get("WEAVER_SANITIZED"):
+        fail(f"the server peaked at {peak >> 20} MiB resident with --memory 48M "
+             f"({sum(answered) >> 20} MiB answered)")
+    if not all(streamed):
+        fail(f"batches streamed (chunked): {streamed}")
+    # The leaver's connection is closed by the server too.
+    descriptors_back_to(descriptors, "before the batches", tries=50)
+finally:
+    server.send_signal(signal.SIGTERM)
+    server.wait(timeout=10)
 print(f"check_serve: JSON routes as weaver query, tiles by pixel, {marked} dangling nodes "
       f"marked, bad requests, a model "
       f"database, /api/geo as weaver query --geo, a re-mesh "
-      f"seen whole ({len(seen)} states, element {probe} as the {' or the '.join(sorted(answers))} mesh has it), stopped by SIGTERM")
+      f"seen whole ({len(seen)} states, element {probe} as the {' or the '.join(sorted(answers))} mesh has it), stopped by SIGTERM; "
+      f"{sum(answered) >> 20} MiB of batches streamed within --memory 48M (peak {peak >> 20} MiB)")
