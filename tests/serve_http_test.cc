@@ -285,5 +285,113 @@ TEST(ServeThreads, BodiesHeldAtOnceAreBounded) {
   ::close(second);
 }
 
+// Everything the server sends on fd until it closes the connection (or
+// for 20 s at most).
+std::string read_to_close(int fd) {
+  timeval tv{20, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  std::string got;
+  char buf[1 << 16];
+  for (ssize_t n; (n = ::recv(fd, buf, sizeof buf, 0)) > 0;) got.append(buf, size_t(n));
+  return got;
+}
+
+// The body of a chunked answer (after its head); *whole: it ended with the
+// last chunk.
+std::string dechunk(const std::string& body, bool* whole) {
+  std::string out;
+  *whole = false;
+  for (size_t at = 0;;) {
+    const size_t eol = body.find("\r\n", at);
+    if (eol == std::string::npos) return out;
+    const size_t n = std::stoul(body.substr(at, eol - at), nullptr, 16);
+    if (n == 0) return *whole = body.compare(eol, 4, "\r\n\r\n") == 0, out;
+    if (body.size() < eol + 2 + n + 2) return out;
+    out.append(body, eol + 2, n);
+    at = eol + 2 + n + 2;
+  }
+}
+
+// A streamed answer within kStreamHold goes out whole with its length; a
+// longer one in chunks, whole, and the connection takes the next request;
+// one that fails after its first chunks is cut short (no last chunk) and
+// its connection closed.
+TEST(ServeThreads, LongAnswersAreStreamedInChunks) {
+  const auto pattern = [](size_t i) { return char('a' + (i * 7 + i / 1000) % 26); };
+  Running run(ServerOptions{}, [&](const Request& r) {
+    const size_t n = r.path == "/short" ? 100 : (3 << 20) + 5;
+    const bool broken = r.path == "/broken";
+    Response res(200, "text/plain");
+    res.stream = [n, broken, &pattern](BodySink& sink) {
+      std::string piece;
+      for (size_t i = 0; i < n; i += piece.size()) {
+        piece.clear();
+        for (size_t k = i; k < std::min(n, i + 10000); ++k) piece += pattern(k);
+        if (broken && i > (2 << 20)) return error_response(500, "broken");
+        if (!sink.write(piece.data(), piece.size())) return error_response(500, "gone");
+      }
+      return Response(200);
+    };
+    return res;
+  });
+  std::string want;
+  for (size_t k = 0; k < (3 << 20) + 5; ++k) want += pattern(k);
+
+  int fd = run.connect();
+  const std::string short_answer = ask(fd, "GET /short HTTP/1.1\r\n\r\n");
+  EXPECT_NE(short_answer.find("Content-Length: 100\r\n"), std::string::npos) << short_answer;
+  EXPECT_EQ(short_answer.substr(short_answer.find("\r\n\r\n") + 4), want.substr(0, 100));
+  // The long one on the same connection, then a last request on it.
+  const std::string req =
+      "GET /long HTTP/1.1\r\n\r\nGET /short HTTP/1.1\r\nConnection: close\r\n\r\n";
+  ASSERT_EQ(::send(fd, req.data(), req.size(), MSG_NOSIGNAL), ssize_t(req.size()));
+  const std::string both = read_to_close(fd);
+  ::close(fd);
+  const size_t head = both.find("\r\n\r\n");
+  ASSERT_NE(head, std::string::npos);
+  EXPECT_NE(both.substr(0, head).find("Transfer-Encoding: chunked"), std::string::npos);
+  EXPECT_EQ(both.substr(0, head).find("Content-Length"), std::string::npos);
+  bool whole = false;
+  const size_t next = both.find("HTTP/1.1 200", head);
+  ASSERT_NE(next, std::string::npos) << "no answer after the chunked one";
+  EXPECT_EQ(dechunk(both.substr(head + 4, next - head - 4), &whole), want);
+  EXPECT_TRUE(whole);
+  EXPECT_EQ(both.substr(both.size() - 100), want.substr(0, 100));
+
+  fd = run.connect();
+  const std::string broken_req = "GET /broken HTTP/1.1\r\n\r\n";
+  ASSERT_EQ(::send(fd, broken_req.data(), broken_req.size(), MSG_NOSIGNAL),
+            ssize_t(broken_req.size()));
+  const std::string cut = read_to_close(fd);  // returns: the server closed it
+  ::close(fd);
+  const size_t cut_head = cut.find("\r\n\r\n");
+  ASSERT_NE(cut_head, std::string::npos);
+  EXPECT_EQ(cut.rfind("HTTP/1.1 200 OK", 0), 0u);
+  const std::string got = dechunk(cut.substr(cut_head + 4), &whole);
+  EXPECT_FALSE(whole);
+  EXPECT_GT(got.size(), size_t{1} << 20);
+  EXPECT_EQ(got, want.substr(0, got.size()));
+}
+
+// A client that asks to be asked for its body (Expect: 100-continue) is
+// asked at once, then answered.
+TEST(ServeThreads, ExpectContinueIsAskedForTheBody) {
+  Running run(ServerOptions{},
+              [](const Request& r) { return Response(200, "text/plain", r.body); });
+  const int fd = run.connect();
+  const std::string head = "POST / HTTP/1.1\r\nContent-Length: 5\r\nExpect: 100-continue\r\n\r\n";
+  ASSERT_EQ(::send(fd, head.data(), head.size(), MSG_NOSIGNAL), ssize_t(head.size()));
+  timeval tv{5, 0};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  char buf[64];
+  const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+  ASSERT_GT(n, 0);
+  EXPECT_EQ(std::string(buf, size_t(n)), "HTTP/1.1 100 Continue\r\n\r\n");
+  const std::string answer = ask(fd, "hello");
+  EXPECT_NE(answer.find("200 OK"), std::string::npos);
+  EXPECT_EQ(answer.substr(answer.size() - 5), "hello");
+  ::close(fd);
+}
+
 }  // namespace
 }  // namespace weaver::serve
