@@ -149,6 +149,66 @@ TEST(ShardedDatabase, ConstructShardsCompactToTheSingleRunsTable) {
   }
 }
 
+// Shards staged by a writer (weaver-mpi mesh's construct, on rank 0) are
+// the table for that writer and for a reader told of them (the other
+// ranks), while the manifest still names the old table; the writer's next
+// commit makes them live, and a writer that closes without one deletes them
+// and leaves the old state.
+TEST(ShardedDatabase, StagedShardsGoLiveWithTheNextCommitOrNotAtAll) {
+  TempDir dir;
+  const ConstructOptions o = basin(0.1);
+  const std::string db = dir.file("db");
+  ConstructPlan plan;
+  ConstructResult old_r;
+  ASSERT_OK(construct_octree(db, basin(0.05), &plan, &old_r));
+  const std::string old_manifest = slurp(db + "/MANIFEST");
+  for (const bool commit : {false, true}) {
+    SCOPED_TRACE(commit);
+    std::unique_ptr<Database> writer;
+    ASSERT_OK(Database::open(db, Database::Mode::kWrite, false, &writer));
+    const uint64_t number = writer->reserve_file_number();
+    std::vector<ShardEntry> entries;
+    uint64_t leaves = 0;
+    for (int s = 0; s < 3; ++s) {
+      ConstructOptions part = o;
+      part.shard = s;
+      part.shards = 3;
+      ConstructResult r;
+      ShardEntry e;
+      ASSERT_OK(construct_shard(db, part, shard_file_name(kOctantTable, number, s), &plan, &r, &e));
+      if (e.records > 0) entries.push_back(e);
+      leaves += r.elements;
+    }
+    ASSERT_OK(writer->stage_shards(kOctantTable, entries));
+    std::unique_ptr<BTree> t;
+    ASSERT_OK(writer->open_table(kOctantTable, 4 << 20, &t));
+    EXPECT_EQ(t->size(), leaves);
+    std::unique_ptr<Database> reader, other;
+    ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &reader));
+    ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &other));
+    ASSERT_OK(reader->stage_shards(kOctantTable, entries));
+    ASSERT_OK(reader->open_table(kOctantTable, 4 << 20, &t));
+    EXPECT_EQ(t->size(), leaves);
+    ASSERT_OK(other->open_table(kOctantTable, 4 << 20, &t));
+    EXPECT_EQ(t->size(), old_r.elements);  // a reader not told sees the manifest's
+    EXPECT_EQ(slurp(db + "/MANIFEST"), old_manifest);
+    reader.reset();  // a reader deletes nothing
+    for (const ShardEntry& e : entries) EXPECT_TRUE(std::filesystem::exists(db + "/" + e.file));
+    if (commit) ASSERT_OK(writer->commit({}));
+    writer.reset();
+    for (const ShardEntry& e : entries) {
+      EXPECT_EQ(std::filesystem::exists(db + "/" + e.file), commit) << e.file;
+    }
+    std::unique_ptr<Database> after;
+    ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &after));
+    ASSERT_OK(after->open_table(kOctantTable, 4 << 20, &t));
+    EXPECT_EQ(t->size(), commit ? leaves : old_r.elements);
+    if (!commit) {
+      EXPECT_EQ(slurp(db + "/MANIFEST"), old_manifest);
+    }
+  }
+}
+
 // Every stage reads sharded tables as it reads one file: balance from sharded
 // leaves, extract from sharded balanced leaves, verify and export over
 // sharded octant and node tables, each writing what it writes from the

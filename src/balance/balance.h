@@ -13,8 +13,10 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "db/octant_table.h"
+#include "db/table_files.h"
 #include "schema/status.h"
 #include "util/memory_budget.h"
 #include "util/progress.h"
@@ -52,6 +54,9 @@ struct BalanceOptions {
   // aggregate hits along a ragged boundary decode no packed leaves) and
   // writes its shard packed.
   int output_packed = -1;
+  // A rank's balance_shard (weaver-mpi mesh --unbalanced): the octant table
+  // is these shards, which the run's rank 0 has staged but not committed.
+  std::vector<ShardEntry> staged_octants;
   // Leaves read by the current pass and the fraction done
   // (balance_progress.h); not called by a check.
   ProgressFn progress;

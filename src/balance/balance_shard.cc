@@ -265,6 +265,9 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   std::vector<std::vector<uint64_t>> queries;
   // Up to the exchanges, an error still takes part in them (sending nothing).
   Status st = Database::open(db_dir, Database::Mode::kRead, false, &db);
+  if (st.ok() && !options.staged_octants.empty()) {
+    st = db->stage_shards(kOctantTable, options.staged_octants);
+  }
   if (st.ok()) st = db->open_table(kOctantTable, 16 << 20, &t);
   if (st.ok()) st = cut_equal_runs(*t, ranks, &cut.key, &cut.lo);
   if (options.algorithm != BalanceOptions::Algorithm::kClosure) {

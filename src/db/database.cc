@@ -58,7 +58,11 @@ std::string table_source(const std::string& name) {
 }
 
 Database::~Database() {
-  for (const auto& [name, file] : staged_) abandon(file);
+  if (mode_ == Mode::kWrite) {
+    for (const auto& [name, value] : staged_) {
+      for (const std::string& file : table_value_files(value)) abandon(file);
+    }
+  }
   for (const auto& [name, fd] : snapshot_fds_) ::close(fd);
   if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
 }
@@ -213,9 +217,11 @@ Status Database::read_manifest() {
 
 std::vector<ShardEntry> Database::shards_of(const std::string& name) const {
   std::vector<ShardEntry> out;
-  const auto it = tables_.find(name);
-  if (it == tables_.end()) return out;
-  for (const std::string& file : table_value_files(it->second)) {
+  const auto staged = staged_.find(name);
+  const auto live = tables_.find(name);
+  if (staged == staged_.end() && live == tables_.end()) return out;
+  const std::string& value = staged != staged_.end() ? staged->second : live->second;
+  for (const std::string& file : table_value_files(value)) {
     const auto e = shard_files_.find(file);
     if (e == shard_files_.end()) return {};
     out.push_back(e->second);
@@ -318,8 +324,8 @@ Status Database::open_sharded(const std::string& name, uint64_t pool_bytes,
 Status Database::open_table(const std::string& name, uint64_t pool_bytes,
                             std::unique_ptr<BTree>* out) const {
   if (!has_table(name)) return Status::NotFound(dir_ + ": no table '" + name + "'");
-  if (staged_.count(name)) return open_file(staged_.at(name), pool_bytes, out);
   if (!shards_of(name).empty()) return open_sharded(name, pool_bytes, out);
+  if (staged_.count(name)) return open_file(staged_.at(name), pool_bytes, out);
   return open_file(tables_.at(name), pool_bytes, out);
 }
 
@@ -409,9 +415,30 @@ Status Database::stage(const std::string& name, const std::string& file,
     abandon(file);
     return built;
   }
-  if (staged_.count(name)) abandon(staged_.at(name));
+  unstage(name);
   staged_[name] = file;
   return Status::Ok();
+}
+
+Status Database::stage_shards(const std::string& name, const std::vector<ShardEntry>& shards) {
+  if (shards.empty()) return Status::InvalidArgument("table '" + name + "' has no shard");
+  unstage(name);
+  std::string value;
+  for (const ShardEntry& e : shards) {
+    shard_files_[e.file] = e;
+    value += (value.empty() ? "" : ",") + e.file;
+  }
+  staged_[name] = value;
+  return Status::Ok();
+}
+
+void Database::unstage(const std::string& name) {
+  const auto it = staged_.find(name);
+  if (it == staged_.end()) return;
+  if (mode_ == Mode::kWrite) {
+    for (const std::string& file : table_value_files(it->second)) abandon(file);
+  }
+  staged_.erase(it);
 }
 
 void Database::abandon(const std::string& file_name) {

@@ -116,6 +116,13 @@ class Database {
   // several stages (weaver mesh) leaves the old tables or all the new ones.
   Status stage(const std::string& name, const std::string& file, std::unique_ptr<BTree>& table,
                Status built);
+  // Stages the given shards (each a committed B+tree file, in key order) as
+  // table `name`, as stage does a file: the ranks of weaver-mpi mesh write
+  // the octant table's shards, rank 0 stages them, and the node table's
+  // commit makes both live.  In a reader (another rank of the same run),
+  // open_table serves the staged table, which the manifest does not name
+  // yet, and nothing is deleted when the Database closes.
+  Status stage_shards(const std::string& name, const std::vector<ShardEntry>& shards);
 
   // Files in the directory that no manifest names (left by a crashed writer);
   // a writer removes them when it opens.
@@ -132,6 +139,8 @@ class Database {
   Status read_manifest();
   Status write_manifest(const std::map<std::string, std::string>& tables, bool* renamed = nullptr);
   Status remove_leftovers();
+  // Forgets a staged table, deleting its files in a writer.
+  void unstage(const std::string& name);
   // One table file, through the reader's snapshot when there is one.
   Status open_file(const std::string& file, uint64_t pool_bytes, std::unique_ptr<BTree>* out) const;
   Status open_sharded(const std::string& name, uint64_t pool_bytes,

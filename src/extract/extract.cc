@@ -195,6 +195,9 @@ Status extract_shard(const std::string& db_dir, const ExtractOptions& options, i
   ExtractPart part;
   // Up to the exchange, an error still takes part in it (sending nothing).
   Status st = Database::open(db_dir, Database::Mode::kRead, false, &db);
+  if (st.ok() && !options.staged_octants.empty()) {
+    st = db->stage_shards(kOctantTable, options.staged_octants);
+  }
   if (st.ok()) st = db->open_table(kOctantTable, memory.octant_pool, &octants);
   if (st.ok()) st = cut_equal_runs(*octants, ranks, &first_leaf, &start);
   if (st.ok()) {

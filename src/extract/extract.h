@@ -60,6 +60,9 @@ struct ExtractOptions {
   // its octant table may be staged (Database::stage), and then goes live
   // with the node table.
   Database* writer = nullptr;
+  // A rank's extract_shard (weaver-mpi mesh): the octant table is these
+  // shards, which the run's rank 0 has staged but not committed.
+  std::vector<ShardEntry> staged_octants;
   // Elements done, and their fraction of the octant table (sort only).
   ProgressFn progress;
 };

@@ -56,11 +56,15 @@ int balance(const Comm& comm, int argc, char** argv) {
   return run_balance(comm, args.positional[0], o);
 }
 
-int run_balance(const Comm& comm, const std::string& dir, const BalanceOptions& o) {
+int run_balance(const Comm& comm, const std::string& dir, const BalanceOptions& o, Database* held,
+                std::vector<ShardEntry>* staged) {
   const auto t0 = std::chrono::steady_clock::now();
-  std::unique_ptr<Database> db;
+  std::unique_ptr<Database> own;
+  Database* db = nullptr;
   uint64_t number = 0;
-  if (!open_writer(comm, "balance", dir, &db, &number)) return 1;
+  if (!stage_writer(comm, "balance", dir, held, !o.staged_octants.empty(), &own, &db, &number)) {
+    return 1;
+  }
   uint64_t messages = 0;
   const RankExchange exchange = [&](const std::vector<std::string>& blobs,
                                     std::vector<std::string>* received) {
@@ -81,9 +85,9 @@ int run_balance(const Comm& comm, const std::string& dir, const BalanceOptions& 
        << " queries, sent " << r.bytes_sent << " B in " << messages << " messages, received "
        << r.bytes_received << " B, wrote " << r.table_bytes << " B, peak RSS " << peak_rss_bytes()
        << " B";
-  return finish_stage(comm, db.get(), "balance", kOctantTable, entry,
-                      st.ok() ? "" : cli::error_text(st), line.str(), r.balance.output_leaves,
-                      "leaves", t0);
+  return finish_stage(comm, db, "balance", kOctantTable, entry, st.ok() ? "" : cli::error_text(st),
+                      line.str(), r.balance.output_leaves, "leaves", t0,
+                      o.staged_octants.empty() ? nullptr : staged);
 }
 
 }  // namespace weaver::mpi

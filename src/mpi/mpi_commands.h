@@ -2,7 +2,9 @@
 // returns the process exit status, the same on every rank.
 #pragma once
 
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "balance/balance.h"
 #include "extract/extract.h"
@@ -16,7 +18,23 @@ int balance(const Comm& comm, int argc, char** argv);
 int mesh(const Comm& comm, int argc, char** argv);
 int export_parts(const Comm& comm, int argc, char** argv);
 // The stages on an open command line's options (weaver-mpi mesh runs all three).
-int run_balance(const Comm& comm, const std::string& dir, const BalanceOptions& options);
-int run_extract(const Comm& comm, const std::string& dir, const ExtractOptions& options);
+// With options.staged_octants (every rank's copy of what rank 0 staged on
+// held, its writer), balance stages its table there in their place (and
+// every rank gets its shards in *staged), and extract commits the node table
+// there, so that the octants and nodes go live in one manifest.
+int run_balance(const Comm& comm, const std::string& dir, const BalanceOptions& options,
+                Database* held = nullptr, std::vector<ShardEntry>* staged = nullptr);
+int run_extract(const Comm& comm, const std::string& dir, const ExtractOptions& options,
+                Database* held = nullptr);
+
+// What weaver-mpi mesh's construct leaves for its extract: rank 0's writer,
+// with the octant table's shards staged, and (on every rank) those shards.
+struct StagedOctants {
+  std::unique_ptr<Database> db;
+  std::vector<ShardEntry> shards;
+};
+// weaver-mpi construct; with staged, the shards are staged there rather
+// than committed.
+int run_construct(const Comm& comm, int argc, char** argv, StagedOctants* staged);
 
 }  // namespace weaver::mpi

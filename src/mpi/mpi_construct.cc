@@ -94,12 +94,17 @@ std::string prepare(const std::string& dir, ConstructOptions* o, ConstructPlan* 
   return "";
 }
 
-// Rank 0: commits the shards, or removes them all after a rank's failure.
-int finish(const Comm& comm, Database& db, const std::vector<Outcome>& all, double seconds) {
+// Rank 0: commits (or, for weaver-mpi mesh, stages: *staged) the shards,
+// or removes them all after a rank's failure.
+int finish(const Comm& comm, Database& db, const std::vector<Outcome>& all, double seconds,
+           std::vector<ShardEntry>* staged) {
   std::vector<ShardEntry> shards;
   std::vector<std::string> errors;
   for (const Outcome& o : all) shards.push_back(o.shard), errors.push_back(o.error);
-  if (const int code = commit_or_fail(db, "construct", kOctantTable, shards, errors)) return code;
+  if (const int code = commit_or_fail(db, "construct", kOctantTable, shards, errors,
+                                      staged != nullptr, staged)) {
+    return code;
+  }
   // Construct exchanges nothing: each rank builds its part from the model.
   for (int r = 0; r < comm.size(); ++r) {
     std::printf(
@@ -121,6 +126,10 @@ int finish(const Comm& comm, Database& db, const std::vector<Outcome>& all, doub
 }  // namespace
 
 int construct(const Comm& comm, int argc, char** argv) {
+  return run_construct(comm, argc, argv, nullptr);
+}
+
+int run_construct(const Comm& comm, int argc, char** argv, StagedOctants* staged) {
   std::string dir;
   ConstructOptions o;
   bool quiet = false;
@@ -153,9 +162,15 @@ int construct(const Comm& comm, int argc, char** argv) {
     std::vector<Outcome> all;
     for (const std::string& t : texts) all.push_back(Outcome::decode(t));
     code = finish(comm, *db, all,
-                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+                  staged != nullptr ? &staged->shards : nullptr);
   }
-  return static_cast<int>(comm.broadcast(uint64_t(code)));
+  code = static_cast<int>(comm.broadcast(uint64_t(code)));
+  if (staged != nullptr && code == 0) {
+    staged->shards = decode_shards(comm.broadcast(encode_shards(staged->shards)));
+    staged->db = std::move(db);  // rank 0's writer: the shards stay staged on it
+  }
+  return code;
 }
 
 }  // namespace weaver::mpi

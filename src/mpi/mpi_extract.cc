@@ -49,11 +49,14 @@ int extract(const Comm& comm, int argc, char** argv) {
   return run_extract(comm, args.positional[0], o);
 }
 
-int run_extract(const Comm& comm, const std::string& dir, const ExtractOptions& o) {
+int run_extract(const Comm& comm, const std::string& dir, const ExtractOptions& o, Database* held) {
   const auto t0 = std::chrono::steady_clock::now();
-  std::unique_ptr<Database> db;
+  std::unique_ptr<Database> own;
+  Database* db = nullptr;
   uint64_t number = 0;
-  if (!open_writer(comm, "extract", dir, &db, &number)) return 1;
+  if (!stage_writer(comm, "extract", dir, held, !o.staged_octants.empty(), &own, &db, &number)) {
+    return 1;
+  }
   uint64_t messages = 0;
   const RankExchange exchange = [&](const std::vector<std::string>& blobs,
                                     std::vector<std::string>* received) {
@@ -75,8 +78,8 @@ int run_extract(const Comm& comm, const std::string& dir, const ExtractOptions& 
        << x.ghosts_sent << "), sent " << x.bytes_sent << " B in " << messages
        << " messages, received " << x.bytes_received << " B, wrote " << r.node_table_bytes
        << " B, peak RSS " << peak_rss_bytes() << " B";
-  return finish_stage(comm, db.get(), "extract", kNodeTable, entry,
-                      st.ok() ? "" : cli::error_text(st), line.str(), r.nodes, "nodes", t0);
+  return finish_stage(comm, db, "extract", kNodeTable, entry, st.ok() ? "" : cli::error_text(st),
+                      line.str(), r.nodes, "nodes", t0);
 }
 
 }  // namespace weaver::mpi

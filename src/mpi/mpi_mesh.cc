@@ -1,6 +1,8 @@
 // weaver-mpi mesh: construct (balanced as it descends) and extract on the
 // ranks, each stage a sharded table (the commands' own code, one after the
-// other); with --unbalanced, balance between them.
+// other), committed once: construct's shards (with --unbalanced, balance's
+// in their place) are staged on rank 0's writer and go live with extract's,
+// so a run killed or failing anywhere leaves the old database.
 #include <cstdio>
 
 #include "cli/cli.h"
@@ -11,25 +13,26 @@ namespace weaver::mpi {
 
 int mesh(const Comm& comm, int argc, char** argv) {
   // construct's arguments and --help (its usage names the other stages too).
-  const int code = construct(comm, argc, argv);
-  bool help = false;
-  for (int i = 2; i < argc; ++i) help = help || std::string(argv[i]) == "--help";
-  if (code != 0 || help) return code;
   std::string dir;
   ConstructOptions o;
   bool quiet = false;
-  cli::parse_construct_command(argc, argv, &dir, &o, &quiet);
+  const int parsed = cli::parse_construct_command(argc, argv, &dir, &o, &quiet);
+  if (parsed >= 0) return parsed;  // the help, or what is wrong
+  StagedOctants staged;
+  if (const int code = run_construct(comm, argc, argv, &staged)) return code;
   if (!o.balanced) {
     BalanceOptions b;
     b.memory = o.memory;
     b.threads = o.threads;
-    if (const int c = run_balance(comm, dir, b)) return c;
+    b.staged_octants = staged.shards;
+    if (const int c = run_balance(comm, dir, b, staged.db.get(), &staged.shards)) return c;
   }
   ExtractOptions x;
   x.memory = o.memory;
   x.threads = o.threads;
   x.packed = o.packed;
-  return run_extract(comm, dir, x);
+  x.staged_octants = staged.shards;
+  return run_extract(comm, dir, x, staged.db.get());
 }
 
 }  // namespace weaver::mpi

@@ -25,9 +25,23 @@ bool open_writer(const Comm& comm, const char* command, const std::string& dir,
   return true;
 }
 
+bool stage_writer(const Comm& comm, const char* command, const std::string& dir, Database* held,
+                  bool staged, std::unique_ptr<Database>* own, Database** db, uint64_t* number) {
+  if (!staged) {
+    if (!open_writer(comm, command, dir, own, number)) return false;
+    *db = own->get();
+    return true;
+  }
+  *db = held;  // rank 0's; null on the others
+  if (comm.rank() == 0) *number = held->reserve_file_number();
+  *number = comm.broadcast(*number);
+  return true;
+}
+
 int finish_stage(const Comm& comm, Database* db, const char* command, const std::string& table,
                  const ShardEntry& mine, const std::string& error, const std::string& line,
-                 uint64_t count, const char* what, std::chrono::steady_clock::time_point start) {
+                 uint64_t count, const char* what, std::chrono::steady_clock::time_point start,
+                 std::vector<ShardEntry>* staged) {
   std::ostringstream out;
   out << mine.file << ' ' << mine.records << ' ' << mine.first_key << ' ' << mine.last_key << ' '
       << count << '\n'
@@ -52,7 +66,7 @@ int finish_stage(const Comm& comm, Database* db, const char* command, const std:
       sum += n;
       std::printf("%s\n", rank_line.c_str());
     }
-    code = commit_or_fail(*db, command, table, shards, errors);
+    code = commit_or_fail(*db, command, table, shards, errors, staged != nullptr, staged);
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (code == 0) {
@@ -61,7 +75,10 @@ int finish_stage(const Comm& comm, Database* db, const char* command, const std:
     }
     std::fflush(stdout);
   }
-  return static_cast<int>(comm.broadcast(uint64_t(code)));
+  code = static_cast<int>(comm.broadcast(uint64_t(code)));
+  if (staged != nullptr && code == 0)
+    *staged = decode_shards(comm.broadcast(encode_shards(*staged)));
+  return code;
 }
 
 uint64_t peak_rss_bytes() {
@@ -71,7 +88,8 @@ uint64_t peak_rss_bytes() {
 }
 
 int commit_or_fail(Database& db, const std::string& command, const std::string& table,
-                   const std::vector<ShardEntry>& shards, const std::vector<std::string>& errors) {
+                   const std::vector<ShardEntry>& shards, const std::vector<std::string>& errors,
+                   bool stage, std::vector<ShardEntry>* kept_out) {
   std::vector<ShardEntry> kept;
   for (size_t r = 0; r < shards.size(); ++r) {
     if (!errors[r].empty()) {
@@ -81,7 +99,8 @@ int commit_or_fail(Database& db, const std::string& command, const std::string& 
     }
     if (shards[r].records > 0) kept.push_back(shards[r]);
   }
-  const Status st = db.commit_shards(table, kept);
+  const Status st = stage ? db.stage_shards(table, kept) : db.commit_shards(table, kept);
+  if (st.ok() && kept_out != nullptr) *kept_out = kept;
   if (!st.ok()) {
     for (const ShardEntry& s : kept) db.abandon(s.file);
     std::fprintf(stderr, "weaver-mpi %s: rank 0: %s\n", command.c_str(),
@@ -89,6 +108,21 @@ int commit_or_fail(Database& db, const std::string& command, const std::string& 
     return 1;
   }
   return 0;
+}
+
+std::string encode_shards(const std::vector<ShardEntry>& shards) {
+  std::ostringstream out;
+  for (const ShardEntry& e : shards) {
+    out << e.file << ' ' << e.records << ' ' << e.first_key << ' ' << e.last_key << '\n';
+  }
+  return out.str();
+}
+
+std::vector<ShardEntry> decode_shards(const std::string& text) {
+  std::vector<ShardEntry> out;
+  std::istringstream in(text);
+  for (ShardEntry e; in >> e.file >> e.records >> e.first_key >> e.last_key;) out.push_back(e);
+  return out;
 }
 
 }  // namespace weaver::mpi

@@ -281,7 +281,10 @@ faults() {  # stage, the database before it (copied fresh for every try), stage 
       fi
       fired=$((fired + 1))
       if [ "$what" = FAIL ]; then
-        grep -q "^weaver-mpi $stage: rank 1: " "$tmp/err" ||
+        # mesh names the stage that failed.
+        local names=$stage
+        [ "$stage" = mesh ] && names="construct|balance|extract"
+        grep -Eq "^weaver-mpi ($names): rank 1: " "$tmp/err" ||
           fail "$stage FAIL at $step: $(cat "$tmp/err")"
         # mpirun adds its own banner about the exit status; weaver says one line.
         [ "$(grep -c '^weaver-mpi' "$tmp/err")" = 1 ] || fail "$stage FAIL at $step: $(cat "$tmp/err")"
@@ -299,3 +302,9 @@ faults balance "$tmp/f.built"
 cp -r "$tmp/f.built" "$tmp/f.balanced"
 "$weaver" balance "$tmp/f.balanced" --quiet >/dev/null
 faults extract "$tmp/f.balanced"
+# mesh as a whole, over a finished mesh: construct's shards (or balance's in
+# their place) are staged and go live with extract's, so a rank killed
+# anywhere leaves the old mesh, both tables, byte for byte.
+"$weaver" mesh "$tmp/f.mesh" --model basin --freq 0.1 --quiet >/dev/null
+faults mesh "$tmp/f.mesh" --model basin --freq 0.2
+faults mesh "$tmp/f.mesh" --model basin --freq 0.2 --unbalanced
