@@ -96,7 +96,7 @@ class BTree final : public Store {
   uint32_t height() const { return height_; }
   uint32_t page_count() const { return page_count_; }
   // Leaves in the lookup directory: 0 until it is built, and after a change.
-  uint32_t directory_leaves() const { return dir_.size(); }
+  uint32_t directory_leaves() const { return dir_ ? dir_->size() : 0; }
   // Builds the lookup directory now, where the budget allows it, rather than
   // after the first page count's eighth of lookups: a server about to answer
   // lookups pays for it before its first request, not during it.
@@ -105,6 +105,13 @@ class BTree final : public Store {
   // bytes).  A tree asked mostly point lookups at random (an Explorer's)
   // gains more from its directory than from as many bytes of cached pages.
   void set_directory_budget(uint64_t bytes) { dir_budget_ = bytes; }
+  // The lookup directory, once built (null before), to share with other
+  // trees open on the same file in the same state: it is never changed,
+  // only dropped (on any change) or replaced.
+  std::shared_ptr<const LeafDirectory> directory() const { return dir_; }
+  // Takes another tree's directory.  REQUIRES: that tree is open on this
+  // file, in the state this one reads (a server's threads, one snapshot).
+  void share_directory(std::shared_ptr<const LeafDirectory> dir) { dir_ = std::move(dir); }
   uint64_t file_bytes() const {
     return uint64_t{shard_headers_ == 0 ? 1 : shard_headers_} * page::kFileHeaderBytes +
            uint64_t{page_count_} * options_.page_size;
@@ -180,12 +187,14 @@ class BTree final : public Store {
   // not fit in its share of the memory budget.
   uint64_t directory_threshold() const;
   Status build_directory();
-  Status add_leaves_below(uint32_t page_no, uint32_t level, uint64_t fence, uint64_t* rank);
+  Status add_leaves_below(LeafDirectory& dir, uint32_t page_no, uint32_t level, uint64_t fence,
+                          uint64_t* rank);
   // Every change calls this: the directory no longer matches the tree.
   void changed() {
-    if (!dir_.empty()) dir_.clear();
+    dir_.reset();
     reads_since_change_ = 0;
   }
+  bool has_directory() const { return dir_ && !dir_->empty(); }
   // How much of a leaf to prefetch on a pool hit, for a reader of all of it
   // (whole) or of one entry.
   uint32_t leaf_prefetch_bytes(bool whole) const;
@@ -279,7 +288,7 @@ class BTree final : public Store {
   BTree* next_shard_ = nullptr;
   uint32_t shard_headers_ = 0;  // file headers in a sharded tree's files (one a shard)
 
-  LeafDirectory dir_;  // empty until built, and after any change
+  std::shared_ptr<const LeafDirectory> dir_;  // null until built, and after any change
   uint64_t reads_since_change_ = 0;
   uint64_t dir_budget_ = 0;  // the directory's share of the memory budget
 };

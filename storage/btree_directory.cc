@@ -35,25 +35,27 @@ uint64_t BTree::directory_threshold() const {
 
 Status BTree::locate(uint64_t key, bool whole_leaf, PageRef* leaf, uint32_t* dir_leaf,
                      uint64_t* first_rank) {
-  if (dir_.empty() && ++reads_since_change_ == directory_threshold()) {
+  if (!has_directory() && ++reads_since_change_ == directory_threshold()) {
     WEAVER_RETURN_IF_ERROR(build_directory());
   }
-  if (dir_.empty()) {
+  if (!has_directory()) {
     *dir_leaf = kNoDirLeaf;
     if (first_rank != nullptr) *first_rank = 0;
     Path path;
     return descend(key, &path, leaf, first_rank, whole_leaf);
   }
-  const uint32_t j = dir_.find(key);
+  const LeafDirectory& dir = *dir_;
+  const uint32_t j = dir.find(key);
   *dir_leaf = j;
-  if (first_rank != nullptr) *first_rank = dir_.first_rank(j);
-  return fetch_typed(dir_.page(j), leaf_type(), leaf, leaf_prefetch_bytes(whole_leaf));
+  if (first_rank != nullptr) *first_rank = dir.first_rank(j);
+  return fetch_typed(dir.page(j), leaf_type(), leaf, leaf_prefetch_bytes(whole_leaf));
 }
 
 const std::byte* BTree::peek_plain_leaf(uint64_t key, uint32_t* dir_leaf) {
-  if (options_.packed || dir_.empty()) return nullptr;
-  const uint32_t j = dir_.find(key);
-  const uint32_t page_no = dir_.page(j);
+  if (options_.packed || !has_directory()) return nullptr;
+  const LeafDirectory& dir = *dir_;
+  const uint32_t j = dir.find(key);
+  const uint32_t page_no = dir.page(j);
   if (page_no == 0 || page_no > page_count_) return nullptr;  // the general path reports it
   const std::byte* d = pool_->peek(page_no, leaf_prefetch_bytes(false));
   if (d == nullptr) return nullptr;
@@ -61,9 +63,9 @@ const std::byte* BTree::peek_plain_leaf(uint64_t key, uint32_t* dir_leaf) {
   // fence and the next, is asked for with the key column: where keys are
   // spread evenly (a region of one level) it arrives with them instead of
   // after the search.  A wrong guess costs one line of bandwidth.
-  const uint64_t n = j + 1 < dir_.size() ? dir_.first_rank(j + 1) - dir_.first_rank(j) : 0;
+  const uint64_t n = j + 1 < dir.size() ? dir.first_rank(j + 1) - dir.first_rank(j) : 0;
   if (payload_ > 0 && n > 0) {
-    const uint64_t lo = dir_.fence(j), span = dir_.fence(j + 1) - lo;
+    const uint64_t lo = dir.fence(j), span = dir.fence(j + 1) - lo;
     const auto guess = static_cast<uint64_t>(double(key - lo) / double(span) * double(n));
     __builtin_prefetch(d + page::kPageHeaderBytes + 8 * size_t{leaf_cap_} +
                        size_t{payload_} * std::min(guess, n - 1));
@@ -74,27 +76,28 @@ const std::byte* BTree::peek_plain_leaf(uint64_t key, uint32_t* dir_leaf) {
 }
 
 Status BTree::prepare_lookups() {
-  if (shards_ != nullptr || !dir_.empty() || directory_threshold() == 0) return Status::Ok();
+  if (shards_ != nullptr || has_directory() || directory_threshold() == 0) return Status::Ok();
   seal_tail();
   return build_directory();
 }
 
 Status BTree::build_directory() {
-  dir_.clear();
-  dir_.reserve(page_count_);  // bounds the leaves, and fits the budget (directory_threshold)
-  if (height_ == 1) dir_.add(0, root_, 0);
-  if (height_ <= 1) return Status::Ok();
+  dir_.reset();
+  auto dir = std::make_shared<LeafDirectory>();
+  dir->reserve(page_count_);  // bounds the leaves, and fits the budget (directory_threshold)
+  if (height_ == 1) dir->add(0, root_, 0);
   uint64_t rank = 0;
-  Status st = add_leaves_below(root_, 0, 0, &rank);
-  if (!st.ok()) dir_.clear();
-  return st;
+  if (height_ > 1) WEAVER_RETURN_IF_ERROR(add_leaves_below(*dir, root_, 0, 0, &rank));
+  if (height_ >= 1) dir_ = std::move(dir);
+  return Status::Ok();
 }
 
 // Adds the leaves under the internal page `page_no` at `level`, whose
 // subtree the tree routes keys >= fence to.  A child's fence is its key in
 // the page, except the first child's: it inherits the page's (its own key
 // may be stale, and routes nothing).
-Status BTree::add_leaves_below(uint32_t page_no, uint32_t level, uint64_t fence, uint64_t* rank) {
+Status BTree::add_leaves_below(LeafDirectory& dir, uint32_t page_no, uint32_t level, uint64_t fence,
+                               uint64_t* rank) {
   PageRef r;
   WEAVER_RETURN_IF_ERROR(fetch_typed(page_no, PageType::kInternal, &r));
   const uint32_t n = page::count(r.data());
@@ -102,14 +105,14 @@ Status BTree::add_leaves_below(uint32_t page_no, uint32_t level, uint64_t fence,
   const page::InternalView v = internal(r);
   for (uint32_t i = 0; i < n; ++i) {
     const uint64_t f = i == 0 ? fence : v.key(i);
-    if (!dir_.empty() && f < dir_.last_fence()) {
+    if (!dir.empty() && f < dir.last_fence()) {
       return Status::Corruption(where(page_no) + ": separator keys out of order");
     }
     if (level + 2 == height_) {
-      dir_.add(f, v.child(i), *rank);
+      dir.add(f, v.child(i), *rank);
       *rank += v.subtree_count(i);
     } else {
-      WEAVER_RETURN_IF_ERROR(add_leaves_below(v.child(i), level + 1, f, rank));
+      WEAVER_RETURN_IF_ERROR(add_leaves_below(dir, v.child(i), level + 1, f, rank));
     }
   }
   return Status::Ok();

@@ -176,7 +176,7 @@ Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out
     if (ub > 0) {
       *found = true;
       *key_out = v.key(ub - 1);
-      if (rank != nullptr) *rank = dir_.first_rank(dir_leaf) + ub - 1;
+      if (rank != nullptr) *rank = dir_->first_rank(dir_leaf) + ub - 1;
       if (payload_out != nullptr) std::memcpy(payload_out, v.value(ub - 1), payload_);
       return Status::Ok();
     }
@@ -213,7 +213,7 @@ Status BTree::preceding_leaf(uint64_t key, uint32_t dir_leaf, PageRef* lf, bool*
   if (dir_leaf != kNoDirLeaf) {
     *first_leaf = dir_leaf == 0;
     if (*first_leaf) return Status::Ok();
-    WEAVER_RETURN_IF_ERROR(fetch_typed(dir_.page(dir_leaf - 1), leaf_type(), lf));
+    WEAVER_RETURN_IF_ERROR(fetch_typed(dir_->page(dir_leaf - 1), leaf_type(), lf));
     if (page::count(lf->data()) > 0) return Status::Ok();
     return Status::Corruption(where(lf->page_no()) + ": empty leaf page");
   }
@@ -249,7 +249,7 @@ Status BTree::rank_exact(uint64_t key, uint64_t* rank, bool* present) {
     const page::LeafView v = leaf(d);
     const uint32_t n = page::count(d);
     pos = page::lower_bound(v.key_at(0), n, key);
-    *rank = dir_.first_rank(dir_leaf) + pos;
+    *rank = dir_->first_rank(dir_leaf) + pos;
     *present = pos < n && v.key(pos) == key;
     return Status::Ok();
   }

@@ -363,6 +363,44 @@ TEST_P(BTreeModel, ReadBurstsBetweenChangesMatchStdMap) {
   ASSERT_NO_FATAL_FAILURE(check_everything());
 }
 
+// A directory built by one tree serves another open on the same file in the
+// same state (weaver serve's threads share one), whose own budget has no
+// room for one: its lookups still match the model, and a change to the
+// tree that built it drops it there alone.
+TEST_P(BTreeModel, ASharedDirectoryAnswersAsTheTreesOwn) {
+  const Params p = GetParam();
+  std::mt19937_64 rng(p.seed + 200);
+  const uint64_t key_space = 60'000;
+  for (int i = 0; i < 20'000; ++i) {
+    const uint64_t k = rng() % key_space;
+    ASSERT_OK(tree_->put(k, payload_for(k, 0).data(), nullptr));
+    model_[k] = payload_for(k, 0);
+    order_.insert(k);
+  }
+  ASSERT_NO_FATAL_FAILURE(reopen());
+  tree_->set_directory_budget(64 << 20);
+  ASSERT_OK(tree_->prepare_lookups());
+  ASSERT_GT(tree_->directory_leaves(), 0u);
+  std::unique_ptr<BTree> builder = std::move(tree_);
+  std::unique_ptr<File> f;
+  ASSERT_OK(open_posix_file(path_, OpenMode::kReadOnly, &f));
+  ASSERT_OK(BTree::open(std::move(f), 16 << 10, &tree_));
+  tree_->set_directory_budget(0);
+  ASSERT_OK(tree_->prepare_lookups());
+  ASSERT_EQ(tree_->directory_leaves(), 0u) << "no room of its own";
+  tree_->share_directory(builder->directory());
+  ASSERT_EQ(tree_->directory_leaves(), builder->directory_leaves());
+  std::vector<uint64_t> probes = {0, 1, key_space, UINT64_MAX};
+  for (auto it = model_.begin(); it != model_.end(); ++it) {
+    if (rng() % 8 == 0) probes.insert(probes.end(), {it->first - 1, it->first, it->first + 1});
+  }
+  for (int i = 0; i < 4000; ++i) probes.push_back(rng() % (key_space + 100));
+  for (const uint64_t k : probes) ASSERT_NO_FATAL_FAILURE(check_lookups(k));
+  ASSERT_OK(builder->put(key_space + 7, payload_for(key_space + 7, 1).data(), nullptr));
+  EXPECT_EQ(builder->directory_leaves(), 0u);
+  EXPECT_GT(tree_->directory_leaves(), 0u);
+}
+
 INSTANTIATE_TEST_SUITE_P(
     PagesPayloadsSeeds, BTreeModel,
     ::testing::Values(Params{128, 0, 1, 1 << 20}, Params{128, 16, 2, 16 << 10},

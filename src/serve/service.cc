@@ -109,10 +109,29 @@ Status Service::check() {
 
 void Service::warm() {
   Explorer* ex = nullptr;
-  if (!explorer(&ex).ok()) return;  // the first request will say why
-  (void)ex->mesh().octants().prepare_lookups();
-  if (ex->has_nodes()) (void)ex->mesh().nodes().prepare_lookups();
-  if (ex->mesh().has_aggregates()) (void)ex->mesh().aggregates().prepare_lookups();
+  (void)explorer(&ex);  // its tables' directories come with it; an error, at the first request
+}
+
+void Service::share_directories(Explorer& ex, ino_t ino, const timespec& ctime) {
+  std::lock_guard<std::mutex> lock(directories_mu_);
+  if (directories_ino_ != ino || directories_ctime_.tv_sec != ctime.tv_sec ||
+      directories_ctime_.tv_nsec != ctime.tv_nsec) {
+    octant_directory_.reset(), node_directory_.reset(), aggregate_directory_.reset();
+    directories_ino_ = ino, directories_ctime_ = ctime;
+  }
+  // Built at most once a state: the first Explorer builds (within the
+  // directories' share), the others take it.
+  const auto share = [this](BTree& t, std::shared_ptr<const LeafDirectory>& slot) {
+    if (!slot) {
+      t.set_directory_budget(directories_ / 2);
+      (void)t.prepare_lookups();  // a table that cannot have one is searched from its root
+      slot = t.directory();
+    }
+    if (slot) t.share_directory(slot);
+  };
+  share(ex.mesh().octants(), octant_directory_);
+  if (ex.has_nodes()) share(ex.mesh().nodes(), node_directory_);
+  if (ex.mesh().has_aggregates()) share(ex.mesh().aggregates(), aggregate_directory_);
 }
 
 Status Service::explorer(Explorer** out) {
@@ -129,6 +148,7 @@ Status Service::explorer(Explorer** out) {
     // Split the budget among the threads that may each hold one.
     WEAVER_RETURN_IF_ERROR(Explorer::open(db_, memory_, &s.ex));
     s.db = db_, s.ino = st.st_ino, s.ctime = st.st_ctim;
+    share_directories(*s.ex, s.ino, s.ctime);
   }
   *out = s.ex.get();
   return Status::Ok();
@@ -145,7 +165,7 @@ Explorer* Service::helper(std::unique_lock<std::mutex>* lock) {
       helper_ctime_.tv_nsec != s.ctime.tv_nsec) {
     helper_.reset();
     if (!Explorer::open(db_, memory_, &helper_).ok()) return nullptr;  // the worker answers alone
-    (void)helper_->mesh().octants().prepare_lookups();
+    share_directories(*helper_, s.ino, s.ctime);
     helper_ino_ = s.ino, helper_ctime_ = s.ctime;
   }
   return helper_.get();

@@ -54,8 +54,11 @@ using QueryRunner = std::function<int(Explorer& ex, const std::vector<Explorer*>
 
 class Service {
  public:
-  Service(std::string db, MemoryBudget memory, QueryRunner query)
-      : db_(std::move(db)), memory_(memory), query_(std::move(query)) {}
+  // memory: each Explorer's (a worker's, the helper's); directories: what
+  // the tables' leaf directories take, built once for each committed state
+  // and shared by every Explorer of it.
+  Service(std::string db, MemoryBudget memory, uint64_t directories, QueryRunner query)
+      : db_(std::move(db)), memory_(memory), directories_(directories), query_(std::move(query)) {}
 
   // Checks that the database opens: the error a user sees before the
   // server starts.
@@ -84,10 +87,20 @@ class Service {
   // The helper Explorer on this thread's snapshot, if no other batch has
   // it (*lock then holds it); null otherwise.
   Explorer* helper(std::unique_lock<std::mutex>* lock);
+  // Gives ex's tables the leaf directories of the state (ino, ctime), built
+  // by the first Explorer of that state to ask.
+  void share_directories(Explorer& ex, ino_t ino, const timespec& ctime);
 
   std::string db_;
   MemoryBudget memory_;
+  uint64_t directories_;
   QueryRunner query_;
+  // The leaf directories of one committed state (a table's is null until
+  // built, or when it does not fit).
+  std::mutex directories_mu_;
+  ino_t directories_ino_ = 0;
+  timespec directories_ctime_{};
+  std::shared_ptr<const LeafDirectory> octant_directory_, node_directory_, aggregate_directory_;
   // One more Explorer, which a batch of points borrows to answer half of
   // its points on a second thread; opened on the first batch, and again
   // when the state it reads is no longer a worker's.
