@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <string>
 #include <thread>
@@ -310,6 +311,40 @@ std::string dechunk(const std::string& body, bool* whole) {
     out.append(body, eol + 2, n);
     at = eol + 2 + n + 2;
   }
+}
+
+// A client refused while it still sends its body (the bodies held at once
+// are at their limit) sends it all and reads the 503: the server drops the
+// rest of the body rather than closing on it, which would reset the
+// connection under the sender.
+TEST(ServeThreads, ARefusedClientStillSendingItsBodyReadsTheRefusal) {
+  ServerOptions o;
+  o.max_buffered = 1000;
+  Running run(o, [](const Request& r) { return Response(200, "text/plain", r.body); });
+  const int first = run.connect(), second = run.connect();
+  const std::string held = "POST / HTTP/1.1\r\nContent-Length: 800\r\n\r\nabc";
+  ASSERT_EQ(::send(first, held.data(), held.size(), MSG_NOSIGNAL), ssize_t(held.size()));
+  for (int i = 0; i < 500 && run.server().held_bytes() == 0; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(run.server().held_bytes(), 800u);
+  const std::string body(4 << 20, 'z');
+  const std::string request =
+      "POST / HTTP/1.1\r\nContent-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body;
+  // As most clients do (Python's http.client among them): the whole body
+  // first, then the answer.  Closed at once, the connection would be reset
+  // under the sender, which fails before it reads anything.
+  size_t sent = 0;
+  for (ssize_t n; sent < request.size() && (n = ::send(second, request.data() + sent,
+                                                       request.size() - sent, MSG_NOSIGNAL)) > 0;) {
+    sent += size_t(n);
+  }
+  EXPECT_EQ(sent, request.size()) << std::strerror(errno);
+  const std::string got = read_to_close(second);
+  EXPECT_EQ(got.rfind("HTTP/1.1 503 ", 0), 0u) << got.substr(0, 200);
+  EXPECT_NE(got.find("too many request bodies"), std::string::npos);
+  ::close(first);
+  ::close(second);
 }
 
 // A streamed answer within kStreamHold goes out whole with its length; a

@@ -38,6 +38,7 @@ struct Connection {
   int64_t since = 0;      // when it went idle, or when its request began
   bool idle = true;       // between requests, with no byte of the next
   bool busy = false;      // a worker has it
+  bool draining = false;  // refused: its answer sent, the rest of its bytes read and dropped
   int served = 0;         // requests answered
   uint64_t reserved = 0;  // body bytes counted against max_buffered
   Request request;        // the request a worker answers
@@ -212,6 +213,10 @@ bool send_response(int fd, const Response& r, bool keep_alive, int timeout_ms) {
   return sink.finish(r.stream(sink));
 }
 
+// How long a refused connection is read (and what it sends dropped) before
+// it is closed (Poller::refuse).
+constexpr int64_t kLingerMs = 1000;
+
 // The work handed between the poller and the workers.
 class Queues {
  public:
@@ -277,9 +282,20 @@ class Poller {
   // Takes the next whole request from c's bytes to a worker, if there is
   // one; false when c must close (an error was answered).
   bool dispatch(Connection& c);
+  // Answers r and stops taking requests from c.  Its client may still be
+  // sending a body: closing at once would reset the connection, and the
+  // client would lose the answer unread.  So c stops writing and is read
+  // (and what it sends dropped) until its client closes, for a second at
+  // most: a lingering close, as web servers do.  True: c stays open.
   bool refuse(Connection& c, const Response& r) {
     send_response(c.fd, r, false, 100);
-    return false;
+    ::shutdown(c.fd, SHUT_WR);
+    buffered_ -= c.reserved;
+    c.reserved = 0;
+    c.in = std::string();
+    c.draining = true;
+    c.since = now_ms();
+    return true;
   }
   void expire(int64_t now);
   void close(std::list<Connection>::iterator it) {
@@ -355,6 +371,7 @@ bool Poller::receive(Connection& c) {
   char chunk[1 << 16];
   for (;;) {
     const ssize_t n = ::recv(c.fd, chunk, sizeof chunk, 0);
+    if (n > 0 && c.draining) continue;  // dropped
     if (n > 0) {
       if (c.idle) c.idle = false, c.since = now_ms();  // a request begins
       c.in.append(chunk, size_t(n));
@@ -401,11 +418,12 @@ bool Poller::dispatch(Connection& c) {
 void Poller::expire(int64_t now) {
   for (auto it = conns_.begin(); it != conns_.end();) {
     const auto next = std::next(it);
-    if (!it->busy && it->idle && now - it->since > o_.idle_ms) {
+    if (it->draining) {
+      if (now - it->since > kLingerMs) close(it);
+    } else if (!it->busy && it->idle && now - it->since > o_.idle_ms) {
       close(it);
     } else if (!it->busy && !it->idle && now - it->since > o_.timeout_ms) {
       refuse(*it, error_response(408, "the request did not arrive in time"));
-      close(it);
     }
     it = next;
   }
