@@ -265,20 +265,33 @@ TEST(ServeThreads, ConnectionsPastTheLimitGet503AndNoneLeaks) {
   EXPECT_EQ(open_descriptors(), before);
 }
 
-// Bodies still arriving count against max_buffered: a second one that
-// would pass it is refused (503) while the first is taken whole.
-TEST(ServeThreads, BodiesHeldAtOnceAreBounded) {
+// A server whose bodies held at once are at most 1000 bytes, answering
+// each request with its body.
+ServerOptions bodies_of_1000() {
   ServerOptions o;
   o.max_buffered = 1000;
-  Running run(o, [](const Request& r) { return Response(200, "text/plain", r.body); });
-  const int first = run.connect(), second = run.connect();
-  const std::string head = "POST / HTTP/1.1\r\nContent-Length: 800\r\n\r\n";
-  ASSERT_EQ(::send(first, (head + "abc").data(), head.size() + 3, MSG_NOSIGNAL),
-            ssize_t(head.size() + 3));
-  for (int i = 0; i < 500 && run.server().held_bytes() == 0; ++i) {  // the first is read
+  return o;
+}
+Response echo_body(const Request& r) { return Response(200, "text/plain", r.body); }
+
+// Starts a body of 800 bytes on fd (3 of them sent) and waits until the
+// server holds it.
+void hold_800(Running& run, int fd) {
+  const std::string head = "POST / HTTP/1.1\r\nContent-Length: 800\r\n\r\nabc";
+  ASSERT_EQ(::send(fd, head.data(), head.size(), MSG_NOSIGNAL), ssize_t(head.size()));
+  for (int i = 0; i < 500 && run.server().held_bytes() == 0; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   ASSERT_EQ(run.server().held_bytes(), 800u);
+}
+
+// Bodies still arriving count against max_buffered: a second one that
+// would pass it is refused (503) while the first is taken whole.
+TEST(ServeThreads, BodiesHeldAtOnceAreBounded) {
+  Running run(bodies_of_1000(), echo_body);
+  const int first = run.connect(), second = run.connect();
+  const std::string head = "POST / HTTP/1.1\r\nContent-Length: 800\r\n\r\n";
+  ASSERT_NO_FATAL_FAILURE(hold_800(run, first));
   EXPECT_NE(ask(second, head + "x").find(" 503 "), std::string::npos);
   const std::string got = ask(first, std::string(797, 'y'));
   EXPECT_NE(got.find("\r\n\r\nabc" + std::string(797, 'y')), std::string::npos);
@@ -318,16 +331,9 @@ std::string dechunk(const std::string& body, bool* whole) {
 // rest of the body rather than closing on it, which would reset the
 // connection under the sender.
 TEST(ServeThreads, ARefusedClientStillSendingItsBodyReadsTheRefusal) {
-  ServerOptions o;
-  o.max_buffered = 1000;
-  Running run(o, [](const Request& r) { return Response(200, "text/plain", r.body); });
+  Running run(bodies_of_1000(), echo_body);
   const int first = run.connect(), second = run.connect();
-  const std::string held = "POST / HTTP/1.1\r\nContent-Length: 800\r\n\r\nabc";
-  ASSERT_EQ(::send(first, held.data(), held.size(), MSG_NOSIGNAL), ssize_t(held.size()));
-  for (int i = 0; i < 500 && run.server().held_bytes() == 0; ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  ASSERT_EQ(run.server().held_bytes(), 800u);
+  ASSERT_NO_FATAL_FAILURE(hold_800(run, first));
   const std::string body(4 << 20, 'z');
   const std::string request =
       "POST / HTTP/1.1\r\nContent-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body;
