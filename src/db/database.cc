@@ -58,11 +58,7 @@ std::string table_source(const std::string& name) {
 }
 
 Database::~Database() {
-  if (mode_ == Mode::kWrite) {
-    for (const auto& [name, value] : staged_) {
-      for (const std::string& file : table_value_files(value)) abandon(file);
-    }
-  }
+  while (!staged_.empty()) unstage(staged_.begin()->first);  // never committed: gone
   for (const auto& [name, fd] : snapshot_fds_) ::close(fd);
   if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the flock
 }

@@ -8,17 +8,20 @@
 #include <poll.h>
 #include <strings.h>
 #include <sys/socket.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <climits>
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
 #include <deque>
 #include <list>
 #include <mutex>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -105,42 +108,48 @@ bool next_request_at_once(Connection& c, uint64_t max_body) {
   return take_request(c, max_body, &length, &refusal) == Take::kRequest;
 }
 
-// Sends all of data on a non-blocking socket, waiting for room at most
-// timeout_ms in all; false if the client is gone or too slow.
-bool send_all(int fd, const char* data, size_t n, int timeout_ms) {
+// Sends all of parts, in order, on a non-blocking socket (one sendmsg for
+// all that fits: a head and a short body in two sends would wait on the
+// client's delayed ACK), waiting for room at most timeout_ms in all; false
+// if the client is gone or too slow.
+bool send_parts(int fd, std::initializer_list<std::string_view> parts, int timeout_ms) {
+  std::vector<iovec> left;
+  for (const std::string_view p : parts) {
+    if (!p.empty()) left.push_back({const_cast<char*>(p.data()), p.size()});
+  }
   const int64_t deadline = now_ms() + timeout_ms;
-  while (n > 0) {
-    const ssize_t sent = ::send(fd, data, n, MSG_NOSIGNAL);
-    if (sent > 0) {
-      data += sent, n -= size_t(sent);
-      continue;
-    }
+  size_t first = 0;
+  while (first < left.size()) {
+    msghdr m{};
+    m.msg_iov = &left[first];
+    m.msg_iovlen = std::min<size_t>(left.size() - first, IOV_MAX);
+    ssize_t sent = ::sendmsg(fd, &m, MSG_NOSIGNAL);
     if (sent < 0 && errno == EINTR) continue;
     if (sent < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
-      const int64_t left = deadline - now_ms();
+      const int64_t wait = deadline - now_ms();
       pollfd p{fd, POLLOUT, 0};
-      if (left <= 0 || ::poll(&p, 1, int(std::min<int64_t>(left, 200))) < 0) return false;
+      if (wait <= 0 || ::poll(&p, 1, int(std::min<int64_t>(wait, 200))) < 0) return false;
       continue;
     }
-    return false;
+    if (sent <= 0) return false;
+    for (; first < left.size() && size_t(sent) >= left[first].iov_len; ++first) {
+      sent -= ssize_t(left[first].iov_len);
+    }
+    if (first < left.size()) {
+      left[first].iov_base = static_cast<char*>(left[first].iov_base) + sent;
+      left[first].iov_len -= size_t(sent);
+    }
   }
   return true;
 }
 
 bool send_whole(int fd, const Response& r, bool keep_alive, int timeout_ms) {
-  const std::string head = response_head(r, keep_alive);
-  // One send for a small answer: two would wait on the client's delayed ACK.
-  if (r.body.size() < (256 << 10)) {
-    const std::string whole = head + r.body;
-    return send_all(fd, whole.data(), whole.size(), timeout_ms);
-  }
-  return send_all(fd, head.data(), head.size(), timeout_ms) &&
-         send_all(fd, r.body.data(), r.body.size(), timeout_ms);
+  return send_parts(fd, {response_head(r, keep_alive), r.body}, timeout_ms);
 }
 
 // A streamed answer's sink on a connection: it holds the first
-// kStreamHold bytes; past them it sends the head and then the body in
-// chunks of kChunk bytes.
+// kStreamHold bytes; past them it sends the head and then each write as a
+// chunk of its own (the stream's stdio buffer makes them 256 KiB).
 class SocketSink : public BodySink {
  public:
   SocketSink(int fd, const Response& head, bool keep_alive, int timeout_ms)
@@ -151,13 +160,10 @@ class SocketSink : public BodySink {
     if (!started_ && held_.size() + n <= kStreamHold) return held_.append(data, n), true;
     if (!started_) {
       started_ = true;
-      const std::string head = response_head(head_, keep_, true);
-      failed_ = !send_all(fd_, head.data(), head.size(), timeout_ms_);
-      std::string held = std::move(held_);
-      held_.clear();
-      if (!failed_) add(held.data(), held.size());
+      failed_ = !send_chunk(response_head(head_, keep_, true), held_);
+      held_ = std::string();
     }
-    add(data, n);
+    failed_ = failed_ || !send_chunk("", std::string_view(data, n));
     return !failed_;
   }
 
@@ -172,29 +178,17 @@ class SocketSink : public BodySink {
       return send_whole(fd_, whole, keep_, timeout_ms_) && keep_;
     }
     if (failed_ || end.status != 200) return false;  // cut short: the client sees it
-    send_chunk();
-    static constexpr char kLast[] = "0\r\n\r\n";
-    return send_all(fd_, kLast, sizeof kLast - 1, timeout_ms_) && keep_;
+    return send_parts(fd_, {"0\r\n\r\n"}, timeout_ms_) && keep_;
   }
 
  private:
-  static constexpr size_t kChunk = 256 << 10;
-  void add(const char* data, size_t n) {
-    while (n > 0 && !failed_) {
-      const size_t take = std::min(n, kChunk - chunk_.size());
-      chunk_.append(data, take);
-      data += take, n -= take;
-      if (chunk_.size() == kChunk) send_chunk();
-    }
-  }
-  void send_chunk() {
-    if (chunk_.empty() || failed_) return;
+  // Sends `before` (the head, before the first chunk), then data as a chunk.
+  bool send_chunk(std::string_view before, std::string_view data) {
+    if (data.empty()) return send_parts(fd_, {before}, timeout_ms_);
     char size[24];
-    const int len = std::snprintf(size, sizeof size, "%zx\r\n", chunk_.size());
-    chunk_.insert(0, size, size_t(len));
-    chunk_ += "\r\n";
-    failed_ = !send_all(fd_, chunk_.data(), chunk_.size(), timeout_ms_);
-    chunk_.clear();
+    const int len = std::snprintf(size, sizeof size, "%zx\r\n", data.size());
+    return send_parts(fd_, {before, std::string_view(size, size_t(len)), data, "\r\n"},
+                      timeout_ms_);
   }
 
   int fd_;
@@ -202,7 +196,7 @@ class SocketSink : public BodySink {
   bool keep_;
   int timeout_ms_;
   bool started_ = false, failed_ = false;
-  std::string held_, chunk_;
+  std::string held_;
 };
 
 // Sends r (running its stream, if it has one): true if the connection may
@@ -401,7 +395,7 @@ bool Poller::dispatch(Connection& c) {
         // A client that waits to be asked for its body (curl does, past
         // 1 MB) is asked now, rather than after its own timeout of a second.
         static constexpr char kContinue[] = "HTTP/1.1 100 Continue\r\n\r\n";
-        if (expects_continue && !send_all(c.fd, kContinue, sizeof kContinue - 1, 100)) {
+        if (expects_continue && !send_parts(c.fd, {kContinue}, 100)) {
           return false;
         }
       }

@@ -18,12 +18,11 @@
 namespace weaver::serve {
 namespace {
 
-// A worker thread's open database: the Explorer, and which MANIFEST (inode
-// and change time) it opened, to see a commit by.
+// A worker thread's open database: the Explorer, and which state it
+// opened, to see a commit by.
 struct Snapshot {
   std::string db;
-  ino_t ino = 0;
-  timespec ctime{};
+  StateStamp state;
   std::unique_ptr<Explorer> ex;
   double extent[3] = {0, 0, 0};  // the domain's, ticks: found once a snapshot
   bool extent_known = false;
@@ -112,12 +111,11 @@ void Service::warm() {
   (void)explorer(&ex);  // its tables' directories come with it; an error, at the first request
 }
 
-void Service::share_directories(Explorer& ex, ino_t ino, const timespec& ctime) {
+void Service::share_directories(Explorer& ex, const StateStamp& state) {
   std::lock_guard<std::mutex> lock(directories_mu_);
-  if (directories_ino_ != ino || directories_ctime_.tv_sec != ctime.tv_sec ||
-      directories_ctime_.tv_nsec != ctime.tv_nsec) {
+  if (!(directories_state_ == state)) {
     octant_directory_.reset(), node_directory_.reset(), aggregate_directory_.reset();
-    directories_ino_ = ino, directories_ctime_ = ctime;
+    directories_state_ = state;
   }
   // Built at most once a state: the first Explorer builds (within the
   // directories' share), the others take it.
@@ -141,14 +139,14 @@ Status Service::explorer(Explorer** out) {
     return Status::NotFound(db_ + ": not a weaver database (no MANIFEST)");
   }
   Snapshot& s = t_snapshot;
-  if (!s.ex || s.db != db_ || s.ino != st.st_ino || s.ctime.tv_sec != st.st_ctim.tv_sec ||
-      s.ctime.tv_nsec != st.st_ctim.tv_nsec) {
+  const StateStamp now{st.st_ino, st.st_ctim};
+  if (!s.ex || s.db != db_ || !(s.state == now)) {
     s.ex.reset();
     s.extent_known = false;
     // Split the budget among the threads that may each hold one.
     WEAVER_RETURN_IF_ERROR(Explorer::open(db_, memory_, &s.ex));
-    s.db = db_, s.ino = st.st_ino, s.ctime = st.st_ctim;
-    share_directories(*s.ex, s.ino, s.ctime);
+    s.db = db_, s.state = now;
+    share_directories(*s.ex, now);
   }
   *out = s.ex.get();
   return Status::Ok();
@@ -161,12 +159,11 @@ Explorer* Service::helper(std::unique_lock<std::mutex>* lock) {
   *lock = std::unique_lock<std::mutex>(helper_mu_, std::try_to_lock);
   if (!lock->owns_lock()) return nullptr;
   const Snapshot& s = t_snapshot;  // the asking worker's: the helper reads the same
-  if (!helper_ || helper_ino_ != s.ino || helper_ctime_.tv_sec != s.ctime.tv_sec ||
-      helper_ctime_.tv_nsec != s.ctime.tv_nsec) {
+  if (!helper_ || !(helper_state_ == s.state)) {
     helper_.reset();
     if (!Explorer::open(db_, memory_, &helper_).ok()) return nullptr;  // the worker answers alone
-    share_directories(*helper_, s.ino, s.ctime);
-    helper_ino_ = s.ino, helper_ctime_ = s.ctime;
+    share_directories(*helper_, s.state);
+    helper_state_ = s.state;
   }
   return helper_.get();
 }
@@ -257,7 +254,8 @@ Response outcome(int code, uint64_t printed, const std::string& err) {
 Response Service::run(Explorer& ex, std::vector<std::string> words, const Request& r) {
   std::string out, err;
   std::FILE* o = string_stream(&out);
-  std::FILE* in = points_stream("");
+  static const std::string kNoPoints;  // these questions read no points
+  std::FILE* in = points_stream(kNoPoints);
   const int code = o && in ? query_(ex, {}, with_options(std::move(words), r), in, o, &err) : 1;
   if (in) std::fclose(in);
   if (o) std::fclose(o);  // flushes into out
@@ -399,7 +397,8 @@ Response Service::export_vtu(Explorer& ex, const Request& r) {
   bool ok = words.size() == 6;
   for (size_t i = 0; ok && i < 6; ++i) ok = parse_number(words[i], &o.box[i]);
   if (!ok) return error_response(400, "box is six numbers in metres: X0,Y0,Z0,X1,Y1,Z1");
-  // How many elements first: the answer is held whole.
+  // How many elements first: a region past kMaxExportElements is for
+  // weaver export.
   std::vector<std::string> count = {"range"};
   count.insert(count.end(), words.begin(), words.end());
   count.insert(count.end(), {"--units", "m"});

@@ -52,6 +52,16 @@ using QueryRunner = std::function<int(Explorer& ex, const std::vector<Explorer*>
                                       const std::vector<std::string>& words, std::FILE* points,
                                       std::FILE* out, std::string* err)>;
 
+// Which committed state a reader opened: its MANIFEST's inode and change
+// time (a commit renames a new MANIFEST into place).
+struct StateStamp {
+  ino_t ino = 0;
+  timespec ctime{};
+  bool operator==(const StateStamp& o) const {
+    return ino == o.ino && ctime.tv_sec == o.ctime.tv_sec && ctime.tv_nsec == o.ctime.tv_nsec;
+  }
+};
+
 class Service {
  public:
   // memory: each Explorer's (a worker's, the helper's); directories: what
@@ -87,9 +97,9 @@ class Service {
   // The helper Explorer on this thread's snapshot, if no other batch has
   // it (*lock then holds it); null otherwise.
   Explorer* helper(std::unique_lock<std::mutex>* lock);
-  // Gives ex's tables the leaf directories of the state (ino, ctime), built
-  // by the first Explorer of that state to ask.
-  void share_directories(Explorer& ex, ino_t ino, const timespec& ctime);
+  // Gives ex's tables the leaf directories of the state `state`, built by
+  // the first Explorer of that state to ask.
+  void share_directories(Explorer& ex, const StateStamp& state);
 
   std::string db_;
   MemoryBudget memory_;
@@ -98,16 +108,14 @@ class Service {
   // The leaf directories of one committed state (a table's is null until
   // built, or when it does not fit).
   std::mutex directories_mu_;
-  ino_t directories_ino_ = 0;
-  timespec directories_ctime_{};
+  StateStamp directories_state_;
   std::shared_ptr<const LeafDirectory> octant_directory_, node_directory_, aggregate_directory_;
   // One more Explorer, which a batch of points borrows to answer half of
   // its points on a second thread; opened on the first batch, and again
   // when the state it reads is no longer a worker's.
   std::mutex helper_mu_;
   std::unique_ptr<Explorer> helper_;
-  ino_t helper_ino_ = 0;
-  timespec helper_ctime_{};
+  StateStamp helper_state_;
 };
 
 // A region downloaded as vtu is written to a scratch file first, then
