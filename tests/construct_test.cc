@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -80,6 +81,17 @@ void expect_lattice_matches_sampling(const VelocityModel& m, double x, double y,
   }
 }
 
+// Points of a 20 m lattice inside the basin's inclusions, in 64 cells of
+// shallow rock.
+std::vector<std::array<double, 3>> soft_points(const VelocityModel& m) {
+  std::vector<std::array<double, 3>> soft;
+  for (double pz = 0; pz < 2400; pz += 20)
+    for (double py = 90000; py < 92400; py += 20)
+      for (double px = 90000; px < 92400; px += 20)
+        if (m.at(px, py, pz).vs == 100) soft.push_back({px, py, pz});
+  return soft;
+}
+
 TEST(Models, BasinLatticeMatchesSampling) {
   std::unique_ptr<VelocityModel> m;
   ASSERT_OK(make_model("basin", "", &m));
@@ -91,11 +103,7 @@ TEST(Models, BasinLatticeMatchesSampling) {
   }
   // Small lattices at and around inclusions (the cached cell of the fast
   // path), across 600 m cell borders too.
-  std::vector<std::array<double, 3>> inclusions;
-  for (double pz = 0; pz < 2400; pz += 20)
-    for (double py = 90000; py < 92400; py += 20)
-      for (double px = 90000; px < 92400; px += 20)
-        if (m->at(px, py, pz).vs == 100) inclusions.push_back({px, py, pz});
+  const std::vector<std::array<double, 3>> inclusions = soft_points(*m);
   ASSERT_GT(inclusions.size(), 20u);
   std::uniform_real_distribution<double> jitter(-60, 60), small(0.5, 40);
   soft = 0;
@@ -105,6 +113,71 @@ TEST(Models, BasinLatticeMatchesSampling) {
                                     small(rng), 3 + 2 * (i & 1), &soft);
   }
   EXPECT_GT(soft, 20000);  // the lattices do meet inclusions
+}
+
+// Every point of a box, the corners and lattice points construct samples
+// among them, has its Vs within the model's bounds over the box; the basin's
+// boxes include ones across bowl rims, ones around, across and inside
+// inclusions, and ones across 600 m cell borders.
+void expect_bounds_hold(const VelocityModel& m, const double lo[3], double edge,
+                        std::mt19937_64& rng, int* settled, float* soft = nullptr) {
+  const double hi[3] = {lo[0] + edge, lo[1] + edge, lo[2] + edge};
+  float vs_lo, vs_hi;
+  ASSERT_TRUE(m.vs_bounds(lo, hi, &vs_lo, &vs_hi));
+  if (soft != nullptr) *soft = vs_hi;
+  ASSERT_LE(vs_lo, vs_hi);
+  std::uniform_real_distribution<double> t(0, 1);
+  auto check = [&](double x, double y, double z) {
+    const float vs = m.at(x, y, z).vs;
+    ASSERT_TRUE(vs >= vs_lo && vs <= vs_hi)
+        << "box (" << lo[0] << ", " << lo[1] << ", " << lo[2] << ") edge " << edge << ": Vs " << vs
+        << " at (" << x << ", " << y << ", " << z << ") outside [" << vs_lo << ", " << vs_hi << "]";
+  };
+  for (int k = 0; k < 5; ++k)
+    for (int j = 0; j < 5; ++j)
+      for (int i = 0; i < 5; ++i)
+        check(lo[0] + i * edge / 4, lo[1] + j * edge / 4, lo[2] + k * edge / 4);
+  for (int p = 0; p < 200; ++p)
+    check(lo[0] + t(rng) * edge, lo[1] + t(rng) * edge, lo[2] + t(rng) * edge);
+  *settled += vs_lo == vs_hi;
+}
+
+TEST(Models, VsBoundsHoldAtEveryPointOfTheBox) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(0, 1);
+  for (const char* name : {"halfspace", "loh1", "basin"}) {
+    std::unique_ptr<VelocityModel> m;
+    ASSERT_OK(make_model(name, "", &m));
+    int settled = 0;
+    for (int i = 0; i < 3000; ++i) {
+      const double edge = std::ldexp(100000.0, -int(rng() % 16));
+      const double lo[3] = {unit(rng) * 100000, unit(rng) * 100000, unit(rng) * 8000};
+      expect_bounds_hold(*m, lo, edge, rng, &settled);
+    }
+    EXPECT_GT(settled, 0) << name;
+  }
+  std::unique_ptr<VelocityModel> m;
+  ASSERT_OK(make_model("basin", "", &m));
+  // Boxes of 1 to 100 m at points in and near inclusions, and across rims.
+  const std::vector<std::array<double, 3>> soft = soft_points(*m);
+  ASSERT_GT(soft.size(), 20u);
+  std::uniform_real_distribution<double> jitter(-60, 60), edge(1, 100);
+  int inside = 0, settled = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const auto& c = soft[rng() % soft.size()];
+    const double lo[3] = {c[0] + jitter(rng), c[1] + jitter(rng), c[2] + jitter(rng)};
+    int one = 0;
+    float vs_hi = 0;
+    expect_bounds_hold(*m, lo, edge(rng), rng, &one, &vs_hi);
+    inside += one && vs_hi == 100;
+    settled += one;
+  }
+  for (int i = 0; i < 5000; ++i) {  // across the rim and floor of the bowl at (22, 24) km
+    const double a = unit(rng) * 6.2832, r = 11000 * (0.9 + 0.2 * unit(rng));
+    const double lo[3] = {22000 + r * std::cos(a), 24000 + r * std::sin(a), unit(rng) * 2500};
+    expect_bounds_hold(*m, lo, std::ldexp(800.0, -int(rng() % 8)), rng, &settled);
+  }
+  EXPECT_GT(inside, 100);  // boxes wholly inside an inclusion are settled as such
 }
 
 TEST(GridModel, InterpolatesAndClamps) {
@@ -263,6 +336,46 @@ TEST(Construct, AnyThreadCountAndBudgetWritesTheSameTable) {
       }
     }
     EXPECT_GT(over, 0u) << model << ": no subtree went past its cap";
+  }
+}
+
+// Octants settled by the model's bounds are the ones samples would have
+// settled the same way: the tables, balanced and not, and the figures are
+// those of a construct that samples every octant, on a corner of the basin
+// holding part of a bowl and a few hundred inclusions (3 m leaves in 3 km
+// of rock: the basin's deepest grading), and on LOH.1.
+TEST(Construct, ModelBoundsChangeNothingButTheSamplesTaken) {
+  struct Case {
+    const char* model;
+    double freq;
+    std::array<double, 3> domain_m;
+  };
+  const Case cases[] = {{"basin", 1.0, {14000, 14000, 3000}}, {"loh1", 2.0, {8000, 4000, 3000}}};
+  for (const Case& c : cases) {
+    for (bool balanced : {true, false}) {
+      std::string tables[2];
+      ConstructResult results[2];
+      for (int bounds = 0; bounds < 2; ++bounds) {
+        testing::TempDir dir;
+        ConstructOptions o;
+        o.model = c.model;
+        o.freq = c.freq;
+        o.domain_m = c.domain_m;
+        o.balanced = balanced;
+        o.model_bounds = bounds == 1;
+        o.threads = 2;
+        ConstructPlan plan;
+        ASSERT_OK(construct_octree(dir.file("db"), o, &plan, &results[bounds]));
+        tables[bounds] = testing::table_bytes(dir.file("db"));
+      }
+      SCOPED_TRACE(std::string(c.model) + (balanced ? ", balanced" : ", unbalanced"));
+      EXPECT_GT(results[0].elements, 10000u);
+      ASSERT_EQ(tables[1], tables[0]);
+      EXPECT_EQ(results[1].levels, results[0].levels);
+      EXPECT_EQ(results[1].worst_ppw, results[0].worst_ppw);
+      EXPECT_EQ(results[1].smallest_edge_m, results[0].smallest_edge_m);
+      EXPECT_EQ(results[1].largest_edge_m, results[0].largest_edge_m);
+    }
   }
 }
 

@@ -48,6 +48,10 @@ struct ConstructOptions {
   // unbalanced one.  False (--unbalanced) writes the descent's leaves as
   // they are.
   bool balanced = true;
+  // Settle octants from the model's Vs bounds where they can
+  // (VelocityModel::vs_bounds, descent.h); false samples every octant.  The
+  // table is the same either way: the tests compare them.
+  bool model_bounds = true;
   // Refuse to start when the estimated octree (construct/estimate.h) has
   // more leaves than this, or needs more disk than is free.  5G is ~4x the
   // paper's 2 Hz mesh.

@@ -39,6 +39,17 @@ void Descent::lattice(const Octant& o, int n, float* out) const {
   model_.vs_on_lattice(axes[0], axes[1], axes[2], n, out);
 }
 
+// The first and last points of every lattice of o, so the box holds them.
+void Descent::box(const Octant& o, double lo[3], double hi[3]) const {
+  const double quarter = p_.tick_m / 4;
+  const uint64_t e4 = 4 * uint64_t{octant_edge(o)};
+  const uint32_t start[3] = {o.x, o.y, o.z};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = double(4 * uint64_t{start[a]}) * quarter;
+    hi[a] = double(4 * uint64_t{start[a]} + e4) * quarter;
+  }
+}
+
 // The least Vs over the 27 sample points, floored by --vs-min.
 // Four running minima, not std::min_element's one: 27 dependent compares
 // were a fifth of construct.  (The minimum is the same in any order.)
@@ -51,63 +62,105 @@ double Descent::vs_min_of(const float* samples) const {
   return std::max<double>(std::min(std::min(m[0], m[1]), std::min(m[2], m[3])), o_.vs_min);
 }
 
+// Splitting is monotone in vs: a lower vs never splits less.
 bool Descent::splits(const Octant& o, double vs) const {
   const double edge_m = octant_edge(o) * p_.tick_m;
   const bool too_big = edge_m > vs * inv_rate_;
   return o.level < o_.min_level || (too_big && o.level < o_.max_level);
 }
 
-bool Descent::splits(const Octant& o) const {
+// The samples lie in o's box, so their least Vs lies within the bounds: if
+// the lower bound keeps o a leaf, so does the least sample; if the upper
+// bound splits it, so does the least sample.
+Descent::Settled Descent::settle(const Octant& o, double* floor) const {
+  float lo, hi;
+  double box_lo[3], box_hi[3];
+  box(o, box_lo, box_hi);
+  if (!o_.model_bounds || !model_.vs_bounds(box_lo, box_hi, &lo, &hi)) return Settled::kNo;
+  *floor = std::max<double>(lo, o_.vs_min);
+  if (!splits(o, *floor)) return Settled::kLeaf;
+  if (splits(o, std::max<double>(hi, o_.vs_min))) return Settled::kSplit;
+  return Settled::kNo;
+}
+
+Judgement Descent::judge(const Octant& o) const {
+  Judgement j;
+  j.floor = o_.vs_min;
+  const Settled s = settle(o, &j.floor);
+  if (s != Settled::kNo) {
+    j.split = s == Settled::kSplit;
+    return j;
+  }
   float samples[27];
   lattice(o, 3, samples);
-  return splits(o, vs_min_of(samples));
+  j.vs = vs_min_of(samples);
+  j.split = splits(o, j.vs);
+  return j;
+}
+
+// Children that their parent's floor keeps leaves cost nothing; the others
+// ask the model's bounds; those the bounds leave open are sampled, from the
+// parent's 5 x 5 x 5 lattice when at least kSharedLattice of them are.
+void Descent::judge_children(const Octant& o, double floor, const bool* want,
+                             Judgement out[8]) const {
+  constexpr int kSharedLattice = 4;
+  bool open[8] = {};
+  int opened = 0;
+  for (int c = 0; c < 8; ++c) {
+    if (want != nullptr && !want[c]) continue;
+    const Octant child = octant_child(o, c);
+    Judgement& j = out[c];
+    j = Judgement{false, floor, -1};
+    if (!splits(child, floor)) continue;
+    const Settled s = settle(child, &j.floor);
+    j.floor = std::max(j.floor, floor);
+    if (s == Settled::kNo) {
+      open[c] = true, ++opened;
+    } else {
+      j.split = s == Settled::kSplit;
+    }
+  }
+  if (opened == 0) return;
+  float fine[125];
+  if (opened >= kSharedLattice) lattice(o, 5, fine);
+  for (int c = 0; c < 8; ++c) {
+    if (!open[c]) continue;
+    float samples[27];
+    if (opened >= kSharedLattice) {
+      const int cx = 2 * (c & 1), cy = (c & 2), cz = (c & 4) / 2;
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 3; ++j)
+          for (int i = 0; i < 3; ++i)
+            samples[(k * 3 + j) * 3 + i] = fine[((cz + k) * 5 + cy + j) * 5 + cx + i];
+    } else {
+      lattice(octant_child(o, c), 3, samples);
+    }
+    out[c].vs = vs_min_of(samples);
+    out[c].split = splits(octant_child(o, c), out[c].vs);
+  }
 }
 
 void Descent::visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const {
   out->clear();
-  // The subtree's closed box, as lattice() computes its far corner.
-  const double quarter = p_.tick_m / 4;
-  const uint64_t e4 = 4 * uint64_t{octant_edge(o)};
-  const double lo[3] = {double(4 * uint64_t{o.x}) * quarter, double(4 * uint64_t{o.y}) * quarter,
-                        double(4 * uint64_t{o.z}) * quarter};
-  const double hi[3] = {double(4 * uint64_t{o.x} + e4) * quarter,
-                        double(4 * uint64_t{o.y} + e4) * quarter,
-                        double(4 * uint64_t{o.z} + e4) * quarter};
+  double lo[3], hi[3];
+  box(o, lo, hi);
   model_.focus(lo, hi);
-  float samples[27];
-  lattice(o, 3, samples);
-  out->overflow = !visit(o, samples, cap, out);
+  out->overflow = !visit(o, judge(o), cap, out);
 }
 
-// o's 27 samples are given (its parent's lattice held them).  A split
-// evaluates its 5 x 5 x 5 lattice once, 125 samples for the 216 of the
-// children's own lattices, and hands each child its 27.  False once the
-// subtree has more than cap leaves.
-bool Descent::visit(const Octant& o, const float* samples, size_t cap, SubtreeLeaves* out) const {
-  const double vs = vs_min_of(samples);
-  if (splits(o, vs)) {
-    float children[8][27];
-    children_samples(o, children);
+// False once the subtree has more than cap leaves.
+bool Descent::visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const {
+  if (j.split) {
+    Judgement children[8];
+    judge_children(o, j.floor, nullptr, children);
     for (int c = 0; c < 8; ++c) {
       if (!visit(octant_child(o, c), children[c], cap, out)) return false;
     }
     return true;
   }
   if (out->elements == cap) return false;
-  emit(o, octant_edge(o) * p_.tick_m, vs, out);
+  emit(o, j, out);
   return true;
-}
-
-void Descent::children_samples(const Octant& o, float (*out)[27]) const {
-  float fine[125];
-  lattice(o, 5, fine);
-  for (int c = 0; c < 8; ++c) {
-    const int cx = 2 * (c & 1), cy = (c & 2), cz = (c & 4) / 2;
-    for (int k = 0; k < 3; ++k)
-      for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 3; ++i)
-          out[c][(k * 3 + j) * 3 + i] = fine[((cz + k) * 5 + cy + j) * 5 + cx + i];
-  }
 }
 
 void Descent::material(const Octant& o, std::byte* out) const {
@@ -119,7 +172,20 @@ void Descent::material(const Octant& o, std::byte* out) const {
   std::memcpy(out, f, payload_bytes());
 }
 
-void Descent::emit(const Octant& o, double edge_m, double vs, SubtreeLeaves* out) const {
+// The worst points per wavelength are those of the least sample; a leaf
+// settled by bounds is sampled only if its floor leaves room for it to be
+// the worst so far.
+void Descent::emit(const Octant& o, const Judgement& j, SubtreeLeaves* out) const {
+  const double edge_m = octant_edge(o) * p_.tick_m;
+  double vs = j.vs;
+  if (vs < 0) {
+    vs = j.floor;
+    if (out->elements == 0 || vs / (o_.freq * edge_m) < out->worst_ppw) {
+      float samples[27];
+      lattice(o, 3, samples);
+      vs = vs_min_of(samples);
+    }
+  }
   out->keys.push_back(octant_key(o));
   const size_t at = out->payloads.size();
   out->payloads.resize(at + payload_bytes());

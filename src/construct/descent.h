@@ -4,11 +4,16 @@
 // A subtree is visited depth first in Z-order: an octant whose least Vs over
 // its 27 sample points (the corners, edge midpoints, face centres and centre)
 // asks for a finer edge (or that lies above --min-level) is split, any other
-// is a leaf, written with the material at its centre.  A split octant's
-// 5 x 5 x 5 lattice holds its children's sample points, so each is
-// evaluated once.  Subtrees are independent, so workers may visit them in any
-// order; their leaves are written in Z-order (construct.cc), and the table
-// is the same for any number of threads.
+// is a leaf, written with the material at its centre.  The samples are taken
+// only where they matter: where the model bounds the Vs of an octant's whole
+// box (VelocityModel::vs_bounds) and the bounds settle the question (both
+// ask for a split, or neither does), the samples, which lie in the box,
+// would settle it the same way.  Most octants are settled so: the bulk of
+// the rock and sediment, the inside of inclusions.  A split whose children
+// must mostly be sampled evaluates its 5 x 5 x 5 lattice once, 125 samples
+// for the 216 of the children's own lattices.  Subtrees are independent, so
+// workers may visit them in any order; their leaves are written in Z-order
+// (construct.cc), and the table is the same for any number of threads.
 #pragma once
 
 #include <cstddef>
@@ -35,6 +40,16 @@ struct SubtreeLeaves {
   void add_to(ConstructResult* r) const;
 };
 
+// What the descent does with an octant: split it or keep it as a leaf.
+// floor bounds the Vs at every point of the octant's closed box from below
+// (so its descendants' too); vs, where it was sampled, is its least sample
+// (else a negative number).
+struct Judgement {
+  bool split = false;
+  double floor = 0;
+  double vs = -1;
+};
+
 class Descent {
  public:
   static constexpr size_t kMaxPayloadBytes = 20;
@@ -43,16 +58,12 @@ class Descent {
       : o_(o), p_(p), model_(m), inv_rate_(1.0 / (o.freq * o.ppw)) {}
 
   // Whether the descent splits o (rather than writing it as a leaf).
-  bool splits(const Octant& o) const;
-  // The same from o's 27 samples (sample_points, or children_samples of
-  // its parent), as the descent decides it.
-  bool splits_sampled(const Octant& o, const float* samples) const {
-    return splits(o, vs_min_of(samples));
-  }
-  // Vs at o's 27 sample points (corners, edge midpoints, face centres, centre).
-  void sample_points(const Octant& o, float* out) const { lattice(o, 3, out); }
-  // The 27 samples of each of o's children, from o's 5 x 5 x 5 lattice.
-  void children_samples(const Octant& o, float (*out)[27]) const;
+  bool splits(const Octant& o) const { return judge(o).split; }
+  // The same, with a lower bound on the Vs of o's box.
+  Judgement judge(const Octant& o) const;
+  // The judgement of each of o's children c with want[c] (all, for null),
+  // given floor, a lower bound on the Vs of o's box.
+  void judge_children(const Octant& o, double floor, const bool* want, Judgement out[8]) const;
   // The leaves of o's subtree into *out; stops, with out->overflow, past cap.
   void visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const;
   // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as
@@ -63,12 +74,17 @@ class Descent {
   const VelocityModel& model() const { return model_; }
 
  private:
+  enum class Settled { kLeaf, kSplit, kNo };
+  // What the model's bounds over o's box say, and the floor they give.
+  Settled settle(const Octant& o, double* floor) const;
+  // o's closed box in metres, its corners as lattice() computes them.
+  void box(const Octant& o, double lo[3], double hi[3]) const;
   // Vs at o's n x n x n lattice (n = 3: its 27 sample points).
   void lattice(const Octant& o, int n, float* out) const;
   double vs_min_of(const float* samples) const;
   bool splits(const Octant& o, double vs) const;
-  bool visit(const Octant& o, const float* samples, size_t cap, SubtreeLeaves* out) const;
-  void emit(const Octant& o, double edge_m, double vs, SubtreeLeaves* out) const;
+  bool visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const;
+  void emit(const Octant& o, const Judgement& j, SubtreeLeaves* out) const;
 
   const ConstructOptions& o_;
   const ConstructPlan& p_;

@@ -53,7 +53,7 @@ void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
             [](const Octant& a, const Octant& b) { return octant_key(a) < octant_key(b); });
   collected_.clear();
   for (const Octant& b : blocks_) {
-    if (wanted(b, root)) collect(b, nullptr, root);
+    if (wanted(b, root)) collect(b, descent_.judge(b), root);
   }
   collected_count_ += collected_.size();
   local_.resize(collected_.size() + leaves->keys.size());
@@ -93,29 +93,18 @@ bool SubtreeBalancer::wanted(const Octant& x, const Octant& root) const {
 }
 
 // The input leaves under x that meet the grown box, outside root, into
-// collected_ in key order.  x's ancestors split (it is a block or a child
-// of a split); samples are its 27 (or null: x samples them itself).  A
-// split hands its children their samples from its 5 x 5 x 5 lattice when
-// most of them are wanted (125 points for 8 x 27), else each takes its own.
-void SubtreeBalancer::collect(const Octant& x, const float* samples, const Octant& root) {
-  bool split = inside(root, x);  // an ancestor of root splits: root is a subtree of the descent
-  if (!split) {
-    float own[27];
-    if (samples == nullptr) descent_.sample_points(x, own), samples = own;
-    split = descent_.splits_sampled(x, samples);
-  }
-  if (!split) {
+// collected_ in key order; j is the descent's judgement of x.
+void SubtreeBalancer::collect(const Octant& x, const Judgement& j, const Octant& root) {
+  if (!j.split) {
     collected_.push_back(octant_key(x));
     return;
   }
   bool want[8];
-  int wanted_children = 0;
-  for (int c = 0; c < 8; ++c) wanted_children += want[c] = wanted(octant_child(x, c), root);
-  float children[8][27];
-  const bool shared = wanted_children >= 5;
-  if (shared) descent_.children_samples(x, children);
+  for (int c = 0; c < 8; ++c) want[c] = wanted(octant_child(x, c), root);
+  Judgement children[8];
+  descent_.judge_children(x, j.floor, want, children);
   for (int c = 0; c < 8; ++c) {
-    if (want[c]) collect(octant_child(x, c), shared ? children[c] : nullptr, root);
+    if (want[c]) collect(octant_child(x, c), children[c], root);
   }
 }
 

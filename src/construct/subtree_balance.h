@@ -56,7 +56,7 @@ class SubtreeBalancer {
 
  private:
   void grow_box(const Octant& root, const SubtreeLeaves& leaves);
-  void collect(const Octant& x, const float* samples, const Octant& root);
+  void collect(const Octant& x, const Judgement& j, const Octant& root);
   bool wanted(const Octant& x, const Octant& root) const;
   void refine(SubtreeLeaves* leaves);
   Status emit_leaf(const Octant& o, bool is_new, const std::byte* parent_payload);

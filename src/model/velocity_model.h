@@ -41,6 +41,15 @@ class VelocityModel {
       for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) out[(k * n + j) * n + i] = at(xs[i], ys[j], zs[k]).vs;
   }
+  // Bounds on the Vs at() gives at every point of the closed box [lo, hi]
+  // (metres), rounded as at() rounds it: *vs_lo <= at(p).vs <= *vs_hi.
+  // Construct decides an octant from them where they settle it and samples
+  // it only where they do not.  A bound too wide costs samples; one too
+  // narrow would change the mesh.  False: the model cannot say cheaply.
+  virtual bool vs_bounds(const double lo[3], const double hi[3], float* vs_lo, float* vs_hi) const {
+    (void)lo, (void)hi, (void)vs_lo, (void)vs_hi;
+    return false;
+  }
   // The points asked next (until the next focus, on this thread) lie in the
   // box [lo, hi] (metres, bounds included): construct says so before each
   // subtree.  A model read from storage loads the box once; others ignore it.
