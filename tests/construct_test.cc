@@ -64,8 +64,9 @@ TEST(Models, BasinInclusionsSitInShallowRockOnly) {
   EXPECT_EQ(soft_points(41000, 54000, 0), 0);     // a bowl's sediments
 }
 
-// The basin's shared-work lattice agrees point by point with plain samples,
-// on the 3- and 5-point lattices construct asks for.
+// The basin's shared-work lattices (of Vs, and of whole materials) agree
+// point by point with plain samples, on the 3- and 5-point lattices
+// construct asks for.
 void expect_lattice_matches_sampling(const VelocityModel& m, double x, double y, double z, double h,
                                      int n, int* soft) {
   double axes[3][5];
@@ -74,9 +75,13 @@ void expect_lattice_matches_sampling(const VelocityModel& m, double x, double y,
   float fast[125], plain[125];
   m.vs_on_lattice(axes[0], axes[1], axes[2], n, fast);
   m.VelocityModel::vs_on_lattice(axes[0], axes[1], axes[2], n, plain);
+  Material materials[125];
+  m.materials_on_lattice(axes[0], axes[1], axes[2], n, materials);
   for (int p = 0; p < n * n * n; ++p) {
     ASSERT_EQ(fast[p], plain[p]) << x << " " << y << " " << z << " " << h << " n " << n << " at "
                                  << p;
+    const Material one = m.at(axes[0][p % n], axes[1][p / n % n], axes[2][p / (n * n)]);
+    ASSERT_EQ(std::memcmp(&materials[p], &one, sizeof one), 0) << x << " " << y << " " << z;
     *soft += fast[p] == 100;
   }
 }
@@ -93,13 +98,14 @@ std::vector<std::array<double, 3>> soft_points(const VelocityModel& m) {
 }
 
 TEST(Models, BasinLatticeMatchesSampling) {
+  constexpr int kSizes[3] = {2, 3, 5};  // sibling centres, an octant's samples, its children's
   std::unique_ptr<VelocityModel> m;
   ASSERT_OK(make_model("basin", "", &m));
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> x(0, 100000), z(0, 8000), h(1, 400);
   int soft = 0;
   for (int i = 0; i < 20000; ++i) {
-    expect_lattice_matches_sampling(*m, x(rng), x(rng), z(rng), h(rng), 3 + 2 * (i & 1), &soft);
+    expect_lattice_matches_sampling(*m, x(rng), x(rng), z(rng), h(rng), kSizes[i % 3], &soft);
   }
   // Small lattices at and around inclusions (the cached cell of the fast
   // path), across 600 m cell borders too.
@@ -110,7 +116,7 @@ TEST(Models, BasinLatticeMatchesSampling) {
   for (int i = 0; i < 20000; ++i) {
     const auto& c = inclusions[rng() % inclusions.size()];
     expect_lattice_matches_sampling(*m, c[0] + jitter(rng), c[1] + jitter(rng), c[2] + jitter(rng),
-                                    small(rng), 3 + 2 * (i & 1), &soft);
+                                    small(rng), kSizes[i % 3], &soft);
   }
   EXPECT_GT(soft, 20000);  // the lattices do meet inclusions
 }

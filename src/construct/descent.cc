@@ -153,20 +153,46 @@ bool Descent::visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeav
   if (j.split) {
     Judgement children[8];
     judge_children(o, j.floor, nullptr, children);
+    bool leaves = true;
+    for (const Judgement& c : children) leaves = leaves && !c.split;
+    if (leaves) return emit_siblings(o, children, cap, out);
     for (int c = 0; c < 8; ++c) {
       if (!visit(octant_child(o, c), children[c], cap, out)) return false;
     }
     return true;
   }
   if (out->elements == cap) return false;
-  emit(o, j, out);
+  const double t = p_.tick_m, half = octant_edge(o) * t / 2;
+  emit(o, j, model_.at(o.x * t + half, o.y * t + half, o.z * t + half), out);
+  return true;
+}
+
+// o's eight children, all leaves, with their materials from one lattice of
+// their centres, computed as material() computes each.
+bool Descent::emit_siblings(const Octant& o, const Judgement* children, size_t cap,
+                            SubtreeLeaves* out) const {
+  if (out->elements + 8 > cap) return false;
+  const double t = p_.tick_m;
+  const uint32_t e = octant_edge(o.level + 1);
+  const double half = e * t / 2;
+  const uint32_t start[3] = {o.x, o.y, o.z};
+  double centres[3][2];
+  for (int a = 0; a < 3; ++a) {
+    for (int i = 0; i < 2; ++i) centres[a][i] = (start[a] + i * e) * t + half;
+  }
+  Material m[8];
+  model_.materials_on_lattice(centres[0], centres[1], centres[2], 2, m);
+  for (int c = 0; c < 8; ++c) emit(octant_child(o, c), children[c], m[c], out);
   return true;
 }
 
 void Descent::material(const Octant& o, std::byte* out) const {
   // As weaver balance computes a new leaf's centre: its tables are the same.
   const double t = p_.tick_m, half = octant_edge(o) * t / 2;
-  const Material m = model_.at(o.x * t + half, o.y * t + half, o.z * t + half);
+  to_payload(model_.at(o.x * t + half, o.y * t + half, o.z * t + half), out);
+}
+
+void Descent::to_payload(const Material& m, std::byte* out) const {
   const float f[5] = {m.vp, m.vs, m.rho, m.qp, m.qs};
   static_assert(sizeof f == kMaxPayloadBytes);
   std::memcpy(out, f, payload_bytes());
@@ -175,7 +201,8 @@ void Descent::material(const Octant& o, std::byte* out) const {
 // The worst points per wavelength are those of the least sample; a leaf
 // settled by bounds is sampled only if its floor leaves room for it to be
 // the worst so far.
-void Descent::emit(const Octant& o, const Judgement& j, SubtreeLeaves* out) const {
+void Descent::emit(const Octant& o, const Judgement& j, const Material& m,
+                   SubtreeLeaves* out) const {
   const double edge_m = octant_edge(o) * p_.tick_m;
   double vs = j.vs;
   if (vs < 0) {
@@ -189,7 +216,7 @@ void Descent::emit(const Octant& o, const Judgement& j, SubtreeLeaves* out) cons
   out->keys.push_back(octant_key(o));
   const size_t at = out->payloads.size();
   out->payloads.resize(at + payload_bytes());
-  material(o, out->payloads.data() + at);
+  to_payload(m, out->payloads.data() + at);
   ++out->levels[o.level];
   const double ppw = vs / (o_.freq * edge_m);
   if (out->elements == 0 || edge_m < out->smallest_edge_m) out->smallest_edge_m = edge_m;

@@ -84,7 +84,10 @@ class Descent {
   double vs_min_of(const float* samples) const;
   bool splits(const Octant& o, double vs) const;
   bool visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const;
-  void emit(const Octant& o, const Judgement& j, SubtreeLeaves* out) const;
+  bool emit_siblings(const Octant& o, const Judgement* children, size_t cap,
+                     SubtreeLeaves* out) const;
+  void emit(const Octant& o, const Judgement& j, const Material& m, SubtreeLeaves* out) const;
+  void to_payload(const Material& m, std::byte* out) const;
 
   const ConstructOptions& o_;
   const ConstructPlan& p_;

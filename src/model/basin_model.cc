@@ -24,13 +24,20 @@ namespace {
 class Basin final : public VelocityModel {
  public:
   Material at(double x, double y, double z) const override {
-    const bool sediment = z < sediment_depth(x, y);
-    const double vs = vs_at(x, y, z, sediment);
-    // Poisson-solid-like Vp for rock, a water-saturated floor for sediments
-    // and inclusions; Gardner-like density.
-    const double vp = std::max(1500.0, vs * (sediment ? 2.0 : std::sqrt(3.0)));
-    const double rho = 1700 + 0.29 * vs;
-    return {static_cast<float>(vp), static_cast<float>(vs), static_cast<float>(rho)};
+    return material_of(z, sediment_depth(x, y), x, y, inclusion_cell());
+  }
+  // The bowl depth once per column, the rest per point as at().
+  void materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                            Material* out) const override {
+    InclusionCell& cell = inclusion_cell();
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double depth = sediment_depth(xs[i], ys[j]);
+        for (int k = 0; k < n; ++k) {
+          out[(k * n + j) * n + i] = material_of(zs[k], depth, xs[i], ys[j], cell);
+        }
+      }
+    }
   }
   // The bowl depth once per column of the lattice; Vs of sediment and of
   // rock, and the inclusion cell's index, once per depth; an inclusion
@@ -190,13 +197,23 @@ class Basin final : public VelocityModel {
     return some ? Reach::kSome : Reach::kNone;
   }
 
-  static double vs_at(double x, double y, double z, bool sediment) {
-    if (sediment) return vs_of(z, true, false);
-    // Each thread remembers the last cell it asked about: leaves come in
-    // Z-order, so most follow one in the same cell, and the hash is most of
-    // at()'s cost.  (The answer is the same either way.)
+  class InclusionCell;
+  // The material at (x, y, z), under a sediment floor at depth.
+  static Material material_of(double z, double depth, double x, double y, InclusionCell& cell) {
+    const bool sediment = z < depth;
+    const double vs = vs_of(z, sediment, !sediment && cell.holds(x, y, z));
+    // Poisson-solid-like Vp for rock, a water-saturated floor for sediments
+    // and inclusions; Gardner-like density.
+    const double vp = std::max(1500.0, vs * (sediment ? 2.0 : std::sqrt(3.0)));
+    const double rho = 1700 + 0.29 * vs;
+    return {static_cast<float>(vp), static_cast<float>(vs), static_cast<float>(rho)};
+  }
+  // Each thread's cell for at(): leaves come in Z-order, so most follow one
+  // in the same 600 m cell, whose hash is most of at()'s cost.  (The answer
+  // is the same either way.)
+  static InclusionCell& inclusion_cell() {
     thread_local InclusionCell cell;
-    return vs_of(z, false, cell.holds(x, y, z));
+    return cell;
   }
   static double vs_of(double z, bool sediment, bool inclusion) {
     if (inclusion) return kInclusionVs;

@@ -41,6 +41,16 @@ class VelocityModel {
       for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) out[(k * n + j) * n + i] = at(xs[i], ys[j], zs[k]).vs;
   }
+  // at() at every point (xs[i], ys[j], zs[k]) of an n x n x n lattice, into
+  // out[(k * n + j) * n + i], the same to the bit: construct asks it for the
+  // centres of eight sibling leaves (n = 2).  Models override it when the
+  // points can share work.
+  virtual void materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                                    Material* out) const {
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) out[(k * n + j) * n + i] = at(xs[i], ys[j], zs[k]);
+  }
   // Bounds on the Vs at() gives at every point of the closed box [lo, hi]
   // (metres), rounded as at() rounds it: *vs_lo <= at(p).vs <= *vs_hi.
   // Construct decides an octant from them where they settle it and samples
