@@ -270,13 +270,16 @@ TEST(Construct, EveryLeafMeetsTheRuleAndNoneIsFinerThanNeeded) {
     ASSERT_OK(db->open_table(kOctantTable, 1 << 20, &t));
     BTreeCursor cur;
     ASSERT_OK(t->seek_cursor(0, &cur));
-    double volume = 0;
+    double volume = 0, worst_ppw = HUGE_VAL, smallest = HUGE_VAL, largest = 0;
     uint64_t n = 0;
     while (cur.valid()) {
       const Octant leaf = octant_from_key(cur.key());
       const double edge = octant_edge(leaf) * plan.tick_m;
       volume += edge * edge * edge;
-      const double limit = vs_min(*model, leaf, plan.tick_m, c.vs_min) / (c.freq * o.ppw);
+      const double leaf_vs = vs_min(*model, leaf, plan.tick_m, c.vs_min);
+      worst_ppw = std::min(worst_ppw, leaf_vs / (c.freq * edge));
+      smallest = std::min(smallest, edge), largest = std::max(largest, edge);
+      const double limit = leaf_vs / (c.freq * o.ppw);
       ASSERT_TRUE(edge <= limit || leaf.level == o.max_level) << c.model << " leaf too big";
       if (leaf.level > plan.block_level) {
         const Octant p = octant_parent(leaf);
@@ -295,6 +298,9 @@ TEST(Construct, EveryLeafMeetsTheRuleAndNoneIsFinerThanNeeded) {
       ASSERT_OK(cur.next());
     }
     EXPECT_EQ(n, r.elements);
+    EXPECT_NEAR(r.worst_ppw, worst_ppw, 1e-9 * worst_ppw) << c.model;
+    EXPECT_EQ(r.smallest_edge_m, smallest) << c.model;
+    EXPECT_EQ(r.largest_edge_m, largest) << c.model;
     const double domain = c.domain[0] * c.domain[1] * c.domain[2];
     EXPECT_NEAR(volume / domain, 1.0, 1e-9) << c.model << ": leaves must tile the domain";
   }

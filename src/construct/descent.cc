@@ -1,6 +1,7 @@
 #include "construct/descent.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace weaver {
@@ -11,6 +12,8 @@ void SubtreeLeaves::clear() {
   levels = {};
   elements = 0;
   smallest_edge_m = largest_edge_m = worst_ppw = 0;
+  least_vs.fill(HUGE_VAL);
+  border_lo = border_hi = {};
   overflow = false;
 }
 
@@ -142,10 +145,28 @@ void Descent::judge_children(const Octant& o, double floor, const bool* want,
 
 void Descent::visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const {
   out->clear();
+  out->root = o;
   double lo[3], hi[3];
   box(o, lo, hi);
   model_.focus(lo, hi);
   out->overflow = !visit(o, judge(o), cap, out);
+  if (!out->overflow) add_figures(out);
+}
+
+// The edges of the finest and coarsest leaves, and the worst points per
+// wavelength: for each level, its least Vs over its edge (the same value as
+// the least of every leaf's own ratio, since all share the divisor).
+void Descent::add_figures(SubtreeLeaves* out) const {
+  bool first = true;
+  for (int l = 0; l <= kMaxLevel; ++l) {
+    if (out->levels[l] == 0) continue;
+    const double edge_m = octant_edge(l) * p_.tick_m;
+    const double ppw = out->least_vs[l] / (o_.freq * edge_m);
+    if (first || edge_m < out->smallest_edge_m) out->smallest_edge_m = edge_m;
+    out->largest_edge_m = std::max(out->largest_edge_m, edge_m);
+    if (first || ppw < out->worst_ppw) out->worst_ppw = ppw;
+    first = false;
+  }
 }
 
 // False once the subtree has more than cap leaves.
@@ -199,30 +220,30 @@ void Descent::to_payload(const Material& m, std::byte* out) const {
 }
 
 // The worst points per wavelength are those of the least sample; a leaf
-// settled by bounds is sampled only if its floor leaves room for it to be
-// the worst so far.
+// settled by bounds is sampled only if its floor is below the least Vs of
+// its level so far (else it cannot be the worst).
 void Descent::emit(const Octant& o, const Judgement& j, const Material& m,
                    SubtreeLeaves* out) const {
-  const double edge_m = octant_edge(o) * p_.tick_m;
-  double vs = j.vs;
-  if (vs < 0) {
-    vs = j.floor;
-    if (out->elements == 0 || vs / (o_.freq * edge_m) < out->worst_ppw) {
-      float samples[27];
-      lattice(o, 3, samples);
-      vs = vs_min_of(samples);
-    }
+  double& least = out->least_vs[o.level];
+  if (j.vs >= 0) {
+    least = std::min(least, j.vs);
+  } else if (j.floor < least) {
+    float samples[27];
+    lattice(o, 3, samples);
+    least = std::min(least, vs_min_of(samples));
   }
   out->keys.push_back(octant_key(o));
   const size_t at = out->payloads.size();
   out->payloads.resize(at + payload_bytes());
   to_payload(m, out->payloads.data() + at);
   ++out->levels[o.level];
-  const double ppw = vs / (o_.freq * edge_m);
-  if (out->elements == 0 || edge_m < out->smallest_edge_m) out->smallest_edge_m = edge_m;
-  out->largest_edge_m = std::max(out->largest_edge_m, edge_m);
-  if (out->elements == 0 || ppw < out->worst_ppw) out->worst_ppw = ppw;
   ++out->elements;
+  const uint32_t e = octant_edge(o), root_e = octant_edge(out->root);
+  const uint32_t c[3] = {o.x, o.y, o.z}, r[3] = {out->root.x, out->root.y, out->root.z};
+  for (int a = 0; a < 3; ++a) {
+    if (c[a] == r[a]) out->border_lo[a] = std::max(out->border_lo[a], e);
+    if (c[a] + e == r[a] + root_e) out->border_hi[a] = std::max(out->border_hi[a], e);
+  }
 }
 
 SubtreeList::SubtreeList(const Descent& d, const ConstructPlan& p, int task_level)

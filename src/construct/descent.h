@@ -16,6 +16,7 @@
 // (construct.cc), and the table is the same for any number of threads.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -33,6 +34,14 @@ struct SubtreeLeaves {
   LevelCounts levels{};
   uint64_t elements = 0;
   double smallest_edge_m = 0, largest_edge_m = 0, worst_ppw = 0;
+  // The least Vs of the leaves of each level (the worst points per
+  // wavelength follow from it once the subtree is done, without a division
+  // for every leaf).
+  std::array<double, kMaxLevel + 1> least_vs{};
+  // The subtree's root, and for each side of it the edge (ticks) of the
+  // largest leaf touching it: how far its balance looks outside.
+  Octant root;
+  std::array<uint32_t, 3> border_lo{}, border_hi{};
   bool overflow = false;  // more leaves than the cap: visit the children instead
 
   void clear();
@@ -87,6 +96,7 @@ class Descent {
   bool emit_siblings(const Octant& o, const Judgement* children, size_t cap,
                      SubtreeLeaves* out) const;
   void emit(const Octant& o, const Judgement& j, const Material& m, SubtreeLeaves* out) const;
+  void add_figures(SubtreeLeaves* out) const;
   void to_payload(const Material& m, std::byte* out) const;
 
   const ConstructOptions& o_;

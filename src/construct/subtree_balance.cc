@@ -67,24 +67,15 @@ void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
 }
 
 // The subtree's box grown on each side by the edge of the largest own leaf
-// touching that side, within the domain.
+// touching that side (the descent noted them), within the domain.
 void SubtreeBalancer::grow_box(const Octant& root, const SubtreeLeaves& leaves) {
   const int64_t r_lo[3] = {root.x, root.y, root.z};
   const int64_t r_edge = octant_edge(root);
-  int64_t grow_lo[3] = {0, 0, 0}, grow_hi[3] = {0, 0, 0};
-  for (uint64_t key : leaves.keys) {
-    const Octant o = octant_from_key(key);
-    const int64_t e = octant_edge(o), c[3] = {o.x, o.y, o.z};
-    for (int a = 0; a < 3; ++a) {
-      if (c[a] == r_lo[a]) grow_lo[a] = std::max(grow_lo[a], e);
-      if (c[a] + e == r_lo[a] + r_edge) grow_hi[a] = std::max(grow_hi[a], e);
-    }
-  }
   const ConstructPlan& p = descent_.plan();
   for (int a = 0; a < 3; ++a) {
     const int64_t domain_end = int64_t{p.blocks[a]} * octant_edge(p.block_level);
-    box_lo_[a] = std::max<int64_t>(0, r_lo[a] - grow_lo[a]);
-    box_hi_[a] = std::min<int64_t>(domain_end, r_lo[a] + r_edge + grow_hi[a]);
+    box_lo_[a] = std::max<int64_t>(0, r_lo[a] - leaves.border_lo[a]);
+    box_hi_[a] = std::min<int64_t>(domain_end, r_lo[a] + r_edge + leaves.border_hi[a]);
   }
 }
 
