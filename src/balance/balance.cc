@@ -97,11 +97,13 @@ namespace {
 // outgrew the memory, and then nothing is written.
 Status balance_by_windows(Database& db, BTree& leaves, const BalanceOptions& o,
                           const BalanceMemory& memory, const TableOptions& topt,
-                          const FillPayload& fill, BalanceResult* r, bool* fitted) {
+                          const FillPayload& fill, bool one_window, BalanceResult* r,
+                          bool* fitted) {
   std::vector<std::unique_ptr<BTree>> more;
   WindowOptions wo;
   WEAVER_RETURN_IF_ERROR(window_options(db, leaves, o, memory, &more, &wo));
   wo.progress = o.progress;
+  wo.one_window = one_window;
   std::unique_ptr<BTree> out;
   std::string file;
   WEAVER_RETURN_IF_ERROR(db.create_table(kOctantTable, topt, memory.output_pool, &out, &file));
@@ -136,9 +138,15 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   const FillPayload fill = model_material_fill(topt, memory.model, o.threads, &model);
   const bool windows = o.algorithm != BalanceOptions::Algorithm::kClosure;
   if (windows && o.keep_from == 0 && o.keep_to == UINT64_MAX) {
-    bool fitted = false;
-    WEAVER_RETURN_IF_ERROR(balance_by_windows(*db, *leaves, o, memory, topt, fill, r, &fitted));
-    if (fitted) return Status::Ok();
+    // Windows on every thread; given up, one window of all the leaves
+    // where the memory holds it (one thread's windows already are that).
+    for (bool one_window : {false, true}) {
+      if (one_window && o.threads <= 1) break;
+      bool fitted = false;
+      WEAVER_RETURN_IF_ERROR(
+          balance_by_windows(*db, *leaves, o, memory, topt, fill, one_window, r, &fitted));
+      if (fitted) return Status::Ok();
+    }
   }
   ScratchDir scratch{db_dir + "/tmp-balance-" + std::to_string(::getpid())};
   std::unique_ptr<BalanceProgress> progress;

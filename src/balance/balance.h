@@ -85,6 +85,7 @@ struct BalanceResult {
   uint64_t required = 0;
   bool by_windows = false;    // balanced in windows, not by the closure
   uint64_t layer_leaves = 0;  // windows: leaves read around them (their layers)
+  uint64_t windows = 0;       // windows: how many were written
   uint64_t split = 0;         // input leaves that were split
   LevelCounts levels{};       // of the output
   bool balanced = true;       // check_only: the verdict

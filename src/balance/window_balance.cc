@@ -356,7 +356,7 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
   const uint64_t lo = std::min(o.first_leaf, total), hi = std::min(o.end_leaf, total);
   const uint64_t n = hi - lo;
   if (n == 0) return Status::Ok();
-  const int threads = static_cast<int>(o.readers.size());
+  const int threads = o.one_window ? 1 : static_cast<int>(o.readers.size());
   // Workers run ahead of the writer by a window each.
   const size_t in_flight = threads == 1 ? 1 : 2 * size_t(threads);
   const uint64_t slot_bytes = o.memory / in_flight;
@@ -364,14 +364,18 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
   // many, beside the local set, the ripple's map and what it creates.
   uint64_t leaves_per =
       std::max<uint64_t>(1024, slot_bytes / (4 * (8 + first.payload_size()) + 160));
-  if (o.window_leaves > 0) leaves_per = std::min(leaves_per, o.window_leaves);
+  if (o.one_window && leaves_per < n) {
+    *fitted = false;
+    return Status::Ok();
+  }
+  if (o.window_leaves > 0 && !o.one_window) leaves_per = std::min(leaves_per, o.window_leaves);
   uint64_t windows = std::max<uint64_t>(1, (n + leaves_per - 1) / leaves_per);
   if (threads > 1) windows = std::max<uint64_t>(windows, 4 * uint64_t(threads));
   windows = std::min(windows, std::max<uint64_t>(n, 1));
 
   std::vector<std::unique_ptr<WindowWorker>> workers;
-  for (BTree* reader : o.readers) {
-    workers.push_back(std::make_unique<WindowWorker>(*reader, slot_bytes, fill, o));
+  for (int i = 0; i < threads; ++i) {
+    workers.push_back(std::make_unique<WindowWorker>(*o.readers[i], slot_bytes, fill, o));
   }
   // Where the windows part, found before the workers use the first handle.
   std::vector<uint64_t> starts(windows + 1, 0);
@@ -431,6 +435,7 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
     r->split += head->split;
     r->required += head->created;
     r->layer_leaves += head->layer;
+    ++r->windows;
     read += head->count;
     if (o.progress) o.progress(read, double(read) / std::max<uint64_t>(n, 1));
     flight.pop_front();

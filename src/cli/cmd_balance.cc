@@ -80,7 +80,8 @@ int cmd_balance(int argc, char** argv) {
   }
   char how[96];
   if (r.by_windows) {
-    std::snprintf(how, sizeof how, "in windows, %llu leaves read around them",
+    std::snprintf(how, sizeof how, "in %llu window%s, %llu leaves read around them",
+                  (unsigned long long)r.windows, r.windows == 1 ? "" : "s",
                   (unsigned long long)r.layer_leaves);
   } else {
     std::snprintf(how, sizeof how, "by the closure of %llu required octants",
