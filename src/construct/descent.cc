@@ -183,8 +183,7 @@ bool Descent::visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeav
     return true;
   }
   if (out->elements == cap) return false;
-  const double t = p_.tick_m, half = octant_edge(o) * t / 2;
-  emit(o, j, model_.at(o.x * t + half, o.y * t + half, o.z * t + half), out);
+  emit(o, j, material_at_centre(o), out);
   return true;
 }
 
@@ -207,10 +206,14 @@ bool Descent::emit_siblings(const Octant& o, const Judgement* children, size_t c
   return true;
 }
 
-void Descent::material(const Octant& o, std::byte* out) const {
-  // As weaver balance computes a new leaf's centre: its tables are the same.
+// As weaver balance computes a new leaf's centre: its tables are the same.
+Material Descent::material_at_centre(const Octant& o) const {
   const double t = p_.tick_m, half = octant_edge(o) * t / 2;
-  to_payload(model_.at(o.x * t + half, o.y * t + half, o.z * t + half), out);
+  return model_.at(o.x * t + half, o.y * t + half, o.z * t + half);
+}
+
+void Descent::material(const Octant& o, std::byte* out) const {
+  to_payload(material_at_centre(o), out);
 }
 
 void Descent::to_payload(const Material& m, std::byte* out) const {

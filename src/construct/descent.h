@@ -97,6 +97,7 @@ class Descent {
                      SubtreeLeaves* out) const;
   void emit(const Octant& o, const Judgement& j, const Material& m, SubtreeLeaves* out) const;
   void add_figures(SubtreeLeaves* out) const;
+  Material material_at_centre(const Octant& o) const;
   void to_payload(const Material& m, std::byte* out) const;
 
   const ConstructOptions& o_;
