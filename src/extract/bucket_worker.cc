@@ -188,7 +188,6 @@ void BucketWorker::add_sibling_lattice(uint64_t child0, uint64_t end) {
     const int back = axis == 0 ? 1 : axis == 1 ? 3 : 9;  // the point one step lower on axis
     keys[p] = morton_step(keys[p - back], axis, bit);
   }
-  for (int p = 0; p < 27; ++p) hash_.prefetch(keys[p]);
   for (int p = 0; p < 27; ++p) {
     if (keys[p] < end) hash_.add(keys[p], kLatticeMasks[p]);
   }
@@ -241,7 +240,6 @@ Status BucketWorker::run(BucketTask& t) {
       continue;
     }
     leaf_corner_keys(leaves[i++], corners);
-    for (int c = 0; c < 8; ++c) hash_.prefetch(corners[c]);
     for (int c = 0; c < 8; ++c) {
       if (corners[c] < t.end) hash_.add(corners[c], corner_direction_bit(c));
     }

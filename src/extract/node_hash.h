@@ -34,15 +34,6 @@ class NodeHash {
     masks_[s] |= bits;
   }
 
-  // Brings the key's first slot towards the cache: a caller adding a
-  // batch of keys prefetches them all first, so that their misses overlap
-  // rather than follow one another.
-  void prefetch(uint64_t key) const {
-    const size_t s = (key * 0x9E3779B97F4A7C15ULL) >> shift_;
-    __builtin_prefetch(&slots_[s], 1);
-    __builtin_prefetch(&masks_[s], 1);
-  }
-
   bool contains(uint64_t key) const { return slots_[find_slot(key)] == key; }
   size_t size() const { return used_.size(); }
   // The keys, in insertion order, and their masks.
