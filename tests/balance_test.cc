@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <random>
@@ -20,6 +21,7 @@
 #include "test_mesh.h"
 #include "test_octrees.h"
 #include "test_util.h"
+#include "util/local_ripple.h"
 #include "util/parent_asks.h"
 
 namespace weaver {
@@ -79,6 +81,18 @@ GenOptions random_small_octree(std::mt19937_64& rng) {
   g.leaves = 10 + rng() % 300;
   g.max_level = g.block_level + 1 + static_cast<int>(rng() % 9);
   return g;
+}
+
+// A random octree of about `leaves` leaves, none finer than max_level
+// (empty if generating it failed).
+std::vector<Octant> random_octree(uint64_t seed, uint64_t leaves, int max_level) {
+  GenOptions g;
+  g.seed = seed;
+  g.leaves = leaves;
+  g.max_level = max_level;
+  std::vector<Octant> out;
+  if (!generate_octree(g, &out).ok()) out.clear();
+  return out;
 }
 
 class BalanceTest : public ::testing::Test {
@@ -257,52 +271,56 @@ TEST(BalanceThreads, AnyThreadCountWritesTheSameTable) {
   ConstructPlan plan;
   ConstructResult cr;
   ASSERT_OK(construct_octree(dir.file("basin"), co, &plan, &cr));
-  GenOptions g;
-  g.seed = 3;
-  g.leaves = testing::scaled(200000, 40000);
-  g.max_level = 9;
-  std::vector<Octant> leaves;
-  ASSERT_OK(generate_octree(g, &leaves));
+  const std::vector<Octant> leaves = random_octree(3, testing::scaled(200000, 40000), 9);
+  ASSERT_FALSE(leaves.empty());
   ASSERT_OK(write_octant_text(dir.file("random.txt"), leaves, ""));
   ImportResult ir;
   ASSERT_OK(import_octants(dir.file("random"), dir.file("random.txt"), ImportOptions{}, &ir));
+  using A = BalanceOptions::Algorithm;
   struct Run {
     int threads;
     size_t chunk;
     uint64_t budget;
-    bool windows;
+    A algorithm;
     uint64_t window_leaves;
   };
   // Under the sanitizers: one thread against three, sharing small chunks
   // with a spilling budget.
-  const std::vector<Run> runs = testing::small_scale()
-                                    ? std::vector<Run>{{1, size_t{1} << 15, 64 << 20, true, 0},
-                                                       {3, 64, 256 << 10, false, 0},
-                                                       {3, 64, 256 << 10, true, 3000}}
-                                    : std::vector<Run>{{1, size_t{1} << 15, 64 << 20, true, 0},
-                                                       {2, size_t{1} << 15, 64 << 20, true, 0},
-                                                       {3, 1000, 64 << 20, false, 0},
-                                                       {2, 64, 256 << 10, true, 5000},
-                                                       {2, 64, 256 << 10, false, 0},
-                                                       {1, 64, 256 << 10, false, 0}};
+  const std::vector<Run> runs =
+      testing::small_scale() ? std::vector<Run>{{1, size_t{1} << 15, 64 << 20, A::kWindows, 0},
+                                                {3, 64, 256 << 10, A::kClosure, 0},
+                                                {3, 64, 256 << 10, A::kWindows, 3000},
+                                                {2, 64, 64 << 20, A::kAuto, 0}}
+                             : std::vector<Run>{{1, size_t{1} << 15, 64 << 20, A::kWindows, 0},
+                                                {2, size_t{1} << 15, 64 << 20, A::kWindows, 0},
+                                                {3, 1000, 64 << 20, A::kClosure, 0},
+                                                {2, 64, 256 << 10, A::kWindows, 5000},
+                                                {2, 64, 256 << 10, A::kClosure, 0},
+                                                {1, 64, 256 << 10, A::kClosure, 0},
+                                                {2, 64, 256 << 20, A::kAuto, 0},
+                                                {3, 64, 256 << 20, A::kAuto, 0}};
   for (const char* name : {"basin", "random"}) {
     std::string first;
     for (const Run& run : runs) {
       SCOPED_TRACE(std::string(name) + ", " + std::to_string(run.threads) + " threads, chunk " +
                    std::to_string(run.chunk) + ", budget " + std::to_string(run.budget) +
-                   (run.windows ? ", windows" : ", closure"));
+                   ", algorithm " + std::to_string(static_cast<int>(run.algorithm)));
       const std::string db = dir.file(std::string(name) + "-" + std::to_string(&run - &runs[0]));
       std::filesystem::copy(dir.file(name), db);
       BalanceOptions o;
       o.threads = run.threads;
       o.parallel_chunk = run.chunk;
       o.memory = MemoryBudget(run.budget);
-      o.algorithm =
-          run.windows ? BalanceOptions::Algorithm::kWindows : BalanceOptions::Algorithm::kClosure;
+      o.algorithm = run.algorithm;
       o.window_leaves = run.window_leaves;
       BalanceResult r;
       ASSERT_OK(balance_octree(db, o, &r));
       EXPECT_GT(r.split, 0u);
+      // Auto on several threads takes one window of the random octree,
+      // whose levels' asks and created octants its threads share.
+      if (run.algorithm == A::kAuto && std::string(name) == "random") {
+        EXPECT_TRUE(r.by_windows && r.windows == 1 && r.layer_leaves == 0);
+      }
       const std::string bytes = testing::table_bytes(db);
       if (first.empty()) first = bytes;
       ASSERT_EQ(bytes, first);
@@ -313,6 +331,27 @@ TEST(BalanceThreads, AnyThreadCountWritesTheSameTable) {
       EXPECT_TRUE(after.balanced) << after.violation;
     }
   }
+}
+
+// One window's ripple on two threads (each taking half of a level's asks,
+// and half of the final merge) finds the octants one thread finds, on a
+// random octree large enough for its levels to be shared.
+TEST(LocalRippleThreads, TwoThreadsCreateWhatOneCreates) {
+  const std::vector<Octant> leaves = random_octree(9, testing::scaled(200000, 60000), 10);
+  std::vector<uint64_t> keys;
+  for (const Octant& o : leaves) keys.push_back(octant_key(o));
+  std::sort(keys.begin(), keys.end());
+  std::vector<uint64_t> one, two;
+  LocalRipple single(1), shared(2);
+  ASSERT_TRUE(single.run(keys, &one));
+  ASSERT_TRUE(shared.run(keys, &two));
+  EXPECT_GT(one.size(), keys.size() / 2);  // real work, past the threads' threshold
+  EXPECT_TRUE(std::is_sorted(one.begin(), one.end()));
+  EXPECT_TRUE(std::adjacent_find(one.begin(), one.end()) == one.end());
+  EXPECT_EQ(two, one);
+  // Run again, the same object: nothing carried over.
+  ASSERT_TRUE(shared.run(keys, &two));
+  EXPECT_EQ(two, one);
 }
 
 // A leaf made by a split takes the model's vp, vs and rho at its centre

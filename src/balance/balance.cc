@@ -69,7 +69,8 @@ BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
   // parents from each of the first scan's two stretches, the required
   // octants' parents, the required), each buffering sorted runs on their
   // way to its file.
-  spool_buffer = std::min<uint64_t>(plan.take("spools (84 buffers)", 1, 8) / 84, 1ull << 20);
+  const uint64_t spools = plan.take("spools (84 buffers)", 1, 8);
+  spool_buffer = std::min<uint64_t>(spools / 84, 1ull << 20);
   // The larger the chunk of parents, the more neighbours it finds among
   // itself and never hands to the sorter.
   parent_chunk = plan.take("parent chunk", 1, 4);
@@ -81,8 +82,9 @@ BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
   second_reader = plan.take("second reader's pool", 1, 64, 1ull << 20);
   // A model database's readers, for the material of new leaves.
   model = plan.take_budget("model readers", 1, 32);
-  // Windows run instead of the closure, never beside it.
-  windows = parent_chunk + candidate_sort;
+  // Windows run instead of the closure, never beside it: they take its
+  // chunk, sorter, spools and map.
+  windows = parent_chunk + candidate_sort + spools + domain_map;
 }
 
 int finest_level_bound(BTree& leaves) {
@@ -138,10 +140,13 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   const FillPayload fill = model_material_fill(topt, memory.model, o.threads, &model);
   const bool windows = o.algorithm != BalanceOptions::Algorithm::kClosure;
   if (windows && o.keep_from == 0 && o.keep_to == UINT64_MAX) {
-    // Windows on every thread; given up, one window of all the leaves
-    // where the memory holds it (one thread's windows already are that).
-    for (bool one_window : {false, true}) {
-      if (one_window && o.threads <= 1) break;
+    // Auto: one window of all the leaves where the memory holds it (it
+    // reads no layers), else windows on every thread; windows asked for:
+    // they first, then one window (so too for the tests' short windows).
+    // One thread's windows already are one window where it fits.
+    const bool auto_way = o.algorithm == BalanceOptions::Algorithm::kAuto && o.window_leaves == 0;
+    for (bool one_window : {auto_way, !auto_way}) {
+      if (one_window && o.threads <= 1) continue;
       bool fitted = false;
       WEAVER_RETURN_IF_ERROR(
           balance_by_windows(*db, *leaves, o, memory, topt, fill, one_window, r, &fitted));

@@ -74,8 +74,8 @@ struct BalanceMemory {
   uint64_t candidate_sort = 0;  // the sorter of a level's candidates
   uint64_t domain_map = 0;      // which coarse cells the leaves cover (domain_map.h)
   uint64_t second_reader = 0;   // the pool of the first scan's second reader (threads > 1)
-  uint64_t windows = 0;         // the windows in flight (the closure's chunk and sorter shares)
-  MemoryBudget model;           // a model database's readers (modeldb/db_model.h)
+  uint64_t windows = 0;  // the windows in flight (the closure's chunk, sorter, spools and map)
+  MemoryBudget model;    // a model database's readers (modeldb/db_model.h)
 };
 
 struct BalanceResult {

@@ -23,12 +23,12 @@ class Completion {
   Completion(BTree& out, bool appender_thread, const FillPayload& fill, uint32_t payload)
       : out_(out, appender_thread), fill_(payload > 0 ? fill : nullptr), payload_(payload) {}
 
-  Status write(const Octant& t, const std::byte* parent_payload, const std::vector<KeyTag>& inside,
+  Status write(uint64_t key, const std::byte* parent_payload, const std::vector<KeyTag>& inside,
                BalanceResult* r) {
     size_t pos = 0;
     return split_to_resolve(
-        t, false, inside.size(), [&](size_t i) { return inside[i].key; }, &pos,
-        [&](const Octant& o, bool is_new) { return emit(o, is_new, parent_payload, r); });
+        key, false, inside.size(), [&](size_t i) { return inside[i].key; }, &pos,
+        [&](uint64_t leaf, bool is_new) { return emit(leaf, is_new, parent_payload, r); });
   }
   // A leaf with nothing required inside it (nearly all of them): copied
   // from its key and payload as they are, without decoding the octant.
@@ -44,9 +44,9 @@ class Completion {
 
  private:
   // is_new: o is a child made by a split, not a leaf of the input.
-  Status emit(const Octant& o, bool is_new, const std::byte* parent_payload, BalanceResult* r) {
-    add_entry(octant_key(o), o.level, parent_payload, r);
-    if (is_new && fill_) fill_(o, &*(batch_.payloads.end() - payload_));
+  Status emit(uint64_t key, bool is_new, const std::byte* parent_payload, BalanceResult* r) {
+    add_entry(key, octant_key_level(key), parent_payload, r);
+    if (is_new && fill_) fill_(octant_from_key(key), &*(batch_.payloads.end() - payload_));
     return flush_if_full();
   }
 
@@ -80,7 +80,7 @@ Status write_refinement(BTree& leaves, KeyTagSource& required, const FillPayload
         if (inside.empty()) return completion.copy(c.key(), c.payload(), r);
         ++r->split;
         if (!payload.empty()) std::memcpy(payload.data(), c.payload(), payload.size());
-        return completion.write(octant_from_key(c.key()), payload.data(), inside, r);
+        return completion.write(c.key(), payload.data(), inside, r);
       }));
   return completion.finish();
 }

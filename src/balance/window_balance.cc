@@ -22,6 +22,7 @@ namespace {
 // One window on its way from a worker to the table: the `count` leaves
 // whose keys lie in [from, to), and their refinement.
 struct Window {
+  uint64_t first = 0;  // a block of the one window: the index of its first leaf
   uint64_t count = 0;
   uint64_t from = 0, to = 0;
   std::vector<uint64_t> keys;  // the refinement
@@ -32,6 +33,25 @@ struct Window {
   Status status;
   bool done = false;  // set by the worker (WorkQueue)
 };
+
+// One window of every leaf, read and rippled once (the ripple's levels
+// shared between the threads); its refinement then goes in blocks of
+// consecutive leaves, on the workers as windows go.
+struct WholeTable {
+  std::vector<uint64_t> keys, created;
+  std::vector<std::byte> payloads;
+
+  uint64_t bytes() const {
+    return (keys.capacity() + created.capacity()) * sizeof(uint64_t) + payloads.capacity();
+  }
+};
+
+// What one window holds for each leaf (its key, a holder, its share of the
+// created octants and the ripple's sort of them, its parent's ask), beside
+// its payload; the ripple's measure decides in the end.
+constexpr uint64_t kWholeBytesPerLeaf = 64;
+// One window's blocks: short enough for several in flight to stay small.
+constexpr uint64_t kBlockLeaves = 16384;
 
 // Whether [key, end of its subtree) lies in [from, to).
 bool within(uint64_t key, uint64_t from, uint64_t to) {
@@ -94,21 +114,33 @@ class WindowWorker {
 
   // Set by any worker whose window gives up: the others stop too.
   void share_giving_up(std::atomic<bool>* flag) { given_up_ = flag; }
+  // The one window: windows are then blocks of its leaves, to refine.
+  void share_whole(const WholeTable* whole) { whole_ = whole; }
 
   void run(Window* w) {
     if (given_up_ != nullptr && given_up_->load()) {
       w->fitted = false;
       return;
     }
+    if (whole_ != nullptr) {
+      bool fits = false;
+      w->status =
+          refine(whole_->keys.data() + w->first, whole_->payloads.data() + w->first * payload_,
+                 w->count, whole_->created, w->from, w->to, w, &fits);
+      if (w->status.ok() && !fits) give_up(w);
+      return;
+    }
     w->status = read(*w);
     if (w->status.ok()) w->status = balance(0, keys_.size(), w->from, w->to, w);
-    if (outweighed_) {
-      w->fitted = false;
-      if (given_up_ != nullptr) given_up_->store(true);
-    }
+    if (outweighed_) give_up(w);
   }
 
  private:
+  void give_up(Window* w) {
+    w->fitted = false;
+    if (given_up_ != nullptr) given_up_->store(true);
+  }
+
   Status read(const Window& w) {
     keys_.clear();
     payloads_.clear();
@@ -163,7 +195,8 @@ class WindowWorker {
       *fits = false;
       return Status::Ok();
     }
-    return refine(i0, i1, from, to, w, fits);
+    return refine(keys_.data() + i0, payloads_.data() + i0 * payload_, i1 - i0, created_, from, to,
+                  w, fits);
   }
 
   // The leaves outside [from, to) that meet the block of an own leaf, in
@@ -260,9 +293,12 @@ class WindowWorker {
     return Status::Ok();
   }
 
-  // Own leaves [i0, i1) split just enough to resolve created_, appended to
-  // w's refinement; undone if the refinement outgrows the memory.
-  Status refine(size_t i0, size_t i1, uint64_t from, uint64_t to, Window* w, bool* fits) {
+  // The n leaves at keys (their payloads at payloads) split just enough to
+  // resolve `created`, appended to w's refinement; undone if the
+  // refinement outgrows the memory.  from and to bound their keys.
+  Status refine(const uint64_t* keys, const std::byte* payloads, size_t n,
+                const std::vector<uint64_t>& created, uint64_t from, uint64_t to, Window* w,
+                bool* fits) {
     *fits = false;
     const size_t at = w->keys.size();
     const uint64_t limit = bytes_ > held(0) ? (bytes_ - held(0)) / (8 + payload_) : 0;
@@ -270,21 +306,23 @@ class WindowWorker {
     bool over = false;
     auto add = [&](uint64_t key, size_t i) {
       w->keys.push_back(key);
-      const std::byte* p = payloads_.data() + (i0 + i) * payload_;
+      const std::byte* p = payloads + i * payload_;
       w->payloads.insert(w->payloads.end(), p, p + payload_);
       if (w->keys.size() - at > limit) over = true;
     };
     size_t last_split = SIZE_MAX;
     const Status st = resolve_leaves(
-        keys_.data() + i0, i1 - i0, created_,
+        keys, n, created,
         [&](size_t i) {
-          add(keys_[i0 + i], i);
+          add(keys[i], i);
           return Status::Ok();
         },
-        [&](size_t i, const Octant& o, bool is_new) {
+        [&](size_t i, uint64_t key, bool is_new) {
           if (i != last_split) last_split = i, ++split;
-          add(octant_key(o), i);
-          if (is_new && fill_ && payload_ > 0) fill_(o, &*(w->payloads.end() - payload_));
+          add(key, i);
+          if (is_new && fill_ && payload_ > 0) {
+            fill_(octant_from_key(key), &*(w->payloads.end() - payload_));
+          }
           return over ? Status::Internal("the window outgrew its memory") : Status::Ok();
         });
     if (over) {  // stopped: undone, to be cut in two
@@ -295,8 +333,8 @@ class WindowWorker {
     WEAVER_RETURN_IF_ERROR(st);
     for (size_t j = at; j < w->keys.size(); ++j) ++w->levels[octant_key_level(w->keys[j])];
     w->split += split;
-    w->created += std::lower_bound(created_.begin(), created_.end(), to) -
-                  std::lower_bound(created_.begin(), created_.end(), from);
+    w->created += std::lower_bound(created.begin(), created.end(), to) -
+                  std::lower_bound(created.begin(), created.end(), from);
     w->layer += layer_.size();
     *fits = true;
     return Status::Ok();
@@ -311,6 +349,7 @@ class WindowWorker {
   const uint64_t least_cut_;     // windows this short that do not fit give up
   bool outweighed_ = false;      // a whole window's layer outweighed it: the run gives up
   std::atomic<bool>* given_up_ = nullptr;
+  const WholeTable* whole_ = nullptr;
   std::vector<uint64_t> keys_;  // the window's own leaves
   std::vector<std::byte> payloads_;
   std::vector<uint64_t> asked_;  // octants whose leaves the layer holds
@@ -348,38 +387,76 @@ Status window_options(Database& db, BTree& leaves, const BalanceOptions& o,
   return Status::Ok();
 }
 
+namespace {
+
+// Reads every leaf of the table into *t and ripples them all on `threads`
+// threads; false in *fits if `memory` does not hold them.
+Status ripple_whole(BTree& leaves, uint64_t memory, int threads, WholeTable* t, bool* fits) {
+  *fits = false;
+  const uint64_t n = leaves.size();
+  const size_t payload = leaves.payload_size();
+  if (n * (kWholeBytesPerLeaf + payload) > memory) return Status::Ok();
+  t->keys.reserve(n);
+  t->payloads.reserve(n * payload);
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(leaves.seek_cursor(0, &c));
+  while (c.valid()) {
+    t->keys.push_back(c.key());
+    t->payloads.insert(t->payloads.end(), c.payload(), c.payload() + payload);
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  if (t->keys.size() != n) return Status::Corruption("the octant table changed under balance");
+  LocalRipple ripple(threads);
+  *fits = ripple.run(t->keys, &t->created, memory - t->bytes());
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree& out,
                           BalanceResult* r, bool* fitted) {
   *fitted = true;
   BTree& first = *o.readers.at(0);
   const uint64_t total = first.size();
-  const uint64_t lo = std::min(o.first_leaf, total), hi = std::min(o.end_leaf, total);
+  const uint64_t lo = o.one_window ? 0 : std::min(o.first_leaf, total);
+  const uint64_t hi = o.one_window ? total : std::min(o.end_leaf, total);
   const uint64_t n = hi - lo;
   if (n == 0) return Status::Ok();
-  const int threads = o.one_window ? 1 : static_cast<int>(o.readers.size());
+  const int threads = static_cast<int>(o.readers.size());
   // Workers run ahead of the writer by a window each.
   const size_t in_flight = threads == 1 ? 1 : 2 * size_t(threads);
-  const uint64_t slot_bytes = o.memory / in_flight;
-  // A window's own leaves, read, and their refinement, about four times as
-  // many, beside the local set, the ripple's map and what it creates.
-  uint64_t leaves_per =
-      std::max<uint64_t>(1024, slot_bytes / (4 * (8 + first.payload_size()) + 160));
-  if (o.one_window && leaves_per < n) {
-    *fitted = false;
-    return Status::Ok();
+  uint64_t slot_bytes = o.memory / in_flight;
+  uint64_t windows = 0;
+  WholeTable whole;
+  if (o.one_window) {
+    bool fits = false;
+    WEAVER_RETURN_IF_ERROR(ripple_whole(first, o.memory, threads, &whole, &fits));
+    // What is left holds the blocks in flight.
+    if (!fits || whole.bytes() + in_flight * kBlockLeaves * 64 > o.memory) {
+      *fitted = false;
+      return Status::Ok();
+    }
+    slot_bytes = (o.memory - whole.bytes()) / in_flight;
+    windows = (n + kBlockLeaves - 1) / kBlockLeaves;
+  } else {
+    // A window's own leaves, read, and their refinement, about four times
+    // as many, beside the local set, the ripple's work and what it creates.
+    uint64_t leaves_per =
+        std::max<uint64_t>(1024, slot_bytes / (4 * (8 + first.payload_size()) + 160));
+    if (o.window_leaves > 0) leaves_per = std::min(leaves_per, o.window_leaves);
+    windows = std::max<uint64_t>(1, (n + leaves_per - 1) / leaves_per);
+    if (threads > 1) windows = std::max<uint64_t>(windows, 4 * uint64_t(threads));
+    windows = std::min(windows, std::max<uint64_t>(n, 1));
   }
-  if (o.window_leaves > 0 && !o.one_window) leaves_per = std::min(leaves_per, o.window_leaves);
-  uint64_t windows = std::max<uint64_t>(1, (n + leaves_per - 1) / leaves_per);
-  if (threads > 1) windows = std::max<uint64_t>(windows, 4 * uint64_t(threads));
-  windows = std::min(windows, std::max<uint64_t>(n, 1));
 
   std::vector<std::unique_ptr<WindowWorker>> workers;
   for (int i = 0; i < threads; ++i) {
     workers.push_back(std::make_unique<WindowWorker>(*o.readers[i], slot_bytes, fill, o));
+    if (o.one_window) workers.back()->share_whole(&whole);
   }
   // Where the windows part, found before the workers use the first handle.
   std::vector<uint64_t> starts(windows + 1, 0);
-  for (uint64_t i = 0; i <= windows; ++i) {
+  for (uint64_t i = 0; i <= windows && !o.one_window; ++i) {
     const uint64_t at = lo + n * i / windows;
     if (at == 0 || at >= total) {
       starts[i] = at == 0 ? 0 : UINT64_MAX;
@@ -404,9 +481,16 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
   uint64_t next = 0;
   auto add = [&](std::deque<std::unique_ptr<Window>>* flight) {
     auto w = std::make_unique<Window>();
-    w->count = n * (next + 1) / windows - n * next / windows;
-    w->from = starts[next];
-    w->to = starts[next + 1];
+    w->first = n * next / windows;
+    w->count = n * (next + 1) / windows - w->first;
+    if (o.one_window) {  // a block: its leaves are read already
+      const uint64_t end = w->first + w->count;
+      w->from = whole.keys[w->first];
+      w->to = end < n ? whole.keys[end] : UINT64_MAX;
+    } else {
+      w->from = starts[next];
+      w->to = starts[next + 1];
+    }
     ++next;
     if (threads > 1) queue.push(w.get());
     flight->push_back(std::move(w));
@@ -442,6 +526,7 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
   }
   r->input_leaves = read;
   r->by_windows = *fitted;
+  if (o.one_window) r->windows = 1;  // its blocks are not windows of their own
   if (threads > 1) {
     for (auto& w : flight) queue.wait_done(w.get());
     queue.stop();

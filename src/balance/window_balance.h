@@ -47,10 +47,11 @@ struct WindowOptions {
   // when a window of at most least_cut leaves does not fit.
   double layer_limit = 0;
   uint64_t layer_window = 4096, least_cut = 4096;
-  // One window of every leaf, with no layer, on the first reader's thread:
-  // *fitted is false at once if the memory does not hold it.  Where the
-  // layers of many windows outweigh them (random refinement), one window
-  // of a table that fits is the least work.
+  // One window of every leaf, with no layer: read and rippled once (the
+  // ripple's levels shared between the threads), then refined in blocks on
+  // every reader's thread; *fitted is false if the memory does not hold
+  // it.  Where the layers of many windows outweigh them (random
+  // refinement), one window of a table that fits is the least work.
   bool one_window = false;
 };
 

@@ -112,8 +112,8 @@ void SubtreeBalancer::refine(SubtreeLeaves* leaves) {
         ++out_.levels[octant_key_level(leaves->keys[i])];
         return Status::Ok();
       },
-      [&](size_t i, const Octant& o, bool is_new) {
-        return emit_leaf(o, is_new, leaves->payloads.data() + i * bytes);
+      [&](size_t i, uint64_t key, bool is_new) {
+        return emit_leaf(key, is_new, leaves->payloads.data() + i * bytes);
       });
   out_.elements = out_.keys.size();
   int coarsest = 0;
@@ -127,16 +127,16 @@ void SubtreeBalancer::refine(SubtreeLeaves* leaves) {
 
 // A leaf of the refinement into out_: a new one with the model's material
 // at its centre (or a copy of its parent's), else as it was.
-Status SubtreeBalancer::emit_leaf(const Octant& o, bool is_new, const std::byte* parent_payload) {
+Status SubtreeBalancer::emit_leaf(uint64_t key, bool is_new, const std::byte* parent_payload) {
   const size_t bytes = descent_.payload_bytes(), at = out_.payloads.size();
-  out_.keys.push_back(octant_key(o));
+  out_.keys.push_back(key);
   out_.payloads.resize(at + bytes);
   if (is_new && fill_) {
-    descent_.material(o, out_.payloads.data() + at);
+    descent_.material(octant_from_key(key), out_.payloads.data() + at);
   } else {
     std::memcpy(out_.payloads.data() + at, parent_payload, bytes);
   }
-  ++out_.levels[o.level];
+  ++out_.levels[octant_key_level(key)];
   return Status::Ok();
 }
 

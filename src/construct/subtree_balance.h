@@ -59,7 +59,7 @@ class SubtreeBalancer {
   void collect(const Octant& x, const Judgement& j, const Octant& root);
   bool wanted(const Octant& x, const Octant& root) const;
   void refine(SubtreeLeaves* leaves);
-  Status emit_leaf(const Octant& o, bool is_new, const std::byte* parent_payload);
+  Status emit_leaf(uint64_t key, bool is_new, const std::byte* parent_payload);
 
   const Descent& descent_;
   const bool fill_;

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <bit>
+#include <queue>
+#include <utility>
 
+#include "util/parallel.h"
 #include "util/parent_asks.h"
 #include "util/radix_sort.h"
 
@@ -27,14 +30,59 @@ constexpr std::array<uint32_t, 8> leaving_parent_table() {
 }
 constexpr std::array<uint32_t, 8> kLeavingParent = leaving_parent_table();
 
+// Candidates are settled this many at a time: their sort stays in the
+// cache, and a level's candidates (many times its created octants) never
+// take more memory than this.
+constexpr size_t kChunk = size_t{1} << 17;
+
+// Sorts keys of octants of one level (level >= 1): only their Morton bits
+// above the level's cell differ.
+void sort_level_keys(std::vector<uint64_t>& keys, int level, std::vector<uint64_t>& scratch) {
+  if (keys.size() < 512) {
+    std::sort(keys.begin(), keys.end());
+  } else {
+    radix_sort(keys, 64 - 3 * level, 3 * level, scratch);
+  }
+}
+
+void sort_unique(std::vector<uint64_t>& keys, int level, std::vector<uint64_t>& scratch) {
+  sort_level_keys(keys, level, scratch);
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+}
+
+// A level's asks are shared between threads only where there are this
+// many: below it, a thread's start costs more than half the work.
+constexpr size_t kSharedAsks = size_t{1} << 14;
+
+// Sorted ranges (none sharing a key) merged into out, in key order.
+void merge_ranges(const std::vector<std::pair<const uint64_t*, const uint64_t*>>& ranges,
+                  uint64_t* out) {
+  using Head = std::pair<uint64_t, size_t>;  // a range's next key, and which range
+  std::priority_queue<Head, std::vector<Head>, std::greater<Head>> heads;
+  std::vector<const uint64_t*> at;
+  for (size_t r = 0; r < ranges.size(); ++r) {
+    at.push_back(ranges[r].first);
+    if (ranges[r].first != ranges[r].second) heads.push({*ranges[r].first, r});
+  }
+  while (!heads.empty()) {
+    const size_t r = heads.top().second;
+    heads.pop();
+    // Take this range's keys while they come before every other head.
+    const uint64_t bound = heads.empty() ? UINT64_MAX : heads.top().first;
+    const uint64_t* p = at[r];
+    while (p != ranges[r].second && *p < bound) *out++ = *p++;
+    at[r] = p;
+    if (p != ranges[r].second) heads.push({*p, r});
+  }
+}
+
 }  // namespace
 
 // Only the leaves two levels finer than the coarsest ask (an octant of
 // level l - 1 lies strictly inside a leaf only if that leaf's level is
 // l - 2 or coarser), so a set graded by one level at most has nothing to
-// do; and only the leaves two levels coarser than the finest go into the
-// map as leaves: the others are found resolved all the same, since their
-// parents are inner.
+// do; and only the leaves two levels coarser than the finest can hold a
+// created octant.
 bool LocalRipple::run(const std::vector<uint64_t>& local, std::vector<uint64_t>* created,
                       size_t max_bytes) {
   created->clear();
@@ -44,133 +92,186 @@ bool LocalRipple::run(const std::vector<uint64_t>& local, std::vector<uint64_t>*
   while (coarsest <= kMaxLevel && count[coarsest] == 0) ++coarsest;
   while (finest >= 0 && count[finest] == 0) --finest;
   if (finest - coarsest < 2) return true;
-  // Room for the leaves it holds and their ancestors (a seventh as many,
-  // where families are whole), and some created octants, without growing.
-  size_t held = 0;
-  for (int l = coarsest; l <= finest - 2; ++l) held += count[l];
-  map_.reset(held + local.size() / 4 + 64);
-  within_ = within_end_ = 0;
-  uint64_t last_parent = ~uint64_t{0};
-  constexpr size_t kAhead = 16;  // map slots prefetched this many leaves ahead
-  for (size_t i = 0; i < local.size(); ++i) {
-    if (i + kAhead < local.size()) {
-      const uint64_t ahead = local[i + kAhead];
-      map_.prefetch(ahead);
-      if (octant_key_level(ahead) > 0) map_.prefetch(octant_key_parent(ahead));
-    }
-    const uint64_t key = local[i];
-    const int level = octant_key_level(key);
-    if (level <= finest - 2) map_.add(key, OctantMap::kLeaf);
-    if (level == 0) continue;
-    const uint64_t parent = octant_key_parent(key);
-    if (level >= coarsest + 2) add_ask(level, parent, 1u << octant_key_child_id(key));
-    if (parent == last_parent) continue;
-    last_parent = parent;
-    for (uint64_t q = parent; map_.add(q, OctantMap::kInner) && octant_key_level(q) > 0;) {
-      q = octant_key_parent(q);
-    }
+  gather(local, coarsest, finest);
+  made_from_ = 0;
+  runs_.assign(1, 0);
+  bool fitted = true;
+  for (int l = finest; l >= coarsest + 2 && fitted; --l) {
+    fitted = ask_level(l, created, max_bytes);
+    runs_.push_back(created->size());
   }
-  for (int l = finest; l >= 1; --l) {
-    if (!ask_level(l, created, max_bytes)) {
-      for (auto& asks : asks_) asks.clear();
-      unsorted_ = {};
-      return false;
-    }
-  }
-  radix_sort_by(*created, scratch_, [](uint64_t k) { return k; });
+  for (auto& asks : leaf_asks_) asks.clear();
+  if (!fitted) return false;
+  merge_runs(created);
   return true;
+}
+
+// *created's runs (a level's created octants each, in key order) merged
+// into one; on two threads where there are many, each taking the keys on
+// one side of the middle key of the longest run.
+void LocalRipple::merge_runs(std::vector<uint64_t>* created) {
+  const size_t n = created->size();
+  if (runs_.size() <= 2 || n < 2) return;
+  if (lanes_ == 1 || n < kSharedAsks) {
+    radix_sort_by(*created, scratch_, [](uint64_t k) { return k; });
+    return;
+  }
+  size_t longest = 0;
+  for (size_t r = 0; r + 1 < runs_.size(); ++r) {
+    if (runs_[r + 1] - runs_[r] > runs_[longest + 1] - runs_[longest]) longest = r;
+  }
+  const uint64_t middle = (*created)[(runs_[longest] + runs_[longest + 1]) / 2];
+  using Range = std::pair<const uint64_t*, const uint64_t*>;
+  std::vector<Range> below, above;
+  const uint64_t* c = created->data();
+  size_t below_count = 0;
+  for (size_t r = 0; r + 1 < runs_.size(); ++r) {
+    const uint64_t* cut = std::lower_bound(c + runs_[r], c + runs_[r + 1], middle);
+    below.push_back({c + runs_[r], cut});
+    above.push_back({cut, c + runs_[r + 1]});
+    below_count += cut - (c + runs_[r]);
+  }
+  scratch_.resize(n);
+  run_shares(2, [&](int half) {
+    merge_ranges(half == 0 ? below : above, scratch_.data() + (half == 0 ? 0 : below_count));
+    return Status::Ok();
+  });
+  created->swap(scratch_);
 }
 
 size_t LocalRipple::bytes(const std::vector<uint64_t>& created) const {
-  size_t n = map_.bytes() + created.capacity() * sizeof(uint64_t);
-  for (const auto& asks : asks_) n += asks.capacity() * sizeof(Ask);
+  size_t n = (holders_.capacity() + scratch_.capacity() + created.capacity()) * sizeof(uint64_t) +
+             asks_.capacity() * sizeof(Ask);
+  for (const auto& asks : leaf_asks_) n += asks.capacity() * sizeof(Ask);
+  for (const Lane& lane : lane_) n += lane.bytes();
   return n;
 }
 
-// Neighbour nb of a level-l parent: created if it lies strictly inside a
-// leaf and is not there already.
-void LocalRipple::consider(uint64_t nb, int l, std::vector<uint64_t>* created) {
-  if (map_.find(nb) != OctantMap::kAbsent) return;  // resolved, or created already
-  // Inside the leaf (or created octant) the last walk ended at: nothing
-  // inner lies between (inner octants hold leaves), so nb is created too.
-  // Neighbours come in key order, so the walk is mostly saved.
-  if (nb <= within_ || nb >= within_end_) {
-    OctantMap::Kind above = OctantMap::kAbsent;
-    uint64_t q = nb;
-    while (above == OctantMap::kAbsent) {
-      q = octant_key_parent(q);
-      above = map_.find(q);
+// The holders, and the leaves' asks by level, merged by parent (siblings
+// come one after another among the leaves of their level).
+void LocalRipple::gather(const std::vector<uint64_t>& local, int coarsest, int finest) {
+  holders_.clear();
+  for (uint64_t key : local) {
+    const int level = octant_key_level(key);
+    if (level <= finest - 2) holders_.push_back(key);
+    if (level < coarsest + 2) continue;
+    const uint64_t parent = octant_key_parent(key);
+    const uint32_t bit = 1u << octant_key_child_id(key);
+    std::vector<Ask>& asks = leaf_asks_[level];
+    if (!asks.empty() && asks.back().parent == parent) {
+      asks.back().children |= bit;
+    } else {
+      asks.push_back({parent, bit, false});
     }
-    if (above == OctantMap::kInner) return;
-    within_ = q;
-    within_end_ = octant_key_subtree_end(q);
-  }
-  map_.add(nb, OctantMap::kCreated);
-  created->push_back(nb);
-  if (l - 1 > 0) {
-    asks_[l - 1].push_back({octant_key_parent(nb), 255, true});
-    unsorted_[l - 1] = true;
   }
 }
 
-// A leaf's ask, merged with its siblings' (they come one after another
-// among the leaves of their level).
-void LocalRipple::add_ask(int level, uint64_t parent, unsigned child_bit) {
-  std::vector<Ask>& asks = asks_[level];
-  if (!asks.empty() && asks.back().parent == parent) {
-    asks.back().children |= child_bit;
-  } else {
-    asks.push_back({parent, child_bit, false});
+// Level l's asks in key order: the leaves' and those of the parents of
+// the octants created at level l (the tail of *created, from made_from_),
+// which ask for all their neighbours.
+void LocalRipple::merge_asks(int l, const std::vector<uint64_t>& created) {
+  asks_.clear();
+  auto push = [&](const Ask& a) {
+    if (!asks_.empty() && asks_.back().parent == a.parent) {
+      asks_.back().children |= a.children;
+      asks_.back().created |= a.created;
+    } else {
+      asks_.push_back(a);
+    }
+  };
+  const std::vector<Ask>& leaves = leaf_asks_[l];
+  size_t i = 0;
+  for (size_t m = made_from_; m < created.size(); ++m) {
+    const uint64_t parent = octant_key_parent(created[m]);
+    while (i < leaves.size() && leaves[i].parent <= parent) push(leaves[i++]);
+    push({parent, 255, true});
   }
+  while (i < leaves.size()) push(leaves[i++]);
 }
 
-// The asks of level l's parents: each neighbour one level coarser that is
-// strictly inside a leaf (its nearest octant in the map, going up, is a
-// leaf or created) is created, and its parent asks in turn at level l - 1.
+// Level l's asks: each candidate of level l - 1 that lies strictly inside
+// a leaf is created (appended to *created, in key order), and asks in turn
+// at level l - 1.  Where there are many asks, two threads take a half
+// each, and their octants are merged.
 bool LocalRipple::ask_level(int l, std::vector<uint64_t>* created, size_t max_bytes) {
-  std::vector<Ask>& asks = asks_[l];
-  if (unsorted_[l]) {
-    radix_sort_by(asks, ask_scratch_, [](const Ask& a) { return a.parent; });
-    size_t n = 0;
-    for (const Ask& a : asks) {
-      if (n > 0 && asks[n - 1].parent == a.parent) {
-        asks[n - 1].children |= a.children;
-        asks[n - 1].created |= a.created;
-      } else {
-        asks[n++] = a;
+  merge_asks(l, *created);
+  const size_t lanes = asks_.size() >= kSharedAsks ? lanes_ : 1;
+  const Ask* asks = asks_.data();
+  const size_t n = asks_.size();
+  run_shares(static_cast<int>(lanes), [&](int i) {
+    lane_[i].take(asks + n * i / lanes, asks + n * (i + 1) / lanes, l, holders_);
+    return Status::Ok();
+  });
+  made_from_ = created->size();
+  if (lanes == 1) {
+    created->insert(created->end(), lane_[0].made.begin(), lane_[0].made.end());
+  } else {
+    const std::vector<uint64_t>&a = lane_[0].made, &b = lane_[1].made;
+    created->resize(made_from_ + a.size() + b.size());
+    const auto end = std::set_union(a.begin(), a.end(), b.begin(), b.end(),
+                                    created->begin() + static_cast<ptrdiff_t>(made_from_));
+    created->erase(end, created->end());
+  }
+  return bytes(*created) <= max_bytes;
+}
+
+// The candidates of asks [begin, end) of level l, settled a chunk at a
+// time into made (sorted, once each).
+void LocalRipple::Lane::take(const Ask* begin, const Ask* end, int l,
+                             const std::vector<uint64_t>& holders) {
+  made.clear();
+  candidates.clear();
+  several = false;
+  recent.fill(~uint64_t{0});
+  for (const Ask* a = begin; a != end; ++a) {
+    uint32_t asked = parent_asks::kTouchedBy[a->children];
+    // The parent's siblings are there (leaves or inner) when its own
+    // parent is inner, as it is above a leaf of the input: only the
+    // neighbours outside it are asked about.
+    if (!a->created && l >= 2) asked &= kLeavingParent[octant_key_child_id(a->parent)];
+    for (uint32_t bits = asked; bits != 0; bits &= bits - 1) {
+      uint64_t nb = 0;
+      if (octant_key_neighbour(a->parent, kFaceAndEdgeDirections[std::countr_zero(bits)], &nb)) {
+        uint64_t& seen = recent[(nb * 0x9E3779B97F4A7C15ULL) >> (64 - kRecentBits)];
+        if (seen == nb) continue;
+        seen = nb;
+        candidates.push_back(nb);
       }
     }
-    asks.resize(n);
-    unsorted_[l] = false;
-  }
-  // Asks go in batches: the map slots of a batch's neighbours (and their
-  // parents') are prefetched together, so their cache misses overlap.
-  constexpr size_t kBatch = 8;
-  std::array<uint64_t, kBatch * kFaceAndEdgeDirections.size()> near;
-  for (size_t b = 0; b < asks.size(); b += kBatch) {
-    const size_t end = std::min(asks.size(), b + kBatch);
-    size_t n = 0;
-    for (size_t i = b; i < end; ++i) {
-      const Ask& a = asks[i];  // (consider() may grow asks_ of level l - 1, not l)
-      uint32_t asked = parent_asks::kTouchedBy[a.children];
-      // The parent's siblings are there (leaves or inner) when its own
-      // parent is inner, as it is above a leaf of the input: only the
-      // neighbours outside it are asked about.
-      if (!a.created && l >= 2) asked &= kLeavingParent[octant_key_child_id(a.parent)];
-      for (uint32_t bits = asked; bits != 0; bits &= bits - 1) {
-        uint64_t& nb = near[n];
-        if (octant_key_neighbour(a.parent, kFaceAndEdgeDirections[std::countr_zero(bits)], &nb)) {
-          map_.prefetch(nb);
-          map_.prefetch(octant_key_parent(nb));
-          ++n;
-        }
-      }
+    if (candidates.size() >= kChunk) {
+      settle(l - 1, holders);
+      several = true;
     }
-    for (size_t k = 0; k < n; ++k) consider(near[k], l, created);
-    if ((b & 255) == 0 && bytes(*created) > max_bytes) return false;
   }
-  asks.clear();
-  return true;
+  settle(l - 1, holders);
+  if (several) sort_unique(made, l - 1, scratch);
+}
+
+// The candidates (octants of `level`) that lie strictly inside a holder,
+// onto made: sorted, each one's holder is the last leaf at or before it,
+// found by walking the holders forwards (in strides, then halving, as the
+// candidates are often sparse among them).
+void LocalRipple::Lane::settle(int level, const std::vector<uint64_t>& holders) {
+  if (candidates.empty()) return;
+  sort_unique(candidates, level, scratch);
+  const uint64_t* h = holders.data();
+  const size_t n = holders.size();
+  size_t past = std::upper_bound(h, h + n, candidates.front()) - h;  // holders <= the candidate
+  for (uint64_t k : candidates) {
+    if (past < n && h[past] <= k) {
+      size_t step = 1;
+      while (past + step < n && h[past + step] <= k) step *= 2;
+      past = std::upper_bound(h + past + step / 2 + 1, h + std::min(n, past + step), k) - h;
+    }
+    if (past == 0) continue;
+    const uint64_t holder = h[past - 1];
+    if (octant_key_level(holder) < level && k < octant_key_subtree_end(holder)) made.push_back(k);
+  }
+  candidates.clear();
+}
+
+size_t LocalRipple::Lane::bytes() const {
+  return (candidates.capacity() + scratch.capacity() + made.capacity()) * sizeof(uint64_t);
 }
 
 }  // namespace weaver

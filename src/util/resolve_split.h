@@ -16,27 +16,29 @@ namespace weaver {
 
 // key_of(i) is the i-th of `count` required octant keys, in key order; *pos
 // is the first not yet passed, and moves forward (calls for leaves in key
-// order share it).  emit(leaf, is_new) is called for each resulting leaf
-// in key order (is_new: made by a split, not o itself); the first error it
-// returns stops the walk.
+// order share it).  emit(leaf key, is_new) is called for each resulting
+// leaf in key order (is_new: made by a split, not `key` itself); the first
+// error it returns stops the walk.  Keys all the way: most callers never
+// need the octant decoded.
 template <typename KeyOf, typename Emit>
-Status split_to_resolve(const Octant& o, bool is_new, size_t count, const KeyOf& key_of,
-                        size_t* pos, const Emit& emit) {
-  const uint64_t key = octant_key(o), end = octant_key_subtree_end(key);
-  while (*pos < count && key_of(*pos) <= key) ++*pos;  // o itself is resolved
+Status split_to_resolve(uint64_t key, bool is_new, size_t count, const KeyOf& key_of, size_t* pos,
+                        const Emit& emit) {
+  const uint64_t end = octant_key_subtree_end(key);
+  while (*pos < count && key_of(*pos) <= key) ++*pos;  // key itself is resolved
   if (*pos < count && key_of(*pos) < end) {
     for (int c = 0; c < 8; ++c) {
-      WEAVER_RETURN_IF_ERROR(split_to_resolve(octant_child(o, c), true, count, key_of, pos, emit));
+      WEAVER_RETURN_IF_ERROR(
+          split_to_resolve(octant_key_child(key, c), true, count, key_of, pos, emit));
     }
     return Status::Ok();
   }
-  return emit(o, is_new);
+  return emit(key, is_new);
 }
 
 // Each of n leaves (keys in key order) resolved against `created` (key
 // order, octants required strictly inside the leaves): copy(i) for a leaf
-// with none inside it, as it is; else emit(i, leaf, is_new) for each leaf
-// of its split, in key order.
+// with none inside it, as it is; else emit(i, leaf key, is_new) for each
+// leaf of its split, in key order.
 template <typename Copy, typename Emit>
 Status resolve_leaves(const uint64_t* keys, size_t n, const std::vector<uint64_t>& created,
                       const Copy& copy, const Emit& emit) {
@@ -51,8 +53,8 @@ Status resolve_leaves(const uint64_t* keys, size_t n, const std::vector<uint64_t
       continue;
     }
     WEAVER_RETURN_IF_ERROR(split_to_resolve(
-        octant_from_key(key), false, created.size(), [&](size_t j) { return created[j]; }, &pos,
-        [&](const Octant& o, bool is_new) { return emit(i, o, is_new); }));
+        key, false, created.size(), [&](size_t j) { return created[j]; }, &pos,
+        [&](uint64_t leaf, bool is_new) { return emit(i, leaf, is_new); }));
   }
   return Status::Ok();
 }
