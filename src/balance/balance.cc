@@ -101,6 +101,10 @@ Status balance_by_windows(Database& db, BTree& leaves, const BalanceOptions& o,
                           const BalanceMemory& memory, const TableOptions& topt,
                           const FillPayload& fill, bool one_window, BalanceResult* r,
                           bool* fitted) {
+  if (one_window && !one_window_may_fit(leaves, memory.windows)) {
+    *fitted = false;  // told before a table is made for it
+    return Status::Ok();
+  }
   std::vector<std::unique_ptr<BTree>> more;
   WindowOptions wo;
   WEAVER_RETURN_IF_ERROR(window_options(db, leaves, o, memory, &more, &wo));

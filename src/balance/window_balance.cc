@@ -50,8 +50,14 @@ struct WholeTable {
 // created octants and the ripple's sort of them, its parent's ask), beside
 // its payload; the ripple's measure decides in the end.
 constexpr uint64_t kWholeBytesPerLeaf = 64;
+constexpr uint64_t kRippleBytesPerLeaf = 64;
 // One window's blocks: short enough for several in flight to stay small.
 constexpr uint64_t kBlockLeaves = 16384;
+
+// A payload row copied (none where the table has no payload).
+void copy_bytes(std::byte* to, const std::byte* from, size_t n) {
+  if (n > 0) std::memcpy(to, from, n);
+}
 
 // Whether [key, end of its subtree) lies in [from, to).
 bool within(uint64_t key, uint64_t from, uint64_t to) {
@@ -143,12 +149,12 @@ class WindowWorker {
 
   Status read(const Window& w) {
     keys_.clear();
-    payloads_.clear();
+    payloads_.resize(w.count * payload_);
     BTreeCursor c;
     WEAVER_RETURN_IF_ERROR(leaves_.seek_cursor(w.from, &c));
     for (uint64_t i = 0; i < w.count && c.valid(); ++i) {
       keys_.push_back(c.key());
-      payloads_.insert(payloads_.end(), c.payload(), c.payload() + payload_);
+      copy_bytes(payloads_.data() + i * payload_, c.payload(), payload_);
       WEAVER_RETURN_IF_ERROR(c.next());
     }
     if (keys_.size() != w.count)
@@ -304,10 +310,15 @@ class WindowWorker {
     const uint64_t limit = bytes_ > held(0) ? (bytes_ - held(0)) / (8 + payload_) : 0;
     uint64_t split = 0;
     bool over = false;
+    // A row goes where the count of keys says; the bytes grow in doubling
+    // steps and are trimmed at the end (a resize for each row cost more
+    // than the rest of the refinement).
+    auto row = [&] { return w->payloads.data() + (w->keys.size() - 1) * payload_; };
     auto add = [&](uint64_t key, size_t i) {
       w->keys.push_back(key);
-      const std::byte* p = payloads + i * payload_;
-      w->payloads.insert(w->payloads.end(), p, p + payload_);
+      const size_t end = w->keys.size() * payload_;
+      if (end > w->payloads.size()) w->payloads.resize(std::max(end, 2 * w->payloads.size()));
+      copy_bytes(row(), payloads + i * payload_, payload_);
       if (w->keys.size() - at > limit) over = true;
     };
     size_t last_split = SIZE_MAX;
@@ -321,7 +332,7 @@ class WindowWorker {
           if (i != last_split) last_split = i, ++split;
           add(key, i);
           if (is_new && fill_ && payload_ > 0) {
-            fill_(octant_from_key(key), &*(w->payloads.end() - payload_));
+            fill_(octant_from_key(key), row());
           }
           return over ? Status::Internal("the window outgrew its memory") : Status::Ok();
         });
@@ -330,6 +341,7 @@ class WindowWorker {
       w->payloads.resize(at * payload_);
       return Status::Ok();
     }
+    w->payloads.resize(w->keys.size() * payload_);
     WEAVER_RETURN_IF_ERROR(st);
     for (size_t j = at; j < w->keys.size(); ++j) ++w->levels[octant_key_level(w->keys[j])];
     w->split += split;
@@ -387,6 +399,10 @@ Status window_options(Database& db, BTree& leaves, const BalanceOptions& o,
   return Status::Ok();
 }
 
+bool one_window_may_fit(const BTree& leaves, uint64_t memory) {
+  return leaves.size() * (kWholeBytesPerLeaf + leaves.payload_size()) <= memory;
+}
+
 namespace {
 
 // Reads every leaf of the table into *t and ripples them all on `threads`
@@ -395,17 +411,20 @@ Status ripple_whole(BTree& leaves, uint64_t memory, int threads, WholeTable* t, 
   *fits = false;
   const uint64_t n = leaves.size();
   const size_t payload = leaves.payload_size();
-  if (n * (kWholeBytesPerLeaf + payload) > memory) return Status::Ok();
+  if (!one_window_may_fit(leaves, memory)) return Status::Ok();
   t->keys.reserve(n);
-  t->payloads.reserve(n * payload);
+  t->payloads.resize(n * payload);
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(leaves.seek_cursor(0, &c));
   while (c.valid()) {
+    if (t->keys.size() == n) break;  // more than its size: told below
+    copy_bytes(t->payloads.data() + t->keys.size() * payload, c.payload(), payload);
     t->keys.push_back(c.key());
-    t->payloads.insert(t->payloads.end(), c.payload(), c.payload() + payload);
     WEAVER_RETURN_IF_ERROR(c.next());
   }
-  if (t->keys.size() != n) return Status::Corruption("the octant table changed under balance");
+  if (t->keys.size() != n || c.valid()) {
+    return Status::Corruption("the octant table changed under balance");
+  }
   LocalRipple ripple(threads);
   *fits = ripple.run(t->keys, &t->created, memory - t->bytes());
   return Status::Ok();
@@ -441,8 +460,8 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
   } else {
     // A window's own leaves, read, and their refinement, about four times
     // as many, beside the local set, the ripple's work and what it creates.
-    uint64_t leaves_per =
-        std::max<uint64_t>(1024, slot_bytes / (4 * (8 + first.payload_size()) + 160));
+    uint64_t leaves_per = std::max<uint64_t>(
+        1024, slot_bytes / (4 * (8 + first.payload_size()) + kRippleBytesPerLeaf));
     if (o.window_leaves > 0) leaves_per = std::min(leaves_per, o.window_leaves);
     windows = std::max<uint64_t>(1, (n + leaves_per - 1) / leaves_per);
     if (threads > 1) windows = std::max<uint64_t>(windows, 4 * uint64_t(threads));
@@ -479,8 +498,19 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
     }
   }
   uint64_t next = 0;
+  // Refinements written, kept for their buffers: a window's refinement
+  // of tens of MB, allocated afresh, is mapped and faulted in page by page
+  // (at 1 Hz on one thread, 2 s of system time).
+  std::vector<std::unique_ptr<Window>> spare;
   auto add = [&](std::deque<std::unique_ptr<Window>>* flight) {
     auto w = std::make_unique<Window>();
+    if (!spare.empty()) {
+      w->keys.swap(spare.back()->keys);
+      w->payloads.swap(spare.back()->payloads);
+      w->keys.clear();
+      w->payloads.clear();
+      spare.pop_back();
+    }
     w->first = n * next / windows;
     w->count = n * (next + 1) / windows - w->first;
     if (o.one_window) {  // a block: its leaves are read already
@@ -522,6 +552,7 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
     ++r->windows;
     read += head->count;
     if (o.progress) o.progress(read, double(read) / std::max<uint64_t>(n, 1));
+    spare.push_back(std::move(flight.front()));
     flight.pop_front();
   }
   r->input_leaves = read;

@@ -65,4 +65,8 @@ Status window_options(Database& db, BTree& leaves, const BalanceOptions& o,
 Status balance_in_windows(const WindowOptions& options, const FillPayload& fill, BTree& out,
                           BalanceResult* r, bool* fitted);
 
+// Whether one window of every leaf of `leaves` may fit in `memory` (by an
+// estimate a leaf; the ripple's own measure decides in the end).
+bool one_window_may_fit(const BTree& leaves, uint64_t memory);
+
 }  // namespace weaver
