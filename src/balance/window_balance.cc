@@ -104,6 +104,43 @@ constexpr std::array<uint32_t, 64> crossing_table() {
 }
 constexpr std::array<uint32_t, 64> kCrossing = crossing_table();
 
+// By the sides touched: the same-size neighbours of the holding octant (a
+// bit each, by their direction as in kAllDirections) that the leaf's own
+// neighbours can lie in: those across touched sides only.
+constexpr std::array<uint32_t, 64> reachable_table() {
+  std::array<uint32_t, 64> t{};
+  for (unsigned sides = 0; sides < 64; ++sides) {
+    for (size_t i = 0; i < kAllDirections.size(); ++i) {
+      const int step[3] = {kAllDirections[i].dx, kAllDirections[i].dy, kAllDirections[i].dz};
+      bool reached = true;
+      for (int axis = 0; axis < 3; ++axis) {
+        if ((step[axis] < 0 && !(sides >> (2 * axis) & 1)) ||
+            (step[axis] > 0 && !(sides >> (2 * axis + 1) & 1))) {
+          reached = false;
+        }
+      }
+      if (reached) t[sides] |= 1u << i;
+    }
+  }
+  return t;
+}
+constexpr std::array<uint32_t, 64> kReachable = reachable_table();
+
+// The same-size neighbours of octant `key` (a bit each, as in
+// kAllDirections) not wholly inside [from, to): a leaf of it can ask for
+// octants outside the window only across these.
+uint32_t neighbours_leaving(uint64_t key, uint64_t from, uint64_t to) {
+  if (octant_key_level(key) == kMaxLevel) return ~uint32_t{0};  // (no same-size steps)
+  uint32_t out = 0;
+  for (size_t i = 0; i < kAllDirections.size(); ++i) {
+    uint64_t nb = 0;
+    if (octant_key_neighbour(key, kAllDirections[i], &nb) && !within(nb, from, to)) {
+      out |= 1u << i;
+    }
+  }
+  return out;
+}
+
 // A worker: reads a window's leaves through its own handle on the table,
 // then balances them against their layer, cutting the window in two while
 // it does not fit in `bytes`.
@@ -211,10 +248,12 @@ class WindowWorker {
   // asks for nothing.
   Status collect_layer(size_t i0, size_t i1, uint64_t from, uint64_t to, bool* fits) {
     asked_.clear();
+    recent_.fill(~uint64_t{0});
     // The octants asked, with the sort's buffer, within a quarter of the
     // memory: compacted when they reach it, the window cut if that fails.
     const size_t ask_cap = std::max<uint64_t>(1024, bytes_ / 64);
     uint64_t anc = 0, anc_end = 0;  // the coarsest octant inside the window holding the leaf
+    uint32_t leaving = 0;           // its neighbours not inside the window
     for (size_t i = i0; i < i1; ++i) {
       const uint64_t key = keys_[i];
       if (key < anc || key >= anc_end) {
@@ -223,12 +262,23 @@ class WindowWorker {
           anc = octant_key_parent(anc);
         }
         anc_end = octant_key_subtree_end(anc);
+        leaving = neighbours_leaving(anc, from, to);
       }
-      const uint32_t crossing = kCrossing[touched_sides(key, octant_key_level(anc))];
+      // Most leaves' neighbours all lie in neighbours of anc inside the
+      // window: they ask for nothing, and their neighbours go untried.
+      if (leaving == 0) continue;
+      const unsigned sides = touched_sides(key, octant_key_level(anc));
+      if ((kReachable[sides] & leaving) == 0) continue;
+      const uint32_t crossing = kCrossing[sides];
       for (uint32_t bits = crossing; bits != 0; bits &= bits - 1) {
         uint64_t nb = 0;
         if (octant_key_neighbour(key, kAllDirections[std::countr_zero(bits)], &nb) &&
             !within(nb, from, to)) {
+          // Leaves side by side ask for the same octants across an edge
+          // or corner: a repeat found among the last asked is not kept.
+          uint64_t& seen = recent_[(nb * 0x9E3779B97F4A7C15ULL) >> (64 - kRecentBits)];
+          if (seen == nb) continue;
+          seen = nb;
           asked_.push_back(nb);
         }
       }
@@ -365,6 +415,8 @@ class WindowWorker {
   std::vector<uint64_t> keys_;  // the window's own leaves
   std::vector<std::byte> payloads_;
   std::vector<uint64_t> asked_;  // octants whose leaves the layer holds
+  static constexpr int kRecentBits = 10;
+  std::array<uint64_t, size_t{1} << kRecentBits> recent_;  // the octants asked last, by hash
   std::vector<uint64_t> scratch_;
   std::vector<uint64_t> layer_;  // before the window, then after it
   size_t layer_before_ = 0;
