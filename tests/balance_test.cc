@@ -10,6 +10,7 @@
 #include <map>
 #include <random>
 
+#include "balance/window_edges.h"
 #include "construct/construct.h"
 #include "db/database.h"
 #include "gen/octree_gen.h"
@@ -331,6 +332,50 @@ TEST(BalanceThreads, AnyThreadCountWritesTheSameTable) {
       EXPECT_TRUE(after.balanced) << after.violation;
     }
   }
+}
+
+// The window's edge test: a leaf that the holding octant's neighbours
+// excuse (none of those it can reach leaves the window) has every
+// neighbour inside the window or outside the root, checked one by one on
+// random leaves and random runs of keys.
+TEST(WindowEdges, ExcusedLeavesHaveEveryNeighbourInsideTheWindow) {
+  std::mt19937_64 rng(23);
+  int excused = 0, asked = 0;
+  for (int t = 0; t < 20000; ++t) {
+    const int level = 1 + static_cast<int>(rng() % 8);
+    const uint32_t cells = 1u << level, edge = octant_edge(level);
+    const Octant leaf{uint32_t(rng() % cells) * edge, uint32_t(rng() % cells) * edge,
+                      uint32_t(rng() % cells) * edge, uint8_t(level)};
+    const uint64_t key = octant_key(leaf);
+    // A window around the leaf: up to a few subtrees of a coarser level
+    // on either side of it.
+    const int coarser = static_cast<int>(rng() % level);
+    const uint64_t span = uint64_t{4} << (3 * (kMaxLevel - coarser) + 4 - 2);
+    const uint64_t end = octant_key_subtree_end(key);
+    const uint64_t from = key - std::min<uint64_t>(key, rng() % span);
+    const uint64_t to = end + std::min<uint64_t>(UINT64_MAX - end, rng() % span);
+    uint64_t anc = key;
+    while (octant_key_level(anc) > 0 && window_edges::within(octant_key_parent(anc), from, to)) {
+      anc = octant_key_parent(anc);
+    }
+    const unsigned sides = window_edges::touched_sides(key, octant_key_level(anc));
+    const uint32_t leaving = window_edges::neighbours_leaving(anc, from, to);
+    bool all_inside = true;
+    for (const Direction& d : kAllDirections) {
+      uint64_t nb = 0;
+      if (octant_key_neighbour(key, d, &nb) && !window_edges::within(nb, from, to)) {
+        all_inside = false;
+      }
+    }
+    if ((window_edges::kReachable[sides] & leaving) == 0) {
+      ++excused;
+      ASSERT_TRUE(all_inside) << describe_octant(leaf) << " in [" << from << ", " << to << ")";
+    } else {
+      ++asked;
+    }
+  }
+  EXPECT_GT(excused, 1000);  // both ways are tried
+  EXPECT_GT(asked, 1000);
 }
 
 // One window's ripple on two threads (each taking half of a level's asks,
