@@ -350,7 +350,8 @@ TEST(WindowEdges, ExcusedLeavesHaveEveryNeighbourInsideTheWindow) {
     // A window around the leaf: up to a few subtrees of a coarser level
     // on either side of it.
     const int coarser = static_cast<int>(rng() % level);
-    const uint64_t span = uint64_t{4} << (3 * (kMaxLevel - coarser) + 4 - 2);
+    // (A subtree of that level spans 2^(3 (20 - level) + 4) keys; the root's, all 2^64.)
+    const uint64_t span = uint64_t{1} << std::min(62, 3 * (kMaxLevel - coarser) + 4);
     const uint64_t end = octant_key_subtree_end(key);
     const uint64_t from = key - std::min<uint64_t>(key, rng() % span);
     const uint64_t to = end + std::min<uint64_t>(UINT64_MAX - end, rng() % span);
