@@ -14,6 +14,7 @@
 #include "schema/octant.h"
 #include "util/local_ripple.h"
 #include "util/radix_sort.h"
+#include "util/recent_keys.h"
 #include "util/resolve_split.h"
 #include "util/work_queue.h"
 
@@ -60,10 +61,35 @@ constexpr uint64_t kWholeBytesPerLeaf = 64;
 constexpr uint64_t kRippleBytesPerLeaf = 64;
 // One window's blocks: short enough for several in flight to stay small.
 constexpr uint64_t kBlockLeaves = 16384;
+// The least room for each leaf of a block in flight (its refinement) that
+// the one window leaves after its ripple, or it is not taken.
+constexpr uint64_t kBlockBytesPerLeaf = 64;
 
 // A payload row copied (none where the table has no payload).
 void copy_bytes(std::byte* to, const std::byte* from, size_t n) {
   if (n > 0) std::memcpy(to, from, n);
+}
+
+// `count` leaves from the first at or after key `from` into *keys and
+// *payloads; Corruption if the table holds fewer (or, asked for all of
+// them, more).
+Status read_leaves(BTree& leaves, uint64_t from, uint64_t count, bool all,
+                   std::vector<uint64_t>* keys, std::vector<std::byte>* payloads) {
+  const size_t payload = leaves.payload_size();
+  keys->clear();
+  keys->reserve(count);
+  payloads->resize(count * payload);
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(leaves.seek_cursor(from, &c));
+  for (uint64_t i = 0; i < count && c.valid(); ++i) {
+    keys->push_back(c.key());
+    copy_bytes(payloads->data() + i * payload, c.payload(), payload);
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  if (keys->size() != count || (all && c.valid())) {
+    return Status::Corruption("the octant table changed under balance");
+  }
+  return Status::Ok();
 }
 
 // A worker: reads a window's leaves through its own handle on the table,
@@ -110,18 +136,7 @@ class WindowWorker {
   }
 
   Status read(const Window& w) {
-    keys_.clear();
-    payloads_.resize(w.count * payload_);
-    BTreeCursor c;
-    WEAVER_RETURN_IF_ERROR(leaves_.seek_cursor(w.from, &c));
-    for (uint64_t i = 0; i < w.count && c.valid(); ++i) {
-      keys_.push_back(c.key());
-      copy_bytes(payloads_.data() + i * payload_, c.payload(), payload_);
-      WEAVER_RETURN_IF_ERROR(c.next());
-    }
-    if (keys_.size() != w.count)
-      return Status::Corruption("the octant table changed under balance");
-    return Status::Ok();
+    return read_leaves(leaves_, w.from, w.count, false, &keys_, &payloads_);
   }
 
   // Own leaves [i0, i1), keys in [from, to), into w's refinement.
@@ -173,7 +188,7 @@ class WindowWorker {
   // asks for nothing.
   Status collect_layer(size_t i0, size_t i1, uint64_t from, uint64_t to, bool* fits) {
     asked_.clear();
-    recent_.fill(~uint64_t{0});
+    recent_.clear();
     // The octants asked, with the sort's buffer, within a quarter of the
     // memory: compacted when they reach it, the window cut if that fails.
     const size_t ask_cap = std::max<uint64_t>(1024, bytes_ / 64);
@@ -201,9 +216,7 @@ class WindowWorker {
             !within(nb, from, to)) {
           // Leaves side by side ask for the same octants across an edge
           // or corner: a repeat found among the last asked is not kept.
-          uint64_t& seen = recent_[(nb * 0x9E3779B97F4A7C15ULL) >> (64 - kRecentBits)];
-          if (seen == nb) continue;
-          seen = nb;
+          if (recent_.seen(nb)) continue;
           asked_.push_back(nb);
         }
       }
@@ -340,8 +353,7 @@ class WindowWorker {
   std::vector<uint64_t> keys_;  // the window's own leaves
   std::vector<std::byte> payloads_;
   std::vector<uint64_t> asked_;  // octants whose leaves the layer holds
-  static constexpr int kRecentBits = 10;
-  std::array<uint64_t, size_t{1} << kRecentBits> recent_;  // the octants asked last, by hash
+  RecentKeys<10> recent_;        // the octants asked last
   std::vector<uint64_t> scratch_;
   std::vector<uint64_t> layer_;  // before the window, then after it
   size_t layer_before_ = 0;
@@ -387,21 +399,8 @@ namespace {
 Status ripple_whole(BTree& leaves, uint64_t memory, int threads, WholeTable* t, bool* fits) {
   *fits = false;
   const uint64_t n = leaves.size();
-  const size_t payload = leaves.payload_size();
   if (!one_window_may_fit(leaves, memory)) return Status::Ok();
-  t->keys.reserve(n);
-  t->payloads.resize(n * payload);
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(leaves.seek_cursor(0, &c));
-  while (c.valid()) {
-    if (t->keys.size() == n) break;  // more than its size: told below
-    copy_bytes(t->payloads.data() + t->keys.size() * payload, c.payload(), payload);
-    t->keys.push_back(c.key());
-    WEAVER_RETURN_IF_ERROR(c.next());
-  }
-  if (t->keys.size() != n || c.valid()) {
-    return Status::Corruption("the octant table changed under balance");
-  }
+  WEAVER_RETURN_IF_ERROR(read_leaves(leaves, 0, n, true, &t->keys, &t->payloads));
   LocalRipple ripple(threads);
   *fits = ripple.run(t->keys, &t->created, memory - t->bytes());
   return Status::Ok();
@@ -428,7 +427,7 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
     bool fits = false;
     WEAVER_RETURN_IF_ERROR(ripple_whole(first, o.memory, threads, &whole, &fits));
     // What is left holds the blocks in flight.
-    if (!fits || whole.bytes() + in_flight * kBlockLeaves * 64 > o.memory) {
+    if (!fits || whole.bytes() + in_flight * kBlockLeaves * kBlockBytesPerLeaf > o.memory) {
       *fitted = false;
       return Status::Ok();
     }

@@ -39,46 +39,31 @@ inline unsigned touched_sides(uint64_t key, int a) {
   return sides;
 }
 
-// By the sides touched: the directions (a bit each, as in kAllDirections)
-// whose neighbour crosses one of them.
-constexpr std::array<uint32_t, 64> crossing_table() {
+// By the sides touched, the directions (a bit each, as in kAllDirections)
+// whose steps cross touched sides: some of them (every = false), or all of
+// them (every = true).
+constexpr std::array<uint32_t, 64> directions_by_sides(bool every) {
   std::array<uint32_t, 64> t{};
   for (unsigned sides = 0; sides < 64; ++sides) {
     for (size_t i = 0; i < kAllDirections.size(); ++i) {
       const int step[3] = {kAllDirections[i].dx, kAllDirections[i].dy, kAllDirections[i].dz};
+      int steps = 0, crossing = 0;
       for (int axis = 0; axis < 3; ++axis) {
-        if ((step[axis] < 0 && (sides >> (2 * axis) & 1)) ||
-            (step[axis] > 0 && (sides >> (2 * axis + 1) & 1))) {
-          t[sides] |= 1u << i;
-        }
+        if (step[axis] == 0) continue;
+        ++steps;
+        crossing += (sides >> (2 * axis + (step[axis] > 0 ? 1 : 0))) & 1;
       }
+      if (every ? crossing == steps : crossing > 0) t[sides] |= 1u << i;
     }
   }
   return t;
 }
-inline constexpr std::array<uint32_t, 64> kCrossing = crossing_table();
-
-// By the sides touched: the same-size neighbours of the holding octant (a
-// bit each, by their direction as in kAllDirections) that the leaf's own
-// neighbours can lie in: those across touched sides only.
-constexpr std::array<uint32_t, 64> reachable_table() {
-  std::array<uint32_t, 64> t{};
-  for (unsigned sides = 0; sides < 64; ++sides) {
-    for (size_t i = 0; i < kAllDirections.size(); ++i) {
-      const int step[3] = {kAllDirections[i].dx, kAllDirections[i].dy, kAllDirections[i].dz};
-      bool reached = true;
-      for (int axis = 0; axis < 3; ++axis) {
-        if ((step[axis] < 0 && !(sides >> (2 * axis) & 1)) ||
-            (step[axis] > 0 && !(sides >> (2 * axis + 1) & 1))) {
-          reached = false;
-        }
-      }
-      if (reached) t[sides] |= 1u << i;
-    }
-  }
-  return t;
-}
-inline constexpr std::array<uint32_t, 64> kReachable = reachable_table();
+// The directions whose neighbour of a leaf crosses one of the sides it
+// touches.
+inline constexpr std::array<uint32_t, 64> kCrossing = directions_by_sides(false);
+// The same-size neighbours of the holding octant (by their direction) that
+// the leaf's own neighbours can lie in: those across touched sides only.
+inline constexpr std::array<uint32_t, 64> kReachable = directions_by_sides(true);
 
 // The same-size neighbours of octant `key` (a bit each, as in
 // kAllDirections) not wholly inside [from, to): a leaf of it can ask for

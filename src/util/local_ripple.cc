@@ -221,8 +221,8 @@ void LocalRipple::Lane::take(const Ask* begin, const Ask* end, int l,
                              const std::vector<uint64_t>& holders) {
   made.clear();
   candidates.clear();
-  several = false;
-  recent.fill(~uint64_t{0});
+  recent.clear();
+  bool several = false;  // chunks settled: made is in order within each
   for (const Ask* a = begin; a != end; ++a) {
     uint32_t asked = parent_asks::kTouchedBy[a->children];
     // The parent's siblings are there (leaves or inner) when its own
@@ -232,10 +232,7 @@ void LocalRipple::Lane::take(const Ask* begin, const Ask* end, int l,
     for (uint32_t bits = asked; bits != 0; bits &= bits - 1) {
       uint64_t nb = 0;
       if (octant_key_neighbour(a->parent, kFaceAndEdgeDirections[std::countr_zero(bits)], &nb)) {
-        uint64_t& seen = recent[(nb * 0x9E3779B97F4A7C15ULL) >> (64 - kRecentBits)];
-        if (seen == nb) continue;
-        seen = nb;
-        candidates.push_back(nb);
+        if (!recent.seen(nb)) candidates.push_back(nb);
       }
     }
     if (candidates.size() >= kChunk) {

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "schema/octant.h"
+#include "util/recent_keys.h"
 
 namespace weaver {
 
@@ -50,13 +51,11 @@ class LocalRipple {
   // One thread's share of a level's asks: their candidates, settled a
   // chunk at a time into the octants they create.
   struct Lane {
-    static constexpr int kRecentBits = 12;
     std::vector<uint64_t> candidates, scratch, made;
-    // The candidates seen last, by hash: neighbouring asks ask about the
-    // same octants (four times over, in random refinement), and a repeat
-    // found here never reaches the sort.
-    std::array<uint64_t, size_t{1} << kRecentBits> recent;
-    bool several = false;  // chunks settled: made is in order within each
+    // The candidates seen last: neighbouring asks ask about the same
+    // octants (four times over, in random refinement), and a repeat found
+    // here never reaches the sort.
+    RecentKeys<12> recent;
     void take(const Ask* begin, const Ask* end, int level, const std::vector<uint64_t>& holders);
     void settle(int level, const std::vector<uint64_t>& holders);
     size_t bytes() const;
