@@ -147,10 +147,11 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
     // Auto: one window of all the leaves where the memory holds it (it
     // reads no layers), else windows on every thread; windows asked for:
     // they first, then one window (so too for the tests' short windows).
-    // One thread's windows already are one window where it fits.
+    // On any number of threads: one thread's windows are sized for output
+    // four times their input, so even one thread's can be many where one
+    // window holds the table.
     const bool auto_way = o.algorithm == BalanceOptions::Algorithm::kAuto && o.window_leaves == 0;
     for (bool one_window : {auto_way, !auto_way}) {
-      if (one_window && o.threads <= 1) continue;
       bool fitted = false;
       WEAVER_RETURN_IF_ERROR(
           balance_by_windows(*db, *leaves, o, memory, topt, fill, one_window, r, &fitted));

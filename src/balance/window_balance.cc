@@ -58,7 +58,7 @@ struct WholeTable {
 // created octants and the ripple's sort of them, its parent's ask), beside
 // its payload; the ripple's measure decides in the end.
 constexpr uint64_t kWholeBytesPerLeaf = 64;
-constexpr uint64_t kRippleBytesPerLeaf = 64;
+constexpr uint64_t kRippleBytesPerLeaf = 160;
 // One window's blocks: short enough for several in flight to stay small.
 constexpr uint64_t kBlockLeaves = 16384;
 // The least room for each leaf of a block in flight (its refinement) that
