@@ -1,0 +1,103 @@
+// util/ordered_run.h: tasks run on several threads are written in the order
+// they were made, each once, by one thread at a time, with never more than
+// `in_flight` of them alive; a stop writes nothing after it.
+#include "util/ordered_run.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <random>
+#include <thread>
+
+namespace weaver {
+namespace {
+
+struct Task {
+  int index = -1;
+  int value = 0;
+  std::thread::id ran_on;
+};
+
+// Work of uneven length, so that later tasks often finish first.
+void uneven_work(Task* t) {
+  std::mt19937 rng(t->index);
+  std::this_thread::sleep_for(std::chrono::microseconds(rng() % 400));
+  t->value = t->index * 7 + 1;
+  t->ran_on = std::this_thread::get_id();
+}
+
+struct Outcome {
+  std::vector<int> written;
+  int most_alive = 0;
+  bool overlapping_writes = false;
+  int wrong_values = 0;
+  std::vector<std::thread::id> threads;
+};
+
+// `tasks` tasks on `threads` threads, `in_flight` at once; stops after
+// `stop_after` writes (or never).
+Outcome run(int tasks, int threads, size_t in_flight, int stop_after = -1) {
+  Outcome o;
+  int made = 0;
+  std::atomic<int> alive{0}, writers{0};
+  OrderedRun<Task> r(
+      in_flight,
+      [&](Task* t) {
+        if (made == tasks) return false;
+        t->index = made++;
+        o.most_alive = std::max(o.most_alive, ++alive);
+        return true;
+      },
+      [&](int, Task* t) { uneven_work(t); },
+      [&](Task* t) {
+        if (++writers > 1) o.overlapping_writes = true;
+        o.written.push_back(t->index);
+        if (t->value != t->index * 7 + 1) ++o.wrong_values;
+        o.threads.push_back(t->ran_on);
+        --alive;
+        --writers;
+        return int(o.written.size()) != stop_after;
+      });
+  r.go(threads);
+  return o;
+}
+
+TEST(OrderedRunThreads, WritesEveryTaskOnceInOrder) {
+  for (int threads : {1, 2, 3, 4}) {
+    for (size_t in_flight : {1, 2, 5, 8}) {
+      const Outcome o = run(60, threads, in_flight);
+      ASSERT_EQ(o.written.size(), 60u) << threads << " threads, " << in_flight << " in flight";
+      for (int i = 0; i < 60; ++i) EXPECT_EQ(o.written[i], i);
+      EXPECT_EQ(o.wrong_values, 0);
+      EXPECT_FALSE(o.overlapping_writes);
+      EXPECT_LE(o.most_alive, int(in_flight));
+    }
+  }
+}
+
+TEST(OrderedRunThreads, TheCallerIsAWorkerAndTheOthersShareTheWork) {
+  const Outcome alone = run(20, 1, 4);
+  for (const auto& id : alone.threads) EXPECT_EQ(id, std::this_thread::get_id());
+  const Outcome shared = run(200, 3, 6);
+  std::vector<std::thread::id> seen;
+  for (const auto& id : shared.threads) {
+    if (std::find(seen.begin(), seen.end(), id) == seen.end()) seen.push_back(id);
+  }
+  EXPECT_GE(seen.size(), 2u);  // 200 uneven tasks: one thread does not take them all
+}
+
+TEST(OrderedRunThreads, AStopWritesNothingAfterIt) {
+  for (int threads : {1, 2, 4}) {
+    const Outcome o = run(100, threads, 6, 13);
+    ASSERT_EQ(o.written.size(), 13u) << threads << " threads";
+    for (int i = 0; i < 13; ++i) EXPECT_EQ(o.written[i], i);
+  }
+}
+
+TEST(OrderedRunThreads, NoTasksWritesNothing) {
+  for (int threads : {1, 3}) EXPECT_TRUE(run(0, threads, 4).written.empty());
+}
+
+}  // namespace
+}  // namespace weaver
