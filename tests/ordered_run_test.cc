@@ -1,6 +1,7 @@
 // util/ordered_run.h: tasks run on several threads are written in the order
-// they were made, each once, by one thread at a time, with never more than
-// `in_flight` of them alive; a stop writes nothing after it.
+// they were made, each once, by one thread at a time (never while one is
+// made), with never more than `in_flight` of them alive, nor more than
+// room() allows; a stop writes nothing after it.
 #include "util/ordered_run.h"
 
 #include <gtest/gtest.h>
@@ -35,19 +36,24 @@ struct Outcome {
   std::vector<std::thread::id> threads;
 };
 
-// `tasks` tasks on `threads` threads, `in_flight` at once; stops after
-// `stop_after` writes (or never).
-Outcome run(int tasks, int threads, size_t in_flight, int stop_after = -1) {
+// `tasks` tasks on `threads` threads, `in_flight` at once (and at most
+// `room` alive, if given); stops after `stop_after` writes (or never).
+Outcome run(int tasks, int threads, size_t in_flight, int stop_after = -1, int room = 0) {
   Outcome o;
   int made = 0;
   std::atomic<int> alive{0}, writers{0};
   OrderedRun<Task> r(
       in_flight,
       [&](Task* t) {
-        if (made == tasks) return false;
-        t->index = made++;
-        o.most_alive = std::max(o.most_alive, ++alive);
-        return true;
+        if (++writers > 1) o.overlapping_writes = true;
+        std::this_thread::sleep_for(std::chrono::microseconds(50));  // a slow make
+        const bool more = made < tasks;
+        if (more) {
+          t->index = made++;
+          o.most_alive = std::max(o.most_alive, ++alive);
+        }
+        --writers;
+        return more;
       },
       [&](int, Task* t) { uneven_work(t); },
       [&](Task* t) {
@@ -58,7 +64,8 @@ Outcome run(int tasks, int threads, size_t in_flight, int stop_after = -1) {
         --alive;
         --writers;
         return int(o.written.size()) != stop_after;
-      });
+      },
+      room > 0 ? OrderedRun<Task>::Room([&] { return alive < room; }) : nullptr);
   r.go(threads);
   return o;
 }
@@ -85,6 +92,16 @@ TEST(OrderedRunThreads, TheCallerIsAWorkerAndTheOthersShareTheWork) {
     if (std::find(seen.begin(), seen.end(), id) == seen.end()) seen.push_back(id);
   }
   EXPECT_GE(seen.size(), 2u);  // 200 uneven tasks: one thread does not take them all
+}
+
+TEST(OrderedRunThreads, NoMoreTasksAliveThanRoomAllows) {
+  for (int threads : {1, 2, 3}) {
+    const Outcome o = run(50, threads, 8, -1, 2);
+    ASSERT_EQ(o.written.size(), 50u) << threads << " threads";
+    for (int i = 0; i < 50; ++i) EXPECT_EQ(o.written[i], i);
+    EXPECT_LE(o.most_alive, 2);
+    EXPECT_FALSE(o.overlapping_writes);
+  }
 }
 
 TEST(OrderedRunThreads, AStopWritesNothingAfterIt) {

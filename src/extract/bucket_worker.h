@@ -61,7 +61,6 @@ struct BucketTask {
   std::vector<std::byte> node_kinds;  // result: their NodeKind, one byte each
   ExtractResult counts;               // result: node and kind counts
   Status status;
-  bool done = false;  // set by the worker (under the pipeline's lock)
 };
 
 // Cuts the octant table into buckets, in Z-order, and routes their spills.

@@ -1,14 +1,18 @@
 // Tasks made in order, run on several threads, and written in the order
-// they were made, with no thread of its own for the writing: whichever
-// thread finishes a task finds whether the oldest ones are done and, if
-// no other thread is writing, writes them.  The calling thread is one of
-// the workers.  So `threads` threads keep `threads` cores busy, where a
-// writer beside them would make one more thread than cores and push the
-// workers' caches around whenever it ran.
+// they were made, with no thread of its own for the making and writing:
+// whichever thread finishes a task finds whether the oldest ones are done
+// and, if no other thread holds that part, writes them and makes the next
+// tasks.  The calling thread is one of the workers.  So `threads` threads
+// keep `threads` cores busy, where a writer beside them would make one
+// more thread than cores and push the workers' caches around whenever it
+// ran.
 //
-// At most `in_flight` tasks exist at once (made, running, done or being
-// written); each is one of `in_flight` objects used again and again, so a
-// task's buffers keep their room from one use to the next.
+// make() and write() are called by one thread at a time, never together,
+// and without the lock that workers take tasks under: a slow make() (a
+// read) holds up no worker.  At most `in_flight` tasks exist at once
+// (made, running, done or being written), and fewer while room() says no;
+// each is one of `in_flight` objects used again and again, so a task's
+// buffers keep their room from one use to the next.
 #pragma once
 
 #include <condition_variable>
@@ -26,20 +30,22 @@ class OrderedRun {
   using Make = std::function<bool(Task*)>;       // fills in the next task; false: none left
   using Work = std::function<void(int, Task*)>;  // runs a task on worker i (0: the caller)
   using Write = std::function<bool(Task*)>;      // false: stop (tasks not yet written are dropped)
+  using Room = std::function<bool()>;            // whether another task may be made now
 
-  OrderedRun(size_t in_flight, Make make, Work work, Write write)
+  OrderedRun(size_t in_flight, Make make, Work work, Write write, Room room = nullptr)
       : tasks_(in_flight),
         make_(std::move(make)),
         work_(std::move(work)),
-        write_(std::move(write)) {
+        write_(std::move(write)),
+        room_(std::move(room)) {
     for (Task& t : tasks_) free_.push_back(&t);
   }
 
   // Runs until every task is written or write() says stop.
   void go(int threads) {
     {
-      std::lock_guard<std::mutex> lock(mu_);
-      fill();
+      std::unique_lock<std::mutex> lock(mu_);
+      fill(lock);
     }
     std::vector<std::thread> pool;
     for (int i = 1; i < threads; ++i) pool.emplace_back([this, i] { serve(i); });
@@ -56,8 +62,8 @@ class OrderedRun {
   void serve(int worker) {
     std::unique_lock<std::mutex> lock(mu_);
     while (true) {
-      // (flight_ is empty for a moment, and no more made, while its last
-      // task is written and fill() has yet to run.)
+      // (flight_ is empty for a moment, with more to make, while its last
+      // task is written and the next made.)
       cv_.wait(lock, [&] { return stopped_ || !ready_.empty() || (made_all_ && flight_.empty()); });
       if (stopped_ || ready_.empty()) break;  // stopped, or all written
       Task* t = ready_.front();
@@ -69,13 +75,13 @@ class OrderedRun {
         if (s.task == t) s.done = true;
       }
       if (!writing_) write_done(lock);
-      cv_.notify_all();
     }
     cv_.notify_all();
   }
 
-  // Writes the oldest tasks while they are done, the lock released while
-  // each is written (other workers go on taking tasks meanwhile).
+  // Writes the oldest tasks while they are done, and makes tasks into the
+  // objects they free; the lock released while each is written or made
+  // (other workers go on taking tasks meanwhile).
   void write_done(std::unique_lock<std::mutex>& lock) {
     writing_ = true;
     while (!stopped_ && !flight_.empty() && flight_.front().done) {
@@ -86,23 +92,31 @@ class OrderedRun {
       lock.lock();
       free_.push_back(head);
       if (!go_on) stopped_ = true;
-      fill();
-      cv_.notify_all();
+      fill(lock);
     }
     writing_ = false;
+    cv_.notify_all();
   }
 
-  // Makes tasks into the free objects, until none is left to make.
-  void fill() {
+  // Makes tasks into the free objects while room() allows (asked only
+  // while some task is in flight: with none, one is made), until none is
+  // left to make.  Called by the thread that writes, or by go() alone.
+  void fill(std::unique_lock<std::mutex>& lock) {
     while (!made_all_ && !stopped_ && !free_.empty()) {
+      if (room_ && !flight_.empty() && !room_()) break;
       Task* t = free_.back();
-      if (!make_(t)) {
+      free_.pop_back();
+      lock.unlock();
+      const bool made = make_(t);
+      lock.lock();
+      if (!made) {
+        free_.push_back(t);
         made_all_ = true;
         break;
       }
-      free_.pop_back();
       flight_.push_back({t, false});
       ready_.push_back(t);
+      cv_.notify_one();
     }
   }
 
@@ -110,6 +124,7 @@ class OrderedRun {
   Make make_;
   Work work_;
   Write write_;
+  Room room_;
   std::mutex mu_;
   std::condition_variable cv_;
   std::deque<Slot> flight_;  // made and not yet written, in order
