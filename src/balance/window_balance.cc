@@ -68,6 +68,16 @@ Status ripple_whole(BTree& leaves, uint64_t memory, int threads, WholeTable* t, 
   return Status::Ok();
 }
 
+// A written window's counts, into the result.
+void count_window(const Window& w, BalanceResult* r) {
+  for (int l = 0; l <= kMaxLevel; ++l) r->levels[l] += w.levels[l];
+  r->output_leaves += w.keys.size();
+  r->split += w.split;
+  r->required += w.created;
+  r->layer_leaves += w.layer;
+  ++r->windows;
+}
+
 }  // namespace
 
 Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree& out,
@@ -134,12 +144,7 @@ Status balance_in_windows(const WindowOptions& o, const FillPayload& fill, BTree
     }
     if (st.ok()) st = out.append_batch(w->keys.data(), w->payloads.data(), w->keys.size());
     if (!st.ok()) return false;
-    for (int l = 0; l <= kMaxLevel; ++l) r->levels[l] += w->levels[l];
-    r->output_leaves += w->keys.size();
-    r->split += w->split;
-    r->required += w->created;
-    r->layer_leaves += w->layer;
-    ++r->windows;
+    count_window(*w, r);
     if (!o.one_window) plan.learn(w->count, w->peak, w->cut);
     read += w->count;
     if (o.progress) o.progress(read, double(read) / std::max<uint64_t>(n, 1));
