@@ -99,15 +99,11 @@ Status WindowWorker::balance(size_t i0, size_t i1, uint64_t from, uint64_t to, W
   return w->fitted ? balance(mid, i1, keys_[mid], to, w) : Status::Ok();
 }
 
-uint64_t WindowWorker::held(uint64_t out_leaves) const {
-  const size_t words = keys_.capacity() + asked_.capacity() + scratch_.capacity() +
-                       layer_.capacity() + local_.capacity();
-  return 8 * words + payloads_.capacity() + ripple_.bytes(created_) + out_leaves * (8 + payload_);
-}
-
-uint64_t WindowWorker::used(uint64_t out_leaves) const {
-  const size_t words = keys_.size() + 2 * asked_.size() + layer_.size() + local_.size();
-  return 8 * words + payloads_.size() + ripple_.bytes(created_) + out_leaves * (8 + payload_);
+uint64_t WindowWorker::held(uint64_t out_leaves, bool allocated) const {
+  auto words = [&](const auto& v) -> uint64_t { return allocated ? v.capacity() : v.size(); };
+  const uint64_t own =
+      words(keys_) + words(asked_) + words(scratch_) + words(layer_) + words(local_);
+  return 8 * own + words(payloads_) + ripple_.bytes(created_) + out_leaves * (8 + payload_);
 }
 
 Status WindowWorker::try_balance(size_t i0, size_t i1, uint64_t from, uint64_t to, Window* w,
@@ -276,7 +272,7 @@ Status WindowWorker::refine(const uint64_t* keys, const std::byte* payloads, siz
   w->created += std::lower_bound(created.begin(), created.end(), to) -
                 std::lower_bound(created.begin(), created.end(), from);
   w->layer += layer_.size();
-  w->peak = std::max<uint64_t>(w->peak, used(w->keys.size()));
+  w->peak = std::max<uint64_t>(w->peak, held(w->keys.size(), false));
   *fits = true;
   return Status::Ok();
 }

@@ -105,13 +105,12 @@ class WindowWorker {
 
   // What the window holds: its own leaves, what it asked for and their
   // sort, the layer, the local set, the ripple's map, asks and what it
-  // created (all as allocated: they keep their room from window to
-  // window), and the refinement.
-  uint64_t held(uint64_t out_leaves) const;
-
-  // What held() counts, as used by this window (the room kept from
-  // longer windows before it aside): what a window costs a leaf.
-  uint64_t used(uint64_t out_leaves) const;
+  // created, and a refinement of out_leaves.  As allocated, whether it
+  // fits (the worker's vectors keep their room from window to window);
+  // as used, what this window costs a leaf (the room kept from longer
+  // windows before it aside: sized by it, windows would shrink window
+  // after window).  The ripple's bytes are as allocated either way.
+  uint64_t held(uint64_t out_leaves, bool allocated = true) const;
 
   Status try_balance(size_t i0, size_t i1, uint64_t from, uint64_t to, Window* w, bool* fits);
 
