@@ -39,15 +39,16 @@ TEST(ServeHttp, ParsesTheRequestLineTargetAndHeaders) {
   EXPECT_EQ(r.query.at("y"), "2");
   EXPECT_EQ(r.query.at("units"), "m");
   EXPECT_EQ(r.query.at("flag"), "");
-  EXPECT_EQ(r.headers.at("content-length"), "12");
+  ASSERT_NE(r.header("content-length"), nullptr);
+  EXPECT_EQ(*r.header("content-length"), "12");
   EXPECT_TRUE(r.keep_alive);
-  ASSERT_TRUE(parse("GET / HTTP/1.1\r\nConnection: Close", &r).ok());
+  ASSERT_TRUE(parse("GET / HTTP/1.1\r\nHost: h\r\nConnection: Close", &r).ok());
   EXPECT_FALSE(r.keep_alive);
   ASSERT_TRUE(parse("GET / HTTP/1.0", &r).ok());
   EXPECT_FALSE(r.keep_alive);
   ASSERT_TRUE(parse("GET / HTTP/1.0\r\nConnection: keep-alive", &r).ok());
   EXPECT_TRUE(r.keep_alive);
-  ASSERT_TRUE(parse("GET /a%20b+c HTTP/1.1", &r).ok());
+  ASSERT_TRUE(parse("GET /a%20b+c HTTP/1.1\r\nHost: h", &r).ok());
   EXPECT_EQ(r.path, "/a b c");
 }
 
@@ -61,11 +62,61 @@ TEST(ServeHttp, RefusesMalformedHeadsAndKeepsToItsLimits) {
     EXPECT_FALSE(parse(bad, &r, &large).ok()) << bad;
     EXPECT_FALSE(large) << bad;
   }
-  EXPECT_TRUE(parse("GET /" + std::string(kMaxRequestLine - 15, 'a') + " HTTP/1.1", &r).ok());
+  EXPECT_TRUE(
+      parse("GET /" + std::string(kMaxRequestLine - 15, 'a') + " HTTP/1.1\r\nHost: h", &r).ok());
   EXPECT_FALSE(parse("GET /" + std::string(kMaxRequestLine, 'a') + " HTTP/1.1", &r, &large).ok());
   EXPECT_TRUE(large);
   EXPECT_FALSE(parse("GET / HTTP/1.1\r\nX: " + std::string(kMaxHeaders, 'y'), &r, &large).ok());
   EXPECT_TRUE(large);
+}
+
+// RFC 9112's framing rules: what a proxy in front could read otherwise is
+// refused, not repaired (request smuggling).
+TEST(ServeHttp, RefusesWhatAProxyCouldReadOtherwise) {
+  Request r;
+  for (const char* bad : {
+           "GET / HTTP/1.1\r\nHost: h\r\nContent-Length : 36",  // space before the colon
+           "GET / HTTP/1.1\r\nHost: h\r\nContent-Length\t: 36",
+           "GET / HTTP/1.1\r\nHost: h\r\nX: a\r\n folded",  // obs-fold
+           "GET / HTTP/1.1\r\nHost: h\r\nX: a\rb",          // CR inside a value
+           "GET / HTTP/1.1\r\nHost: h\r\nX: a\nb",
+           "GET / HTTP/1.1",                        // no Host
+           "GET / HTTP/1.1\r\nHost: a\r\nHost: b",  // two Hosts
+           "GET / HTTP/1.1\r\nHost: h\r\nX(y): 1",  // a name that is no token
+       }) {
+    EXPECT_FALSE(parse(bad, &r).ok()) << bad;
+  }
+  std::string nul = "GET / HTTP/1.1\r\nHost: h\r\nX: a";
+  nul += '\0';
+  EXPECT_FALSE(parse(nul + "b", &r).ok());
+  ASSERT_TRUE(parse("GET / HTTP/1.0", &r).ok());  // HTTP/1.0 needs no Host
+  EXPECT_TRUE(r.http10);
+  // Repeated headers are kept, in order.
+  ASSERT_TRUE(parse("GET / HTTP/1.1\r\nHost: h\r\nX: 1\r\nX: 2 \t", &r).ok());
+  EXPECT_EQ(r.header_count("x"), 2u);
+  EXPECT_EQ(r.headers.back().second, "2");
+  // Connection is a list of tokens.
+  ASSERT_TRUE(parse("GET / HTTP/1.1\r\nHost: h\r\nConnection: Upgrade, CLOSE", &r).ok());
+  EXPECT_FALSE(r.keep_alive);
+  ASSERT_TRUE(parse("GET / HTTP/1.1\r\nHost: h\r\nConnection: closed", &r).ok());
+  EXPECT_TRUE(r.keep_alive);
+  ASSERT_TRUE(parse("GET / HTTP/1.0\r\nConnection: foo, Keep-Alive", &r).ok());
+  EXPECT_TRUE(r.keep_alive);
+  // Content-Length: the same twice is one length; two that differ, a list,
+  // a sign or any Transfer-Encoding is a 400.
+  uint64_t length = 0;
+  Response error;
+  ASSERT_TRUE(
+      parse("POST / HTTP/1.1\r\nHost: h\r\nContent-Length: 7\r\ncontent-length: 7", &r).ok());
+  EXPECT_TRUE(body_length(r, 100, &length, &error));
+  EXPECT_EQ(length, 7u);
+  for (const char* bad :
+       {"Content-Length: 7\r\nContent-Length: 8", "Content-Length: 7, 7", "Content-Length: +7",
+        "Transfer-Encoding: chunked", "Transfer-Encoding: identity\r\nContent-Length: 7"}) {
+    ASSERT_TRUE(parse(std::string("POST / HTTP/1.1\r\nHost: h\r\n") + bad, &r).ok()) << bad;
+    EXPECT_FALSE(body_length(r, 100, &length, &error)) << bad;
+    EXPECT_EQ(error.status, 400) << bad;
+  }
 }
 
 int connect_local(int port) {
@@ -128,7 +179,7 @@ TEST(ServeThreads, ManyKeptAliveClientsGetTheirOwnAnswers) {
       for (int i = 0; i < kRequests; ++i) {
         const std::string body = std::to_string(c) + "-" + std::to_string(i);
         const std::string got =
-            ask(fd, "POST /c" + std::to_string(c) + " HTTP/1.1\r\nContent-Length: " +
+            ask(fd, "POST /c" + std::to_string(c) + " HTTP/1.1\r\nHost: h\r\nContent-Length: " +
                         std::to_string(body.size()) + "\r\n\r\n" + body);
         if (got.find("\r\n\r\nPOST /c" + std::to_string(c) + " " + body) != std::string::npos) {
           ++right;
@@ -154,7 +205,7 @@ TEST(ServeThreads, StopEndsThePoolWithClientsConnected) {
   std::thread pool([&] { server.serve([](const Request&) { return Response(200); }); });
   const int idle = connect_local(server.port());  // connected, never asking
   const int asking = connect_local(server.port());
-  EXPECT_NE(ask(asking, "GET / HTTP/1.1\r\n\r\n").find("200 OK"), std::string::npos);
+  EXPECT_NE(ask(asking, "GET / HTTP/1.1\r\nHost: h\r\n\r\n").find("200 OK"), std::string::npos);
   server.stop();
   pool.join();  // returns: the test would hang (and time out) otherwise
   ::close(idle);
@@ -215,7 +266,8 @@ TEST(ServeThreads, SlowClientsDoNotHoldUpOthers) {
   }
   ASSERT_TRUE(wait_for_connections(run.server(), 10));
   const int fast = run.connect();
-  EXPECT_NE(ask(fast, "GET /fast HTTP/1.1\r\n\r\n").find("\r\n\r\n/fast"), std::string::npos);
+  EXPECT_NE(ask(fast, "GET /fast HTTP/1.1\r\nHost: h\r\n\r\n").find("\r\n\r\n/fast"),
+            std::string::npos);
   for (int i = 0; i < 10; ++i) {
     EXPECT_NE(ask(slow[i], " x\r\n\r\n").find("\r\n\r\n/slow" + std::to_string(i)),
               std::string::npos);
@@ -231,7 +283,7 @@ TEST(ServeThreads, ARequestTooSlowToArriveGets408) {
   o.timeout_ms = 200;
   Running run(o);
   const int fd = run.connect();
-  const std::string part = "GET / HTTP/1.1\r\n";
+  const std::string part = "GET / HTTP/1.1\r\nHost: h\r\n";
   ASSERT_EQ(::send(fd, part.data(), part.size(), MSG_NOSIGNAL), ssize_t(part.size()));
   char buf[512];
   const ssize_t n = ::recv(fd, buf, sizeof buf, 0);  // waits for the server's answer
@@ -253,12 +305,13 @@ TEST(ServeThreads, ConnectionsPastTheLimitGet503AndNoneLeaks) {
     for (int i = 0; i < 8; ++i) held.push_back(run.connect());
     ASSERT_TRUE(wait_for_connections(run.server(), 8));
     const int extra = run.connect();
-    EXPECT_NE(ask(extra, "GET / HTTP/1.1\r\n\r\n").find(" 503 "), std::string::npos);
+    EXPECT_NE(ask(extra, "GET / HTTP/1.1\r\nHost: h\r\n\r\n").find(" 503 "), std::string::npos);
     ::close(extra);
     for (int fd : held) ::close(fd);
     ASSERT_TRUE(wait_for_connections(run.server(), 0));
     const int again = run.connect();
-    EXPECT_NE(ask(again, "GET /again HTTP/1.1\r\n\r\n").find(" 200 "), std::string::npos);
+    EXPECT_NE(ask(again, "GET /again HTTP/1.1\r\nHost: h\r\n\r\n").find(" 200 "),
+              std::string::npos);
     ::close(again);
     EXPECT_TRUE(wait_for_connections(run.server(), 0));
   }
@@ -277,7 +330,7 @@ Response echo_body(const Request& r) { return Response(200, "text/plain", r.body
 // Starts a body of 800 bytes on fd (3 of them sent) and waits until the
 // server holds it.
 void hold_800(Running& run, int fd) {
-  const std::string head = "POST / HTTP/1.1\r\nContent-Length: 800\r\n\r\nabc";
+  const std::string head = "POST / HTTP/1.1\r\nHost: h\r\nContent-Length: 800\r\n\r\nabc";
   ASSERT_EQ(::send(fd, head.data(), head.size(), MSG_NOSIGNAL), ssize_t(head.size()));
   for (int i = 0; i < 500 && run.server().held_bytes() == 0; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -290,7 +343,7 @@ void hold_800(Running& run, int fd) {
 TEST(ServeThreads, BodiesHeldAtOnceAreBounded) {
   Running run(bodies_of_1000(), echo_body);
   const int first = run.connect(), second = run.connect();
-  const std::string head = "POST / HTTP/1.1\r\nContent-Length: 800\r\n\r\n";
+  const std::string head = "POST / HTTP/1.1\r\nHost: h\r\nContent-Length: 800\r\n\r\n";
   ASSERT_NO_FATAL_FAILURE(hold_800(run, first));
   EXPECT_NE(ask(second, head + "x").find(" 503 "), std::string::npos);
   const std::string got = ask(first, std::string(797, 'y'));
@@ -336,7 +389,8 @@ TEST(ServeThreads, ARefusedClientStillSendingItsBodyReadsTheRefusal) {
   ASSERT_NO_FATAL_FAILURE(hold_800(run, first));
   const std::string body(4 << 20, 'z');
   const std::string request =
-      "POST / HTTP/1.1\r\nContent-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body;
+      "POST / HTTP/1.1\r\nHost: h\r\nContent-Length: " + std::to_string(body.size()) + "\r\n\r\n" +
+      body;
   // As most clients do (Python's http.client among them): the whole body
   // first, then the answer.  Closed at once, the connection would be reset
   // under the sender, which fails before it reads anything.
@@ -379,12 +433,13 @@ TEST(ServeThreads, LongAnswersAreStreamedInChunks) {
   for (size_t k = 0; k < (3 << 20) + 5; ++k) want += pattern(k);
 
   int fd = run.connect();
-  const std::string short_answer = ask(fd, "GET /short HTTP/1.1\r\n\r\n");
+  const std::string short_answer = ask(fd, "GET /short HTTP/1.1\r\nHost: h\r\n\r\n");
   EXPECT_NE(short_answer.find("Content-Length: 100\r\n"), std::string::npos) << short_answer;
   EXPECT_EQ(short_answer.substr(short_answer.find("\r\n\r\n") + 4), want.substr(0, 100));
   // The long one on the same connection, then a last request on it.
   const std::string req =
-      "GET /long HTTP/1.1\r\n\r\nGET /short HTTP/1.1\r\nConnection: close\r\n\r\n";
+      "GET /long HTTP/1.1\r\nHost: h\r\n\r\nGET /short HTTP/1.1\r\nHost: h\r\nConnection: "
+      "close\r\n\r\n";
   ASSERT_EQ(::send(fd, req.data(), req.size(), MSG_NOSIGNAL), ssize_t(req.size()));
   const std::string both = read_to_close(fd);
   ::close(fd);
@@ -400,7 +455,7 @@ TEST(ServeThreads, LongAnswersAreStreamedInChunks) {
   EXPECT_EQ(both.substr(both.size() - 100), want.substr(0, 100));
 
   fd = run.connect();
-  const std::string broken_req = "GET /broken HTTP/1.1\r\n\r\n";
+  const std::string broken_req = "GET /broken HTTP/1.1\r\nHost: h\r\n\r\n";
   ASSERT_EQ(::send(fd, broken_req.data(), broken_req.size(), MSG_NOSIGNAL),
             ssize_t(broken_req.size()));
   const std::string cut = read_to_close(fd);  // returns: the server closed it
@@ -420,7 +475,8 @@ TEST(ServeThreads, ExpectContinueIsAskedForTheBody) {
   Running run(ServerOptions{},
               [](const Request& r) { return Response(200, "text/plain", r.body); });
   const int fd = run.connect();
-  const std::string head = "POST / HTTP/1.1\r\nContent-Length: 5\r\nExpect: 100-continue\r\n\r\n";
+  const std::string head =
+      "POST / HTTP/1.1\r\nHost: h\r\nContent-Length: 5\r\nExpect: 100-continue\r\n\r\n";
   ASSERT_EQ(::send(fd, head.data(), head.size(), MSG_NOSIGNAL), ssize_t(head.size()));
   timeval tv{5, 0};
   ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
@@ -432,6 +488,98 @@ TEST(ServeThreads, ExpectContinueIsAskedForTheBody) {
   EXPECT_NE(answer.find("200 OK"), std::string::npos);
   EXPECT_EQ(answer.substr(answer.size() - 5), "hello");
   ::close(fd);
+}
+
+// HEAD is answered with GET's head and no body; an HTTP/1.0 client gets a
+// long answer delimited by the connection's close, never chunked; blank
+// lines before a request are skipped; a handler that throws is a 500 and
+// the server goes on.
+TEST(ServeThreads, HeadHttp10BlankLinesAndAThrowingHandler) {
+  Running run(ServerOptions{}, [](const Request& r) {
+    if (r.path == "/throw") throw std::bad_alloc();
+    Response res(200, "text/plain", r.path == "/long" ? "" : "five!");
+    if (r.path == "/long") {
+      res.stream = [](BodySink& sink) {
+        const std::string piece(100000, 'w');
+        for (int i = 0; i < 30; ++i) {
+          if (!sink.write(piece.data(), piece.size())) return error_response(500, "gone");
+        }
+        return Response(200);
+      };
+    }
+    return res;
+  });
+  int fd = run.connect();
+  const std::string req = "\r\n\r\nHEAD /x HTTP/1.1\r\nHost: h\r\n\r\n";
+  ASSERT_EQ(::send(fd, req.data(), req.size(), MSG_NOSIGNAL), ssize_t(req.size()));
+  std::string head;  // read to the end of the head: a HEAD answer has no body
+  char buf[512];
+  for (ssize_t n;
+       head.find("\r\n\r\n") == std::string::npos && (n = ::recv(fd, buf, sizeof buf, 0)) > 0;) {
+    head.append(buf, size_t(n));
+  }
+  EXPECT_EQ(head.rfind("HTTP/1.1 200", 0), 0u) << head;
+  EXPECT_NE(head.find("Content-Length: 5\r\n"), std::string::npos);
+  EXPECT_EQ(head.substr(head.find("\r\n\r\n") + 4), "");  // no body: the next answer follows
+  const std::string thrown = ask(fd, "GET /throw HTTP/1.1\r\nHost: h\r\n\r\n");
+  EXPECT_EQ(thrown.rfind("HTTP/1.1 500", 0), 0u) << thrown;
+  const std::string after = ask(fd, "GET /x HTTP/1.1\r\nHost: h\r\n\r\n");
+  EXPECT_EQ(after.substr(after.size() - 5), "five!");
+  ::close(fd);
+  fd = run.connect();
+  const std::string old = "GET /long HTTP/1.0\r\n\r\n";
+  ASSERT_EQ(::send(fd, old.data(), old.size(), MSG_NOSIGNAL), ssize_t(old.size()));
+  const std::string got = read_to_close(fd);
+  ::close(fd);
+  const size_t end = got.find("\r\n\r\n");
+  ASSERT_NE(end, std::string::npos);
+  EXPECT_EQ(got.substr(0, end).find("chunked"), std::string::npos) << got.substr(0, end);
+  EXPECT_EQ(got.substr(end + 4), std::string(3000000, 'w'));
+}
+
+// A client that reads a long answer slowly holds no worker: with one
+// worker and four clients each taking 2 KB a second of a 20 MB answer,
+// other requests are answered at once while all four are still
+// connected.
+TEST(ServeThreads, SlowReadersHoldNoWorker) {
+  ServerOptions o;
+  o.threads = 1;
+  o.scratch_dir = testing::TempDir();
+  Running run(o, [](const Request& r) {
+    Response res(200, "text/plain", "quick");
+    if (r.path == "/long") {
+      res.stream = [](BodySink& sink) {
+        const std::string piece(1 << 20, 'l');
+        for (int i = 0; i < 20; ++i) {
+          if (!sink.write(piece.data(), piece.size())) return error_response(500, "gone");
+        }
+        return Response(200);
+      };
+    }
+    return res;
+  });
+  std::vector<int> slow;
+  for (int i = 0; i < 4; ++i) {
+    slow.push_back(run.connect());
+    const int small = 4096;
+    ::setsockopt(slow.back(), SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    const std::string req = "GET /long HTTP/1.1\r\nHost: h\r\n\r\n";
+    ASSERT_EQ(::send(slow.back(), req.data(), req.size(), MSG_NOSIGNAL), ssize_t(req.size()));
+  }
+  char buf[2048];
+  for (int round = 0; round < 3; ++round) {  // the slow clients read a little
+    for (const int fd : slow) EXPECT_GT(::recv(fd, buf, sizeof buf, 0), 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  }
+  const auto asked = std::chrono::steady_clock::now();
+  const int quick = run.connect();
+  EXPECT_NE(ask(quick, "GET /q HTTP/1.1\r\nHost: h\r\n\r\n").find("quick"), std::string::npos);
+  const double waited =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
+  EXPECT_LT(waited, 2.0);
+  EXPECT_EQ(run.server().connections(), 5);  // every slow reader is still connected
+  ::close(quick);
+  for (const int fd : slow) ::close(fd);
 }
 
 }  // namespace

@@ -14,35 +14,49 @@ namespace {
 
 constexpr char kUsage[] =
     "usage: weaver serve DB [--port P] [--bind ADDR] [--threads N] [--memory BYTES]\n"
+    "                       [--allow-host NAME[,NAME...]] [--quiet]\n"
     "\n"
     "Serves DB read-only over HTTP: a page to explore the mesh in a browser (a\n"
     "cross-section as a zoomable map of tiles, coloured by a field, the element\n"
     "under a click and its neighbours) and a JSON API with the answers of\n"
     "'weaver query --format json'.  Each request reads one committed state; a\n"
     "writer committing meanwhile is seen from the next request on.  With an\n"
-    "aggregate table ('weaver aggregate DB') a map pixel that holds many\n"
-    "elements shows their least vs (or another summary) rather than the one at\n"
-    "its centre.  Limits: 64 connections (more get 503), a request's head 40 KiB\n"
-    "and body 64 MiB, a quarter of --memory for the bodies at once (503 past it),\n"
-    "10 s to send a request (408), 5 s idle between two.  Answers past 1 MiB are\n"
-    "sent as they are written (chunked), so the server stays within --memory.\n"
+    "aggregate table (weaver mesh makes one; 'weaver aggregate DB' for older\n"
+    "meshes) a map pixel that holds many elements shows their least vs (or\n"
+    "another summary) rather than the one at its centre.\n"
+    "Safe to leave running: every value a client sends is parsed as a number,\n"
+    "an id or a name from a fixed list (400 otherwise), never as an option or a\n"
+    "path; a request whose Host is not this server's is 421, one from another\n"
+    "site's page (Origin, Sec-Fetch-Site) 403.  Limits: 64 connections (more\n"
+    "get 503), a request's head 40 KiB and body 64 MiB, a quarter of --memory\n"
+    "for the bodies at once (503 past it), 10 s to send a request (408) or to\n"
+    "wait for a thread (503), 5 s idle between two; a range lists at most 1M\n"
+    "elements a page, a region at most 1M elements.  Answers past 1 MiB are sent\n"
+    "as they are written (chunked), so the server stays within --memory; a\n"
+    "client that reads an answer slowly holds a connection and spill space in\n"
+    "DB (at most 1 GiB in all), not a thread, and one that reads slower than\n"
+    "64 KB/s over 10 s is dropped.  Each request is logged on stderr.\n"
     "  --port P        the TCP port (default 8080; 0 for any free one)\n"
     "  --bind ADDR     the IPv4 address to listen on (default 127.0.0.1: this\n"
     "                  machine only; 0.0.0.0 for every interface)\n"
-    "  --threads N     requests answered at once (default 4); a slow or idle\n"
-    "                  client holds a connection, never a thread\n"
+    "  --threads N     requests answered at once (default 4)\n"
     "  --memory BYTES  memory budget (default 256M): a quarter for request bodies,\n"
     "                  an eighth for the tables' leaf directories (built once,\n"
     "                  shared by the threads), the rest for the threads' caches\n"
     "                  (a mesh of a billion elements answers fastest with 1G)\n"
-    "Routes:\n"
-    "  /                                  the page\n"
+    "  --allow-host NAMES  host names clients may address the server by (commas\n"
+    "                  between), besides localhost, 127.0.0.1, [::1] and the\n"
+    "                  bound address: a proxy's or the machine's own name\n"
+    "  --quiet         no line on stderr for each request\n"
+    "Routes (GET and HEAD, but POST /api/points):\n"
+    "  /                                  the page (and /page.css, /page.js)\n"
     "  /api/stat                          counts, units, extents, fields\n"
     "  /api/locate?x=&y=&z=[&units=m|ticks][&geo=1]\n"
     "  POST /api/points[?query=locate|material|node-at][&units=m]  lines or [[x,y,z],...]\n"
     "  /api/element/ID  /api/node/ID  /api/neighbors/ID[?kinds=all]\n"
     "  /api/node-elements/ID  /api/depends/ID\n"
-    "  /api/range?box=X0,Y0,Z0,X1,Y1,Z1[&list=1]\n"
+    "  /api/range?box=X0,Y0,Z0,X1,Y1,Z1[&list=1[&limit=N][&from=ID]]  the count, or\n"
+    "                                     a page of the elements and the next id\n"
     "  /api/section/AXIS/POSITION?color=F[&summary=S]  a section's extent and\n"
     "                                     colour range (S: min, max, mean, centre)\n"
     "  /api/tile/AXIS/POSITION/ZOOM/X/Y.png?color=F[&summary=S][&min=&max=]\n"
@@ -56,26 +70,84 @@ extern "C" void stop_serving(int) {
   if (g_server != nullptr) g_server->stop();
 }
 
-// A query of `weaver query` on an open Explorer, its points read from
-// points, its answer printed to out and its errors captured.
-int run_query_on(Explorer& ex, const std::vector<Explorer*>& helpers,
-                 const std::vector<std::string>& words, std::FILE* points, std::FILE* out,
-                 std::string* err) {
+// A coordinate of q as a word of the query: its own text, printed here
+// from a number the service parsed.
+std::string coordinate_word(double v, bool metres) {
+  if (!metres) return std::to_string(uint64_t(v));  // whole ticks, checked by the service
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+// The query q asks, as parse_args would leave it: every word made here
+// from q's typed values, none taken from a client.
+ParsedArgs query_args(const serve::ApiQuery& q) {
+  using Kind = serve::ApiQuery::Kind;
+  static const char* const kNames[] = {"locate",    "material",      "node-at", "element", "node",
+                                       "neighbors", "node-elements", "depends", "range"};
+  ParsedArgs a;
+  a.positional = {kNames[int(q.kind)]};
+  const bool metres = q.metres || q.geo;
+  if (q.kind == Kind::kLocate || q.kind == Kind::kMaterial || q.kind == Kind::kNodeAt) {
+    if (q.batch) a.values["points"] = "-";
+    for (int i = 0; i < 3 && !q.batch; ++i)
+      a.positional.push_back(coordinate_word(q.point[i], metres));
+  } else if (q.kind == Kind::kRange) {
+    for (double v : q.box) a.positional.push_back(coordinate_word(v, metres));
+    if (q.list) a.flags.insert("list");
+  } else {
+    a.positional.push_back(std::to_string(q.id));
+  }
+  if (q.kind == Kind::kNeighbors) {
+    static const char* const kKinds[] = {"faces", "edges", "corners"};
+    for (int k = 0; k < 3; ++k) {
+      if (q.neighbor_kinds & (1u << k)) a.flags.insert(kKinds[k]);
+    }
+  }
+  if (q.metres) a.values["units"] = "m";
+  if (q.geo) a.flags.insert("geo");
+  a.values["format"] = "json";
+  return a;
+}
+
+// A query of the API on an open Explorer, its points read from points,
+// its answer printed to out and the first of its errors captured.
+int run_query_on(Explorer& ex, const std::vector<Explorer*>& helpers, const serve::ApiQuery& q,
+                 std::FILE* points, std::FILE* out, std::string* err) {
   err->clear();
-  std::FILE* e = serve::string_stream(err);
+  std::FILE* e = serve::string_stream(err, 4096);
   QuerySettings settings;
   settings.points_stdin = points;
   settings.helpers = helpers;
-  const int code = e ? run_query(ex, words, settings, out, e, "weaver serve") : 1;
+  if (q.list) {
+    settings.list_from = q.list_from, settings.list_limit = q.list_limit;
+    settings.list_next = q.list_next, settings.list_count = q.list_count;
+  }
+  const int code = e ? run_parsed_query(ex, query_args(q), settings, out, e, "weaver serve") : 1;
   if (e) std::fclose(e);  // flushes into *err
   return code;
+}
+
+// --allow-host's names.
+std::vector<std::string> allowed_hosts(const ParsedArgs& args) {
+  std::vector<std::string> names;
+  if (!args.values.count("allow-host")) return names;
+  const std::string& list = args.values.at("allow-host");
+  for (size_t from = 0; from <= list.size();) {
+    size_t comma = list.find(',', from);
+    if (comma == std::string::npos) comma = list.size();
+    if (comma > from) names.push_back(list.substr(from, comma - from));
+    from = comma + 1;
+  }
+  return names;
 }
 
 }  // namespace
 
 int cmd_serve(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"port", "bind", "threads", "memory"}, {}, &args);
+  Status st = parse_args(argc, argv, 2, {"port", "bind", "threads", "memory", "allow-host"},
+                         {"quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("serve", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("serve", "expected one DB", kUsage);
@@ -98,6 +170,8 @@ int cmd_serve(int argc, char** argv) {
   // a megabyte or so each, whatever their size.
   o.max_buffered = std::max<uint64_t>(memory.bytes() / 4, 1 << 20);
   o.max_body = std::min(o.max_body, o.max_buffered);
+  o.scratch_dir = db;  // a slow reader's spilled answer: an unnamed file in DB
+  o.log = !args.flags.count("quiet");
   const uint64_t directories = memory.bytes() / 8;
   const MemoryBudget each(std::max<uint64_t>(memory.bytes() / 8 * 5 / uint64_t(o.threads + 1),
                                              MemoryBudget::kMinBytes));
@@ -112,6 +186,7 @@ int cmd_serve(int argc, char** argv) {
   st = server.listen(o);
   if (st.is_invalid_argument()) return usage_error("serve", st.message(), kUsage);
   if (!st.ok()) return report("serve", st);
+  service.set_callers(serve::caller_policy(o.bind, server.port(), allowed_hosts(args)));
   g_server = &server;
   std::signal(SIGINT, stop_serving);
   std::signal(SIGTERM, stop_serving);

@@ -129,11 +129,16 @@ class RowWriter {
 // Lines of a stream, read 64 KiB at a time (getline's per-line cost shows
 // at a million lines a second; a larger buffer gains nothing, and one point
 // asked through `weaver serve` would zero it).  A line is valid until the
-// next call.
+// next call.  A line longer than the buffer is no point: it comes back as
+// its first kMaxLine bytes, marked too long, and the rest of it is skipped
+// unread into memory (a stream of /dev/zero is one such line, not an
+// allocation without end).
 class LineReader {
  public:
-  explicit LineReader(std::FILE* in) : in_(in), buf_(64 << 10) {}
-  bool next(std::string_view* line) {
+  static constexpr size_t kMaxLine = 64 << 10;
+  explicit LineReader(std::FILE* in) : in_(in), buf_(kMaxLine) {}
+  bool next(std::string_view* line, bool* too_long) {
+    *too_long = false;
     for (;;) {
       const char* nl = static_cast<const char*>(std::memchr(&buf_[at_], '\n', len_ - at_));
       if (nl != nullptr) {
@@ -147,6 +152,12 @@ class LineReader {
         at_ = len_;
         return true;
       }
+      if (at_ == 0 && len_ == buf_.size()) {
+        *line = std::string_view(buf_.data(), len_);
+        *too_long = true;
+        skip_line();
+        return true;
+      }
       refill();
     }
   }
@@ -156,10 +167,21 @@ class LineReader {
   void refill() {
     std::memmove(buf_.data(), &buf_[at_], len_ - at_);
     len_ -= at_, at_ = 0;
-    if (len_ == buf_.size()) buf_.resize(2 * buf_.size());  // a very long line
     const size_t n = std::fread(&buf_[len_], 1, buf_.size() - len_, in_);
     len_ += n;
     eof_ = n == 0;
+  }
+  // Drops the rest of a long line: read on to its end a byte at a time
+  // through stdio's buffer, none of it kept.  The line's first bytes stay
+  // in the buffer for the caller, and are dropped at the next call.
+  void skip_line() {
+    for (int c; (c = getc_unlocked(in_)) != '\n';) {
+      if (c == EOF) {
+        eof_ = true;
+        break;
+      }
+    }
+    at_ = len_;
   }
 
   std::FILE* in_;
@@ -413,7 +435,8 @@ Status run_point_batch(Explorer& ex, std::FILE* in, const std::string& name,
   uint64_t line_no = 0;
   Status st;
   std::string why;
-  for (std::string_view text; st.ok() && lines.next(&text);) {
+  bool too_long = false;
+  for (std::string_view text; st.ok() && lines.next(&text, &too_long);) {
     if (interrupted()) {
       st = Status::Busy("interrupted at line " + std::to_string(line_no + 1) + " of " + name);
       break;
@@ -424,8 +447,9 @@ Status run_point_batch(Explorer& ex, std::FILE* in, const std::string& name,
     while (len > 0 && line[len - 1] == '\r') --len;
     size_t first = 0;
     while (first < len && (line[first] == ' ' || line[first] == '\t')) ++first;
-    if (first == len || line[first] == '#') continue;
-    if (!batch.add(line + first, len - first, &why)) {
+    if (!too_long && (first == len || line[first] == '#')) continue;
+    if (too_long) why = "a line longer than " + std::to_string(LineReader::kMaxLine >> 10) + " KiB";
+    if (too_long || !batch.add(line + first, len - first, &why)) {
       std::fprintf(err, "%s:%llu: %s\n", name.c_str(), (unsigned long long)line_no, why.c_str());
       batch.add_bad();
       ++result->bad_lines;

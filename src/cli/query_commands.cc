@@ -105,9 +105,18 @@ int run_query(Explorer& ex, const std::vector<std::string>& words, const QuerySe
               std::FILE* out, std::FILE* err, const std::string& who) {
   std::vector<char*> argv;
   for (const std::string& w : words) argv.push_back(const_cast<char*>(w.c_str()));
-  Query q{ex, {}, settings, out, err, who, {nullptr, std::fclose}, {}};
-  const Status st = parse_args(int(argv.size()), argv.data(), 0, kValueOptions, kFlags, &q.args);
-  if (!st.ok()) return q.usage(st.message());
+  ParsedArgs args;
+  const Status st = parse_args(int(argv.size()), argv.data(), 0, kValueOptions, kFlags, &args);
+  if (!st.ok()) {
+    Query q{ex, {}, settings, out, err, who, {nullptr, std::fclose}, {}};
+    return q.usage(st.message());
+  }
+  return run_parsed_query(ex, std::move(args), settings, out, err, who);
+}
+
+int run_parsed_query(Explorer& ex, ParsedArgs args, const QuerySettings& settings, std::FILE* out,
+                     std::FILE* err, const std::string& who) {
+  Query q{ex, std::move(args), settings, out, err, who, {nullptr, std::fclose}, {}};
   if (q.args.positional.empty()) return q.usage("expected a query");
   return q.run();
 }

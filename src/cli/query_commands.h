@@ -9,6 +9,7 @@
 
 #include "cli/query_output.h"
 #include "query/explorer.h"
+#include "util/args.h"
 
 namespace weaver::cli {
 
@@ -23,6 +24,13 @@ struct QuerySettings {
   // More Explorers on the same state, for a --points batch to share its
   // work with (PointBatchOptions::helpers).
   std::vector<Explorer*> helpers;
+  // range --list: one page of the leaves, those from element id list_from
+  // on, at most list_limit; then *list_next (if set) is the id of the first
+  // leaf past the page (UINT64_MAX when it ends the box) and *list_count
+  // (if set) the count of the whole box.
+  uint64_t list_from = 0, list_limit = UINT64_MAX;
+  uint64_t* list_next = nullptr;
+  uint64_t* list_count = nullptr;
 };
 
 // Runs one query: words[0] is its name ("locate", "neighbors", ...), the
@@ -31,6 +39,12 @@ struct QuerySettings {
 // points file) or 2 (bad usage).
 int run_query(Explorer& ex, const std::vector<std::string>& words, const QuerySettings& settings,
               std::FILE* out, std::FILE* err, const std::string& who);
+
+// Runs a query whose words were parsed already, or made by a program rather
+// than typed (weaver serve's, from values it parsed itself): args as
+// parse_args leaves them, the query's name first among the positional.
+int run_parsed_query(Explorer& ex, ParsedArgs args, const QuerySettings& settings, std::FILE* out,
+                     std::FILE* err, const std::string& who);
 
 // Checks a query's words without a database: its name, options and the
 // count and syntax of its numbers.  InvalidArgument saying what is wrong.

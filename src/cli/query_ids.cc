@@ -13,25 +13,30 @@ int Query::run_range() {
   if (st.ok()) st = point_argument(1, &lo);
   if (st.ok()) st = point_argument(4, &hi);
   if (!st.ok()) return usage(st.message());
-  const bool list = args.flags.count("list") != 0;
-  Table t;
-  t.columns = list ? std::vector<std::string>{"element", "x", "y", "z", "level", "edge"}
-                   : std::vector<std::string>{"count"};
   uint64_t count = 0;
-  std::function<void(const Octant&, uint64_t)> each;
-  if (list) {
-    each = [&](const Octant& o, uint64_t id) {
-      std::vector<Cell> row{Cell::number(id)};
-      octant_cells(o, &row);
-      t.rows.push_back(std::move(row));
-    };
-  }
-  st = range_query(ex.mesh().octants(), {lo, hi}, &count, each);
+  st = range_query(ex.mesh().octants(), {lo, hi}, &count, nullptr);
   if (!st.ok()) return fail(st);
-  if (!list) t.rows.push_back({Cell::number(count)}), t.one = true;
-  if (text() && !list)
-    return std::fprintf(out, "%llu leaves intersect the box\n", (unsigned long long)count), 0;
-  return print(t);
+  if (s.list_count != nullptr) *s.list_count = count;
+  if (!args.flags.count("list")) {
+    if (text())
+      return std::fprintf(out, "%llu leaves intersect the box\n", (unsigned long long)count), 0;
+    return print(Table{{"count"}, {{Cell::number(count)}}, true});
+  }
+  // Streamed a row at a time: a box may hold the whole mesh.
+  TableStream rows(s.mode, {"element", "x", "y", "z", "level", "edge"}, out);
+  uint64_t next = UINT64_MAX;
+  st = range_page(
+      ex.mesh().octants(), {lo, hi}, s.list_from, s.list_limit,
+      [&](const Octant& o, uint64_t id) {
+        std::vector<Cell> row{Cell::number(id)};
+        octant_cells(o, &row);
+        rows.row(std::move(row));
+      },
+      &next);
+  if (!st.ok()) return fail(st);
+  rows.finish();
+  if (s.list_next != nullptr) *s.list_next = next;
+  return 0;
 }
 
 int Query::run_element() {

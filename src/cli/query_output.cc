@@ -75,18 +75,23 @@ void print_json_lines(const Table& t, std::FILE* out) {
   for (const auto& row : t.rows) std::fprintf(out, "%s\n", json_object(t, row).c_str());
 }
 
-void print_separated(const Table& t, char sep, std::FILE* out) {
+void print_separated_row(const std::vector<Cell>& row, char sep, std::FILE* out) {
   std::string line;
-  for (size_t i = 0; i < t.columns.size(); ++i) {
-    line += (i ? std::string(1, sep) : "") + csv_text(Cell::string(t.columns[i]), sep);
+  for (size_t i = 0; i < row.size(); ++i) {
+    line += (i ? std::string(1, sep) : "") + csv_text(row[i], sep);
   }
-  if (!t.columns.empty()) std::fprintf(out, "%s\n", line.c_str());
-  for (const auto& row : t.rows) {
-    line.clear();
-    for (size_t i = 0; i < row.size(); ++i)
-      line += (i ? std::string(1, sep) : "") + csv_text(row[i], sep);
-    std::fprintf(out, "%s\n", line.c_str());
-  }
+  std::fprintf(out, "%s\n", line.c_str());
+}
+
+void print_separated_header(const std::vector<std::string>& columns, char sep, std::FILE* out) {
+  std::vector<Cell> names;
+  for (const std::string& c : columns) names.push_back(Cell::string(c));
+  if (!names.empty()) print_separated_row(names, sep, out);
+}
+
+void print_separated(const Table& t, char sep, std::FILE* out) {
+  print_separated_header(t.columns, sep, out);
+  for (const auto& row : t.rows) print_separated_row(row, sep, out);
 }
 
 // Numbers right-aligned, text left-aligned, as the sqlite3 shell's table mode.
@@ -154,6 +159,32 @@ void print_table(const Table& t, OutputMode mode, std::FILE* out) {
     case OutputMode::kTsv: return print_separated(t, '\t', out);
     default: return print_aligned(t, out);
   }
+}
+
+TableStream::TableStream(OutputMode mode, std::vector<std::string> columns, std::FILE* out)
+    : mode_(mode), out_(out) {
+  held_.columns = std::move(columns);
+  if (mode_ == OutputMode::kCsv || mode_ == OutputMode::kTsv) {
+    print_separated_header(held_.columns, mode_ == OutputMode::kCsv ? ',' : '\t', out_);
+  }
+}
+
+void TableStream::row(std::vector<Cell> cells) {
+  switch (mode_) {
+    case OutputMode::kJson:
+      std::fprintf(out_, "%s%s", rows_ ? ",\n" : "[", json_object(held_, cells).c_str());
+      break;
+    case OutputMode::kJsonl: std::fprintf(out_, "%s\n", json_object(held_, cells).c_str()); break;
+    case OutputMode::kCsv: print_separated_row(cells, ',', out_); break;
+    case OutputMode::kTsv: print_separated_row(cells, '\t', out_); break;
+    default: held_.rows.push_back(std::move(cells));
+  }
+  ++rows_;
+}
+
+void TableStream::finish() {
+  if (mode_ == OutputMode::kJson) std::fputs(rows_ ? "]\n" : "[]\n", out_);
+  if (mode_ == OutputMode::kText || mode_ == OutputMode::kTable) print_aligned(held_, out_);
 }
 
 }  // namespace weaver::cli

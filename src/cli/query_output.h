@@ -9,6 +9,7 @@
 //   tsv    the same with tabs
 #pragma once
 
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -50,6 +51,23 @@ struct Table {
 // Prints t in mode (kText prints it as kTable).  Header lines (table, csv,
 // tsv) only when the table has columns.
 void print_table(const Table& t, OutputMode mode, std::FILE* out);
+
+// A table printed a row at a time, as print_table prints it whole: json,
+// jsonl, csv and tsv rows go out as they come (an answer of any length in
+// little memory); text and table hold them, to align their columns.
+class TableStream {
+ public:
+  TableStream(OutputMode mode, std::vector<std::string> columns, std::FILE* out);
+  void row(std::vector<Cell> cells);
+  // After the last row: closes a JSON array, prints the rows held.
+  void finish();
+
+ private:
+  OutputMode mode_;
+  std::FILE* out_;
+  Table held_;  // the columns, and in text or table mode the rows
+  uint64_t rows_ = 0;
+};
 
 // A cell as JSON and as CSV text; a list as its items joined by spaces.
 std::string plain_text(const Cell& c);

@@ -47,6 +47,10 @@ struct ExportOptions {
   // order; node_id and element_id keep the global ids.
   bool has_box = false;
   double box[6] = {0, 0, 0, 0, 0, 0};
+  // vtu with a box: more elements than this in the box (0: no limit) is
+  // refused before anything is written, ExportResult::elements saying how
+  // many (weaver serve's cap, counted on the state the export reads).
+  uint64_t max_elements = 0;
   // pvtu: pieces of consecutive element ids, equal in count.
   uint32_t parts = 1;
   MemoryBudget memory;

@@ -212,6 +212,16 @@ Status write_vtu(ExportJob& job) {
   if (job.options.has_box) {
     Selection s;
     WEAVER_RETURN_IF_ERROR(job.box_selection(&s));
+    if (job.options.max_elements > 0) {
+      uint64_t n = 0;
+      WEAVER_RETURN_IF_ERROR(count_box_elements(job.mesh, s, &n));
+      if (n > job.options.max_elements) {
+        job.result->elements = n;
+        return Status::InvalidArgument(std::to_string(n) +
+                                       " elements share a point with the box, more than " +
+                                       std::to_string(job.options.max_elements));
+      }
+    }
     WEAVER_RETURN_IF_ERROR(job.select(s, false, job.options.out + ".scratch"));
   }
   return write_vtu_file(job, job.options.out);

@@ -8,16 +8,20 @@
 #include <cstdio>
 #include <vector>
 
+#include "query/octant_query.h"
 #include "sort/external_sort.h"
 #include "storage/file.h"
 #include "util/radix_sort.h"
 
 namespace weaver {
 
-Status scan_selected(Mesh& mesh, const Selection& sel, bool with_nodes,
-                     const std::function<Status(MeshElement&)>& fn) {
+namespace {
+
+// The elements of ids [first, end) that sel keeps.
+Status scan_ids(Mesh& mesh, const Selection& sel, uint64_t first, uint64_t end, bool with_nodes,
+                const std::function<Status(MeshElement&)>& fn) {
   ElementScan scan;
-  WEAVER_RETURN_IF_ERROR(scan.start(mesh, sel.first, false));
+  WEAVER_RETURN_IF_ERROR(scan.start(mesh, first, false));
   std::vector<MeshElement> kept;
   std::vector<Octant> octants;
   std::vector<std::array<uint64_t, 8>> ids;
@@ -35,7 +39,7 @@ Status scan_selected(Mesh& mesh, const Selection& sel, bool with_nodes,
     kept.clear();
     return Status::Ok();
   };
-  for (; scan.valid() && scan.element().id < sel.end; scan.next()) {
+  for (; scan.valid() && scan.element().id < end; scan.next()) {
     bool keep = false;
     WEAVER_RETURN_IF_ERROR(sel.keeps(scan.element().id, scan.element().octant, &keep));
     if (!keep) continue;
@@ -44,6 +48,29 @@ Status scan_selected(Mesh& mesh, const Selection& sel, bool with_nodes,
   }
   WEAVER_RETURN_IF_ERROR(scan.status());
   return flush();
+}
+
+// sel's box as the pixels a leaf sharing a point with it holds: a leaf
+// [c, c + s) touches [lo, hi] (bounds included) when c <= hi and
+// c + s >= lo, that is when it holds a pixel of [lo - 1, hi].
+TickBox touching_pixels(const Selection& sel) {
+  const auto below = [](uint32_t v) { return v > 0 ? v - 1 : 0; };
+  return {{below(sel.lo.x), below(sel.lo.y), below(sel.lo.z)}, sel.hi};
+}
+
+}  // namespace
+
+Status scan_selected(Mesh& mesh, const Selection& sel, bool with_nodes,
+                     const std::function<Status(MeshElement&)>& fn) {
+  if (!sel.has_box) return scan_ids(mesh, sel, sel.first, sel.end, with_nodes, fn);
+  return range_runs(mesh.octants(), touching_pixels(sel), [&](uint64_t first, uint64_t end) {
+    first = std::max(first, sel.first), end = std::min(end, sel.end);
+    return first < end ? scan_ids(mesh, sel, first, end, with_nodes, fn) : Status::Ok();
+  });
+}
+
+Status count_box_elements(Mesh& mesh, const Selection& sel, uint64_t* count) {
+  return range_query(mesh.octants(), touching_pixels(sel), count, nullptr);
 }
 
 namespace {

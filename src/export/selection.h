@@ -43,9 +43,14 @@ struct Selection {
 };
 
 // Calls fn for each selected element in id order, with its corners' global
-// node ids when with_nodes (looked up a batch at a time).
+// node ids when with_nodes (looked up a batch at a time).  With a box only
+// the box's runs of ids are read (query/octant_query.h), not the mesh.
 Status scan_selected(Mesh& mesh, const Selection& sel, bool with_nodes,
                      const std::function<Status(MeshElement&)>& fn);
+
+// How many elements share a point with sel's box (sel.has_box), whatever
+// its id range and part: counted by rank, without reading them.
+Status count_box_elements(Mesh& mesh, const Selection& sel, uint64_t* count);
 
 // The nodes of a selection, local id = rank in global id order.  For the
 // whole mesh local ids are the global ones and nothing is built.

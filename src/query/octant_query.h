@@ -34,4 +34,17 @@ struct TickBox {
 Status range_query(BTree& octants, const TickBox& box, uint64_t* count,
                    const std::function<void(const Octant&, uint64_t id)>& on_leaf);
 
+// One page of range_query's leaves: those with id >= from, in key order, at
+// most limit of them, each given to on_leaf.  *next: the id of the first
+// leaf of the box past the page (UINT64_MAX when the page ends the box).
+// Skips the subtrees before `from` by rank, so a page costs what it lists
+// plus O(boundary octants x log n), wherever it starts.
+Status range_page(BTree& octants, const TickBox& box, uint64_t from, uint64_t limit,
+                  const std::function<void(const Octant&, uint64_t id)>& on_leaf, uint64_t* next);
+
+// The leaves of the box as runs of consecutive ids [first, end), in
+// increasing order: what an export of the box reads instead of the mesh.
+Status range_runs(BTree& octants, const TickBox& box,
+                  const std::function<Status(uint64_t first, uint64_t end)>& on_run);
+
 }  // namespace weaver

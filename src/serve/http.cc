@@ -1,5 +1,8 @@
 #include "serve/http.h"
 
+#include <strings.h>
+
+#include <cctype>
 #include <cstring>
 
 #include "util/json_string.h"
@@ -14,17 +17,14 @@ const char* reason(int status) {
     case 404: return "Not Found";
     case 405: return "Method Not Allowed";
     case 408: return "Request Timeout";
-    case 413: return "Payload Too Large";
+    case 403: return "Forbidden";
+    case 413: return "Content Too Large";
+    case 421: return "Misdirected Request";
     case 431: return "Request Header Fields Too Large";
     case 500: return "Internal Server Error";
     case 503: return "Service Unavailable";
     default: return "Error";
   }
-}
-
-std::string lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
 }
 
 Status parse_query(const std::string& qs, Request* r) {
@@ -42,34 +42,99 @@ Status parse_query(const std::string& qs, Request* r) {
   return Status::Ok();
 }
 
+// A header name is a token (RFC 9110 5.6.2).
+bool is_token_char(unsigned char c) {
+  return std::isalnum(c) || std::strchr("!#$%&'*+-.^_`|~", c) != nullptr;
+}
+
+// One header line into r: "name: value", the name a token right before
+// the colon, the value without control bytes (tabs aside).
+Status parse_header_line(const std::string& h, Request* r) {
+  if (h.empty()) return Status::InvalidArgument("malformed header line");
+  if (h[0] == ' ' || h[0] == '\t')
+    return Status::InvalidArgument("a folded header line (obs-fold)");
+  const size_t colon = h.find(':');
+  if (colon == std::string::npos || colon == 0) {
+    return Status::InvalidArgument("malformed header line");
+  }
+  for (size_t i = 0; i < colon; ++i) {
+    if (!is_token_char(static_cast<unsigned char>(h[i]))) {
+      return Status::InvalidArgument("a header name that is not a token (whitespace before ':'?)");
+    }
+  }
+  size_t from = colon + 1, to = h.size();
+  while (from < to && (h[from] == ' ' || h[from] == '\t')) ++from;
+  while (to > from && (h[to - 1] == ' ' || h[to - 1] == '\t')) --to;
+  for (size_t i = from; i < to; ++i) {
+    const unsigned char c = static_cast<unsigned char>(h[i]);
+    if ((c < 0x20 && c != '\t') || c == 0x7f) {
+      return Status::InvalidArgument("a control byte in a header's value");
+    }
+  }
+  r->headers.emplace_back(lower_ascii(h.substr(0, colon)), h.substr(from, to - from));
+  return Status::Ok();
+}
+
+// Whether a comma-separated list of tokens holds `token` (any case).
+bool has_token(const std::string& list, const char* token) {
+  size_t from = 0;
+  while (from <= list.size()) {
+    size_t comma = list.find(',', from);
+    if (comma == std::string::npos) comma = list.size();
+    size_t a = from, b = comma;
+    while (a < b && (list[a] == ' ' || list[a] == '\t')) ++a;
+    while (b > a && (list[b - 1] == ' ' || list[b - 1] == '\t')) --b;
+    if (::strncasecmp(list.c_str() + a, token, b - a) == 0 && std::strlen(token) == b - a) {
+      return true;
+    }
+    from = comma + 1;
+  }
+  return false;
+}
+
 }  // namespace
 
-std::string response_head(const Response& r, bool keep_alive, bool chunked) {
+std::string lower_ascii(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string response_head(const Response& r, bool keep_alive, Framing framing) {
   std::string head = "HTTP/1.1 " + std::to_string(r.status) + " " + reason(r.status) + "\r\n";
   head += "Content-Type: " + r.content_type + "\r\n";
-  head += chunked ? std::string("Transfer-Encoding: chunked\r\n")
-                  : "Content-Length: " + std::to_string(r.body.size()) + "\r\n";
+  if (framing == Framing::kChunked) head += "Transfer-Encoding: chunked\r\n";
+  if (framing == Framing::kLength) {
+    const uint64_t length = r.file ? r.file->size : r.body.size();
+    head += "Content-Length: " + std::to_string(length) + "\r\n";
+  }
+  if (framing == Framing::kClose) keep_alive = false;
   head += "Cache-Control: " + r.cache_control + "\r\n";
   if (!r.attachment.empty()) {
     head += "Content-Disposition: attachment; filename=\"" + r.attachment + "\"\r\n";
   }
   head += "X-Content-Type-Options: nosniff\r\n";
+  for (const auto& [name, value] : r.extra_headers) head += name + ": " + value + "\r\n";
   head += keep_alive ? "Connection: keep-alive\r\n\r\n" : "Connection: close\r\n\r\n";
   return head;
 }
 
 bool body_length(const Request& r, uint64_t max_body, uint64_t* length, Response* error) {
   *length = 0;
-  const auto cl = r.headers.find("content-length");
-  if (cl != r.headers.end()) {
-    char* end = nullptr;
-    *length = std::strtoull(cl->second.c_str(), &end, 10);
-    if (cl->second.empty() || *end != '\0' || !std::isdigit(uint8_t(cl->second[0]))) {
+  if (r.header("transfer-encoding") != nullptr) {
+    return *error = error_response(400, "Transfer-Encoding is not taken: send Content-Length"),
+           false;
+  }
+  bool seen = false;
+  for (const auto& [name, value] : r.headers) {
+    if (name != "content-length") continue;
+    uint64_t v = 0;
+    bool digits = !value.empty() && value.size() <= 19;
+    for (const char c : value) digits = digits && c >= '0' && c <= '9';
+    if (digits) v = std::strtoull(value.c_str(), nullptr, 10);
+    if (!digits || (seen && v != *length)) {
       return *error = error_response(400, "bad Content-Length"), false;
     }
-  }
-  if (r.headers.count("transfer-encoding")) {
-    return *error = error_response(400, "chunked bodies are not taken: send Content-Length"), false;
+    *length = v, seen = true;
   }
   if (*length > max_body) {
     return *error = error_response(
@@ -144,19 +209,20 @@ Status parse_request_head(const std::string& head, Request* r, bool* too_large) 
   for (size_t at = line_end; at < head.size();) {
     size_t next = head.find("\r\n", at + 2);
     if (next == std::string::npos) next = head.size();
-    const std::string h = head.substr(at + 2, next - at - 2);
-    const size_t colon = h.find(':');
-    if (colon == std::string::npos || colon == 0) {
-      return Status::InvalidArgument("malformed header line");
-    }
-    size_t v = colon + 1;
-    while (v < h.size() && (h[v] == ' ' || h[v] == '\t')) ++v;
-    r->headers[lower(h.substr(0, colon))] = h.substr(v);
+    WEAVER_RETURN_IF_ERROR(parse_header_line(head.substr(at + 2, next - at - 2), r));
     at = next;
   }
-  const auto c = r->headers.find("connection");
-  const std::string connection = c == r->headers.end() ? "" : lower(c->second);
-  r->keep_alive = version == "HTTP/1.1" ? connection != "close" : connection == "keep-alive";
+  r->http10 = version == "HTTP/1.0";
+  if (!r->http10 && r->header_count("host") != 1) {
+    return Status::InvalidArgument("an HTTP/1.1 request has one Host header");
+  }
+  bool close = false, keep = false;
+  for (const auto& [name, value] : r->headers) {
+    if (name != "connection") continue;
+    close = close || has_token(value, "close");
+    keep = keep || has_token(value, "keep-alive");
+  }
+  r->keep_alive = !close && (!r->http10 || keep);
   return Status::Ok();
 }
 

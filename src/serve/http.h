@@ -15,19 +15,39 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
 
 #include "schema/status.h"
+#include "serve/outbox.h"
 
 namespace weaver::serve {
 
 struct Request {
-  std::string method;                          // "GET", "POST", ...
-  std::string path;                            // the target without its query: "/api/element/5"
-  std::map<std::string, std::string> query;    // decoded ?a=1&b=2
-  std::map<std::string, std::string> headers;  // names in lower case
+  std::string method;                        // "GET", "POST", ...
+  std::string path;                          // the target without its query: "/api/element/5"
+  std::map<std::string, std::string> query;  // decoded ?a=1&b=2
+  // In the order sent, names in lower case, values without the spaces
+  // around them; a header sent twice is here twice.
+  std::vector<std::pair<std::string, std::string>> headers;
   std::string body;
+  bool http10 = false;     // HTTP/1.0: no chunked answers, close-delimited instead
   bool keep_alive = true;  // HTTP/1.1 unless "Connection: close"
+  // The first header of that (lower-case) name, or null.
+  const std::string* header(std::string_view name) const {
+    for (const auto& [n, v] : headers) {
+      if (n == name) return &v;
+    }
+    return nullptr;
+  }
+  size_t header_count(std::string_view name) const {
+    size_t n = 0;
+    for (const auto& h : headers) n += h.first == name;
+    return n;
+  }
 };
 
 // Limits of a request's head.
@@ -36,8 +56,11 @@ inline constexpr size_t kMaxHeaders = 32 << 10;
 
 // Parses a request's head (the bytes before "\r\n\r\n"): its line, target
 // and headers into *r.  InvalidArgument saying what is wrong, for a reply
-// of 400 (or 431 when a limit is passed: *too_large).  What the fuzz target
-// fuzz/http_request_fuzz.cc feeds.
+// of 400 (or 431 when a limit is passed: *too_large).  Rejects, as RFC 9112
+// says a server must or may, rather than repairs: whitespace before a
+// header's colon, a folded line (obs-fold), a control byte in a value, a
+// header name that is not a token, an HTTP/1.1 request without exactly one
+// Host.  What the fuzz target fuzz/http_request_fuzz.cc feeds.
 Status parse_request_head(const std::string& head, Request* r, bool* too_large);
 
 // Where a streamed answer writes its body (Response::stream).  The server
@@ -72,18 +95,24 @@ struct Response {
   std::string content_type;
   std::string body;
   std::string cache_control;
-  std::string attachment;  // a file name: the browser saves the body as that file
-  BodyStream stream;       // set: the body is written by it, not taken from body
+  std::string attachment;          // a file name: the browser saves the body as that file
+  BodyStream stream;               // set: the body is written by it, not taken from body
+  std::shared_ptr<FileBody> file;  // set: the body is this file's bytes
+  // More headers, name and value (the page's Content-Security-Policy).
+  std::vector<std::pair<std::string, std::string>> extra_headers;
 };
 
 // A response with status and a JSON body {"error": message}.
 Response error_response(int status, const std::string& message);
-// The status line and headers of r; chunked: the body follows in chunks
-// rather than with a Content-Length.
-std::string response_head(const Response& r, bool keep_alive, bool chunked = false);
+// How an answer's body is framed: by Content-Length, in chunks (HTTP/1.1
+// answers of unknown length), or by closing the connection (HTTP/1.0's).
+enum class Framing { kLength, kChunked, kClose };
+// The status line and headers of r.
+std::string response_head(const Response& r, bool keep_alive, Framing framing = Framing::kLength);
 // The body length a parsed request announces: its Content-Length, 0 without
-// one.  An error response (400 for a bad length or a chunked body, 413 past
-// max_body) when it cannot be taken.
+// one.  An error response (400 for a bad length, for Content-Length headers
+// that differ, or for any Transfer-Encoding; 413 past max_body) when it
+// cannot be taken: the connection is then closed, as its framing is unknown.
 bool body_length(const Request& r, uint64_t max_body, uint64_t* length, Response* error);
 
 struct ServerOptions {
@@ -96,6 +125,11 @@ struct ServerOptions {
   int max_requests = 100000;             // on one connection
   int max_connections = 64;              // open at once; past them 503 and closed
   uint64_t max_buffered = 256ull << 20;  // request bodies held at once; past it 503
+  // Where the rest of an answer to a slow reader is spilled (serve/outbox.h),
+  // and how much may be there at once.
+  std::string scratch_dir = ".";
+  uint64_t max_spill = 1ull << 30;
+  bool log = true;  // a line on stderr for each request
 };
 
 class Server {
@@ -124,7 +158,11 @@ class Server {
   std::atomic<bool> stopping_{false};
   std::atomic<int> open_{0};
   std::atomic<uint64_t> held_{0};
+  SpillRoom spill_;
 };
+
+// s with ASCII letters in lower case (header names, host names).
+std::string lower_ascii(std::string s);
 
 // "%41" and "+" decoded; InvalidArgument for a bad escape.
 Status url_decode(const std::string& in, std::string* out);

@@ -18,6 +18,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <deque>
 #include <list>
 #include <mutex>
@@ -26,6 +27,8 @@
 #include <vector>
 
 #include "serve/http.h"
+#include "serve/outbox.h"
+#include "util/printable.h"
 
 namespace weaver::serve {
 namespace {
@@ -37,14 +40,20 @@ int64_t now_ms() {
 
 struct Connection {
   int fd = -1;
-  std::string in;         // received, not yet taken as a request
-  int64_t since = 0;      // when it went idle, or when its request began
-  bool idle = true;       // between requests, with no byte of the next
-  bool busy = false;      // a worker has it
-  bool draining = false;  // refused: its answer sent, the rest of its bytes read and dropped
-  int served = 0;         // requests answered
-  uint64_t reserved = 0;  // body bytes counted against max_buffered
-  Request request;        // the request a worker answers
+  std::string in;             // received, not yet taken as a request
+  int64_t since = 0;          // when it went idle, when its request began, or when it was queued
+  bool idle = true;           // between requests, with no byte of the next
+  bool busy = false;          // a worker has it
+  bool draining = false;      // refused: its answer sent, the rest of its bytes read and dropped
+  bool sending = false;       // the poller sends the rest of an answer (out) for a slow reader
+  bool keep_after = false;    // ... after which the connection takes another request
+  int served = 0;             // requests answered
+  uint64_t reserved = 0;      // body bytes counted against max_buffered
+  Request request;            // the request a worker answers
+  std::string peer;           // the client's address, for the log
+  uint64_t answer_bytes = 0;  // of the answer being sent, head included
+  Outbox out;                 // what is still to send of an answer
+  RateClock clock;            // how fast the client reads it
 };
 
 // What a connection's bytes hold: a whole request (moved from c.in to
@@ -54,6 +63,10 @@ enum class Take { kRequest, kMore, kRefuse };
 Take take_request(Connection& c, uint64_t max_body, uint64_t* length, Response* refusal,
                   bool* expects_continue = nullptr) {
   *length = 0;
+  // Empty lines before a request are ignored (RFC 9112 2.2).
+  size_t blank = 0;
+  while (c.in.compare(blank, 2, "\r\n") == 0) blank += 2;
+  if (blank > 0) c.in.erase(0, blank);
   const size_t end = c.in.find("\r\n\r\n");
   if (end == std::string::npos) {
     if (c.in.size() <= kMaxRequestLine + kMaxHeaders) return Take::kMore;
@@ -70,9 +83,8 @@ Take take_request(Connection& c, uint64_t max_body, uint64_t* length, Response* 
   if (!body_length(r, max_body, length, refusal)) return Take::kRefuse;
   if (c.in.size() < end + 4 + *length) {
     if (expects_continue != nullptr) {
-      const auto e = r.headers.find("expect");
-      *expects_continue =
-          e != r.headers.end() && ::strcasecmp(e->second.c_str(), "100-continue") == 0;
+      const std::string* e = r.header("expect");
+      *expects_continue = e != nullptr && ::strcasecmp(e->c_str(), "100-continue") == 0;
     }
     c.in.reserve(end + 4 + *length);
     return Take::kMore;
@@ -111,7 +123,8 @@ bool next_request_at_once(Connection& c, uint64_t max_body) {
 // Sends all of parts, in order, on a non-blocking socket (one sendmsg for
 // all that fits: a head and a short body in two sends would wait on the
 // client's delayed ACK), waiting for room at most timeout_ms in all; false
-// if the client is gone or too slow.
+// if the client is gone or too slow.  For short answers only (refusals,
+// 100 Continue): an answer goes through the connection's Outbox.
 bool send_parts(int fd, std::initializer_list<std::string_view> parts, int timeout_ms) {
   std::vector<iovec> left;
   for (const std::string_view p : parts) {
@@ -143,68 +156,155 @@ bool send_parts(int fd, std::initializer_list<std::string_view> parts, int timeo
   return true;
 }
 
-bool send_whole(int fd, const Response& r, bool keep_alive, int timeout_ms) {
-  return send_parts(fd, {response_head(r, keep_alive), r.body}, timeout_ms);
-}
+// What becomes of a connection after an answer: it takes another request,
+// it closes once the answer is sent, or it closes now (the client is gone,
+// too slow, or the answer was cut short).
+enum class After { kKeep, kClose, kDrop };
 
-// A streamed answer's sink on a connection: it holds the first
-// kStreamHold bytes; past them it sends the head and then each write as a
-// chunk of its own (the stream's stdio buffer makes them 256 KiB).
+// How long a worker waits for a client to take more of an answer before
+// it calls the client slow and leaves the rest to the polling thread.
+constexpr int kPatienceMs = 50;
+
+// A worker's side of sending an answer on c: bytes go into c.out and out
+// to the socket as fast as the client takes them; once the client is slow
+// the rest stays queued (spilled past kHeldBytes), for the poller.  When
+// no spill room is left the worker waits, held to the minimum rate.
+class Sender {
+ public:
+  Sender(Connection& c, SpillRoom* room) : c_(c), room_(room) { c_.clock.start(now_ms()); }
+
+  bool put(std::string_view data) {
+    if (failed_) return false;
+    c_.answer_bytes += data.size();
+    if (!c_.out.add(data, room_)) {  // no room to spill: wait for the client
+      while (!failed_ && !c_.out.empty()) failed_ = !wait_once(kRateWindowMs);
+      failed_ = failed_ || !c_.out.add(data, room_);
+      return !failed_;
+    }
+    return drain();
+  }
+  void put_file(std::shared_ptr<FileBody> f) {
+    c_.answer_bytes += f->size;
+    c_.out.add_file(std::move(f));
+    drain();
+  }
+  // Sends what the client takes now, waiting a little while it keeps up.
+  bool drain() {
+    while (!failed_ && !c_.out.empty()) {
+      if (!send_now()) return false;
+      if (c_.out.empty() || slow_) break;
+      pollfd p{c_.fd, POLLOUT, 0};
+      if (::poll(&p, 1, kPatienceMs) == 0) slow_ = true;  // the rest waits for the poller
+    }
+    return !failed_;
+  }
+  bool failed() const { return failed_; }
+
+ private:
+  bool send_now() {
+    failed_ = failed_ || !c_.out.send_some(c_.fd, &c_.clock.bytes) || !c_.clock.keeps_up(now_ms());
+    if (c_.out.empty()) slow_ = false;  // caught up: worth waiting for again
+    return !failed_;
+  }
+  // Waits for room on the socket at most ms, then sends.
+  bool wait_once(int ms) {
+    pollfd p{c_.fd, POLLOUT, 0};
+    if (::poll(&p, 1, std::min(ms, 200)) < 0 && errno != EINTR) return false;
+    return send_now();
+  }
+
+  Connection& c_;
+  SpillRoom* room_;
+  bool slow_ = false, failed_ = false;
+};
+
+// A streamed answer's sink: it holds the first kStreamHold bytes; an
+// answer that ends within them goes out whole with its Content-Length.
+// Past them the head goes out, then each write as a chunk of its own (the
+// stream's stdio buffer makes them 256 KiB), or, to an HTTP/1.0 client,
+// as it is, the connection's close ending it.
 class SocketSink : public BodySink {
  public:
-  SocketSink(int fd, const Response& head, bool keep_alive, int timeout_ms)
-      : fd_(fd), head_(head), keep_(keep_alive), timeout_ms_(timeout_ms) {}
+  SocketSink(Sender& out, const Response& head, bool keep_alive, bool http10)
+      : out_(out), head_(head), keep_(keep_alive), http10_(http10) {}
 
   bool write(const char* data, size_t n) override {
-    if (failed_) return false;
+    if (out_.failed()) return false;
     if (!started_ && held_.size() + n <= kStreamHold) return held_.append(data, n), true;
     if (!started_) {
       started_ = true;
-      failed_ = !send_chunk(response_head(head_, keep_, true), held_);
+      const Framing f = http10_ ? Framing::kClose : Framing::kChunked;
+      if (!out_.put(response_head(head_, keep_ && !http10_, f)) || !chunk(held_)) return false;
       held_ = std::string();
     }
-    failed_ = failed_ || !send_chunk("", std::string_view(data, n));
-    return !failed_;
+    return chunk(std::string_view(data, n));
   }
 
-  // Ends the answer as the stream said (end): true if the connection may
-  // take another request.
-  bool finish(Response end) {
+  // Ends the answer as the stream said (end).
+  After finish(Response end) {
+    const After done = keep_ ? After::kKeep : After::kClose;
     if (!started_) {
-      if (end.status != 200) return send_whole(fd_, end, keep_, timeout_ms_) && keep_;
-      Response whole = head_;
-      whole.stream = nullptr;
-      whole.body = std::move(held_);
-      return send_whole(fd_, whole, keep_, timeout_ms_) && keep_;
+      Response whole = end.status != 200 ? std::move(end) : head_;
+      if (whole.status == 200) whole.stream = nullptr, whole.body = std::move(held_);
+      const bool sent = out_.put(response_head(whole, keep_)) && out_.put(whole.body);
+      return sent ? done : After::kDrop;
     }
-    if (failed_ || end.status != 200) return false;  // cut short: the client sees it
-    return send_parts(fd_, {"0\r\n\r\n"}, timeout_ms_) && keep_;
+    if (out_.failed() || end.status != 200) return After::kDrop;  // cut short: the client sees it
+    if (http10_) return After::kClose;                            // the close ends the body
+    return out_.put("0\r\n\r\n") ? done : After::kDrop;
   }
 
  private:
-  // Sends `before` (the head, before the first chunk), then data as a chunk.
-  bool send_chunk(std::string_view before, std::string_view data) {
-    if (data.empty()) return send_parts(fd_, {before}, timeout_ms_);
+  bool chunk(std::string_view data) {
+    if (data.empty()) return true;
+    if (http10_) return out_.put(data);
     char size[24];
     const int len = std::snprintf(size, sizeof size, "%zx\r\n", data.size());
-    return send_parts(fd_, {before, std::string_view(size, size_t(len)), data, "\r\n"},
-                      timeout_ms_);
+    return out_.put(std::string_view(size, size_t(len))) && out_.put(data) && out_.put("\r\n");
   }
 
-  int fd_;
+  Sender& out_;
   const Response& head_;
-  bool keep_;
-  int timeout_ms_;
-  bool started_ = false, failed_ = false;
+  bool keep_, http10_;
+  bool started_ = false;
   std::string held_;
 };
 
-// Sends r (running its stream, if it has one): true if the connection may
-// take another request.
-bool send_response(int fd, const Response& r, bool keep_alive, int timeout_ms) {
-  if (!r.stream) return send_whole(fd, r, keep_alive, timeout_ms) && keep_alive;
-  SocketSink sink(fd, r, keep_alive, timeout_ms);
-  return sink.finish(r.stream(sink));
+// Answers c's request with r (running its stream, if it has one, unless
+// the request is a HEAD): what is left to send stays in c.out.
+After send_response(Connection& c, const Response& r, bool keep_alive, SpillRoom* room) {
+  Sender out(c, room);
+  const Request& q = c.request;
+  const After done = keep_alive ? After::kKeep : After::kClose;
+  const auto ended = [&](bool sent, After after) {
+    return sent && !out.failed() ? after : After::kDrop;
+  };
+  if (q.method == "HEAD" && r.stream) {
+    const Framing f = q.http10 ? Framing::kClose : Framing::kChunked;
+    return ended(out.put(response_head(r, keep_alive && !q.http10, f)),
+                 q.http10 ? After::kClose : done);
+  }
+  if (!r.stream) {
+    bool sent = out.put(response_head(r, keep_alive));
+    if (q.method != "HEAD" && r.file) out.put_file(r.file);
+    if (q.method != "HEAD" && !r.file) sent = sent && out.put(r.body);
+    return ended(sent, done);
+  }
+  SocketSink sink(out, r, keep_alive, q.http10);
+  Response end;
+  try {
+    end = r.stream(sink);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "weaver serve: %s %s: %s\n", q.method.c_str(), printable(q.path).c_str(),
+                 e.what());
+    end = error_response(500, "the answer failed");
+  }
+  return sink.finish(std::move(end));
+}
+
+// A short answer sent at once, before the connection closes.
+void send_refusal(int fd, const Response& r) {
+  send_parts(fd, {response_head(r, false), r.body}, 100);
 }
 
 // How long a refused connection is read (and what it sends dropped) before
@@ -233,8 +333,8 @@ class Queues {
     closed_ = true;
     ready_.notify_all();
   }
-  // A worker is done with c: keep it open for its next request or not.
-  void push_done(Connection* c, bool keep, int wake_fd) {
+  // A worker is done with c: what becomes of it.
+  void push_done(Connection* c, After keep, int wake_fd) {
     {
       std::lock_guard<std::mutex> l(m_);
       done_.push_back({c, keep});
@@ -242,9 +342,9 @@ class Queues {
     const char b = 1;
     (void)!::write(wake_fd, &b, 1);
   }
-  std::vector<std::pair<Connection*, bool>> take_done() {
+  std::vector<std::pair<Connection*, After>> take_done() {
     std::lock_guard<std::mutex> l(m_);
-    std::vector<std::pair<Connection*, bool>> out(done_.begin(), done_.end());
+    std::vector<std::pair<Connection*, After>> out(done_.begin(), done_.end());
     done_.clear();
     return out;
   }
@@ -253,7 +353,7 @@ class Queues {
   std::mutex m_;
   std::condition_variable ready_;
   std::deque<Connection*> jobs_;
-  std::deque<std::pair<Connection*, bool>> done_;
+  std::deque<std::pair<Connection*, After>> done_;
   bool closed_ = false;
 };
 
@@ -282,7 +382,7 @@ class Poller {
   // (and what it sends dropped) until its client closes, for a second at
   // most: a lingering close, as web servers do.  True: c stays open.
   bool refuse(Connection& c, const Response& r) {
-    send_response(c.fd, r, false, 100);
+    send_refusal(c.fd, r);
     ::shutdown(c.fd, SHUT_WR);
     buffered_ -= c.reserved;
     c.reserved = 0;
@@ -292,7 +392,12 @@ class Poller {
     return true;
   }
   void expire(int64_t now);
+  // Sends more of a slow reader's answer.
+  void send_more(std::list<Connection>::iterator it);
+  // An answer is sent: c takes its next request (keep) or closes.
+  void answered(std::list<Connection>::iterator it, bool keep);
   void close(std::list<Connection>::iterator it) {
+    it->out.release();
     buffered_ -= it->reserved;
     ::close(it->fd);
     --open_;
@@ -305,23 +410,37 @@ class Poller {
   std::atomic<int>& open_;
   std::list<Connection> conns_;      // stable addresses: workers hold pointers
   std::atomic<uint64_t>& buffered_;  // body bytes reserved by all connections
+  int64_t accept_after_ = 0;         // out of descriptors: no accept before this
 };
+
+// How long the listening socket rests when descriptors run out.
+constexpr int64_t kAcceptPauseMs = 100;
 
 void Poller::run(const std::atomic<bool>& stopping, int wake_fd) {
   std::vector<pollfd> fds;
   std::vector<std::list<Connection>::iterator> polled;
   while (!stopping) {
-    for (const auto& [c, keep] : q_.take_done()) {
+    for (const auto& [c, after] : q_.take_done()) {
       const auto it = std::find_if(conns_.begin(), conns_.end(),
                                    [c = c](const Connection& x) { return &x == c; });
       buffered_ -= it->reserved;
-      it->reserved = 0, it->busy = false, it->idle = it->in.empty(), it->since = now_ms();
-      if (!keep || (!it->in.empty() && !dispatch(*it))) close(it);
+      it->reserved = 0, it->busy = false;
+      if (after == After::kDrop) {
+        close(it);
+      } else if (!it->out.empty()) {
+        it->sending = true, it->keep_after = after == After::kKeep;
+      } else {
+        answered(it, after == After::kKeep);
+      }
     }
-    fds.assign({{wake_fd, POLLIN, 0}, {listen_fd_, POLLIN, 0}});
+    const int64_t now = now_ms();
+    fds.assign({{wake_fd, POLLIN, 0}, {now >= accept_after_ ? listen_fd_ : -1, POLLIN, 0}});
     polled.clear();
     for (auto it = conns_.begin(); it != conns_.end(); ++it) {
-      if (!it->busy) fds.push_back({it->fd, POLLIN, 0}), polled.push_back(it);
+      if (!it->busy) {
+        fds.push_back({it->fd, short(it->sending ? POLLOUT : POLLIN), 0});
+        polled.push_back(it);
+      }
     }
     if (::poll(fds.data(), fds.size(), 200) < 0 && errno != EINTR) break;
     if (fds[0].revents & POLLIN) {
@@ -333,29 +452,57 @@ void Poller::run(const std::atomic<bool>& stopping, int wake_fd) {
     for (size_t i = 0; i < polled.size(); ++i) {
       if (fds[i + 2].revents == 0) continue;
       Connection& c = *polled[i];
-      if (!receive(c) || (!c.in.empty() && !dispatch(c))) close(polled[i]);
+      if (c.sending) {
+        send_more(polled[i]);
+      } else if (!receive(c) || (!c.in.empty() && !dispatch(c))) {
+        close(polled[i]);
+      }
     }
     expire(now_ms());
   }
 }
 
+void Poller::send_more(std::list<Connection>::iterator it) {
+  if (!it->out.send_some(it->fd, &it->clock.bytes)) return close(it);
+  if (!it->out.empty()) return;
+  it->out.release();
+  it->sending = false;
+  answered(it, it->keep_after);
+}
+
+void Poller::answered(std::list<Connection>::iterator it, bool keep) {
+  it->idle = it->in.empty(), it->since = now_ms();
+  if (!keep || (!it->in.empty() && !dispatch(*it))) close(it);
+}
+
 void Poller::accept_all() {
   for (;;) {
     const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK);
+    if (fd < 0 && (errno == EMFILE || errno == ENFILE || errno == ENOMEM || errno == ENOBUFS)) {
+      // Out of descriptors: the listening socket stays readable, so it is
+      // left unpolled a while rather than spun on.
+      accept_after_ = now_ms() + kAcceptPauseMs;
+      return;
+    }
     if (fd < 0) return;  // none left (EAGAIN), or the client left
     const int one = 1;   // answers go out whole, at once
     ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
     if (int(conns_.size()) >= o_.max_connections) {
-      send_response(fd,
-                    error_response(503, "too many connections (" +
-                                            std::to_string(o_.max_connections) + "): retry"),
-                    false, 100);
+      send_refusal(fd, error_response(503, "too many connections (" +
+                                               std::to_string(o_.max_connections) + "): retry"));
       ::close(fd);
       continue;
     }
     Connection c;
     c.fd = fd;
     c.since = now_ms();
+    sockaddr_in peer{};
+    socklen_t len = sizeof peer;
+    char ip[INET_ADDRSTRLEN] = "?";
+    if (::getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &len) == 0) {
+      ::inet_ntop(AF_INET, &peer.sin_addr, ip, sizeof ip);
+    }
+    c.peer = std::string(ip) + ":" + std::to_string(ntohs(peer.sin_port));
     conns_.push_back(std::move(c));
     ++open_;
   }
@@ -403,6 +550,7 @@ bool Poller::dispatch(Connection& c) {
     case Take::kRequest: break;
   }
   c.busy = true;
+  c.since = now_ms();  // queued: a worker that finds it waited too long answers 503
   q_.push_job(&c);
   return true;
 }
@@ -414,6 +562,8 @@ void Poller::expire(int64_t now) {
     const auto next = std::next(it);
     if (it->draining) {
       if (now - it->since > kLingerMs) close(it);
+    } else if (it->sending) {
+      if (!it->clock.keeps_up(now)) close(it);  // reads slower than kMinRate
     } else if (!it->busy && it->idle && now - it->since > o_.idle_ms) {
       close(it);
     } else if (!it->busy && !it->idle && now - it->since > o_.timeout_ms) {
@@ -423,10 +573,36 @@ void Poller::expire(int64_t now) {
   }
 }
 
+// The handler's answer to r; an exception (an allocation that failed, say)
+// is a 500, logged, never the end of the process.
+Response answer(const Server::Handler& handler, const Request& r) {
+  try {
+    return handler(r);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "weaver serve: %s %s: %s\n", r.method.c_str(), printable(r.path).c_str(),
+                 e.what());
+    return error_response(500, "the request failed on the server");
+  }
+}
+
+// One line on stderr a request: when, who, what, and how it went.
+void log_request(const Connection& c, int status, int64_t ms) {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char when[32];
+  std::strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  std::fprintf(stderr, "%s %s %s %s %d %llu %lldms\n", when, c.peer.c_str(),
+               printable(c.request.method, 16).c_str(), printable(c.request.path, 200).c_str(),
+               status, (unsigned long long)c.answer_bytes, (long long)ms);
+}
+
 }  // namespace
 
 Status Server::listen(const ServerOptions& o) {
   o_ = o;
+  spill_.dir = o.scratch_dir;
+  spill_.limit = o.max_spill;
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   addr.sin_port = htons(uint16_t(o.port));
@@ -460,14 +636,21 @@ void Server::serve(const Handler& handler, const std::function<void()>& on_start
     pool.emplace_back([&] {
       if (on_start) on_start();
       while (Connection* c = q.pop_job()) {
-        bool keep = true;
+        After after = After::kKeep;
         do {
           const Request& r = c->request;
-          keep = r.keep_alive && c->served + 1 < o_.max_requests && !stopping_;
-          keep = send_response(c->fd, handler(r), keep, o_.timeout_ms);
+          const int64_t start = now_ms();
+          const bool keep = r.keep_alive && c->served + 1 < o_.max_requests && !stopping_;
+          const Response res = start - c->since > o_.timeout_ms
+                                   ? error_response(503, "the server is busy: retry")
+                                   : answer(handler, r);
+          c->answer_bytes = 0;
+          after = send_response(*c, res, keep, &spill_);
           ++c->served;
-        } while (keep && next_request_at_once(*c, o_.max_body));
-        q.push_done(c, keep, wake[1]);
+          if (o_.log) log_request(*c, res.status, now_ms() - start);
+          c->since = now_ms();
+        } while (after == After::kKeep && c->out.empty() && next_request_at_once(*c, o_.max_body));
+        q.push_done(c, after, wake[1]);
       }
     });
   }

@@ -3,7 +3,9 @@
 // keyboard, coloured by a field with its colour bar, with the coordinate
 // under the pointer, the element under a click (and its neighbours, which
 // are clickable), and the view kept in the URL.  Nothing is fetched from
-// elsewhere.
+// elsewhere, and nothing inline: the page, its style and its script are
+// three answers, so that the Content-Security-Policy allows only this
+// origin (Service::handle).
 #include "serve/service.h"
 
 namespace weaver::serve {
@@ -12,8 +14,23 @@ const char kPage[] = R"PAGE(<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <title>weaver serve</title><link rel="icon" href="data:,">
-<style>
-body{margin:0;font:14px system-ui,sans-serif;display:flex;flex-direction:column;height:100vh}
+<link rel="stylesheet" href="/page.css"></head><body>
+<header>
+<b>weaver</b>
+<label>axis <select id="axis"><option>x</option><option>y</option><option selected>z</option></select></label>
+<label>at <input id="at" type="range" step="any"> <input id="atn" type="number" step="any"> m</label>
+<label>colour <select id="color"></select></label>
+<label id="sumlabel" hidden>pixel <select id="summary"><option value="">own</option><option value="min">least</option><option value="max">greatest</option><option value="mean">mean</option><option value="centre">centre</option></select></label>
+<label id="danglabel" title="the dangling nodes on the plane: red edge-dangling, white face-dangling; only a plane on element faces (z = 0, say) has nodes on it"><input type="checkbox" id="dang"> dangling nodes</label>
+<span id="where"></span>
+</header>
+<main><div id="map"><canvas id="axes"></canvas></div>
+<aside><div id="info"></div><canvas id="bar" width="300" height="46"></canvas><div id="note"></div><div id="sel">Click the map to select an element; shift and drag to download a region as vtu.</div></aside></main>
+<script src="/page.js"></script></body></html>
+)PAGE";
+
+const char kPageCss[] =
+    R"PAGE(body{margin:0;font:14px system-ui,sans-serif;display:flex;flex-direction:column;height:100vh}
 header{display:flex;gap:12px;align-items:center;padding:6px 10px;background:#f3f3f3;flex-wrap:wrap}
 main{flex:1;display:flex;min-height:0}
 #map{flex:1;position:relative;overflow:hidden;background:#fff;cursor:grab;touch-action:none}
@@ -24,20 +41,11 @@ aside{width:320px;overflow:auto;padding:8px 10px;border-left:1px solid #ddd}
 .id{color:#0645ad;cursor:pointer;text-decoration:underline}
 table{border-collapse:collapse}td{padding:1px 6px 1px 0;vertical-align:top}
 #where{font-family:monospace}
-</style></head><body>
-<header>
-<b>weaver</b>
-<label>axis <select id="axis"><option>x</option><option>y</option><option selected>z</option></select></label>
-<label>at <input id="at" type="range" step="any" style="width:220px"> <input id="atn" type="number" step="any" style="width:90px"> m</label>
-<label>colour <select id="color"></select></label>
-<label id="sumlabel" hidden>pixel <select id="summary"><option value="">own</option><option value="min">least</option><option value="max">greatest</option><option value="mean">mean</option><option value="centre">centre</option></select></label>
-<label id="danglabel" title="the dangling nodes on the plane: red edge-dangling, white face-dangling; only a plane on element faces (z = 0, say) has nodes on it"><input type="checkbox" id="dang"> dangling nodes</label>
-<span id="where"></span>
-</header>
-<main><div id="map"><canvas id="axes"></canvas></div>
-<aside><div id="info"></div><canvas id="bar" width="300" height="46"></canvas><div id="note"></div><div id="sel">Click the map to select an element; shift and drag to download a region as vtu.</div></aside></main>
-<script>
-"use strict";
+#at{width:220px}
+#atn{width:90px}
+)PAGE";
+
+const char kPageJs[] = R"PAGE("use strict";
 const $ = id => document.getElementById(id);
 const map = $("map"), axesCanvas = $("axes");
 let stat = null, sec = null;
@@ -317,7 +325,6 @@ window.addEventListener("resize", draw);
   await loadSection(false);
   if (view.sel !== "") select(view.sel);  // a shared link's selected element
 })();
-</script></body></html>
 )PAGE";
 
 }  // namespace weaver::serve

@@ -3,17 +3,21 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 
 #include "export/export.h"
 #include "model/geo_frame.h"
+#include "serve/params.h"
 #include "serve/streams.h"
 #include "serve/tiles.h"
 #include "util/json_string.h"
+#include "util/printable.h"
 
 namespace weaver::serve {
 namespace {
@@ -50,19 +54,6 @@ std::vector<std::string> split(const std::string& s, char sep) {
   return out;
 }
 
-bool parse_number(const std::string& s, double* v) {
-  char* end = nullptr;
-  *v = std::strtod(s.c_str(), &end);
-  return !s.empty() && *end == '\0' && std::isfinite(*v);
-}
-
-bool parse_whole(const std::string& s, int64_t lo, int64_t hi, int64_t* v) {
-  char* end = nullptr;
-  const long long n = std::strtoll(s.c_str(), &end, 10);
-  *v = n;
-  return !s.empty() && *end == '\0' && n >= lo && n <= hi;
-}
-
 int axis_of(const std::string& name) {
   return name == "x" ? 0 : name == "y" ? 1 : name == "z" ? 2 : -1;
 }
@@ -84,12 +75,54 @@ std::string query_message(const std::string& err) {
 }
 
 // The paint a request asks for: ?color= (level) and ?summary= (the
-// field's own).
+// field's own), each from its fixed list.
 Status paint_from(Explorer& ex, const Request& r, Paint* out) {
-  const auto arg = [&r](const char* k, const char* none) {
-    return r.query.count(k) ? r.query.at(k) : std::string(none);
-  };
-  return paint_of(ex, arg("color", "level"), arg("summary", ""), out);
+  const Params p(r);
+  int field = 0, summary = 0;
+  WEAVER_RETURN_IF_ERROR(
+      p.choice("color", {"level", "edge", "vp", "vs", "rho", "qp", "qs"}, &field));
+  WEAVER_RETURN_IF_ERROR(p.choice("summary", {"", "min", "max", "mean", "centre"}, &summary));
+  static const char* const kFields[] = {"level", "edge", "vp", "vs", "rho", "qp", "qs"};
+  static const char* const kSummaries[] = {"", "min", "max", "mean", "centre"};
+  return paint_of(ex, kFields[field], kSummaries[summary], out);
+}
+
+// The units and geo of a point question: ?units=ticks|m, ?geo=0|1.
+Status coordinate_options(const Params& p, ApiQuery* q) {
+  int units = 0;
+  WEAVER_RETURN_IF_ERROR(p.choice("units", {"ticks", "m"}, &units));
+  q->metres = units == 1;
+  return p.flag("geo", &q->geo);
+}
+
+// A coordinate of a question: metres (or degrees) as a finite number,
+// ticks as a whole number that fits a tick coordinate.
+Status coordinate(const Params& p, const char* name, bool metres, double* v) {
+  if (metres) return p.number(name, true, v);
+  uint64_t t = 0;
+  WEAVER_RETURN_IF_ERROR(p.whole(name, 0, UINT32_MAX, true, &t));
+  *v = double(t);
+  return Status::Ok();
+}
+
+// The kinds of ?kinds=faces,edges,corners,all as ApiQuery's bits.
+Status neighbor_kinds(const Request& r, unsigned* mask) {
+  *mask = 0;
+  const auto it = r.query.find("kinds");
+  if (it == r.query.end()) return Status::Ok();
+  for (const std::string& k : split(it->second, ',')) {
+    const unsigned bit = k == "faces"     ? 1
+                         : k == "edges"   ? 2
+                         : k == "corners" ? 4
+                         : k == "all"     ? 7
+                                          : 0;
+    if (bit == 0) {
+      return Status::InvalidArgument("kinds=" + quoted(it->second) +
+                                     " is a list of faces, edges, corners and all");
+    }
+    *mask |= bit;
+  }
+  return Status::Ok();
 }
 
 Response status_response(const Status& st) {
@@ -168,14 +201,39 @@ Explorer* Service::helper(std::unique_lock<std::mutex>* lock) {
   return helper_.get();
 }
 
+namespace {
+
+// The page's three parts, none of them inline: the policy allows this
+// origin's own files only, and no framing by another page.
+Response page_part(const char* type, const char* text) {
+  Response r{200, type, text, "no-cache"};
+  r.extra_headers = {{"Content-Security-Policy",
+                      "default-src 'self'; img-src 'self' data: blob:; "
+                      "frame-ancestors 'none'; base-uri 'none'; form-action 'none'"},
+                     {"X-Frame-Options", "DENY"}};
+  return r;
+}
+
+}  // namespace
+
 Response Service::handle(const Request& r) {
-  if (r.path == "/" || r.path == "/index.html") {
-    if (r.method != "GET") return error_response(405, "the page takes GET");
-    return {200, "text/html; charset=utf-8", kPage, "no-cache"};
+  std::string why;
+  if (const int refused = check_caller(r, callers_, &why)) return error_response(refused, why);
+  const bool get = r.method == "GET" || r.method == "HEAD";
+  if (r.path == "/" || r.path == "/index.html" || r.path == "/page.css" || r.path == "/page.js") {
+    if (!get) return error_response(405, "the page takes GET");
+    if (r.path == "/page.css") return page_part("text/css; charset=utf-8", kPageCss);
+    if (r.path == "/page.js") return page_part("text/javascript; charset=utf-8", kPageJs);
+    return page_part("text/html; charset=utf-8", kPage);
   }
-  if (r.path.rfind("/api/", 0) != 0) return error_response(404, "no such page: " + r.path);
-  if (r.method != "GET" && !(r.method == "POST" && r.path == "/api/points")) {
-    return error_response(405, r.method + " " + r.path + ": not taken here");
+  if (r.path.rfind("/api/", 0) != 0) return error_response(404, "no such page: " + quoted(r.path));
+  const bool post_route = r.path == "/api/points";
+  if (post_route ? r.method != "POST" : !get) {
+    Response no =
+        error_response(405, printable(r.method, 16) + " " + quoted(r.path) + ": not taken here (" +
+                                (post_route ? "POST" : "GET") + ")");
+    no.extra_headers = {{"Allow", post_route ? "POST" : "GET, HEAD"}};
+    return no;
   }
   Explorer* ex = nullptr;
   const Status st = explorer(&ex);
@@ -191,48 +249,61 @@ Response Service::api(const Request& r, Explorer& ex) {
   if (what == "tile") return tile(ex, parts, r);
   if (what == "export.vtu" && parts.size() == 2) return export_vtu(ex, r);
   if (what == "geo" && parts.size() == 2) return geo(ex, r);
+  const Params p(r);
+  ApiQuery q;
+  using Kind = ApiQuery::Kind;
   if (what == "locate" && parts.size() == 2) {
-    for (const char* c : {"x", "y", "z"}) {
-      if (!r.query.count(c)) return error_response(400, "locate takes x, y and z");
-    }
-    return run(ex, {"locate", r.query.at("x"), r.query.at("y"), r.query.at("z")}, r);
+    Status st = coordinate_options(p, &q);
+    const bool metres = q.metres || q.geo;
+    static const char* const kAxes[] = {"x", "y", "z"};
+    for (int a = 0; a < 3 && st.ok(); ++a) st = coordinate(p, kAxes[a], metres, &q.point[a]);
+    if (!st.ok()) return status_response(st);
+    return run(ex, q);
   }
   if (what == "points" && parts.size() == 2) {
-    const std::string q = r.query.count("query") ? r.query.at("query") : "locate";
-    if (q != "locate" && q != "material" && q != "node-at") {
-      return error_response(400, "query is locate, material or node-at, not '" + q + "'");
-    }
-    return run_batch(ex, {q, "--points", "-"}, r);
+    int kind = 0;
+    Status st = p.choice("query", {"locate", "material", "node-at"}, &kind);
+    if (st.ok()) st = coordinate_options(p, &q);
+    if (!st.ok()) return status_response(st);
+    q.kind = kind == 0 ? Kind::kLocate : kind == 1 ? Kind::kMaterial : Kind::kNodeAt;
+    q.batch = true;
+    return run_batch(ex, q, r);
   }
-  const bool by_id = what == "element" || what == "node" || what == "neighbors" ||
-                     what == "node-elements" || what == "depends";
-  if (by_id && parts.size() == 3) {
-    std::vector<std::string> words = {what, parts[2]};
-    if (what == "neighbors" && r.query.count("kinds")) {
-      for (const std::string& k : split(r.query.at("kinds"), ',')) words.push_back("--" + k);
+  static const std::map<std::string, Kind> kById = {{"element", Kind::kElement},
+                                                    {"node", Kind::kNode},
+                                                    {"neighbors", Kind::kNeighbors},
+                                                    {"node-elements", Kind::kNodeElements},
+                                                    {"depends", Kind::kDepends}};
+  if (kById.count(what) && parts.size() == 3) {
+    q.kind = kById.at(what);
+    if (!parse_whole(parts[2], 0, UINT64_MAX, &q.id)) {
+      return error_response(400, what + " takes an id (a whole number), not " + quoted(parts[2]));
     }
-    return run(ex, words, r);
+    Status st = coordinate_options(p, &q);
+    if (st.ok() && q.kind == Kind::kNeighbors) st = neighbor_kinds(r, &q.neighbor_kinds);
+    if (!st.ok()) return status_response(st);
+    return run(ex, q);
   }
   if (what == "range" && parts.size() == 2) {
-    if (!r.query.count("box")) return error_response(400, "range takes box=X0,Y0,Z0,X1,Y1,Z1");
-    std::vector<std::string> words = split(r.query.at("box"), ',');
-    if (words.size() != 6) return error_response(400, "box is six numbers: X0,Y0,Z0,X1,Y1,Z1");
-    words.insert(words.begin(), "range");
-    if (r.query.count("list") && r.query.at("list") != "0") words.push_back("--list");
-    return run(ex, words, r);
+    q.kind = Kind::kRange;
+    Status st = coordinate_options(p, &q);
+    if (st.ok()) st = p.box("box", q.box);
+    for (int i = 0; i < 6 && st.ok() && !q.metres; ++i) {
+      if (!(q.box[i] >= 0 && q.box[i] <= UINT32_MAX && q.box[i] == std::floor(q.box[i]))) {
+        st = Status::InvalidArgument("box in ticks is six whole numbers");
+      }
+    }
+    q.list_limit = kMaxListed;
+    if (st.ok()) st = p.flag("list", &q.list);
+    if (st.ok()) st = p.whole("limit", 1, kMaxListed, false, &q.list_limit);
+    if (st.ok()) st = p.whole("from", 0, UINT64_MAX, false, &q.list_from);
+    if (!st.ok()) return status_response(st);
+    return q.list ? run_list(ex, q) : run(ex, q);
   }
-  return error_response(404, "no such API route: " + r.path);
+  return error_response(404, "no such API route: " + quoted(r.path));
 }
 
 namespace {
-
-// The words of a query as the API's options ask: units, geo, JSON.
-std::vector<std::string> with_options(std::vector<std::string> words, const Request& r) {
-  if (r.query.count("units")) words.insert(words.end(), {"--units", r.query.at("units")});
-  if (r.query.count("geo") && r.query.at("geo") != "0") words.push_back("--geo");
-  words.insert(words.end(), {"--format", "json"});
-  return words;
-}
 
 // How a query that ended with code, having printed `printed` bytes and err,
 // is answered: 200 when it printed its answer (a batch with bad lines ends
@@ -251,24 +322,30 @@ Response outcome(int code, uint64_t printed, const std::string& err) {
 
 }  // namespace
 
-Response Service::run(Explorer& ex, std::vector<std::string> words, const Request& r) {
+// The first line of what a query printed to stderr is all that is kept (a
+// batch of a million bad lines writes a million).
+constexpr size_t kErrorHeld = 4096;
+
+Response Service::run(Explorer& ex, const ApiQuery& q) {
   std::string out, err;
   std::FILE* o = string_stream(&out);
+  std::FILE* e = string_stream(&err, kErrorHeld);
   static const std::string kNoPoints;  // these questions read no points
   std::FILE* in = points_stream(kNoPoints);
-  const int code = o && in ? query_(ex, {}, with_options(std::move(words), r), in, o, &err) : 1;
+  const int code = o && e && in ? query_(ex, {}, q, in, o, &err) : 1;
   if (in) std::fclose(in);
+  if (e) std::fclose(e);
   if (o) std::fclose(o);  // flushes into out
   Response res = outcome(code, out.size(), err);
   if (res.status == 200) res.body = std::move(out);
   return res;
 }
 
-Response Service::run_batch(Explorer& ex, std::vector<std::string> words, const Request& r) {
+Response Service::run_batch(Explorer& ex, const ApiQuery& q, const Request& r) {
   Response res(200, "application/json");
   // Run by this worker as it sends the answer, before its next request:
   // ex and r are still this request's.
-  res.stream = [this, &ex, &r, words = with_options(std::move(words), r)](BodySink& sink) {
+  res.stream = [this, &ex, &r, q](BodySink& sink) {
     uint64_t printed = 0;
     std::string err;
     std::FILE* o = sink_stream(&sink, &printed);
@@ -278,10 +355,36 @@ Response Service::run_batch(Explorer& ex, std::vector<std::string> words, const 
     if (r.body.size() >= kHelpedBody) {
       if (Explorer* h = helper(&lock)) helpers.push_back(h);
     }
-    const int code = o && in ? query_(ex, helpers, words, in, o, &err) : 1;
+    const int code = o && in ? query_(ex, helpers, q, in, o, &err) : 1;
     if (in) std::fclose(in);
     if (o && std::fclose(o) != 0 && code == 0) return error_response(500, "the client left");
     return outcome(code, printed, err);
+  };
+  return res;
+}
+
+Response Service::run_list(Explorer& ex, const ApiQuery& asked) {
+  Response res(200, "application/json");
+  res.stream = [this, &ex, asked](BodySink& sink) {
+    ApiQuery q = asked;
+    uint64_t printed = 0, next = UINT64_MAX, count = 0;
+    q.list_next = &next, q.list_count = &count;
+    std::string err;
+    std::FILE* o = sink_stream(&sink, &printed);
+    static const std::string kNoPoints;
+    std::FILE* in = points_stream(kNoPoints);
+    int code = 1;
+    if (o && in) {
+      std::fputs("{\"elements\": ", o);
+      code = query_(ex, {}, q, in, o, &err);
+      const bool cut = next != UINT64_MAX;
+      std::fprintf(o, ", \"count\": %llu, \"truncated\": %s, \"next\": %s}\n",
+                   (unsigned long long)count, cut ? "true" : "false",
+                   cut ? std::to_string(next).c_str() : "null");
+    }
+    if (in) std::fclose(in);
+    if (o && std::fclose(o) != 0 && code == 0) return error_response(500, "the client left");
+    return code == 0 ? Response(200) : outcome(code, 0, err);
   };
   return res;
 }
@@ -310,7 +413,7 @@ Response Service::stat(Explorer& ex) {
 
 Response Service::section(Explorer& ex, const std::vector<std::string>& parts, const Request& r) {
   double at = 0;
-  if (parts.size() != 4 || axis_of(parts[2]) < 0 || !parse_number(parts[3], &at)) {
+  if (parts.size() != 4 || axis_of(parts[2]) < 0 || !parse_finite(parts[3], &at)) {
     return error_response(400, "a section is /api/section/AXIS/POSITION (x, y or z; metres)");
   }
   Section s;
@@ -320,7 +423,7 @@ Response Service::section(Explorer& ex, const std::vector<std::string>& parts, c
   const double* extent = nullptr;
   if (st.ok()) st = snapshot_extent(ex, &extent);
   if (st.ok()) st = section_of(ex, extent, axis_of(parts[2]), at, &s);
-  if (st.ok()) st = field_range(ex, s, paint, &range);
+  if (st.ok()) st = shared_range(ex, s, paint, &range);
   if (!st.ok()) return status_response(st);
   const Units& u = ex.units();
   std::string j =
@@ -338,50 +441,74 @@ Response Service::section(Explorer& ex, const std::vector<std::string>& parts, c
 
 Response Service::tile(Explorer& ex, const std::vector<std::string>& parts, const Request& r) {
   double at = 0;
-  int64_t zoom = 0, x = 0, y = 0;
+  uint64_t zoom = 0, x = 0, y = 0;
   const std::string last = parts.size() == 7 ? parts[6] : "";
   const bool png = last.size() > 4 && last.compare(last.size() - 4, 4, ".png") == 0;
-  if (parts.size() != 7 || axis_of(parts[2]) < 0 || !parse_number(parts[3], &at) ||
+  if (parts.size() != 7 || axis_of(parts[2]) < 0 || !parse_finite(parts[3], &at) ||
       !parse_whole(parts[4], 0, 30, &zoom) || !png) {
     return error_response(400, "a tile is /api/tile/AXIS/POSITION/ZOOM/X/Y.png (zoom 0 to 30)");
   }
-  const int64_t n = int64_t{1} << zoom;
+  const uint64_t n = uint64_t{1} << zoom;
   if (!parse_whole(parts[5], 0, n - 1, &x) ||
       !parse_whole(last.substr(0, last.size() - 4), 0, n - 1, &y)) {
     return error_response(404, "zoom " + std::to_string(zoom) + " has tiles 0 to " +
                                    std::to_string(n - 1) + " across and down");
   }
+  const Params p(r);
+  FieldRange range;
+  bool danglings = false;
+  Status st = p.number("min", false, &range.min);
+  if (st.ok()) st = p.number("max", false, &range.max);
+  if (st.ok()) st = p.flag("danglings", &danglings);
+  if (st.ok() && p.has("min") != p.has("max")) {
+    st = Status::InvalidArgument("min and max go together");
+  }
   Section s;
   Paint paint;
-  Status st = paint_from(ex, r, &paint);
+  if (st.ok()) st = paint_from(ex, r, &paint);
   const double* extent = nullptr;
   if (st.ok()) st = snapshot_extent(ex, &extent);
   if (st.ok()) st = section_of(ex, extent, axis_of(parts[2]), at, &s);
-  FieldRange range;
-  const bool given = r.query.count("min") && r.query.count("max");
-  if (given && (!parse_number(r.query.at("min"), &range.min) ||
-                !parse_number(r.query.at("max"), &range.max))) {
-    return error_response(400, "min and max are numbers");
-  }
-  if (st.ok() && !given) st = field_range(ex, s, paint, &range);
+  if (st.ok() && !p.has("min")) st = shared_range(ex, s, paint, &range);
   std::string bytes;
-  const bool danglings = r.query.count("danglings") && r.query.at("danglings") != "0";
   if (st.ok()) {
-    st = render_tile(ex, s, paint, range.min, range.max, int(zoom), x, y, &bytes, danglings);
+    st = render_tile(ex, s, paint, range.min, range.max, int(zoom), int64_t(x), int64_t(y), &bytes,
+                     danglings);
   }
   if (!st.ok()) return status_response(st);
   return {200, "image/png", std::move(bytes)};
 }
 
+Status Service::shared_range(Explorer& ex, const Section& s, const Paint& paint,
+                             FieldRange* range) {
+  const std::string key = std::to_string(s.axis) + " " + std::to_string(s.at) + " " + paint.field +
+                          " " + summary_name(paint.summary);
+  const StateStamp state = t_snapshot.state;  // ex's
+  {
+    std::lock_guard<std::mutex> lock(ranges_mu_);
+    if (!(ranges_state_ == state)) ranges_.clear(), ranges_state_ = state;
+    const auto it = ranges_.find(key);
+    if (it != ranges_.end()) return *range = it->second, Status::Ok();
+  }
+  // Found outside the lock: two workers asking at once both work it out,
+  // and find the same.
+  WEAVER_RETURN_IF_ERROR(field_range(ex, s, paint, range));
+  std::lock_guard<std::mutex> lock(ranges_mu_);
+  if (!(ranges_state_ == state)) return Status::Ok();  // a newer state came meanwhile
+  if (ranges_.size() >= kMaxRanges) ranges_.clear();
+  ranges_[key] = *range;
+  return Status::Ok();
+}
+
 Response Service::geo(Explorer& ex, const Request& r) {
   double x = 0, y = 0;
-  if (!r.query.count("x") || !r.query.count("y") || !parse_number(r.query.at("x"), &x) ||
-      !parse_number(r.query.at("y"), &y)) {
-    return error_response(400, "geo takes x and y in metres");
-  }
+  const Params p(r);
+  Status st = p.number("x", true, &x);
+  if (st.ok()) st = p.number("y", true, &y);
+  if (!st.ok()) return error_response(400, "geo takes x and y in metres: " + st.message());
   GeoFrame frame;
   if (ex.units().geo.empty()) return error_response(404, "this database is not georeferenced");
-  const Status st = GeoFrame::parse(ex.units().geo, &frame);
+  st = GeoFrame::parse(ex.units().geo, &frame);
   if (!st.ok()) return status_response(st);
   double lon = 0, lat = 0;
   frame.to_geo(x, y, &lon, &lat);
@@ -391,35 +518,23 @@ Response Service::geo(Explorer& ex, const Request& r) {
 }
 
 Response Service::export_vtu(Explorer& ex, const Request& r) {
-  if (!r.query.count("box")) return error_response(400, "export takes box=X0,Y0,Z0,X1,Y1,Z1");
-  const std::vector<std::string> words = split(r.query.at("box"), ',');
+  (void)ex;  // the export opens the database itself: it reads what it counts
   ExportOptions o;
-  bool ok = words.size() == 6;
-  for (size_t i = 0; ok && i < 6; ++i) ok = parse_number(words[i], &o.box[i]);
-  if (!ok) return error_response(400, "box is six numbers in metres: X0,Y0,Z0,X1,Y1,Z1");
-  // How many elements first: a region past kMaxExportElements is for
-  // weaver export.
-  std::vector<std::string> count = {"range"};
-  count.insert(count.end(), words.begin(), words.end());
-  count.insert(count.end(), {"--units", "m"});
-  const Response counted = run(ex, count, Request{});
-  if (counted.status != 200) return counted;
-  const std::string& out = counted.body;
-  const size_t at = out.find("\"count\": ");
-  const uint64_t n = at == std::string::npos ? 0 : std::strtoull(out.c_str() + at + 9, nullptr, 10);
-  if (n == 0) return error_response(404, "no element shares a point with the box");
-  if (n > kMaxExportElements) {
-    return error_response(413, std::to_string(n) + " elements share a point with the box, more " +
-                                   "than " + std::to_string(kMaxExportElements) +
-                                   ": use weaver export --format vtu --box");
+  const Status given = Params(r).box("box", o.box);
+  if (!given.ok()) return error_response(400, given.message() + " (metres)");
+  // Written by the exporter into a scratch directory of its own inside the
+  // database (a writer's leftover pattern: removed by the next writer if
+  // this process dies), opened, and removed at once: the open file is
+  // streamed, never held whole.
+  std::string dir = db_ + "/tmp-serve-XXXXXX";
+  if (::mkdtemp(dir.data()) == nullptr) {
+    return error_response(
+        500, "cannot make a scratch directory in " + db_ + ": " + std::strerror(errno));
   }
-  // Written by the exporter into a scratch directory of its own, opened,
-  // and removed at once: the open file is streamed, never held whole.
-  char dir[] = "/tmp/weaver-serve-XXXXXX";
-  if (::mkdtemp(dir) == nullptr) return error_response(500, "cannot make a scratch directory");
   o.format = ExportFormat::kVtu;
-  o.out = std::string(dir) + "/region.vtu";
+  o.out = dir + "/region.vtu";
   o.has_box = true;
+  o.max_elements = kMaxExportElements;
   o.memory = memory_;
   ExportResult result;
   const Status st = export_mesh(db_, o, &result);
@@ -429,7 +544,13 @@ Response Service::export_vtu(Explorer& ex, const Request& r) {
                                   });
   std::error_code ec;
   std::filesystem::remove_all(dir, ec);
+  if (result.elements > kMaxExportElements) {
+    return error_response(
+        413, std::to_string(result.elements) + " elements share a point with the box, more than " +
+                 std::to_string(kMaxExportElements) + ": use weaver export --format vtu --box");
+  }
   if (!st.ok()) return status_response(st);
+  if (result.elements == 0) return error_response(404, "no element shares a point with the box");
   if (!file) return error_response(500, "cannot read the region written");
   Response res{200, "application/xml", "", "no-store", "region.vtu"};
   res.stream = [file](BodySink& sink) {

@@ -5,14 +5,18 @@
 // state and sees the new one from its next request on.
 //
 // Routes (JSON answers are those of `weaver query ... --format json`):
-//   GET  /                         the page (serve/page.cc)
+//   GET  /, /page.css, /page.js    the page (serve/page.cc)
 //   GET  /api/stat                 the mesh: counts, units, extents, fields
 //   GET  /api/locate?x=&y=&z=[&units=m|ticks][&geo=1]
 //   POST /api/points[?query=locate|material|node-at][&units=][&geo=1]
 //                                  points as text lines or a JSON array
 //   GET  /api/element/ID, /api/node/ID, /api/neighbors/ID[?kinds=all]
 //   GET  /api/node-elements/ID, /api/depends/ID
-//   GET  /api/range?box=X0,Y0,Z0,X1,Y1,Z1[&list=1][&units=]
+//   GET  /api/range?box=X0,Y0,Z0,X1,Y1,Z1[&units=]   the count
+//   GET  /api/range?box=...&list=1[&limit=N][&from=ID]  the elements, a page
+//                                  of at most N (kMaxListed) streamed as
+//                                  they are found: {"elements": [...],
+//                                  "count", "listed", "truncated", "next"}
 //   GET  /api/section/AXIS/POSITION?color=F[&summary=S]   the section's
 //                                  extent, the colour range its tiles share
 //                                  and what a pixel of many elements shows
@@ -32,25 +36,29 @@
 #include <cstdio>
 #include <ctime>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
 
 #include "query/explorer.h"
+#include "serve/api_query.h"
+#include "serve/guard.h"
 #include "serve/http.h"
+#include "serve/tiles.h"
 #include "util/memory_budget.h"
 
 namespace weaver::serve {
 
-// Runs one query of `weaver query` (words as the shell takes them, with
-// --format json among them) on ex, with helpers (more Explorers on the same
-// state, which a batch of points shares its work with), reading a batch's
-// points (--points -) from points and printing to out: the exit status, and
-// what it printed to stderr.  The command line supplies it.
-using QueryRunner = std::function<int(Explorer& ex, const std::vector<Explorer*>& helpers,
-                                      const std::vector<std::string>& words, std::FILE* points,
-                                      std::FILE* out, std::string* err)>;
+// Runs one query of `weaver query` as q asks it, its answer as JSON, on ex,
+// with helpers (more Explorers on the same state, which a batch of points
+// shares its work with), reading a batch's points from points and printing
+// to out: the exit status, and the first of what it printed to stderr.  The
+// command line supplies it (cli/cmd_serve.cc).
+using QueryRunner =
+    std::function<int(Explorer& ex, const std::vector<Explorer*>& helpers, const ApiQuery& q,
+                      std::FILE* points, std::FILE* out, std::string* err)>;
 
 // Which committed state a reader opened: its MANIFEST's inode and change
 // time (a commit renames a new MANIFEST into place).
@@ -77,6 +85,8 @@ class Service {
   // B+trees' leaf directories), so that a thread's first request is not its
   // slowest (2 s for a tile of the 2 Hz basin otherwise).
   void warm();
+  // Who may call (serve/guard.h): set once the server listens.
+  void set_callers(CallerPolicy p) { callers_ = std::move(p); }
   Response handle(const Request& r);
 
  private:
@@ -84,10 +94,15 @@ class Service {
   Status explorer(Explorer** out);
   Response api(const Request& r, Explorer& ex);
   // The query's answer held whole: for the questions of one thing.
-  Response run(Explorer& ex, std::vector<std::string> words, const Request& r);
+  Response run(Explorer& ex, const ApiQuery& q);
   // A batch of points from r's body, its answer streamed as it is printed
   // (a million points are about 130 MB of JSON).
-  Response run_batch(Explorer& ex, std::vector<std::string> words, const Request& r);
+  Response run_batch(Explorer& ex, const ApiQuery& q, const Request& r);
+  // A page of a range's elements, streamed as they are found.
+  Response run_list(Explorer& ex, const ApiQuery& q);
+  // The colour range of a section's paint: found once a committed state
+  // and shared by the workers (it reads the 65536 pixels of zoom 0).
+  Status shared_range(Explorer& ex, const Section& s, const Paint& paint, FieldRange* range);
   Response stat(Explorer& ex);
   Response section(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
   Response tile(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
@@ -102,6 +117,7 @@ class Service {
   void share_directories(Explorer& ex, const StateStamp& state);
 
   std::string db_;
+  CallerPolicy callers_;
   MemoryBudget memory_;
   uint64_t directories_;
   QueryRunner query_;
@@ -116,15 +132,29 @@ class Service {
   std::mutex helper_mu_;
   std::unique_ptr<Explorer> helper_;
   StateStamp helper_state_;
+  // The colour ranges found in the state ranges_state_, by section and paint.
+  std::mutex ranges_mu_;
+  StateStamp ranges_state_;
+  std::map<std::string, FieldRange> ranges_;
 };
 
-// A region downloaded as vtu is written to a scratch file first, then
-// streamed: at most this many elements (about 100 MB of vtu); larger ones
-// are for `weaver export`.
+// range?list=1: at most this many elements a page (about 100 MB of JSON);
+// a request may ask for fewer with limit=N.
+inline constexpr uint64_t kMaxListed = 1000000;
+// The colour ranges remembered at once (a range is 24 bytes and its key a
+// few more; past this many the memory starts again).
+inline constexpr size_t kMaxRanges = 4096;
+
+// A region downloaded as vtu is written to a scratch file first (in a
+// "tmp-serve-*" directory inside the database, which the next writer
+// removes if the server dies), then streamed: at most this many elements
+// (about 100 MB of vtu); larger ones are for `weaver export`.
 inline constexpr uint64_t kMaxExportElements = 1000000;
 
-// The page: one HTML document with its script and style, nothing fetched
-// from elsewhere.
+// The page (/), its style (/page.css) and its script (/page.js); nothing
+// fetched from elsewhere.
 extern const char kPage[];
+extern const char kPageCss[];
+extern const char kPageJs[];
 
 }  // namespace weaver::serve

@@ -44,13 +44,25 @@ bool is_json_array(const std::string& body) {
 
 }  // namespace
 
-std::FILE* string_stream(std::string* s) {
-  cookie_io_functions_t io{};
-  io.write = [](void* cookie, const char* data, size_t n) -> ssize_t {
-    static_cast<std::string*>(cookie)->append(data, n);
-    return ssize_t(n);
+std::FILE* string_stream(std::string* s, size_t cap) {
+  struct Capped {
+    std::string* s;
+    size_t cap;
   };
-  return fopencookie(s, "w", io);
+  auto cookie = std::make_unique<Capped>(Capped{s, cap});
+  cookie_io_functions_t io{};
+  io.write = [](void* c, const char* data, size_t n) -> ssize_t {
+    auto* k = static_cast<Capped*>(c);
+    if (k->s->size() < k->cap) k->s->append(data, std::min(n, k->cap - k->s->size()));
+    return ssize_t(n);  // past the cap: taken, and dropped
+  };
+  io.close = [](void* c) {
+    delete static_cast<Capped*>(c);
+    return 0;
+  };
+  std::FILE* f = fopencookie(cookie.get(), "w", io);
+  if (f != nullptr) cookie.release();
+  return f;
 }
 
 std::FILE* sink_stream(BodySink* sink, uint64_t* written) {

@@ -53,12 +53,14 @@ def descriptors_back_to(descriptors, when, tries):
 
 db = os.path.join(work, "basin.db")
 run("mesh", db, "--model", "basin", "--freq", "0.05", "--quiet")
+log_path = os.path.join(work, "serve.log")
+log_file = open(log_path, "w")
 server = subprocess.Popen([weaver_bin, "serve", db, "--port", "0", "--threads", "3"],
-                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                          stdout=subprocess.PIPE, stderr=log_file, text=True)
 try:
     first = server.stdout.readline()
     if "http://127.0.0.1:" not in first:
-        fail(f"no URL on the first line: {first!r} {server.stderr.read()}")
+        fail(f"no URL on the first line: {first!r} {open(log_path).read()}")
     port = int(first.split("http://127.0.0.1:")[1].split("/")[0])
 
     def request(method, path, body=None, headers=None):
@@ -109,8 +111,25 @@ try:
                   "300", "--units", "m")
     same_as_query("/api/range?box=0,0,100,1048575,1048575,100", "range", "0", "0", "100",
                   "1048575", "1048575", "100")
-    same_as_query("/api/range?box=0,0,100,1048575,1048575,100&list=1", "range", "0", "0", "100",
-                  "1048575", "1048575", "100", "--list")
+    # A range's list comes in pages: the whole of it, and pages of 1000
+    # following "next" to the end, are weaver query's rows.
+    want_list = json.loads(run("query", db, "range", "0", "0", "100", "1048575", "1048575", "100",
+                               "--list", "--format", "json").stdout)
+    whole = api("/api/range?box=0,0,100,1048575,1048575,100&list=1")
+    if (whole["elements"], whole["count"], whole["truncated"], whole["next"]) != \
+            (want_list, len(want_list), False, None):
+        fail(f"/api/range list=1: {json.dumps(whole)[:300]}")
+    paged, at = [], 0
+    for _ in range(1000):
+        page = api(f"/api/range?box=0,0,100,1048575,1048575,100&list=1&limit=1000&from={at}")
+        paged += page["elements"]
+        if page["next"] is None:
+            break
+        if not page["truncated"] or len(page["elements"]) != 1000 or page["next"] <= at:
+            fail(f"a page of a range: {json.dumps(page)[:300]}")
+        at = page["next"]
+    if paged != want_list or len(want_list) <= 1000:
+        fail(f"the pages of a range ({len(paged)} rows) are not weaver query's {len(want_list)}")
     lines = "".join(f"{i * 997} {i * 1231} {i * 89}\n" for i in range(300)) + "not a point\n"
     same_as_query("/api/points?query=material&units=m", "material", "--points", "-",
                   "--units", "m", method="POST", body=lines, stdin=lines)
@@ -221,6 +240,7 @@ try:
     if status != 413:
         fail(f"an oversized body: status {status}")
     status, kind, page = request("GET", "/")
+    page += request("GET", "/page.js")[2] + request("GET", "/page.css")[2]
     if status != 200 or not kind.startswith("text/html") or b"/api/tile/" not in page \
             or b"http://" in page.replace(b"http://127", b""):
         fail(f"the page: status {status}, {kind}, or it fetches from elsewhere")
@@ -243,8 +263,9 @@ try:
     api("/api/stat")
     if time.monotonic() - t0 > 5:
         fail("an idle connection held up another client")
-    two = raw(b"GET /api/element/1 HTTP/1.1\r\nHost: x\r\n\r\n"
-              b"GET /api/element/2 HTTP/1.1\r\nConnection: close\r\n\r\n")
+    host = f"Host: 127.0.0.1:{port}\r\n".encode()
+    two = raw(b"GET /api/element/1 HTTP/1.1\r\n" + host + b"\r\n"
+              b"GET /api/element/2 HTTP/1.1\r\n" + host + b"Connection: close\r\n\r\n")
     if two.count(b"HTTP/1.1 200 OK") != 2 or b"Connection: keep-alive" not in two:
         fail(f"two pipelined requests: {two[:300]!r}")
     for data, want in ((b"GARBAGE\r\n\r\n", b" 400 "),
@@ -255,9 +276,10 @@ try:
                        (b"GET / HTTP/1.1\r\n" + b"X-Long: " + b"y" * 40000 + b"\r\n\r\n",
                         b" 431 "),
                        (b"GET / HTTP/1.1\r\nno colon here\r\n\r\n", b" 400 "),
-                       (b"POST /api/points HTTP/1.1\r\nContent-Length: -5\r\n\r\n", b" 400 "),
-                       (b"POST /api/points HTTP/1.1\r\nTransfer-Encoding: chunked\r\n\r\n",
-                        b" 400 ")):
+                       (b"POST /api/points HTTP/1.1\r\n" + host + b"Content-Length: -5\r\n\r\n",
+                        b" 400 "),
+                       (b"POST /api/points HTTP/1.1\r\n" + host +
+                        b"Transfer-Encoding: chunked\r\n\r\n", b" 400 ")):
         got = raw(data)
         if want not in got.split(b"\r\n")[0] or b'{"error": ' not in got:
             fail(f"{data[:40]!r}: {got[:200]!r}")
@@ -326,7 +348,8 @@ try:
     slow_errors = []
 
     def slow_client(i):
-        request = f"GET /api/element/{i} HTTP/1.1\r\nConnection: close\r\n\r\n".encode()
+        request = (f"GET /api/element/{i} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
+                   f"Connection: close\r\n\r\n").encode()
         try:
             with socket.create_connection(("127.0.0.1", port), timeout=20) as so:
                 for k in range(0, len(request), 7):
@@ -375,7 +398,12 @@ finally:
         server.kill()
         fail("the server did not stop on SIGTERM")
 if code != 0:
-    fail(f"the server exited {code}: {server.stderr.read()}")
+    fail(f"the server exited {code}: {open(log_path).read()[-2000:]}")
+# The log: a line a request, with its status.
+log_lines = open(log_path).read().splitlines()
+if not any(" GET /api/stat 200 " in line for line in log_lines) or \
+        not any(" 400 " in line for line in log_lines):
+    fail(f"the request log: {log_lines[:3]}")
 
 # A model database (weaver model import of the etree fixture): its cells as
 # the octree, the material of a point as `weaver model material` gives it,
@@ -383,7 +411,7 @@ if code != 0:
 model = os.path.join(work, "model.db")
 fixture = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "etree", "cmu.e")
 run("model", "import", model, "--from", "etree:" + fixture)
-server = subprocess.Popen([weaver_bin, "serve", model, "--port", "0"], stdout=subprocess.PIPE,
+server = subprocess.Popen([weaver_bin, "serve", model, "--port", "0", "--quiet"], stdout=subprocess.PIPE,
                           stderr=subprocess.PIPE, text=True)
 try:
     port = int(server.stdout.readline().split("http://127.0.0.1:")[1].split("/")[0])
@@ -413,7 +441,7 @@ finally:
 geo_db = os.path.join(work, "geo.db")
 run("mesh", geo_db, "--model", "basin", "--freq", "0.05", "--origin-geo", "-118.7,33.58",
     "--azimuth", "30", "--quiet")
-server = subprocess.Popen([weaver_bin, "serve", geo_db, "--port", "0"], stdout=subprocess.PIPE,
+server = subprocess.Popen([weaver_bin, "serve", geo_db, "--port", "0", "--quiet"], stdout=subprocess.PIPE,
                           stderr=subprocess.PIPE, text=True)
 try:
     port = int(server.stdout.readline().split("http://127.0.0.1:")[1].split("/")[0])
@@ -435,7 +463,7 @@ finally:
 # for the program itself (its code, libraries and thread stacks).
 BUDGET, ALLOWANCE = 48 << 20, 24 << 20
 server = subprocess.Popen([weaver_bin, "serve", db, "--port", "0", "--threads", "3",
-                           "--memory", "48M"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           "--memory", "48M", "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           text=True)
 try:
     port = int(server.stdout.readline().split("http://127.0.0.1:")[1].split("/")[0])
@@ -470,7 +498,7 @@ try:
 
     def leaver():
         s = socket.create_connection(("127.0.0.1", port), timeout=30)
-        s.sendall(f"POST /api/points?units=m HTTP/1.1\r\nHost: x\r\n"
+        s.sendall(f"POST /api/points?units=m HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
                   f"Content-Length: {len(batch)}\r\n\r\n{batch}".encode())
         s.recv(100000)  # a little of the answer, then gone
         s.close()
