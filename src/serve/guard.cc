@@ -78,7 +78,8 @@ int check_caller(const Request& r, const CallerPolicy& p, std::string* why) {
     return 403;
   }
   const std::string* origin = r.header("origin");
-  if (origin != nullptr && (host == nullptr || lower_ascii(*origin) != "http://" + lower_ascii(*host))) {
+  if (origin != nullptr &&
+      (host == nullptr || lower_ascii(*origin) != "http://" + lower_ascii(*host))) {
     *why = "a request from another origin (Origin: " + printable(*origin, 80) + ")";
     return 403;
   }
