@@ -19,6 +19,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // more than its head held.
     if (r.method.empty() || r.path.empty() || r.path.size() > head.size()) std::abort();
     if (r.headers.size() > head.size()) std::abort();
+    // RFC 9112's rules held: names are lower-case tokens, values carry no
+    // control byte but tabs, an HTTP/1.1 request has one Host.
+    for (const auto& [name, value] : r.headers) {
+      if (name.empty()) std::abort();
+      for (const char c : name) {
+        if (c <= ' ' || c == ':' || (c >= 'A' && c <= 'Z') || c == 0x7f) std::abort();
+      }
+      for (const char c : value) {
+        if ((static_cast<unsigned char>(c) < 0x20 && c != '\t') || c == 0x7f) std::abort();
+      }
+    }
+    if (!r.http10 && r.header_count("host") != 1) std::abort();
   } else if (too_large && head.size() <= serve::kMaxRequestLine) {
     std::abort();  // too large only past a limit
   }

@@ -7,7 +7,7 @@
 #include "gen/octree_gen.h"
 #include "import/import.h"
 #include "import/octant_text.h"
-#include "query/octant_query.h"
+#include "mesh/octant_query.h"
 #include "test_util.h"
 
 namespace weaver {

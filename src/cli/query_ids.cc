@@ -3,7 +3,7 @@
 #include <sstream>
 
 #include "cli/query_context.h"
-#include "query/octant_query.h"
+#include "mesh/octant_query.h"
 
 namespace weaver::cli {
 

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "query/octant_query.h"
+#include "mesh/octant_query.h"
 #include "sort/external_sort.h"
 #include "storage/file.h"
 #include "util/radix_sort.h"

@@ -44,7 +44,7 @@ struct Selection {
 
 // Calls fn for each selected element in id order, with its corners' global
 // node ids when with_nodes (looked up a batch at a time).  With a box only
-// the box's runs of ids are read (query/octant_query.h), not the mesh.
+// the box's runs of ids are read (mesh/octant_query.h), not the mesh.
 Status scan_selected(Mesh& mesh, const Selection& sel, bool with_nodes,
                      const std::function<Status(MeshElement&)>& fn);
 

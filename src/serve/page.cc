@@ -72,7 +72,16 @@ function writeHash(push) {
   if (url !== location.hash) (push ? history.pushState : history.replaceState).call(history, null, "", url);
 }
 function axisIndex(a) { return "xyz".indexOf(a); }
-async function loadSection(push) {
+// The view that shows the section's part of the domain whole, as large as a
+// whole zoom allows, in the middle of the map.
+function fitView() {
+  const fu = sec.extent_m[0] / sec.side_m, fv = sec.extent_m[1] / sec.side_m;
+  const across = Math.min(map.clientWidth / (256 * fu), map.clientHeight / (256 * fv));
+  view.zoom = Math.max(0, Math.min(24, Math.floor(Math.log2(across))));
+  view.cu = fu / 2;
+  view.cv = sec.down ? fv / 2 : 1 - fv / 2;
+}
+async function loadSection(push, fit) {
   const i = axisIndex(view.axis);
   const lo = stat.origin_m[i], hi = lo + stat.extent_m[i];
   $("at").min = $("atn").min = lo; $("at").max = $("atn").max = hi;
@@ -82,6 +91,7 @@ async function loadSection(push) {
   $("dang").checked = view.dang !== "";
   try { sec = await json(`/api/section/${view.axis}/${view.at}?${paintQuery()}`); }
   catch (e) { $("note").textContent = e.message; return; }
+  if (fit) fitView();
   writeHash(push);
   drawBar(); draw();
 }
@@ -302,7 +312,7 @@ document.addEventListener("keydown", ev => {
   else return;
   writeHash(false); draw();
 });
-$("axis").onchange = () => { view.axis = $("axis").value; view.at = NaN; loadSection(true); };
+$("axis").onchange = () => { view.axis = $("axis").value; view.at = NaN; loadSection(true, true); };
 $("at").onchange = () => { view.at = Number($("at").value); loadSection(true); };
 $("at").oninput = () => { $("atn").value = $("at").value; };
 $("atn").onchange = () => { view.at = Number($("atn").value); loadSection(true); };
@@ -321,8 +331,9 @@ window.addEventListener("resize", draw);
   $("danglabel").hidden = stat.nodes === 0;  // a mesh's nodes
   readHash();
   if (!stat.fields.includes(view.color)) view.color = stat.fields.includes("vs") ? "vs" : "level";
-  if (!location.hash) view.color = stat.fields.includes("vs") ? "vs" : "level";
-  await loadSection(false);
+  const fresh = !location.hash;  // no view asked: open on the domain's extent
+  if (fresh) view.color = stat.fields.includes("vs") ? "vs" : "level";
+  await loadSection(false, fresh);
   if (view.sel !== "") select(view.sel);  // a shared link's selected element
 })();
 )PAGE";

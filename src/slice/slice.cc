@@ -7,7 +7,7 @@
 #include "db/leaf_window.h"
 #include "export/output_file.h"
 #include "query/explorer.h"
-#include "query/octant_query.h"
+#include "mesh/octant_query.h"
 #include "slice/canvas.h"
 #include "slice/font.h"
 

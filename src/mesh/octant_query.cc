@@ -1,4 +1,4 @@
-#include "query/octant_query.h"
+#include "mesh/octant_query.h"
 
 #include <string>
 
