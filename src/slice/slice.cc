@@ -6,8 +6,8 @@
 
 #include "db/leaf_window.h"
 #include "export/output_file.h"
-#include "query/explorer.h"
 #include "mesh/octant_query.h"
+#include "query/explorer.h"
 #include "slice/canvas.h"
 #include "slice/font.h"
 
