@@ -175,7 +175,11 @@ function drawBar() {
   g.fillText(`${+sec.min.toPrecision(5)}${u}`, 0, 36);
   const t = `${+sec.max.toPrecision(5)}${u}`; g.fillText(t, 300 - g.measureText(t).width, 36);
   $("note").textContent = `${sec.caption}, on the ${view.axis} = ${+sec.at_m.toPrecision(8)} m plane; colour range over the section (${sec.samples} pixels)` +
-    (view.dang ? "; dangling nodes on the plane marked on elements 6 pixels wide or more (red: edge, white: face)" : "");
+    (view.dang ? "; dangling nodes on the plane marked on elements 6 pixels wide or more (red: edge, white: face)" : "") +
+    // Without the aggregate table a pixel of many elements shows one of them:
+    // small features (the basin's 40 m inclusions) vanish at coarse zooms.
+    (stat.aggregates === null && stat.kind === "mesh" ? ". Each pixel shows the element at its centre: " +
+      "'weaver aggregate DB' adds the summaries (the least vs of the elements in a pixel)" : "");
 }
 function worldAt(px, py) {
   const full = 256 * 2 ** view.zoom, perPx = sec.side_m / full;

@@ -80,7 +80,7 @@ def chromium(url, *extra):
 
 db = os.path.join(work, "basin.db")
 run("mesh", db, "--model", "basin", "--freq", "0.05", "--quiet")
-server = subprocess.Popen([weaver_bin, "serve", db, "--port", "0"], stdout=subprocess.PIPE,
+server = subprocess.Popen([weaver_bin, "serve", db, "--port", "0", "--quiet"], stdout=subprocess.PIPE,
                           stderr=subprocess.PIPE, text=True)
 try:
     first = server.stdout.readline()
@@ -140,6 +140,17 @@ try:
                          f"weaver query says {value}")
         print(f"check_page: {name}: {len(doc.tiles)} tiles of {prefix}, the panel as weaver "
               f"query; {os.path.join(work, name + '.png')}")
+    # Opened with no view in the URL, the page fits the domain: the map
+    # (1200 x 800 less the header and the panel) holds the 100 x 100 km plane
+    # at zoom 1, all four of its tiles, not zoom 0's one tile in a sea of
+    # empty axes.
+    doc = Document()
+    doc.feed(chromium(base + "/", "--dump-dom"))
+    chromium(base + "/", f"--screenshot={os.path.join(work, 'first.png')}")
+    zooms = {t.split("/")[5] for t in doc.tiles}
+    if zooms != {"1"} or len(doc.tiles) != 4:
+        fail(f"the first view: tiles {doc.tiles}, expected the four of zoom 1")
+    print(f"check_page: the first view fits the domain: {len(doc.tiles)} tiles of zoom 1")
 finally:
     server.send_signal(signal.SIGTERM)
     server.wait(timeout=10)
