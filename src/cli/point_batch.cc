@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <thread>
 #include <vector>
 
@@ -24,11 +25,13 @@ class RowWriter {
  public:
   // one: the answer to one point, which JSON prints as an object rather
   // than as an array of one.
-  RowWriter(OutputMode mode, bool one) : mode_(mode), one_(one), buf_(kCapacity) {
+  RowWriter(OutputMode mode, bool one) : mode_(mode), one_(one) {
     sep_ = mode == OutputMode::kCsv ? ',' : mode == OutputMode::kTsv ? '\t' : ' ';
+    reserve(kCapacity);
   }
+  RowWriter(RowWriter&&) = default;
   void header(const std::vector<const char*>& columns) {
-    columns_ = columns;
+    columns_.assign(columns.begin(), columns.end());
     if (mode_ == OutputMode::kJson && !one_) raw("[");
     if (json()) return;
     begin();
@@ -39,13 +42,13 @@ class RowWriter {
   // A row starts: room for the longest row is made here, once.
   void begin() {
     field_ = 0;
-    if (len_ + kMaxRow > buf_.size()) buf_.resize(std::max(buf_.size() * 2, len_ + kMaxRow));
+    if (len_ + kMaxRow > cap_) reserve(std::max(cap_ * 2, len_ + kMaxRow));
     if (mode_ == OutputMode::kJson && rows_ > 0) raw(",\n");
   }
   template <typename T>
   void number(T v) {
     separate(false);
-    len_ = size_t(std::to_chars(&buf_[len_], &buf_[len_] + 40, v).ptr - buf_.data());
+    len_ = size_t(std::to_chars(&buf_[len_], &buf_[len_] + 40, v).ptr - buf_.get());
     close(false);
   }
   void text(std::string_view s) { put(s, true); }
@@ -56,7 +59,7 @@ class RowWriter {
   }
   // After the last row: closes the JSON document.
   void close_document() {
-    if (len_ + 4 > buf_.size()) buf_.resize(len_ + 4);
+    if (len_ + 4 > cap_) reserve(len_ + 4);
     if (mode_ == OutputMode::kJson) raw(one_ && rows_ == 1 ? "\n" : "]\n");
   }
   size_t size() const { return len_; }
@@ -76,7 +79,7 @@ class RowWriter {
   void count_rows(uint64_t n) { rows_ += n; }
   // Writes the rows held to out and forgets them.
   Status flush(std::FILE* out) {
-    if (len_ > 0 && std::fwrite(buf_.data(), 1, len_, out) != len_) {
+    if (len_ > 0 && std::fwrite(buf_.get(), 1, len_, out) != len_) {
       return Status::IOError(std::string("writing the answers: ") + std::strerror(errno));
     }
     len_ = 0;
@@ -90,6 +93,14 @@ class RowWriter {
   static constexpr size_t kCapacity = 16 << 10;
   static constexpr size_t kMaxRow = 2048;  // 13 fields with their JSON names, and margin
 
+  // Room for n bytes, the bytes held kept; new room is not zeroed (a batch's
+  // rows fill megabytes, written over at once).
+  void reserve(size_t n) {
+    std::unique_ptr<char[]> bigger(new char[n]);
+    if (len_ > 0) std::memcpy(bigger.get(), buf_.get(), len_);
+    buf_ = std::move(bigger);
+    cap_ = n;
+  }
   void raw(std::string_view v) {
     std::memcpy(&buf_[len_], v.data(), v.size());
     len_ += v.size();
@@ -120,10 +131,10 @@ class RowWriter {
   bool one_;
   uint64_t rows_ = 0;
   char sep_;
-  std::vector<const char*> columns_;
+  std::vector<std::string_view> columns_;  // lengths found once, not a strlen a field
   size_t field_ = 0;
-  std::vector<char> buf_;
-  size_t len_ = 0;
+  std::unique_ptr<char[]> buf_;
+  size_t cap_ = 0, len_ = 0;
 };
 
 // Lines of a stream, read 64 KiB at a time (getline's per-line cost shows
@@ -312,8 +323,9 @@ class BatchRunner {
       return Status::Ok();
     }
     WEAVER_RETURN_IF_ERROR(w_.flush(out_));  // the header, before the rows
-    std::vector<RowWriter> writers;
-    for (size_t i = 0; i < parts; ++i) writers.push_back(w_.continuation(0));
+    // Kept from batch to batch: their buffers grow to a slice's rows once.
+    std::vector<RowWriter>& writers = writers_;
+    while (writers.size() < parts) writers.push_back(w_.continuation(0));
     std::vector<uint64_t> missed_by(parts, 0);
     for (size_t lo = 0; lo < n; lo += parts * kSlice) {
       in_parallel(parts, [&](size_t i) {
@@ -415,6 +427,7 @@ class BatchRunner {
   std::vector<Coord> points_;
   std::vector<std::array<double, 3>> values_;
   std::vector<bool> bad_;
+  std::vector<RowWriter> writers_;  // a thread's rows, for a batch shared among threads
   std::vector<PointHit> hits_;
   std::vector<NodeHit> nodes_;
 };

@@ -162,8 +162,10 @@ bool send_parts(int fd, std::initializer_list<std::string_view> parts, int timeo
 enum class After { kKeep, kClose, kDrop };
 
 // How long a worker waits for a client to take more of an answer before
-// it calls the client slow and leaves the rest to the polling thread.
-constexpr int kPatienceMs = 50;
+// it calls the client slow and leaves the rest to the polling thread: a
+// client on a busy machine stalls 50 ms now and then (and its answer would
+// go to disk for nothing), and a slow one costs a worker no more than this.
+constexpr int kPatienceMs = 200;
 
 // A worker's side of sending an answer on c: bytes go into c.out and out
 // to the socket as fast as the client takes them; once the client is slow
