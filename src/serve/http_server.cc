@@ -175,9 +175,25 @@ class Sender {
  public:
   Sender(Connection& c, SpillRoom* room) : c_(c), room_(room) { c_.clock.start(now_ms()); }
 
+  // Sends data after what is queued: straight from data to the socket
+  // while the client keeps up (waiting for it kPatienceMs at most at a
+  // time), into the outbox once it is slow.
   bool put(std::string_view data) {
     if (failed_) return false;
     c_.answer_bytes += data.size();
+    while (!data.empty() && !slow_ && c_.out.empty()) {
+      const ssize_t n = ::send(c_.fd, data.data(), data.size(), MSG_NOSIGNAL);
+      if (n > 0) {
+        data.remove_prefix(size_t(n)), c_.clock.bytes += uint64_t(n);
+      } else if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+        if (!c_.clock.keeps_up(now_ms())) return failed_ = true, false;
+        pollfd p{c_.fd, POLLOUT, 0};
+        if (::poll(&p, 1, kPatienceMs) == 0) slow_ = true;  // the rest waits for the poller
+      } else if (!(n < 0 && errno == EINTR)) {
+        return failed_ = true, false;  // the client is gone
+      }
+    }
+    if (data.empty()) return true;
     if (!c_.out.add(data, room_)) {  // no room to spill: wait for the client
       while (!failed_ && !c_.out.empty()) failed_ = !wait_once(kRateWindowMs);
       failed_ = failed_ || !c_.out.add(data, room_);
@@ -248,8 +264,7 @@ class SocketSink : public BodySink {
     if (!started_) {
       Response whole = end.status != 200 ? std::move(end) : head_;
       if (whole.status == 200) whole.stream = nullptr, whole.body = std::move(held_);
-      const bool sent = out_.put(response_head(whole, keep_)) && out_.put(whole.body);
-      return sent ? done : After::kDrop;
+      return out_.put(response_head(whole, keep_) + whole.body) ? done : After::kDrop;
     }
     if (out_.failed() || end.status != 200) return After::kDrop;  // cut short: the client sees it
     if (http10_) return After::kClose;                            // the close ends the body
@@ -286,11 +301,15 @@ After send_response(Connection& c, const Response& r, bool keep_alive, SpillRoom
     return ended(out.put(response_head(r, keep_alive && !q.http10, f)),
                  q.http10 ? After::kClose : done);
   }
-  if (!r.stream) {
-    bool sent = out.put(response_head(r, keep_alive));
-    if (q.method != "HEAD" && r.file) out.put_file(r.file);
-    if (q.method != "HEAD" && !r.file) sent = sent && out.put(r.body);
+  if (r.file) {
+    const bool sent = out.put(response_head(r, keep_alive));
+    if (q.method != "HEAD") out.put_file(r.file);
     return ended(sent, done);
+  }
+  if (!r.stream) {  // head and body in one send: two would wait on the client's delayed ACK
+    std::string whole = response_head(r, keep_alive);
+    if (q.method != "HEAD") whole += r.body;
+    return ended(out.put(whole), done);
   }
   SocketSink sink(out, r, keep_alive, q.http10);
   Response end;
