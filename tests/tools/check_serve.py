@@ -19,6 +19,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from picture import pixel, read_png, viridis  # noqa: E402
+from serve_client import exchange  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "src",
                                 "api", "python"))
@@ -66,12 +67,8 @@ try:
     def request(method, path, body=None, headers=None):
         if time.monotonic() > DEADLINE:
             fail("out of time")
-        c = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
-        c.request(method, path, body=body, headers=headers or {})
-        r = c.getresponse()
-        data = r.read()
-        c.close()
-        return r.status, r.getheader("Content-Type"), data
+        status, head, data = exchange(port, method, path, body, headers, timeout=30)
+        return status, head.get("Content-Type"), data
 
     def api(path, method="GET", body=None, status=200):
         got, kind, data = request(method, path, body)

@@ -8,7 +8,6 @@ colour range is the tile with the section's range; and hostile bodies and
 whole-mesh ranges keep the server within --memory.
 usage: check_serve_hostile.py WEAVER WORK_DIR"""
 import errno
-import http.client
 import json
 import os
 import shutil
@@ -19,6 +18,9 @@ import sys
 import threading
 import time
 import urllib.parse
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from serve_client import exchange  # noqa: E402
 
 weaver_bin, work = sys.argv[1:3]
 shutil.rmtree(work, ignore_errors=True)
@@ -47,12 +49,7 @@ def stop(server):
 def request(port, method, path, body=None, headers=None):
     if time.monotonic() > DEADLINE:
         fail("out of time")
-    c = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
-    c.request(method, path, body=body, headers=headers or {})
-    r = c.getresponse()
-    data = r.read()
-    c.close()
-    return r.status, dict(r.getheaders()), data
+    return exchange(port, method, path, body, headers)
 
 
 def raw(port, data):
@@ -185,6 +182,29 @@ try:
         got = raw(port, data.encode())
         if b" 400 " not in got.split(b"\r\n")[0]:
             fail(f"{data[:60]!r}: {got[:200]!r}")
+
+    # 3b. Slow readers hold no worker: eight clients (four times the threads)
+    # each reading a 10 MB answer 2 KB at a time, and /api/stat answered at
+    # once while every one of them is still connected.
+    slow = []
+    for _ in range(8):
+        so = socket.create_connection(("127.0.0.1", port), timeout=20)
+        so.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        so.sendall(f"GET /api/range?box=0,0,0,100000,100000,37500&units=m&list=1&limit=100000 "
+                   f"HTTP/1.1\r\nHost: {me}\r\n\r\n".encode())
+        slow.append(so)
+    for _ in range(3):
+        for so in slow:
+            if not so.recv(2048):
+                fail("a slow reader's answer ended early")
+        time.sleep(0.3)
+    t0 = time.monotonic()
+    if request(port, "GET", "/api/stat")[0] != 200 or time.monotonic() - t0 > 2:
+        fail(f"/api/stat took {time.monotonic() - t0:.1f} s beside eight slow readers")
+    for so in slow:
+        if not so.recv(2048):
+            fail("a slow reader was dropped within seconds")
+        so.close()
 
     # 4. A tile without a colour range is the tile with the section's.
     section = json.loads(request(port, "GET", "/api/section/z/1000?color=vs")[2])
