@@ -89,6 +89,8 @@ TEST(ServeHttp, RefusesWhatAProxyCouldReadOtherwise) {
   std::string nul = "GET / HTTP/1.1\r\nHost: h\r\nX: a";
   nul += '\0';
   EXPECT_FALSE(parse(nul + "b", &r).ok());
+  // A NUL in a header's name (found by fuzz/http_request_fuzz.cc).
+  EXPECT_FALSE(parse(std::string("GET / HTTP/1.1\r\nHost: h\r\nCo\0\0: x", 32), &r).ok());
   ASSERT_TRUE(parse("GET / HTTP/1.0", &r).ok());  // HTTP/1.0 needs no Host
   EXPECT_TRUE(r.http10);
   // Repeated headers are kept, in order.

@@ -44,7 +44,8 @@ Status parse_query(const std::string& qs, Request* r) {
 
 // A header name is a token (RFC 9110 5.6.2).
 bool is_token_char(unsigned char c) {
-  return std::isalnum(c) || std::strchr("!#$%&'*+-.^_`|~", c) != nullptr;
+  // (strchr finds a NUL too: the string's own end)
+  return std::isalnum(c) || (c != 0 && std::strchr("!#$%&'*+-.^_`|~", c) != nullptr);
 }
 
 // One header line into r: "name: value", the name a token right before
