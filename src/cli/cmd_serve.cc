@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "cli/cli.h"
+#include "cli/point_batch.h"
 #include "cli/serve_queries.h"
 #include "serve/service.h"
 #include "serve/streams.h"
@@ -42,7 +43,8 @@ constexpr char kUsage[] =
     "  --threads N     requests answered at once (default 4)\n"
     "  --memory BYTES  memory budget (default 256M): a quarter for request bodies,\n"
     "                  an eighth for the tables' leaf directories (built once,\n"
-    "                  shared by the threads), the rest for the threads' caches\n"
+    "                  shared by the threads), a quarter for one large batch of\n"
+    "                  points at a time, the rest for the threads' caches\n"
     "                  (a mesh of a billion elements answers fastest with 1G)\n"
     "  --allow-host NAMES  host names clients may address the server by (commas\n"
     "                  between), besides localhost, 127.0.0.1, [::1] and the\n"
@@ -106,22 +108,24 @@ int cmd_serve(int argc, char** argv) {
   const std::string& db = args.positional[0];
   // A quarter of the budget holds request bodies (at most 64 MiB each); an
   // eighth the tables' leaf directories, built once and shared by every
-  // thread (at 2 Hz, 1.3B elements, the octant table's is 7 MB); the rest
-  // is shared by the Explorers: one a worker, and the helper that a batch
-  // of points borrows.  Answers are streamed (serve/http.h), so they hold
-  // a megabyte or so each, whatever their size.
+  // thread (at 2 Hz, 1.3B elements, the octant table's is 7 MB); a quarter
+  // the batch lane, which one large batch of points at a time answers in
+  // (Service); the rest is shared by the Explorers: one a worker, and the
+  // helper that a batch of points borrows.  Answers are streamed
+  // (serve/http.h), so they hold a megabyte or so each, whatever their size.
   o.max_buffered = std::max<uint64_t>(memory.bytes() / 4, 1 << 20);
   o.max_body = std::min(o.max_body, o.max_buffered);
   o.scratch_dir = db;  // a slow reader's spilled answer: an unnamed file in DB
   o.log = !args.flags.count("quiet");
   const uint64_t directories = memory.bytes() / 8;
-  const MemoryBudget each(std::max<uint64_t>(memory.bytes() / 8 * 5 / uint64_t(o.threads + 1),
+  const size_t lane_points = size_t(memory.bytes() / 4 / kBatchPointBytes);
+  const MemoryBudget each(std::max<uint64_t>(memory.bytes() / 8 * 3 / uint64_t(o.threads + 1),
                                              MemoryBudget::kMinBytes));
   // Large blocks (a request's body, a batch's arrays) go back to the system
   // when freed: otherwise each thread's arena keeps the largest it has seen,
   // and the process outgrows --memory after a few batches.
   mallopt(M_MMAP_THRESHOLD, 1 << 20);
-  serve::Service service(db, each, directories, serve_query_runner());
+  serve::Service service(db, each, directories, serve_query_runner(), lane_points);
   st = service.check();
   if (!st.ok()) return report("serve", st);
   serve::Server server;

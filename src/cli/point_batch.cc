@@ -252,7 +252,7 @@ class BatchRunner {
   // batch's size, so that one point (a request of `weaver serve`) does not
   // reserve, and fault in huge pages for, a million.
   void grow() {
-    const size_t n = std::min(ex_.batch_points(), std::max<size_t>(4096, 4 * points_.size()));
+    const size_t n = std::min(limit(), std::max<size_t>(4096, 4 * points_.size()));
     reserve_huge(points_, n);
     if (o_.metres) reserve_huge(values_, n);
     reserve_huge(hits_, o_.query == PointQuery::kNodeAt ? 0 : n);
@@ -265,6 +265,8 @@ class BatchRunner {
     bad_.push_back(true);
   }
   size_t size() const { return points_.size(); }
+  // Points answered at a time.
+  size_t limit() const { return o_.batch_points > 0 ? o_.batch_points : ex_.batch_points(); }
 
   // Answers the points held and writes their rows.
   Status answer(PointBatchResult* r) {
@@ -467,7 +469,7 @@ Status run_point_batch(Explorer& ex, std::FILE* in, const std::string& name,
       batch.add_bad();
       ++result->bad_lines;
     }
-    if (batch.size() >= ex.batch_points()) st = batch.answer(result);
+    if (batch.size() >= batch.limit()) st = batch.answer(result);
   }
   const bool read_error = std::ferror(in);
   if (st.ok()) st = batch.answer(result);

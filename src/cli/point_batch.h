@@ -27,7 +27,14 @@ struct PointBatchOptions {
   // More Explorers on the same committed state as the one asked: a large
   // batch splits its lookups and its rows among them, a thread each.
   std::vector<Explorer*> helpers;
+  // Points answered at a time (0: the Explorer's batch_points()): more for
+  // a caller that sets memory aside for the batch (kBatchPointBytes each).
+  size_t batch_points = 0;
 };
+
+// What a point of a batch holds while it is answered: its coordinate, its
+// metres, its answer and its sort pairs (about 124 bytes), with margin.
+inline constexpr size_t kBatchPointBytes = 128;
 
 struct PointBatchResult {
   uint64_t points = 0;     // rows written

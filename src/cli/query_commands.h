@@ -24,6 +24,8 @@ struct QuerySettings {
   // More Explorers on the same state, for a --points batch to share its
   // work with (PointBatchOptions::helpers).
   std::vector<Explorer*> helpers;
+  // A --points batch's points answered at a time (0: the Explorer's).
+  size_t batch_points = 0;
   // range --list: one page of the leaves, those from element id list_from
   // on, at most list_limit; then *list_next (if set) is the id of the first
   // leaf past the page (UINT64_MAX when it ends the box) and *list_count

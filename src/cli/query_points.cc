@@ -68,6 +68,7 @@ Status Query::to_frame_metres() {
 int Query::run_points(PointQuery q) {
   PointBatchOptions o{q, s.mode, s.metres, false, {}};
   o.helpers = s.helpers;
+  o.batch_points = s.batch_points;
   PointBatchResult r;
   const bool from_file = args.values.count("points") != 0;
   if (from_file && args.positional.size() != 1) {

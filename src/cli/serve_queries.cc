@@ -57,6 +57,7 @@ int run_query_on(Explorer& ex, const std::vector<Explorer*>& helpers, const serv
   QuerySettings settings;
   settings.points_stdin = points;
   settings.helpers = helpers;
+  settings.batch_points = q.batch_points;
   if (q.list) {
     settings.list_from = q.list_from, settings.list_limit = q.list_limit;
     settings.list_next = q.list_next, settings.list_count = q.list_count;

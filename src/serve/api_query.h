@@ -24,6 +24,9 @@ struct ApiQuery {
   Kind kind = Kind::kLocate;
   // locate, material, node-at: the points of the request's body, not point.
   bool batch = false;
+  // A batch's points answered at a time (0: the Explorer's): set when the
+  // service lends the batch its lane of memory (Service::run_batch).
+  size_t batch_points = 0;
   // One point: metres when metres or geo (lon, lat, depth), else whole ticks.
   double point[3] = {0, 0, 0};
   uint64_t id = 0;                     // element, node, neighbors, ...

@@ -352,10 +352,14 @@ Response Service::run_batch(Explorer& ex, const ApiQuery& q, const Request& r) {
     std::FILE* in = points_stream(r.body);
     std::unique_lock<std::mutex> lock;
     std::vector<Explorer*> helpers;
+    ApiQuery asked = q;
+    std::unique_lock<std::mutex> lane;
     if (r.body.size() >= kHelpedBody) {
       if (Explorer* h = helper(&lock)) helpers.push_back(h);
+      lane = std::unique_lock<std::mutex>(lane_mu_, std::try_to_lock);
+      if (lane.owns_lock()) asked.batch_points = lane_points_;
     }
-    const int code = o && in ? query_(ex, helpers, q, in, o, &err) : 1;
+    const int code = o && in ? query_(ex, helpers, asked, in, o, &err) : 1;
     if (in) std::fclose(in);
     if (o && std::fclose(o) != 0 && code == 0) return error_response(500, "the client left");
     return outcome(code, printed, err);
