@@ -230,6 +230,7 @@ class CrashTest : public ::testing::Test {
         std::string(fault.errno_name) == "ENOSPC" ? "No space left" : "Input/output error";
     ASSERT_NE(err.find(want), std::string::npos) << where << ": " << err;
     ++faults_reported_;
+    ++reported_by_[writer_];
   }
 
   // Kills the writer at every durable step (or `steps` of them, spread
@@ -237,6 +238,8 @@ class CrashTest : public ::testing::Test {
   // fails each of those steps with EIO and ENOSPC instead.
   void torture(const Writer& w, const std::vector<std::vector<std::string>>& setup, uint64_t steps,
                int kills, bool faults = false) {
+    writer_ = w.name;
+    reported_by_[writer_] += 0;  // every writer tortured has a count, if only 0
     const std::string old_db = dir_.file("old.db"), new_db = dir_.file("new.db");
     ASSERT_NO_FATAL_FAILURE(prepare(old_db, setup));
     const Fingerprint before = fingerprint(old_db);
@@ -278,6 +281,8 @@ class CrashTest : public ::testing::Test {
   std::string text_a_, text_b_;
   int points_ = 0, fired_ = 0, old_states_ = 0, new_states_ = 0;
   int faults_reported_ = 0, faults_absorbed_ = 0;
+  std::string writer_;                      // the writer tortured now
+  std::map<std::string, int> reported_by_;  // faults each writer reported
 
   // Every writer of the database, from its state before (setup commands).
   void each_writer(
@@ -315,6 +320,10 @@ TEST_F(CrashTest, IoErrorsAtEveryStepLeaveTheOldState) {
               faults_reported_, faults_absorbed_, old_states_, new_states_);
   EXPECT_GT(faults_reported_, 0);
   EXPECT_GT(old_states_, 0);
+  // Each writer failed, and said so, at least once: one that ignored the
+  // injected faults (every step absorbed) would pass the totals above.
+  EXPECT_EQ(reported_by_.size(), 7u);
+  for (const auto& [name, n] : reported_by_) EXPECT_GT(n, 0) << name << " reported no fault";
 }
 
 TEST_F(CrashTest, EveryWriterLeavesTheOldOrTheNewState) {
