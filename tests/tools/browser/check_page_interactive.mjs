@@ -156,7 +156,18 @@ try {
 
   // A click selects the element there: the one `weaver query locate`
   // finds, shown as `weaver query element` says.
-  const p = await page.evaluate(() => worldAt(map.clientWidth / 2, map.clientHeight / 2));
+  // The point under the click, from the URL's view and /api/section alone,
+  // not from the page's own worldAt (a wrong transform would agree with
+  // itself): the map's centre is the point (cu, cv) of the section's square,
+  // u across from its left, v down from its top.
+  const view = await hash();
+  const section = await (await fetch(`${base}/api/section/${view.axis}/${view.at}?color=${view.color}`)).json();
+  const along = (a) => "xyz".indexOf(a);
+  const p = [0, 0, 0];
+  p[along(view.axis)] = section.at_m;
+  p[along(section.u)] = section.origin_m[0] + Number(view.cu) * section.side_m;
+  p[along(section.v)] = section.down ? section.origin_m[1] + Number(view.cv) * section.side_m
+    : section.origin_m[1] + (1 - Number(view.cv)) * section.side_m;
   await page.mouse.click(cx, cy);
   await page.waitForSelector("#selected", { timeout: 10000 });
   const hit = JSON.parse(run("query", db, "locate", ...p.map(String), "--units", "m", "--format", "json"));
