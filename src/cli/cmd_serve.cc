@@ -15,7 +15,7 @@ namespace {
 
 constexpr char kUsage[] =
     "usage: weaver serve DB [--port P] [--bind ADDR] [--threads N] [--memory BYTES]\n"
-    "                       [--allow-host NAME[,NAME...]] [--quiet]\n"
+    "                       [--allow-host NAME[,NAME...]] [--scratch DIR] [--quiet]\n"
     "\n"
     "Serves DB read-only over HTTP: a page to explore the mesh in a browser (a\n"
     "cross-section as a zoomable map of tiles, coloured by a field, the element\n"
@@ -49,6 +49,9 @@ constexpr char kUsage[] =
     "  --allow-host NAMES  host names clients may address the server by (commas\n"
     "                  between), besides localhost, 127.0.0.1, [::1] and the\n"
     "                  bound address: a proxy's or the machine's own name\n"
+    "  --scratch DIR   where a region's vtu is written before it is sent, and a\n"
+    "                  slow reader's answer spilled (default: DB itself; give a\n"
+    "                  directory for a database you may not write to)\n"
     "  --quiet         no line on stderr for each request\n"
     "Routes (GET and HEAD, but POST /api/points):\n"
     "  /                                  the page (and /page.css, /page.js)\n"
@@ -90,8 +93,9 @@ std::vector<std::string> allowed_hosts(const ParsedArgs& args) {
 
 int cmd_serve(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"port", "bind", "threads", "memory", "allow-host"},
-                         {"quiet"}, &args);
+  Status st =
+      parse_args(argc, argv, 2, {"port", "bind", "threads", "memory", "allow-host", "scratch"},
+                 {"quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("serve", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("serve", "expected one DB", kUsage);
@@ -115,7 +119,8 @@ int cmd_serve(int argc, char** argv) {
   // (serve/http.h), so they hold a megabyte or so each, whatever their size.
   o.max_buffered = std::max<uint64_t>(memory.bytes() / 4, 1 << 20);
   o.max_body = std::min(o.max_body, o.max_buffered);
-  o.scratch_dir = db;  // a slow reader's spilled answer: an unnamed file in DB
+  // A slow reader's spilled answer: an unnamed file in DB, or --scratch.
+  o.scratch_dir = args.values.count("scratch") ? args.values.at("scratch") : db;
   o.log = !args.flags.count("quiet");
   const uint64_t directories = memory.bytes() / 8;
   const size_t lane_points = size_t(memory.bytes() / 4 / kBatchPointBytes);
@@ -133,6 +138,7 @@ int cmd_serve(int argc, char** argv) {
   if (st.is_invalid_argument()) return usage_error("serve", st.message(), kUsage);
   if (!st.ok()) return report("serve", st);
   service.set_callers(serve::caller_policy(o.bind, server.port(), allowed_hosts(args)));
+  if (args.values.count("scratch")) service.set_scratch(args.values.at("scratch"));
   g_server = &server;
   std::signal(SIGINT, stop_serving);
   std::signal(SIGTERM, stop_serving);

@@ -530,10 +530,11 @@ Response Service::export_vtu(Explorer& ex, const Request& r) {
   // database (a writer's leftover pattern: removed by the next writer if
   // this process dies), opened, and removed at once: the open file is
   // streamed, never held whole.
-  std::string dir = db_ + "/tmp-serve-XXXXXX";
+  const std::string& scratch = scratch_.empty() ? db_ : scratch_;
+  std::string dir = scratch + "/tmp-serve-XXXXXX";
   if (::mkdtemp(dir.data()) == nullptr) {
-    return error_response(
-        500, "cannot make a scratch directory in " + db_ + ": " + std::strerror(errno));
+    return error_response(500, "cannot make a scratch directory in " + scratch + ": " +
+                                   std::strerror(errno) + " (weaver serve --scratch DIR)");
   }
   o.format = ExportFormat::kVtu;
   o.out = dir + "/region.vtu";

@@ -94,6 +94,9 @@ class Service {
   void warm();
   // Who may call (serve/guard.h): set once the server listens.
   void set_callers(CallerPolicy p) { callers_ = std::move(p); }
+  // Where a region's vtu is written before it is sent (default: the
+  // database's directory, whose next writer removes what a crash left).
+  void set_scratch(std::string dir) { scratch_ = std::move(dir); }
   Response handle(const Request& r);
 
  private:
@@ -124,6 +127,7 @@ class Service {
   void share_directories(Explorer& ex, const StateStamp& state);
 
   std::string db_;
+  std::string scratch_;  // empty: db_
   CallerPolicy callers_;
   MemoryBudget memory_;
   uint64_t directories_;

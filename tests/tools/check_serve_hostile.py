@@ -217,6 +217,21 @@ try:
 finally:
     stop(server)
 
+# 4b. --scratch: a region's vtu is written where it says, not in DB (a
+# directory that does not exist names itself in the 500).
+missing = os.path.join(work, "no-such-scratch")
+server, port = start(db, "--scratch", missing)
+try:
+    status, _, data = request(port, "GET", "/api/export.vtu?box=20000,30000,0,21000,31000,500")
+    if status != 500 or missing.encode() not in data:
+        fail(f"--scratch {missing}: status {status}: {data[:200]!r}")
+    os.makedirs(missing)
+    status, _, data = request(port, "GET", "/api/export.vtu?box=20000,30000,0,21000,31000,500")
+    if status != 200 or b"<VTKFile" not in data[:200] or os.listdir(missing):
+        fail(f"--scratch: status {status}, {os.listdir(missing)} left in it")
+finally:
+    stop(server)
+
 # 5. Hostile bodies and whole-mesh answers within --memory.
 BUDGET, ALLOWANCE = 48 << 20, 24 << 20
 server, port = start(db, "--threads", "3", "--memory", "48M")
