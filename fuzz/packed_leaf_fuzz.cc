@@ -1,6 +1,7 @@
 // One packed leaf page (storage/packed_leaf.h) read by every accessor, with a
 // shape chosen by the first bytes: offsets are checked, never trusted.
 #include <algorithm>
+#include <cstring>
 #include <vector>
 
 #include "fuzz_util.h"
@@ -28,10 +29,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // reports that); only a sorted one must be searchable.
   const bool sorted = std::is_sorted(keys.begin(), keys.end()) &&
                       std::adjacent_find(keys.begin(), keys.end()) == keys.end();
+  std::vector<std::byte> one(shape.payload + 1);
   for (uint32_t i = 0; i < leaf.size(); ++i) {
     uint64_t k = 0;
     if (!leaf.key(i, &k) || k != keys[i]) __builtin_trap();  // one answer, however asked
-    leaf.payload(i, vals.data());
+    leaf.payload(i, one.data());  // the payload decode gave, read on its own
+    if (!std::equal(one.begin(), one.begin() + shape.payload,
+                    vals.begin() + size_t{i} * shape.payload)) {
+      __builtin_trap();
+    }
     uint32_t pos = 0;
     if (leaf.bound(k, false, &pos) && sorted && pos != i) __builtin_trap();
   }
