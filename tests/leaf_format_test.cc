@@ -7,14 +7,18 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <map>
 #include <string>
 #include <vector>
 
+#include "balance/balance.h"
 #include "construct/construct.h"
 #include "db/database.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "extract/extract.h"
+#include "partition/partition.h"
 #include "storage/btree.h"
 #include "test_util.h"
 #include "verify/verify.h"
@@ -79,6 +83,56 @@ TEST(LeafFormat, TablesOfTheColumnOnlyFormatStillRead) {
     VerifyReport report;
     ASSERT_TRUE(verify_database(db, VerifyOptions{}, &report).ok());
     EXPECT_TRUE(report.ok()) << db << ": " << (report.problems.empty() ? "" : report.problems[0]);
+  }
+}
+
+// The fixture is read, never written.  On a copy, extract (a new node
+// table, in leaf format 2, beside format 1's octants) and partition leave a
+// mixed database that verifies and holds the same keys and payloads; then
+// balance (which rewrites the octant table, in format 2) leaves one that
+// verifies too; and the fixture's bytes are as they were.
+TEST(LeafFormat, WritersOverAFormatOneDatabaseLeaveAMixedOneThatVerifies) {
+  testing::TempDir dir;
+  const std::string fixture = std::string(WEAVER_SOURCE_DIR) + "/tests/data/format1/basin.db";
+  const auto bytes_of = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  std::map<std::string, std::string> fixture_bytes;
+  for (const auto& e : std::filesystem::directory_iterator(fixture)) {
+    fixture_bytes[e.path().string()] = bytes_of(e.path().string());
+  }
+  const auto verifies = [](const std::string& db) {
+    VerifyReport report;
+    ASSERT_OK(verify_database(db, VerifyOptions{}, &report));
+    EXPECT_TRUE(report.ok()) << (report.problems.empty() ? "" : report.problems[0]);
+  };
+  const std::string db = dir.file("format1");
+  std::filesystem::copy(fixture, db);
+  const Records octants = read_table(db, kOctantTable), nodes = read_table(db, kNodeTable);
+  ASSERT_EQ(octants.leaf_format, 1);
+  ExtractResult er;
+  ASSERT_OK(extract_mesh(db, ExtractOptions{}, &er));
+  PartitionOptions po;
+  po.parts = 3;
+  PartitionReport pr;
+  ASSERT_OK(partition_mesh(db, po, &pr));
+  const Records mixed_octants = read_table(db, kOctantTable),
+                mixed_nodes = read_table(db, kNodeTable);
+  EXPECT_EQ(mixed_octants.leaf_format, 1);  // read, not rewritten
+  EXPECT_EQ(mixed_nodes.leaf_format, 2);    // written anew by extract
+  EXPECT_EQ(mixed_nodes.keys, nodes.keys);
+  EXPECT_TRUE(mixed_nodes.payloads == nodes.payloads);
+  ASSERT_NO_FATAL_FAILURE(verifies(db));
+  BalanceResult br;
+  ASSERT_OK(balance_octree(db, BalanceOptions{}, &br));
+  const Records balanced = read_table(db, kOctantTable);
+  EXPECT_EQ(balanced.leaf_format, 2);
+  EXPECT_EQ(balanced.keys, octants.keys);  // it was balanced already
+  EXPECT_TRUE(balanced.payloads == octants.payloads);
+  ASSERT_NO_FATAL_FAILURE(verifies(db));
+  for (const auto& [path, bytes] : fixture_bytes) {
+    EXPECT_TRUE(bytes_of(path) == bytes) << path << " changed";
   }
 }
 
