@@ -30,6 +30,17 @@ TEST(Cli, EveryCommandHasHelp) {
   }
 }
 
+// `weaver --version`: one line, the project's version (CMakeLists.txt's).
+TEST(Cli, VersionIsTheProjectsVersion) {
+  const CommandRun r = run("--version");
+  EXPECT_EQ(r.code, 0);
+  std::ifstream cmake(std::string(WEAVER_SOURCE_DIR) + "/CMakeLists.txt");
+  const std::string text(std::istreambuf_iterator<char>(cmake), {});
+  const size_t at = text.find("project(weaver VERSION ") + 23;
+  ASSERT_GT(at, 23u);
+  EXPECT_EQ(r.out, "weaver " + text.substr(at, text.find(' ', at) - at) + "\n");
+}
+
 TEST(Cli, UsageErrorsAreOneLineWithStatus2) {
   for (const char* args : {"frobnicate", "import", "import db --octants x --memory lots",
                            "query db locate 1 2", "query db locate 1 2 -3", "stat --bogus db",

@@ -34,7 +34,8 @@ constexpr char kUsage[] =
     "  compact DB        join the shards of weaver-mpi's tables into one file each\n"
     "  model import|material  a velocity model as a database (from etree or grid files)\n"
     "\n"
-    "Run 'weaver <command> --help' for the arguments of one command.\n";
+    "Run 'weaver <command> --help' for the arguments of one command, 'weaver\n"
+    "--version' for the version.\n";
 
 const char* g_command = "";  // for the out-of-memory line
 
@@ -86,6 +87,10 @@ int dispatch(int argc, char** argv) {
     return argc < 2 ? 2 : 0;
   }
   const std::string cmd = argv[1];
+  if (cmd == "--version" || cmd == "version") {
+    std::printf("weaver %s\n", WEAVER_VERSION);  // the project's version (CMakeLists.txt)
+    return 0;
+  }
   if (cmd == "generate") return cmd_generate(argc, argv);
   if (cmd == "import") return cmd_import(argc, argv);
   if (cmd == "construct") return cmd_construct(argc, argv);
