@@ -53,7 +53,7 @@ ParsedArgs query_args(const serve::ApiQuery& q) {
 int run_query_on(Explorer& ex, const std::vector<Explorer*>& helpers, const serve::ApiQuery& q,
                  std::FILE* points, std::FILE* out, std::string* err) {
   err->clear();
-  std::FILE* e = serve::string_stream(err, 4096);
+  std::FILE* e = serve::string_stream(err, serve::kErrorHeld);
   QuerySettings settings;
   settings.points_stdin = points;
   settings.helpers = helpers;

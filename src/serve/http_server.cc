@@ -9,13 +9,10 @@
 #include <poll.h>
 #include <strings.h>
 #include <sys/socket.h>
-#include <sys/uio.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
-#include <climits>
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
@@ -23,7 +20,6 @@
 #include <deque>
 #include <list>
 #include <mutex>
-#include <string_view>
 #include <thread>
 #include <vector>
 

@@ -247,7 +247,7 @@ Response Service::api(const Request& r, Explorer& ex) {
   if (what == "stat" && parts.size() == 2) return stat(ex);
   if (what == "section") return section(ex, parts, r);
   if (what == "tile") return tile(ex, parts, r);
-  if (what == "export.vtu" && parts.size() == 2) return export_vtu(ex, r);
+  if (what == "export.vtu" && parts.size() == 2) return export_vtu(r);
   if (what == "geo" && parts.size() == 2) return geo(ex, r);
   const Params p(r);
   ApiQuery q;
@@ -322,19 +322,13 @@ Response outcome(int code, uint64_t printed, const std::string& err) {
 
 }  // namespace
 
-// The first line of what a query printed to stderr is all that is kept (a
-// batch of a million bad lines writes a million).
-constexpr size_t kErrorHeld = 4096;
-
 Response Service::run(Explorer& ex, const ApiQuery& q) {
   std::string out, err;
   std::FILE* o = string_stream(&out);
-  std::FILE* e = string_stream(&err, kErrorHeld);
   static const std::string kNoPoints;  // these questions read no points
   std::FILE* in = points_stream(kNoPoints);
-  const int code = o && e && in ? query_(ex, {}, q, in, o, &err) : 1;
+  const int code = o && in ? query_(ex, {}, q, in, o, &err) : 1;
   if (in) std::fclose(in);
-  if (e) std::fclose(e);
   if (o) std::fclose(o);  // flushes into out
   Response res = outcome(code, out.size(), err);
   if (res.status == 200) res.body = std::move(out);
@@ -521,8 +515,9 @@ Response Service::geo(Explorer& ex, const Request& r) {
               ", \"lat\": " + number(lat) + "}\n"};
 }
 
-Response Service::export_vtu(Explorer& ex, const Request& r) {
-  (void)ex;  // the export opens the database itself: it reads what it counts
+// The export opens the database itself (not this thread's Explorer), so it
+// counts its cap on the state it writes.
+Response Service::export_vtu(const Request& r) {
   ExportOptions o;
   const Status given = Params(r).box("box", o.box);
   if (!given.ok()) return error_response(400, given.message() + " (metres)");

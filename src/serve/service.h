@@ -54,8 +54,11 @@ namespace weaver::serve {
 // Runs one query of `weaver query` as q asks it, its answer as JSON, on ex,
 // with helpers (more Explorers on the same state, which a batch of points
 // shares its work with), reading a batch's points from points and printing
-// to out: the exit status, and the first of what it printed to stderr.  The
-// command line supplies it (cli/cmd_serve.cc).
+// to out: the exit status, and the first kErrorHeld bytes of what it printed
+// to stderr.  The command line supplies it (cli/serve_queries.h).
+// What a query's errors keep: the first of them (a batch of a million bad
+// lines writes a million).
+inline constexpr size_t kErrorHeld = 4096;
 using QueryRunner =
     std::function<int(Explorer& ex, const std::vector<Explorer*>& helpers, const ApiQuery& q,
                       std::FILE* points, std::FILE* out, std::string* err)>;
@@ -116,7 +119,7 @@ class Service {
   Response stat(Explorer& ex);
   Response section(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
   Response tile(Explorer& ex, const std::vector<std::string>& parts, const Request& r);
-  Response export_vtu(Explorer& ex, const Request& r);
+  Response export_vtu(const Request& r);
   Response geo(Explorer& ex, const Request& r);
 
   // The helper Explorer on this thread's snapshot, if no other batch has

@@ -37,6 +37,20 @@ struct JsonPoints {
   }
 };
 
+// A stdio stream over cookie (mode "r" or "w"); the stream owns the cookie
+// from here on, and io.close deletes it.  Null if it cannot be made.
+template <typename Cookie>
+std::FILE* cookie_stream(std::unique_ptr<Cookie> cookie, const char* mode,
+                         cookie_io_functions_t io) {
+  io.close = [](void* c) {
+    delete static_cast<Cookie*>(c);
+    return 0;
+  };
+  std::FILE* f = fopencookie(cookie.get(), mode, io);
+  if (f != nullptr) cookie.release();
+  return f;
+}
+
 bool is_json_array(const std::string& body) {
   const size_t at = body.find_first_not_of(" \t\r\n");
   return at != std::string::npos && body[at] == '[';
@@ -49,24 +63,16 @@ std::FILE* string_stream(std::string* s, size_t cap) {
     std::string* s;
     size_t cap;
   };
-  auto cookie = std::make_unique<Capped>(Capped{s, cap});
   cookie_io_functions_t io{};
   io.write = [](void* c, const char* data, size_t n) -> ssize_t {
     auto* k = static_cast<Capped*>(c);
     if (k->s->size() < k->cap) k->s->append(data, std::min(n, k->cap - k->s->size()));
     return ssize_t(n);  // past the cap: taken, and dropped
   };
-  io.close = [](void* c) {
-    delete static_cast<Capped*>(c);
-    return 0;
-  };
-  std::FILE* f = fopencookie(cookie.get(), "w", io);
-  if (f != nullptr) cookie.release();
-  return f;
+  return cookie_stream(std::make_unique<Capped>(Capped{s, cap}), "w", io);
 }
 
 std::FILE* sink_stream(BodySink* sink, uint64_t* written) {
-  auto cookie = std::make_unique<SinkCookie>(SinkCookie{sink, written});
   cookie_io_functions_t io{};
   io.write = [](void* c, const char* data, size_t n) -> ssize_t {
     auto* k = static_cast<SinkCookie*>(c);
@@ -74,14 +80,8 @@ std::FILE* sink_stream(BodySink* sink, uint64_t* written) {
     *k->written += n;
     return ssize_t(n);
   };
-  io.close = [](void* c) {
-    delete static_cast<SinkCookie*>(c);
-    return 0;
-  };
-  std::FILE* f = fopencookie(cookie.get(), "w", io);
-  if (f == nullptr) return nullptr;
-  cookie.release();
-  std::setvbuf(f, nullptr, _IOFBF, 256 << 10);
+  std::FILE* f = cookie_stream(std::make_unique<SinkCookie>(SinkCookie{sink, written}), "w", io);
+  if (f != nullptr) std::setvbuf(f, nullptr, _IOFBF, 256 << 10);
   return f;
 }
 
@@ -97,13 +97,7 @@ std::FILE* points_stream(const std::string& body) {
   io.read = [](void* c, char* out, size_t size) -> ssize_t {
     return ssize_t(static_cast<JsonPoints*>(c)->read(out, size));
   };
-  io.close = [](void* c) {
-    delete static_cast<JsonPoints*>(c);
-    return 0;
-  };
-  std::FILE* f = fopencookie(cookie.get(), "r", io);
-  if (f != nullptr) cookie.release();
-  return f;
+  return cookie_stream(std::move(cookie), "r", io);
 }
 
 }  // namespace weaver::serve
