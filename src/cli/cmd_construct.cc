@@ -19,7 +19,9 @@ constexpr char kUsage[] =
     "                           [--max-level L] [--max-elements N] [--memory BYTES]\n"
     "                           [--threads N] [--origin-geo LON,LAT [--azimuth DEG]\n"
     "                           [--utm-zone Z]] [--outside clamp|error] [--plain]\n"
-    "                           [--unbalanced] [--quiet]\n"
+    "                           [--surface SOURCE [--surface-crs frame|lonlat]]\n"
+    "                           [--top-elevation E] [--model-z depth|elevation]\n"
+    "                           [--surface-edge M] [--unbalanced] [--quiet]\n"
     "\n"
     "Builds the octant table of DB from a velocity model: every leaf satisfies\n"
     "edge <= Vs_min / (F * N), Vs_min being the least Vs of the model over 27\n"
@@ -38,8 +40,10 @@ constexpr char kUsage[] =
     "                     read whole), db:MODEL.db (a model database, 'weaver model\n"
     "                     import'), or a model file imported into DB's own model\n"
     "                     table first: etree:FILE, grid:FILE, layers:FILE, xyz:FILE\n"
-    "                     (formats in 'weaver model --help'); a model read from\n"
-    "                     storage is sampled within --memory whatever its size\n"
+    "                     (formats in 'weaver model --help'); rfile:FILE, an SW4\n"
+    "                     rfile, sampled as SW4 does and bringing its topography;\n"
+    "                     a model read from storage is sampled within --memory\n"
+    "                     whatever its size\n"
     "  --freq F           highest frequency to resolve, Hz (default 0.5)\n"
     "  --ppw N            points per wavelength (default 10)\n"
     "  --vs-min V         Vs floor in the rule, m/s (default none)\n"
@@ -54,6 +58,7 @@ constexpr char kUsage[] =
     "                     box: take the nearest model cell's values (clamp, the\n"
     "                     default, said in the plan) or refuse to start (error)\n"
     "  --min-level L, --max-level L   bounds on leaf levels (default 0, 20)\n"
+    WEAVER_GROUND_USAGE
     "  --max-elements N   refuse to start when a coarse sampling of the model\n"
     "                     estimates more leaves than N (default 5G), or more\n"
     "                     disk than is free; the estimate is printed first\n"
@@ -96,6 +101,39 @@ Status geo_options(const ParsedArgs& args, std::string* geo) {
   return Status::Ok();
 }
 
+// --surface, --surface-crs, --top-elevation, --model-z, --surface-edge.
+Status ground_options(const ParsedArgs& args, ConstructOptions* o) {
+  const auto value = [&](const char* name) -> const std::string* {
+    auto it = args.values.find(name);
+    return it == args.values.end() ? nullptr : &it->second;
+  };
+  if (const std::string* v = value("surface")) {
+    SurfaceSource s;
+    WEAVER_RETURN_IF_ERROR(parse_surface_source(*v, &s));
+    o->surface = *v;
+  }
+  if (const std::string* v = value("surface-crs")) {
+    if (*v != "frame" && *v != "lonlat")
+      return Status::InvalidArgument("--surface-crs '" + *v + "': frame or lonlat");
+    if (*v == "lonlat" && o->geo.empty() && !value("origin-geo"))
+      return Status::InvalidArgument("--surface-crs lonlat needs --origin-geo LON,LAT");
+    o->surface_crs = *v == "lonlat" ? SurfaceCrs::kLonLat : SurfaceCrs::kFrame;
+  }
+  if (const std::string* v = value("top-elevation")) {
+    WEAVER_RETURN_IF_ERROR(parse_double(*v, "--top-elevation", &o->top_elevation));
+  }
+  if (const std::string* v = value("model-z")) {
+    ModelZ z;
+    WEAVER_RETURN_IF_ERROR(parse_model_z(*v, &z));
+    o->model_z = *v;
+  }
+  if (const std::string* v = value("surface-edge")) {
+    WEAVER_RETURN_IF_ERROR(parse_double(*v, "--surface-edge", &o->surface_edge_m));
+    if (!(o->surface_edge_m > 0)) return Status::InvalidArgument("--surface-edge must be positive");
+  }
+  return Status::Ok();
+}
+
 Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
   auto number = [&](const char* name, double* v) -> Status {
     if (!args.values.count(name)) return Status::Ok();
@@ -130,6 +168,7 @@ Status parse_construct_options(const ParsedArgs& args, ConstructOptions* o) {
   }
   WEAVER_RETURN_IF_ERROR(geo_options(args, &o->geo));
   WEAVER_RETURN_IF_ERROR(outside_option(args, &o->outside_error));
+  WEAVER_RETURN_IF_ERROR(ground_options(args, o));
   return memory_option(args, &o->memory);
 }
 
@@ -158,6 +197,16 @@ void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
     std::printf("outside    %s: points there take the nearest model cell's values\n",
                 p.outside.c_str());
   }
+  if (p.carved) {
+    std::printf("ground     %s: %g to %g m; top (z = 0) at elevation %g m; the model read by %s%s\n",
+                p.surface_source.c_str(), p.surface->lowest(), p.surface->highest(),
+                p.ground.top_elevation, model_z_name(p.ground.model_z),
+                p.ground.model_z == ModelZ::kDepth ? " below the ground" : " (down from sea level)");
+  } else if (p.ground.top_elevation != 0) {
+    std::printf("ground     flat at elevation %g m; the model read by %s\n", p.ground.top_elevation,
+                model_z_name(p.ground.model_z));
+  }
+  if (!p.surface_outside.empty()) std::printf("surface    %s\n", p.surface_outside.c_str());
   std::printf("estimate   about %.3g elements, %.3g GB of disk (a coarse sampling of the model)\n",
               p.estimated_elements, p.estimated_disk_bytes / 1e9);
 }
@@ -168,7 +217,8 @@ int parse_construct_command(int argc, char** argv, std::string* db, ConstructOpt
   Status st = parse_args(
       argc, argv, 2,
       {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level", "memory",
-       "max-elements", "threads", "origin-geo", "azimuth", "utm-zone", "outside"},
+       "max-elements", "threads", "origin-geo", "azimuth", "utm-zone", "outside", "surface",
+       "surface-crs", "top-elevation", "model-z", "surface-edge"},
       {"plain", "quiet", "unbalanced"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);

@@ -24,7 +24,9 @@ constexpr char kUsage[] =
     "                      [--min-level L] [--max-level L] [--grid FILE] [--threads N]\n"
     "                      [--max-elements N] [--memory BYTES] [--origin-geo LON,LAT\n"
     "                      [--azimuth DEG] [--utm-zone Z]] [--outside clamp|error]\n"
-    "                      [--plain] [--unbalanced] [--quiet]\n"
+    "                      [--surface SOURCE [--surface-crs frame|lonlat]]\n"
+    "                      [--top-elevation E] [--model-z depth|elevation]\n"
+    "                      [--surface-edge M] [--plain] [--unbalanced] [--quiet]\n"
     "\n"
     "The whole pipeline: construct the octree from the model, 2:1 balanced as it is\n"
     "descended, and extract the mesh (--unbalanced: construct, then 'weaver balance',\n"
@@ -38,7 +40,8 @@ constexpr char kUsage[] =
     "lines (see each stage's --help for what their percent means);\n"
     "--plain writes plain leaf pages in every table (default: packed).  If a\n"
     "stage fails, the error says which stages had committed their tables.\n"
-    "--memory (default 256M) bounds each stage in turn, as in that stage's command.\n";
+    "--memory (default 256M) bounds each stage in turn, as in that stage's command.\n"
+    "\n" WEAVER_GROUND_USAGE;
 
 // Peak resident memory since the last reset_peak(), from the kernel's high
 // water mark (Linux); 0 where unavailable.
@@ -116,7 +119,8 @@ int cmd_mesh(int argc, char** argv) {
   Status st = parse_args(
       argc, argv, 2,
       {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level", "memory",
-       "threads", "max-elements", "origin-geo", "azimuth", "utm-zone", "outside"},
+       "threads", "max-elements", "origin-geo", "azimuth", "utm-zone", "outside", "surface",
+       "surface-crs", "top-elevation", "model-z", "surface-edge"},
       {"plain", "quiet", "unbalanced"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);

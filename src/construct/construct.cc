@@ -10,10 +10,12 @@
 #include <thread>
 #include <vector>
 
+#include "construct/carve.h"
 #include "construct/descent.h"
 #include "construct/estimate.h"
 #include "construct/subtree_balance.h"
 #include "db/database.h"
+#include "model/geo_frame.h"
 #include "model/velocity_model.h"
 #include "modeldb/open_model.h"
 #include "schema/octant.h"
@@ -45,6 +47,7 @@ struct Slot {
   Octant root;
   SubtreeLeaves leaves;
   uint64_t descended = 0;  // leaves before the balance
+  uint64_t air = 0, cut = 0;  // carved: leaves dropped, leaves cut (carve.h)
   bool done = false;       // set by the worker (WorkQueue)
 };
 
@@ -61,9 +64,16 @@ class SubtreeVisitor {
       : descent_(d), cap_(cap), balanced_(o.balanced), balancer_(d, fills_material(o)) {}
   void visit(Slot* s) {
     descent_.visit_subtree(s->root, cap_, &s->leaves);
-    if (!balanced_ || s->leaves.overflow) return;
-    s->descended = s->leaves.keys.size();
-    balancer_.balance(s->root, &s->leaves);
+    if (s->leaves.overflow) return;
+    if (balanced_) {
+      s->descended = s->leaves.keys.size();
+      balancer_.balance(s->root, &s->leaves);
+    }
+    // Air goes after the balance: what remains of a balanced octree is
+    // balanced, and its dangling nodes' anchors stay anchored.
+    if (descent_.plan().carved) {
+      carve_leaves(descent_.plan(), descent_.payload_bytes(), &s->leaves, &s->air, &s->cut);
+    }
   }
   uint64_t neighbours() const { return balancer_.neighbours_collected(); }
 
@@ -173,6 +183,8 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     st = out.append_batch(leaves.keys.data(), leaves.payloads.data(), leaves.keys.size());
     leaves.add_to(r);
     r->descended += head->descended;
+    r->air += head->air;
+    r->cut += head->cut;
     if (o.progress && !leaves.keys.empty()) {
       o.progress(r->elements, share.fraction_before(leaves.keys.back()));
     }
@@ -210,6 +222,58 @@ bool exact_blocks(const std::array<double, 3>& domain, int* level, double* block
   return false;
 }
 
+bool is_rfile(const std::string& model) { return model.rfind("rfile:", 0) == 0; }
+
+// The ground: its surface, the top's elevation, how the model reads z.
+Status plan_ground(const ConstructOptions& o, const VelocityModel& model, uint64_t surface_bytes,
+                   ConstructPlan* p) {
+  const std::string source =
+      !o.surface.empty() ? o.surface : is_rfile(o.model) ? o.model : std::string("flat");
+  SurfaceSource s;
+  WEAVER_RETURN_IF_ERROR(parse_surface_source(source, &s));
+  s.crs = o.surface_crs;
+  const std::string z = o.model_z.empty() ? (is_rfile(o.model) ? "elevation" : "depth") : o.model_z;
+  WEAVER_RETURN_IF_ERROR(parse_model_z(z, &p->ground.model_z));
+  GeoFrame geo;
+  const std::string geo_text = o.geo.empty() ? model.geo() : o.geo;
+  if (!geo_text.empty()) WEAVER_RETURN_IF_ERROR(GeoFrame::parse(geo_text, &geo));
+  std::unique_ptr<Surface> surface;
+  WEAVER_RETURN_IF_ERROR(load_surface(s, geo_text.empty() ? nullptr : &geo, surface_bytes, &surface));
+  p->surface_source = s.text;
+  double top = std::isnan(o.top_elevation) ? 0 : o.top_elevation;
+  if (surface) {
+    const double highest = surface->highest();
+    if (std::isnan(o.top_elevation)) {
+      top = std::ceil(highest / p->tick_m - 1e-9) * p->tick_m;
+    } else if (highest > top) {
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "the ground rises to %.2f m, above --top-elevation %g m",
+                    highest, top);
+      return Status::InvalidArgument(buf);
+    }
+    p->surface_outside = surface->outside(p->domain_m[0], p->domain_m[1]);
+    if (surface->filled > 0 && p->surface_outside.empty()) {
+      // Said in the plan: the nearest valid ground stood in for NODATA.
+      p->surface_outside = std::to_string(surface->filled) +
+                           " NODATA points of the surface took the nearest valid ground";
+    }
+  }
+  if (!std::isfinite(top) || std::abs(top) > 1e7)
+    return Status::InvalidArgument("--top-elevation must be a finite number of metres");
+  p->ground.top_elevation = top;
+  p->surface = std::move(surface);
+  p->ground.surface = p->surface.get();
+  p->carved = p->surface != nullptr;
+  return Status::Ok();
+}
+
+// The model as the mesh's frame asks it: under the ground, or as it is
+// where the top is flat at elevation 0 (today's meshes, unchanged).
+void ground_model(const ConstructPlan& p, std::unique_ptr<VelocityModel>* model) {
+  if (!p.carved && p.ground.top_elevation == 0) return;
+  *model = std::make_unique<GroundedModel>(std::move(*model), p.ground);
+}
+
 }  // namespace
 
 Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
@@ -243,15 +307,23 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
     return Status::InvalidArgument("the domain needs blocks of level " +
                                    std::to_string(p->block_level) + ", finer than --max-level");
   }
+  const ConstructMemory memory(o.memory);
   std::unique_ptr<VelocityModel> model;
-  WEAVER_RETURN_IF_ERROR(open_velocity_model(o.model, o.grid_file, ConstructMemory(o.memory).model,
+  WEAVER_RETURN_IF_ERROR(open_velocity_model(o.model, o.grid_file, memory.model,
                                              std::max(1, o.threads), &model));
+  WEAVER_RETURN_IF_ERROR(plan_ground(o, *model, memory.surface, p));
+  ground_model(*p, &model);
   p->model = model->describe();
   p->outside = model->outside(p->domain_m);
   if (!p->outside.empty() && o.outside_error) {
     return Status::NotFound(p->outside +
                             " (without --outside error, points there take the "
                             "values of the nearest model cell)");
+  }
+  if (!p->surface_outside.empty() && o.outside_error) {
+    return Status::NotFound(p->surface_outside +
+                            " (without --outside error, the ground there is the grid's "
+                            "nearest edge)");
   }
   const ConstructEstimate e = estimate_construct(o, *p, *model);
   p->estimated_elements = e.elements;
@@ -268,14 +340,25 @@ ConstructMemory::ConstructMemory(MemoryBudget budget) : plan(budget) {
   // A model read from storage (modeldb/db_model.h): each worker's table
   // cache and the decoded model octants around its subtree.
   model = plan.take_budget("model readers", 1, 2);
+  // The ground's grid, whole, with its pyramid: 12 bytes a point (a 1000
+  // x 1000 DEM takes 12 MB of the 128 MB this leaves at --memory 1G).
+  surface = plan.take("surface", 1, 8);
 }
 
 namespace {
 
-TableOptions octant_table_options(const ConstructOptions& o, const VelocityModel& model) {
+TableOptions octant_table_options(const ConstructOptions& o, const ConstructPlan& p,
+                                  const VelocityModel& model) {
   TableOptions t;
   t.key_kind = KeyKind::kOctant;
   t.schema = material_schema(model.has_q());
+  if (p.carved) {
+    std::string error;
+    t.schema = *RecordSchema::parse(std::string(model.has_q() ? "vp:f32,vs:f32,rho:f32,qp:f32,qs:f32"
+                                                               : "vp:f32,vs:f32,rho:f32") +
+                                        ",solid:f32",
+                                    &error);
+  }
   t.packed = o.packed;
   return t;
 }
@@ -296,7 +379,15 @@ Status write_octree(const ConstructOptions& o, const ConstructPlan& p, const Vel
   char model_meta[256];
   std::snprintf(model_meta, sizeof model_meta, ";model=%s;freq=%.17g;ppw=%.17g;vs_min=%.17g",
                 o.model.c_str(), o.freq, o.ppw, o.vs_min);
-  table.set_metadata(units_to_metadata(u) + levels_to_metadata(r->levels) + model_meta);
+  std::string ground_meta;
+  if (p.carved || p.ground.top_elevation != 0) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, ";top_elevation_m=%.17g;model_z=%s;surface_edge=%.17g",
+                  p.ground.top_elevation, model_z_name(p.ground.model_z), o.surface_edge_m);
+    ground_meta = ";surface=" + p.surface_source + buf;
+  }
+  table.set_metadata(units_to_metadata(u) + levels_to_metadata(r->levels) + model_meta +
+                     ground_meta);
   return Status::Ok();
 }
 
@@ -304,7 +395,10 @@ Status write_octree(const ConstructOptions& o, const ConstructPlan& p, const Vel
 Status plan_and_open(const ConstructOptions& o, const ConstructMemory& memory, ConstructPlan* p,
                      std::unique_ptr<VelocityModel>* model) {
   WEAVER_RETURN_IF_ERROR(plan_construct(o, p));
-  return open_velocity_model(o.model, o.grid_file, memory.model, std::max(1, o.threads), model);
+  WEAVER_RETURN_IF_ERROR(
+      open_velocity_model(o.model, o.grid_file, memory.model, std::max(1, o.threads), model));
+  ground_model(*p, model);
+  return Status::Ok();
 }
 
 }  // namespace
@@ -327,7 +421,7 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   }
   std::unique_ptr<BTree> table;
   std::string file;
-  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, octant_table_options(o, *model),
+  WEAVER_RETURN_IF_ERROR(db->create_table(kOctantTable, octant_table_options(o, *p, *model),
                                           memory.table_pool, &table, &file));
   const Status st = write_octree(o, *p, *model, memory, *table, r);
   WEAVER_RETURN_IF_ERROR(o.stage ? db->stage(kOctantTable, file, table, st)
@@ -346,7 +440,7 @@ Status construct_shard(const std::string& db_dir, const ConstructOptions& o,
   WEAVER_RETURN_IF_ERROR(plan_and_open(o, memory, p, &model));
   std::unique_ptr<BTree> table;
   WEAVER_RETURN_IF_ERROR(
-      create_shard_table(db_dir, file, octant_table_options(o, *model), memory.table_pool, &table));
+      create_shard_table(db_dir, file, octant_table_options(o, *p, *model), memory.table_pool, &table));
   ShardPlace place;
   Status st = write_octree(o, *p, *model, memory, *table, r, &place);
   return finish_shard(db_dir, table, st, place, entry, &r->table_bytes);

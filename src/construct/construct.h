@@ -12,10 +12,14 @@
 
 #include <array>
 #include <cstdint>
+#include <cmath>
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "db/database.h"
+#include "model/ground_model.h"
+#include "model/surface.h"
 #include "db/octant_table.h"
 #include "schema/octant.h"
 #include "schema/status.h"
@@ -37,6 +41,20 @@ struct ConstructOptions {
   // Where the domain reaches past the model's box (VelocityModel::outside):
   // refuse (true) or sample the model's edge values there (false, the default).
   bool outside_error = false;
+  // The ground (model/surface.h): "" takes an rfile model's own surface
+  // and is flat for any other; "flat" is today's box, byte for byte.
+  std::string surface;
+  SurfaceCrs surface_crs = SurfaceCrs::kFrame;
+  // The elevation of z = 0 (metres); NaN: the highest ground rounded up to
+  // a tick (0 when flat).  The domain's z is measured down from it.
+  double top_elevation = NAN;
+  // How the model reads z: "" is elevation for an rfile, depth below the
+  // local ground for any other (model/ground_model.h).
+  std::string model_z;
+  // Leaves the ground crosses are split until their edge is at most this
+  // (metres); 0: the wavelength rule alone (its samples in the air taken at
+  // the ground beneath).
+  double surface_edge_m = 0;
   int min_level = 0, max_level = kMaxLevel;
   MemoryBudget memory;
   // Worker threads visiting subtrees (descent.h); the table is the same for any count.
@@ -83,6 +101,7 @@ struct ConstructMemory {
   uint64_t table_pool = 0;  // the octant table, written by sorted append
   uint64_t subtrees = 0;    // leaves of the subtrees in flight (descent.h)
   MemoryBudget model;       // a model database's readers (modeldb/db_model.h)
+  uint64_t surface = 0;     // the ground's grid and its pyramid (model/surface.h)
 };
 
 // The domain as a union of blocks: resolved before anything is written.
@@ -95,6 +114,13 @@ struct ConstructPlan {
   bool rounded_up = false;        // no blocks tiled the domain exactly: rounded up to them
   std::string model;              // the model's description
   std::string outside;            // where the domain reaches past the model's box ("": nowhere)
+  std::string surface_outside;    // where the domain reaches past the surface's grid ("": nowhere)
+  // The ground the mesh follows: surface null when flat.  carved: air is
+  // cut away and each leaf carries its solid fraction.
+  std::shared_ptr<const Surface> surface;
+  std::string surface_source = "flat";
+  Ground ground;
+  bool carved = false;
   double estimated_elements = 0;  // from a coarse sampling (construct/estimate.h)
   double estimated_disk_bytes = 0;
 };
@@ -110,6 +136,9 @@ struct ConstructResult {
   // Balanced: the descent's leaves before the balance split some, and the
   // leaves outside the subtrees descended again to balance them against.
   uint64_t descended = 0, neighbours = 0;
+  // Carved: the leaves dropped as wholly above the ground, and the kept
+  // leaves the ground crosses (solid fraction below 1).
+  uint64_t air = 0, cut = 0;
 };
 
 Status plan_construct(const ConstructOptions& options, ConstructPlan* plan);

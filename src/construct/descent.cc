@@ -1,5 +1,7 @@
 #include "construct/descent.h"
 
+#include "construct/carve.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -89,16 +91,45 @@ Descent::Settled Descent::settle(const Octant& o, double* floor) const {
 Judgement Descent::judge(const Octant& o) const {
   Judgement j;
   j.floor = o_.vs_min;
+  if (p_.carved && ground_side(o) == GroundSide::kAir) {
+    apply_ground(o, &j);
+    return j;
+  }
   const Settled s = settle(o, &j.floor);
   if (s != Settled::kNo) {
     j.split = s == Settled::kSplit;
-    return j;
+  } else {
+    float samples[27];
+    lattice(o, 3, samples);
+    j.vs = vs_min_of(samples);
+    j.split = splits(o, j.vs);
   }
-  float samples[27];
-  lattice(o, 3, samples);
-  j.vs = vs_min_of(samples);
-  j.split = splits(o, j.vs);
+  if (p_.carved) apply_ground(o, &j);
   return j;
+}
+
+GroundSide Descent::ground_side(const Octant& o) const {
+  double lo[3], hi[3];
+  box(o, lo, hi);
+  return side_of_ground(p_.ground, lo, hi);
+}
+
+void Descent::apply_ground(const Octant& o, Judgement* j) const {
+  switch (ground_side(o)) {
+    case GroundSide::kAir:
+      // Nothing of it is meshed: no samples, no split but --min-level's.
+      j->split = o.level < o_.min_level;
+      j->floor = HUGE_VAL;
+      j->vs = -1;
+      return;
+    case GroundSide::kCut:
+      if (o_.surface_edge_m > 0 && octant_edge(o) * p_.tick_m > o_.surface_edge_m &&
+          o.level < o_.max_level)
+        j->split = true;
+      return;
+    case GroundSide::kSolid:
+      return;
+  }
 }
 
 // Children that their parent's floor keeps leaves cost nothing; the others
@@ -114,6 +145,10 @@ void Descent::judge_children(const Octant& o, double floor, const bool* want,
     const Octant child = octant_child(o, c);
     Judgement& j = out[c];
     j = Judgement{false, floor, -1};
+    if (p_.carved && ground_side(child) != GroundSide::kSolid) {
+      j = judge(child);
+      continue;
+    }
     if (!splits(child, floor)) continue;
     const Settled s = settle(child, &j.floor);
     j.floor = std::max(j.floor, floor);
@@ -217,9 +252,12 @@ void Descent::material(const Octant& o, std::byte* out) const {
 }
 
 void Descent::to_payload(const Material& m, std::byte* out) const {
-  const float f[5] = {m.vp, m.vs, m.rho, m.qp, m.qs};
+  // The solid fraction, last, is 1 until the carve (construct/carve.h) sets it.
+  const float f[6] = {m.vp, m.vs, m.rho, m.qp, m.qs, 1.0f};
   static_assert(sizeof f == kMaxPayloadBytes);
-  std::memcpy(out, f, payload_bytes());
+  const size_t material = model_.has_q() ? 20 : 12;
+  std::memcpy(out, f, material);
+  if (p_.carved) std::memcpy(out + material, &f[5], 4);
 }
 
 // The worst points per wavelength are those of the least sample; a leaf

@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "construct/carve.h"
 #include "construct/construct.h"
 #include "model/velocity_model.h"
 #include "schema/octant.h"
@@ -61,7 +62,7 @@ struct Judgement {
 
 class Descent {
  public:
-  static constexpr size_t kMaxPayloadBytes = 20;
+  static constexpr size_t kMaxPayloadBytes = 24;
 
   Descent(const ConstructOptions& o, const ConstructPlan& p, const VelocityModel& m)
       : o_(o), p_(p), model_(m), inv_rate_(1.0 / (o.freq * o.ppw)) {}
@@ -78,7 +79,8 @@ class Descent {
   // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as
   // f32), payload_bytes() of them into out.
   void material(const Octant& o, std::byte* out) const;
-  size_t payload_bytes() const { return model_.has_q() ? 20 : 12; }  // material_schema's record
+  // material_schema's record, and the solid fraction where the ground is carved.
+  size_t payload_bytes() const { return (model_.has_q() ? 20 : 12) + (p_.carved ? 4 : 0); }
   const ConstructPlan& plan() const { return p_; }
   const VelocityModel& model() const { return model_; }
 
@@ -93,6 +95,10 @@ class Descent {
   double vs_min_of(const float* samples) const;
   bool splits(const Octant& o, double vs) const;
   bool visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const;
+  // Where the ground decides: air is never split (but for --min-level), a
+  // leaf it crosses is split down to --surface-edge.
+  void apply_ground(const Octant& o, Judgement* j) const;
+  GroundSide ground_side(const Octant& o) const;
   bool emit_siblings(const Octant& o, const Judgement* children, size_t cap,
                      SubtreeLeaves* out) const;
   void emit(const Octant& o, const Judgement& j, const Material& m, SubtreeLeaves* out) const;

@@ -1,5 +1,6 @@
 #include "modeldb/open_model.h"
 
+#include "model/rfile_model.h"
 #include "modeldb/db_model.h"
 
 namespace weaver {
@@ -9,6 +10,12 @@ Status open_velocity_model(const std::string& name, const std::string& grid_file
   if (name.rfind("db:", 0) == 0) {
     std::unique_ptr<DbModel> m;
     WEAVER_RETURN_IF_ERROR(DbModel::open(name.substr(3), memory, threads, &m));
+    *out = std::move(m);
+    return Status::Ok();
+  }
+  if (name.rfind("rfile:", 0) == 0) {
+    std::unique_ptr<RfileModel> m;
+    WEAVER_RETURN_IF_ERROR(RfileModel::open(name.substr(6), memory, threads, &m));
     *out = std::move(m);
     return Status::Ok();
   }

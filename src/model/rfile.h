@@ -1,0 +1,75 @@
+// SW4's rfile: a velocity model with its ground surface, in one binary file
+// (SW4's MaterialRfile reads it; pySW4's rfileIO writes it).
+//
+//   header   int32 magic        1 in the writer's byte order (either is read)
+//            int32 precision    4 (float32 values) or 8 (float64)
+//            int32 attenuation  1: the material blocks carry Qp and Qs
+//            f64   azimuth      of the x axis, degrees clockwise from north
+//            f64   lon0, lat0   where x = y = 0 lies (WGS84 degrees)
+//            int32 length, then that many bytes: a PROJ string (kept as text)
+//            int32 blocks
+//   per block, all headers first:
+//            f64   hh, hv, z0   horizontal and vertical spacing, the block's
+//                               top (z: metres down from sea level)
+//            int32 nc, ni, nj, nk
+//   then each block's values in C order over (i, j, k, component): i along
+//   x, j along y, k down; x = i hh, y = j hh, z = z0 + k hv.
+//
+// Block 0 is the topography: nc = nk = 1, elevation in metres (up).  Blocks
+// 1 and on hold rho, vp, vs (nc = 3) or rho, vp, vs, qp, qs (nc = 5), top to
+// bottom; -999 marks "no data" (air, water), which SW4 fills from below.
+//
+// read_rfile_header checks everything the header promises against the
+// file: the data must be exactly as long as the blocks say, the blocks must
+// share one horizontal extent and be stacked top to bottom without a gap.
+// Errors name the file and what is wrong, in one line.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "schema/status.h"
+
+namespace weaver {
+
+struct RfileBlock {
+  double hh = 0, hv = 0, z0 = 0;
+  int nc = 0, ni = 0, nj = 0, nk = 0;
+  uint64_t offset = 0;  // of the block's first value in the file
+
+  double x_extent() const { return (ni - 1) * hh; }
+  double y_extent() const { return (nj - 1) * hh; }
+  double bottom() const { return z0 + (nk - 1) * hv; }
+  uint64_t values() const { return uint64_t(nc) * ni * nj * nk; }
+};
+
+struct RfileHeader {
+  bool swap = false;  // written in the other byte order
+  int precision = 4;  // bytes a value
+  bool attenuation = false;
+  double azimuth = 0, lon0 = 0, lat0 = 0;
+  std::string proj;
+  std::vector<RfileBlock> blocks;  // [0]: the topography
+
+  bool has_q() const { return blocks.size() > 1 && blocks[1].nc == 5; }
+  uint64_t grid_points() const;  // over the material blocks
+};
+
+// Parses the header held in bytes [0, n) of a file of file_size bytes.
+// `what` names the file in errors.  Corruption for anything wrong; a header
+// that runs past n is "truncated" when n is the whole file.
+Status parse_rfile_header(const unsigned char* bytes, size_t n, uint64_t file_size,
+                          const std::string& what, RfileHeader* out);
+// Reads and parses path's header.
+Status read_rfile_header(const std::string& path, RfileHeader* out);
+
+// The values of column (i, j) of block b, nk x nc of them (k, then the
+// component), as doubles in the machine's order.
+Status read_rfile_column(int fd, const RfileHeader& h, int b, int i, int j, double* out);
+
+// The file's value for "no data".
+constexpr double kRfileNoData = -999;
+
+}  // namespace weaver
