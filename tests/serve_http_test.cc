@@ -559,7 +559,7 @@ TEST(ServeThreads, HeadHttp10BlankLinesAndAThrowingHandler) {
 TEST(ServeThreads, SlowReadersHoldNoWorker) {
   ServerOptions o;
   o.threads = 1;
-  o.scratch_dir = testing::TempDir();
+  o.scratch_dir = ::testing::TempDir();
   Running run(o, [](const Request& r) {
     Response res(200, "text/plain", "quick");
     if (r.path == "/long") {
