@@ -22,6 +22,7 @@
 #include "db/database.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
+#include "export/export.h"
 #include "extract/extract.h"
 #include "reference/reference_mesh.h"
 #include "rfile_writer.h"
@@ -176,6 +177,27 @@ void check_ground_case(const GroundCase& c, const testing::TempDir& dir) {
     ASSERT_EQ(morton_decode(cur.key()), want.c);
     ASSERT_EQ(static_cast<NodeKind>(cur.payload()[0]), want.kind);
     ASSERT_OK(cur.next());
+  }
+  // The raw export carries each element's fraction, and the top's elevation.
+  ExportOptions eo;
+  eo.format = ExportFormat::kRaw;
+  eo.out = dir.file(c.name + "-raw");
+  ExportResult xr;
+  ASSERT_OK(export_mesh(db, eo, &xr));
+  std::ifstream json_in(eo.out + "/mesh.json");
+  const std::string json((std::istreambuf_iterator<char>(json_in)), std::istreambuf_iterator<char>());
+  const size_t at = json.find("\"element_solid_fraction\"");
+  ASSERT_NE(at, std::string::npos);
+  const size_t off = json.find("\"offset\": ", at);
+  ASSERT_NE(off, std::string::npos);
+  const uint64_t offset = std::stoull(json.substr(off + 10));
+  EXPECT_NE(json.find("\"top_elevation_m\": "), std::string::npos);
+  std::ifstream bin(eo.out + "/mesh.bin", std::ios::binary);
+  bin.seekg(std::streamoff(offset));
+  for (const auto& [o, f] : leaves) {
+    float got = 0;
+    bin.read(reinterpret_cast<char*>(&got), 4);
+    ASSERT_EQ(got, f) << o.x << " " << o.y << " " << o.z;
   }
   VerifyOptions vo;
   VerifyReport report;

@@ -9,6 +9,8 @@
 //   element_level     (elements,)    |u1
 //   element_material  (elements, 3)  <f4  vp, vs, rho (when the mesh has them)
 //   element_q         (elements, 2)  <f4  qp, qs (when its material has them)
+//   element_solid_fraction (elements,) <f4  the share of the element below the
+//                                         ground (a mesh built with --surface)
 //   dangling_nodes    (dangling,)    <i8  the node ids of dangling nodes
 //   dangling_anchors  (dangling, 4)  <i8  their anchors' ids, -1 past 2 for edges
 //   node_global_id    (nodes,)       <i8  with --box: the node's id in the whole mesh
@@ -62,6 +64,7 @@ enum : int {
   kSharedParts,
   kLonLat,
   kQ,
+  kSolid,
   kArrays
 };
 
@@ -69,7 +72,7 @@ enum : int {
 // out of mesh.json.
 // shared: the part's (node, other part) pairs, or -1 outside a partition.
 std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool material, bool q,
-                          bool selected, int64_t shared, bool geo) {
+                          bool selected, int64_t shared, bool geo, bool solid) {
   std::vector<Array> a = {
       {"node_coords", ticks ? "<u4" : "<f8", n, 3, ticks ? 4u : 8u, ticks ? "ticks" : "m"},
       {"node_kind", "|u1", n, 0, 1, ""},
@@ -83,7 +86,8 @@ std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool m
       {"shared_nodes", "<i8", uint64_t(std::max<int64_t>(shared, 0)), 0, 8, ""},
       {"shared_parts", "<i4", uint64_t(std::max<int64_t>(shared, 0)), 0, 4, ""},
       {"node_lonlat", "<f8", geo ? n : 0, 2, 8, "degrees"},
-      {"element_q", "<f4", q ? e : 0, 2, 4, ""}};
+      {"element_q", "<f4", q ? e : 0, 2, 4, ""},
+      {"element_solid_fraction", "<f4", solid ? e : 0, 0, 4, ""}};
   a[kDangling].always = a[kAnchors].always = true;
   a[kSharedNodes].always = a[kSharedParts].always = shared >= 0;
   uint64_t at = 0;
@@ -108,6 +112,9 @@ std::string json(const std::vector<Array>& arrays, const ExportJob& job, uint64_
   s += std::string("  \"units\": \"") + job.unit_name() + "\",\n";
   s += "  \"tick_m\": " + number(u.tick_m) + ",\n  \"origin_m\": [" + number(u.origin_m[0]) + ", " +
        number(u.origin_m[1]) + ", " + number(u.origin_m[2]) + "],\n";
+  if (job.mesh.has_ground()) {
+    s += "  \"top_elevation_m\": " + number(job.mesh.top_elevation()) + ",\n";
+  }
   if (!u.geo.empty()) s += "  \"geo\": \"" + u.geo + "\",\n";
   s += "  \"corner_order\": \"corner k at (x + s*(k&1), y + s*((k>>1)&1), z + s*((k>>2)&1))\",\n";
   s += "  \"node_kinds\": [\"anchored\", \"edge\", \"face\"],\n  \"arrays\": {";
@@ -188,6 +195,7 @@ Status write_elements(ExportJob& job, std::vector<Section>& out, bool material, 
       const float f[2] = {e.qp, e.qs};
       WEAVER_RETURN_IF_ERROR(out[kQ].put(f, sizeof f));
     }
+    if (job.mesh.has_solid()) WEAVER_RETURN_IF_ERROR(out[kSolid].value(e.solid));
     if (!material) return Status::Ok();
     const float m[3] = {e.vp, e.vs, e.rho};
     return out[kMaterial].put(m, sizeof m);
@@ -249,7 +257,7 @@ Status write_raw_files(ExportJob& job, const std::string& dir, SharedNodes* shar
   const GeoTransform transform(geo);
   const std::vector<Array> arrays = layout(
       job.node_count(), job.element_count(), dangling, job.options.units == ExportUnits::kTicks,
-      material, job.mesh.has_q(), !job.sel.whole(), pairs, georeferenced);
+      material, job.mesh.has_q(), !job.sel.whole(), pairs, georeferenced, job.mesh.has_solid());
   OutputFile bin(dir + "/mesh.bin");
   WEAVER_RETURN_IF_ERROR(bin.open());
   std::vector<Section> out;

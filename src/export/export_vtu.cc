@@ -9,7 +9,8 @@
 //              longitude latitude Float64 (WGS84 degrees, when georeferenced)
 //   CellData   element_id Int64 (global ids), level UInt8, edge Float64 (in
 //              the units), vp vs rho Float32 (when the mesh has material),
-//              qp qs Float32 (when its material has them)
+//              qp qs Float32 (when its material has them), solid_fraction
+//              Float32 (a mesh built with --surface: the share below ground)
 //   Points     Float64 x 3 (metres by default, or ticks)
 //   Cells      connectivity Int64 (VTK's corner order), offsets Int64,
 //              types UInt8 (12, VTK_HEXAHEDRON)
@@ -57,6 +58,7 @@ enum : int {
   kRho,
   kQp,
   kQs,
+  kSolid,
   kPoints,
   kConn,
   kOffsets,
@@ -66,16 +68,17 @@ enum : int {
 
 // The optional arrays: which the mesh has.
 struct Present {
-  bool material = false, q = false, geo = false;
+  bool material = false, q = false, geo = false, solid = false;
   bool operator()(int i) const {
     return (material || i < kVp || i > kRho) && (q || (i != kQp && i != kQs)) &&
-           (geo || (i != kLon && i != kLat));
+           (geo || (i != kLon && i != kLat)) && (solid || i != kSolid);
   }
 };
 
 // Which optional arrays the job's mesh has; *geo its frame when georeferenced.
 Present present(ExportJob& job, GeoFrame* geo) {
-  return {job.mesh.has_material(), job.mesh.has_q(), job.georeferenced(geo)};
+  return {job.mesh.has_material(), job.mesh.has_q(), job.georeferenced(geo),
+          job.mesh.has_solid()};
 }
 
 // Arrays the mesh does not have (vp, vs, rho without material; qp, qs
@@ -83,12 +86,14 @@ Present present(ExportJob& job, GeoFrame* geo) {
 // are not declared.
 std::vector<Array> layout(uint64_t n, uint64_t e, Present has) {
   const uint64_t m = has.material ? 4 * e : 0, q = has.q ? 4 * e : 0, g = has.geo ? 8 * n : 0;
+  const uint64_t solid = has.solid ? 4 * e : 0;
   std::vector<Array> a = {{"node_id", "Int64", 1, 8 * n},    {"kind", "UInt8", 1, n},
                           {"longitude", "Float64", 1, g},    {"latitude", "Float64", 1, g},
                           {"element_id", "Int64", 1, 8 * e}, {"level", "UInt8", 1, e},
                           {"edge", "Float64", 1, 8 * e},     {"vp", "Float32", 1, m},
                           {"vs", "Float32", 1, m},           {"rho", "Float32", 1, m},
                           {"qp", "Float32", 1, q},           {"qs", "Float32", 1, q},
+                          {"solid_fraction", "Float32", 1, solid},
                           {"Points", "Float64", 3, 24 * n},  {"connectivity", "Int64", 1, 64 * e},
                           {"offsets", "Int64", 1, 8 * e},    {"types", "UInt8", 1, e}};
   uint64_t at = 0;
@@ -117,6 +122,7 @@ std::string declarations(const std::vector<Array>& a, Present has, bool p) {
        data_array(a[kEdge], p);
   if (has.material) s += data_array(a[kVp], p) + data_array(a[kVs], p) + data_array(a[kRho], p);
   if (has.q) s += data_array(a[kQp], p) + data_array(a[kQs], p);
+  if (has.solid) s += data_array(a[kSolid], p);
   return s + out + "CellData>\n" + in + "Points>\n" + data_array(a[kPoints], p) + out + "Points>\n";
 }
 
@@ -160,6 +166,7 @@ Status write_cells(ExportJob& job, std::vector<Section>& out, Present has) {
       WEAVER_RETURN_IF_ERROR(out[kVs].value(e.vs));
       WEAVER_RETURN_IF_ERROR(out[kRho].value(e.rho));
     }
+    if (has.solid) WEAVER_RETURN_IF_ERROR(out[kSolid].value(e.solid));
     if (has.q) {
       WEAVER_RETURN_IF_ERROR(out[kQp].value(e.qp));
       WEAVER_RETURN_IF_ERROR(out[kQs].value(e.qs));

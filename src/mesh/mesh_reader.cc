@@ -33,6 +33,9 @@ Status Mesh::open(const std::string& db_dir, uint64_t octant_pool, uint64_t node
     const Field* qs = m->schema_.find("qs");
     if (qp != nullptr && qs != nullptr) m->qp_ = qp, m->qs_ = qs;
   }
+  m->solid_ = m->schema_.find("solid");
+  const std::string top = metadata_value(t.metadata, "top_elevation_m");
+  if (!top.empty()) m->has_ground_ = true, m->top_elevation_ = std::strtod(top.c_str(), nullptr);
   if (m->db_->has_table(kPartitionTable)) {
     WEAVER_RETURN_IF_ERROR(m->db_->open_table(kPartitionTable, 1 << 20, &m->partition_));
     const std::string& meta = m->partition_->options().metadata;
@@ -131,6 +134,7 @@ Status Mesh::node(uint64_t id, bool with_anchors, MeshNode* out) {
 }
 
 void Mesh::fill_material(const std::byte* payload, MeshElement* e) const {
+  if (solid_ != nullptr) e->solid = float(RecordSchema::get_double(payload, *solid_));
   if (vp_ == nullptr) return;
   e->vp = float(RecordSchema::get_double(payload, *vp_));
   e->vs = float(RecordSchema::get_double(payload, *vs_));
@@ -176,7 +180,7 @@ Status ElementScan::fill() {
     e.octant = octant_from_key(cursor_.key());
     mesh_->fill_material(cursor_.payload(), &e);
     batch_.push_back(e.octant);
-    material_.push_back({e.vp, e.vs, e.rho, e.qp, e.qs});
+    material_.push_back({e.vp, e.vs, e.rho, e.qp, e.qs, e.solid});
     WEAVER_RETURN_IF_ERROR(cursor_.next());
   }
   if (nodes_) WEAVER_RETURN_IF_ERROR(corners_.resolve(mesh_->nodes(), batch_, &ids_));
@@ -193,8 +197,8 @@ void ElementScan::load() {
   if (at_ >= batch_.size()) return;
   e_.id = batch_first_ + at_;
   e_.octant = batch_[at_];
-  const std::array<float, 5>& m = material_[at_];
-  e_.vp = m[0], e_.vs = m[1], e_.rho = m[2], e_.qp = m[3], e_.qs = m[4];
+  const std::array<float, 6>& m = material_[at_];
+  e_.vp = m[0], e_.vs = m[1], e_.rho = m[2], e_.qp = m[3], e_.qs = m[4], e_.solid = m[5];
   if (nodes_) e_.nodes = ids_[at_];
 }
 

@@ -28,6 +28,7 @@ struct MeshElement {
   std::array<uint64_t, 8> nodes{};  // node ids of corners 0..7 (x fastest)
   float vp = 0, vs = 0, rho = 0;    // when the mesh has material
   float qp = 0, qs = 0;             // when its material has them
+  float solid = 1;                  // the share below the ground (has_ground())
 };
 
 struct MeshNode {
@@ -60,6 +61,13 @@ class Mesh {
   bool has_material() const { return vp_ != nullptr; }
   // Whether it carries qp and qs too (a model with attenuation).
   bool has_q() const { return qp_ != nullptr; }
+  // Whether the mesh follows a ground surface (construct --surface): air cut
+  // away, each element's solid fraction in its 'solid' column.
+  bool has_solid() const { return solid_ != nullptr; }
+  // The elevation of z = 0 (metres): 0 unless the mesh was built with a
+  // ground or --top-elevation.
+  double top_elevation() const { return top_elevation_; }
+  bool has_ground() const { return has_ground_; }
   // The stored partition (`weaver partition`), if any: its parts, method
   // ("sfc" or "graph") and map.
   bool has_partition() const { return partition_ != nullptr; }
@@ -96,6 +104,9 @@ class Mesh {
   Units units_;
   RecordSchema schema_;
   const Field *vp_ = nullptr, *vs_ = nullptr, *rho_ = nullptr, *qp_ = nullptr, *qs_ = nullptr;
+  const Field* solid_ = nullptr;
+  double top_elevation_ = 0;
+  bool has_ground_ = false;
   std::unique_ptr<BTree> partition_, aggregates_;
   bool model_ = false;
   uint32_t partition_parts_ = 0;
@@ -136,7 +147,7 @@ class ElementScan {
   BTreeCursor cursor_;
   uint64_t batch_first_ = 0;                    // the id of batch_[0]
   std::vector<Octant> batch_;                   // the elements read ahead
-  std::vector<std::array<float, 5>> material_;  // their vp, vs, rho, qp, qs
+  std::vector<std::array<float, 6>> material_;  // their vp, vs, rho, qp, qs, solid
   std::vector<std::array<uint64_t, 8>> ids_;    // their corners' ids
   size_t at_ = 0;                               // batch_[at_] is e_
   CornerBatch corners_;
