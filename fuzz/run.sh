@@ -14,7 +14,7 @@ shift
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
   targets=(octant_text grid_model manifest btree_file packed_leaf lsm_run_list record_schema options
-           etree_file layer_table xyz_grid http_request http_exchange)
+           etree_file layer_table xyz_grid http_request http_exchange rfile)
 fi
 cmake --preset debug >/dev/null && cmake --build --preset fuzz >/dev/null
 out=build/debug/fuzz

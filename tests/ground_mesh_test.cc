@@ -18,12 +18,15 @@
 #include <string>
 #include <vector>
 
+#include "boundary/boundary.h"
 #include "construct/construct.h"
+#include "db/boundary_table.h"
 #include "db/database.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "export/export.h"
 #include "extract/extract.h"
+#include "reference/boundary_reference.h"
 #include "reference/reference_mesh.h"
 #include "rfile_writer.h"
 #include "test_util.h"
@@ -177,6 +180,27 @@ void check_ground_case(const GroundCase& c, const testing::TempDir& dir) {
     ASSERT_EQ(morton_decode(cur.key()), want.c);
     ASSERT_EQ(static_cast<NodeKind>(cur.payload()[0]), want.kind);
     ASSERT_OK(cur.next());
+  }
+  // The boundary table, the ground ruling out the buried elements, against
+  // the reference's from the leaves alone.
+  BoundaryResult br;
+  ASSERT_OK(build_boundary(db, BoundaryOptions{}, &br));
+  EXPECT_FALSE(br.filled);
+  EXPECT_LT(br.asked, leaves.size());
+  {
+    const auto want = reference::boundary(octants);
+    std::unique_ptr<Database> bd;
+    ASSERT_OK(Database::open(db, Database::Mode::kRead, false, &bd));
+    std::unique_ptr<BTree> bt;
+    ASSERT_OK(bd->open_table(kBoundaryTable, 1 << 20, &bt));
+    ASSERT_EQ(bt->size(), want.size());
+    BTreeCursor bc;
+    ASSERT_OK(bt->seek_cursor(0, &bc));
+    for (const auto& w : want) {
+      ASSERT_EQ(bc.key(), boundary_key(w.element, w.face, w.part));
+      ASSERT_EQ(int(static_cast<uint8_t>(bc.payload()[0])), w.kind);
+      ASSERT_OK(bc.next());
+    }
   }
   // The raw export carries each element's fraction, and the top's elevation.
   ExportOptions eo;

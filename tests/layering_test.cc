@@ -57,13 +57,13 @@ TEST(LayeringTest, SrcFoldersIncludeOnlyWhatSrcReadmeAllows) {
       {"util", base},       {"model", base},   {"gen", base},        {"sort", engine},
       {"db", engine},       {"import", stage}, {"construct", stage}, {"balance", stage},
       {"extract", stage},   {"export", stage}, {"query", stage},     {"verify", stage},
-      {"partition", stage},
+      {"partition", stage}, {"boundary", stage},
   };
   allowed["verify"].insert({"balance", "query"});
   allowed["mesh"] = {"schema", "storage", "util", "db"};
   allowed["modeldb"] = {"schema", "storage", "util", "db", "model"};
   for (const char* s : {"construct", "query", "balance", "verify"}) allowed[s].insert("modeldb");
-  for (const char* s : {"export", "query", "partition"}) allowed[s].insert("mesh");
+  for (const char* s : {"export", "query", "partition", "boundary"}) allowed[s].insert("mesh");
   // slice draws what query finds and writes through export's OutputFile.
   allowed["slice"] = stage;
   allowed["slice"].insert({"mesh", "query", "export"});

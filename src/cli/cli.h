@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "balance/balance.h"
+#include "boundary/boundary.h"
 #include "schema/status.h"
 #include "util/args.h"
 #include "util/memory_budget.h"
@@ -34,6 +35,9 @@ int cmd_verify(int argc, char** argv);
 int cmd_recover(int argc, char** argv);
 int cmd_compact(int argc, char** argv);
 int cmd_aggregate(int argc, char** argv);
+int cmd_boundary(int argc, char** argv);
+// The boundary table's line, as 'weaver boundary' and 'weaver mesh' print it.
+void print_boundary(const BoundaryResult& r, double secs);
 int cmd_model(int argc, char** argv);
 int cmd_serve(int argc, char** argv);
 

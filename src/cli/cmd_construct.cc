@@ -271,8 +271,13 @@ void print_construct_balance(const ConstructResult& r) {
   std::printf(
       "balanced   %llu leaves descended, %llu more made by the balance's splits; %llu "
       "leaves around the subtrees descended again (%.1f%%)\n",
-      (unsigned long long)r.descended, (unsigned long long)(r.elements - r.descended),
+      (unsigned long long)r.descended, (unsigned long long)(r.elements + r.air - r.descended),
       (unsigned long long)r.neighbours, 100.0 * r.neighbours / std::max<uint64_t>(1, r.descended));
+  if (r.air > 0 || r.cut > 0) {
+    std::printf("carved     %llu leaves of air cut away after the balance, %llu elements cut by "
+                "the ground (solid fraction below 1)\n",
+                (unsigned long long)r.air, (unsigned long long)r.cut);
+  }
 }
 
 }  // namespace weaver::cli

@@ -39,7 +39,8 @@ constexpr char kUsage[] =
     "the tables are the same for every N); --quiet drops the progress\n"
     "lines (see each stage's --help for what their percent means);\n"
     "--plain writes plain leaf pages in every table (default: packed).  If a\n"
-    "stage fails, the error says which stages had committed their tables.\n"
+    "stage fails, the error says which stages had committed their tables.  Last, the\n"
+    "boundary table ('weaver boundary --help'), timed apart.\n"
     "--memory (default 256M) bounds each stage in turn, as in that stage's command.\n"
     "\n" WEAVER_GROUND_USAGE;
 
@@ -207,6 +208,22 @@ int cmd_mesh(int argc, char** argv) {
   }
   stage_line("extract", er.nodes, "nodes", s3);
 
+  // The boundary faces, committed on their own after the mesh (timed apart:
+  // the stages before are the paper's pipeline).
+  reset_peak();
+  Stage s4;
+  BoundaryOptions bo;
+  bo.memory = co.memory;
+  bo.packed = co.packed;
+  bo.writer = writer.get();
+  ProgressLine boundary_line(style, "boundary", "elements");
+  bo.progress = boundary_line.fn();
+  BoundaryResult br;
+  st = build_boundary(db, bo, &br);
+  boundary_line.finish();
+  if (!st.ok()) return report_after("boundary", st, "the mesh is committed, its boundary table not");
+  stage_line("boundary", br.faces, "faces", s4);
+
   std::printf("\nmesh at %g Hz, %g points per wavelength, in %.2fs\n", co.freq, co.ppw,
               total.seconds());
   const uint64_t db_bytes = directory_bytes(db);
@@ -231,6 +248,8 @@ int cmd_mesh(int argc, char** argv) {
   }
   std::printf("  edges %.2f m .. %.2f m; at least %.2f points per wavelength everywhere\n",
               plan.root_edge_m / (1 << finest), plan.root_edge_m / (1 << coarsest), cr.worst_ppw);
+  print_boundary(br, s4.seconds());
+
   return 0;
 }
 

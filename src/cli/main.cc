@@ -28,6 +28,7 @@ constexpr char kUsage[] =
     "  shell DB          an interactive prompt for queries over one open database\n"
     "  slice DB          a picture (PNG or SVG) of the mesh cut by a plane\n"
     "  aggregate DB      summarise the elements of coarse octants (for serve's maps)\n"
+    "  boundary DB       the faces a solver treats as boundaries (mesh builds them)\n"
     "  serve DB          explore the mesh in a browser, and query it over HTTP\n"
     "  verify DB         check pages, keys and the mesh invariants\n"
     "  recover DB        rebuild a lost or damaged MANIFEST from the table files\n"
@@ -108,6 +109,7 @@ int dispatch(int argc, char** argv) {
   if (cmd == "recover") return cmd_recover(argc, argv);
   if (cmd == "compact") return cmd_compact(argc, argv);
   if (cmd == "aggregate") return cmd_aggregate(argc, argv);
+  if (cmd == "boundary") return cmd_boundary(argc, argv);
   if (cmd == "model") return cmd_model(argc, argv);
   std::fprintf(stderr, "weaver: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
   return 2;

@@ -12,14 +12,6 @@ constexpr int kFractionPoints = 8;
 
 }  // namespace
 
-GroundSide side_of_ground(const Ground& g, const double lo[3], const double hi[3]) {
-  double g_lo = g.top_elevation, g_hi = g.top_elevation;
-  if (g.surface) g.surface->range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);
-  if (hi[2] <= g.top_elevation - g_hi) return GroundSide::kAir;
-  if (lo[2] >= g.top_elevation - g_lo) return GroundSide::kSolid;
-  return GroundSide::kCut;
-}
-
 double solid_fraction(const Ground& g, const double lo[3], const double hi[3]) {
   double g_lo = g.top_elevation, g_hi = g.top_elevation;
   if (g.surface) g.surface->range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);

@@ -24,11 +24,6 @@ namespace weaver {
 
 struct SubtreeLeaves;
 
-enum class GroundSide { kAir, kCut, kSolid };
-
-// Of the box [lo, hi] (metres; z down from the top).
-GroundSide side_of_ground(const Ground& g, const double lo[3], const double hi[3]);
-
 // In (0, 1] for a box that is not air; 0 for air.
 double solid_fraction(const Ground& g, const double lo[3], const double hi[3]);
 

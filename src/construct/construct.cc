@@ -385,6 +385,7 @@ Status write_octree(const ConstructOptions& o, const ConstructPlan& p, const Vel
     std::snprintf(buf, sizeof buf, ";top_elevation_m=%.17g;model_z=%s;surface_edge=%.17g",
                   p.ground.top_elevation, model_z_name(p.ground.model_z), o.surface_edge_m);
     ground_meta = ";surface=" + p.surface_source + buf;
+    if (p.carved && o.surface_crs == SurfaceCrs::kLonLat) ground_meta += ";surface_crs=lonlat";
   }
   table.set_metadata(units_to_metadata(u) + levels_to_metadata(r->levels) + model_meta +
                      ground_meta);

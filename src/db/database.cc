@@ -1,5 +1,7 @@
 #include "db/database.h"
 
+#include "db/boundary_table.h"
+
 #include <fcntl.h>
 #include <sys/file.h>
 #include <unistd.h>
@@ -53,8 +55,10 @@ std::string join(const std::vector<std::string>& names) {
 }  // namespace
 
 std::string table_source(const std::string& name) {
-  return name == kNodeTable || name == kPartitionTable || name == kAggregateTable ? kOctantTable
-                                                                                  : "";
+  return name == kNodeTable || name == kPartitionTable || name == kAggregateTable ||
+                 name == kBoundaryTable
+             ? kOctantTable
+             : "";
 }
 
 Database::~Database() {

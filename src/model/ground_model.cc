@@ -23,6 +23,14 @@ double Ground::model_z_of(double x, double y, double z) const {
   return model_z == ModelZ::kElevation ? -e : ground - e;
 }
 
+GroundSide side_of_ground(const Ground& g, const double lo[3], const double hi[3]) {
+  double g_lo = g.top_elevation, g_hi = g.top_elevation;
+  if (g.surface) g.surface->range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);
+  if (hi[2] <= g.top_elevation - g_hi) return GroundSide::kAir;
+  if (lo[2] >= g.top_elevation - g_lo) return GroundSide::kSolid;
+  return GroundSide::kCut;
+}
+
 Material GroundedModel::at(double x, double y, double z) const {
   return inner_.at(x, y, g_.model_z_of(x, y, z));
 }

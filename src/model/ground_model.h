@@ -36,6 +36,13 @@ struct Ground {
   double model_z_of(double x, double y, double z) const;
 };
 
+// Which side of the ground the box [lo, hi] (metres; z down from the top)
+// lies on: air when its bottom is at or above the highest ground over its
+// footprint (exactly: Surface::range), solid when its top is at or below
+// the lowest, else cut.
+enum class GroundSide { kAir, kCut, kSolid };
+GroundSide side_of_ground(const Ground& g, const double lo[3], const double hi[3]);
+
 class GroundedModel final : public VelocityModel {
  public:
   GroundedModel(std::unique_ptr<VelocityModel> inner, Ground g)

@@ -1,0 +1,220 @@
+#include "boundary/boundary.h"
+
+#include <algorithm>
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "db/boundary_table.h"
+#include "db/leaf_reader.h"
+#include "db/octant_table.h"
+#include "mesh/face_neighbors.h"
+#include "mesh/mesh_reader.h"
+#include "model/geo_frame.h"
+#include "model/ground_model.h"
+
+namespace weaver {
+namespace {
+
+// The box the leaves span (ticks), and whether their volumes fill it.
+struct Span {
+  std::array<uint32_t, 3> lo{}, hi{};  // hi: the far side
+  bool filled = true;
+};
+
+Status span_of(BTree& octants, Span* s) {
+  LeafReader r;
+  WEAVER_RETURN_IF_ERROR(r.open(octants));
+  s->lo = {UINT32_MAX, UINT32_MAX, UINT32_MAX};
+  s->hi = {0, 0, 0};
+  unsigned __int128 volume = 0;
+  for (; r.valid();) {
+    const Octant o = octant_from_key(r.key());
+    const uint32_t e = octant_edge(o), c[3] = {o.x, o.y, o.z};
+    for (int a = 0; a < 3; ++a) {
+      s->lo[a] = std::min(s->lo[a], c[a]);
+      s->hi[a] = std::max(s->hi[a], c[a] + e);
+    }
+    volume += static_cast<unsigned __int128>(uint64_t{e} * e) * e;
+    WEAVER_RETURN_IF_ERROR(r.next());
+  }
+  if (volume == 0) return Status::Ok();
+  unsigned __int128 box = 1;
+  for (int a = 0; a < 3; ++a) box *= s->hi[a] - s->lo[a];
+  s->filled = volume == box;
+  return Status::Ok();
+}
+
+// The ground a carved mesh was built under, read again from the octant
+// table's metadata; none (flat, or the surface file gone) leaves every
+// element to the table's answer.
+struct GroundCheck {
+  std::unique_ptr<Surface> surface;
+  Ground ground;
+  double tick_m = 0;
+  bool ready = false;
+
+  void load(const std::string& metadata, const Units& units, MemoryBudget memory) {
+    const std::string source = metadata_value(metadata, "surface");
+    const std::string top = metadata_value(metadata, "top_elevation_m");
+    if (source.empty() || top.empty()) return;
+    SurfaceSource s;
+    if (!parse_surface_source(source, &s).ok()) return;
+    if (metadata_value(metadata, "surface_crs") == "lonlat") s.crs = SurfaceCrs::kLonLat;
+    GeoFrame geo;
+    const bool has_geo = !units.geo.empty() && GeoFrame::parse(units.geo, &geo).ok();
+    if (!load_surface(s, has_geo ? &geo : nullptr, memory.bytes(), &surface).ok() || !surface)
+      return;
+    ground.surface = surface.get();
+    ground.top_elevation = std::strtod(top.c_str(), nullptr);
+    tick_m = units.tick_m;
+    ready = true;
+  }
+  // Whether every leaf around o (within its edge) lies wholly below ground.
+  bool buried(const Octant& o) const {
+    if (!ready) return false;
+    const double e = octant_edge(o) * tick_m;
+    const double lo[3] = {o.x * tick_m - e, o.y * tick_m - e, o.z * tick_m - e};
+    const double hi[3] = {lo[0] + 3 * e, lo[1] + 3 * e, lo[2] + 3 * e};
+    return side_of_ground(ground, lo, hi) == GroundSide::kSolid;
+  }
+};
+
+// The face's two in-plane axes, in x, y, z order.
+void face_axes(int face, int* u, int* v) {
+  const int axis = face / 2;
+  *u = axis == 0 ? 1 : 0;
+  *v = axis == 2 ? 1 : 2;
+}
+
+class BoundaryWriter {
+ public:
+  BoundaryWriter(BTree& out, const Span& span, BoundaryResult* r)
+      : out_(out), span_(span), r_(r) {}
+
+  // The boundary records of element id (octant o), in key order.
+  Status element(uint64_t id, const Octant& o, FaceFinder* finder, const GroundCheck& ground) {
+    const uint32_t e = octant_edge(o), c[3] = {o.x, o.y, o.z};
+    std::array<bool, 6> on_side{};
+    for (int f = 0; f < 6; ++f) {
+      const int a = f / 2;
+      on_side[f] = (f & 1) ? c[a] + e == span_.hi[a] : c[a] == span_.lo[a];
+    }
+    std::array<uint8_t, 6> missing{};  // per face: bit p set when part p lies open
+    if (!span_.filled && !ground.buried(o)) {
+      ++r_->asked;
+      neighbours_.clear();
+      WEAVER_RETURN_IF_ERROR(finder->find(o, &neighbours_));
+      std::array<uint8_t, 6> covered{};  // bit q: quarter q (0-3) has an element
+      std::array<bool, 6> whole{};
+      for (const FaceNeighbor& n : neighbours_) {
+        if (n.octant.level <= o.level) {
+          whole[n.face] = true;
+          continue;
+        }
+        int u, v;
+        face_axes(n.face, &u, &v);
+        const uint32_t nc[3] = {n.octant.x, n.octant.y, n.octant.z};
+        const int qu = nc[u] - c[u] >= e / 2, qv = nc[v] - c[v] >= e / 2;
+        covered[n.face] |= uint8_t(1u << (qu + 2 * qv));
+      }
+      for (int f = 0; f < 6; ++f) {
+        if (on_side[f] || whole[f]) continue;
+        missing[f] = covered[f] == 0 ? 1 : uint8_t((~covered[f] & 15u) << 1);
+      }
+    }
+    for (int f = 0; f < 6; ++f) {
+      if (on_side[f]) {
+        WEAVER_RETURN_IF_ERROR(emit(id, f, 0, f == 4 ? BoundaryKind::kFreeSurface
+                                                    : BoundaryKind::kDomainSide));
+        continue;
+      }
+      for (int part = 0; part <= 4; ++part) {
+        if (missing[f] & (1u << part)) {
+          WEAVER_RETURN_IF_ERROR(emit(id, f, part, BoundaryKind::kFreeSurface));
+        }
+      }
+    }
+    return Status::Ok();
+  }
+
+ private:
+  Status emit(uint64_t id, int face, int part, BoundaryKind kind) {
+    const uint64_t key = boundary_key(id, face, part);
+    const uint8_t k = static_cast<uint8_t>(kind);
+    ++r_->faces;
+    r_->quarters += part != 0;
+    r_->free_surface += kind == BoundaryKind::kFreeSurface;
+    return out_.append(key, reinterpret_cast<const std::byte*>(&k));
+  }
+
+  BTree& out_;
+  const Span& span_;
+  BoundaryResult* r_;
+  std::vector<FaceNeighbor> neighbours_;
+};
+
+Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, MemoryBudget surface,
+                      BoundaryResult* r) {
+  Span span;
+  WEAVER_RETURN_IF_ERROR(span_of(octants, &span));
+  r->filled = span.filled;
+  GroundCheck ground;
+  if (!span.filled) {
+    Units units;
+    units_from_metadata(octants.options().metadata, &units);
+    ground.load(octants.options().metadata, units, surface);
+  }
+  FaceFinder finder(octants);
+  BoundaryWriter w(out, span, r);
+  LeafReader reader;
+  WEAVER_RETURN_IF_ERROR(reader.open(octants));
+  const uint64_t total = octants.size();
+  for (uint64_t id = 0; reader.valid(); ++id) {
+    WEAVER_RETURN_IF_ERROR(w.element(id, octant_from_key(reader.key()), &finder, ground));
+    ++r->elements;
+    if (o.progress && (id & 0xFFFFF) == 0xFFFFF) o.progress(id + 1, double(id + 1) / total);
+    WEAVER_RETURN_IF_ERROR(reader.next());
+  }
+  char meta[128];
+  std::snprintf(meta, sizeof meta, "faces=%llu;free_surface=%llu;sides=%llu",
+                (unsigned long long)r->faces, (unsigned long long)r->free_surface,
+                (unsigned long long)(r->faces - r->free_surface));
+  out.set_metadata(meta);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status build_boundary(const std::string& db_dir, const BoundaryOptions& o, BoundaryResult* r) {
+  *r = BoundaryResult{};
+  MemoryPlan plan(o.memory);
+  // Both scans and the lookups read the octant table; the writer appends.
+  const uint64_t octant_pool = plan.take("octant table pool", 1, 4);
+  const uint64_t out_pool = plan.take("boundary table pool", 1, 8, 8ull << 20);
+  // A carved mesh's surface, read again (model/surface.h).
+  const MemoryBudget surface = plan.take_budget("surface", 1, 2);
+  std::unique_ptr<Database> own;
+  Database* db = o.writer;
+  if (db == nullptr) {
+    WEAVER_RETURN_IF_ERROR(Database::open(db_dir, Database::Mode::kWrite, false, &own));
+    db = own.get();
+  }
+  if (!db->has_table(kOctantTable)) return Status::NotFound(db_dir + ": no octant table");
+  std::unique_ptr<BTree> octants;
+  WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, octant_pool, &octants));
+  TableOptions t;
+  t.key_kind = KeyKind::kNode;
+  std::string error;
+  t.schema = *RecordSchema::parse(kBoundarySchema, &error);
+  t.packed = o.packed;
+  std::unique_ptr<BTree> table;
+  std::string file;
+  WEAVER_RETURN_IF_ERROR(db->create_table(kBoundaryTable, t, out_pool, &table, &file));
+  const Status st = write_boundary(*octants, *table, o, surface, r);
+  WEAVER_RETURN_IF_ERROR(db->publish(kBoundaryTable, file, table, st));
+  r->table_bytes = table->file_bytes();
+  return Status::Ok();
+}
+
+}  // namespace weaver

@@ -1,0 +1,53 @@
+// `weaver boundary` (and the last step of `weaver mesh`): the boundary
+// table (db/boundary_table.h) from the octant table: the element faces, or
+// quarters of faces, that a solver must treat as a boundary.
+//
+// Two scans of the octant table in key order.  The first finds the box the
+// leaves span and whether they fill it (their volumes add up to its).  The
+// second visits each element's six faces:
+//   - a face on the box's side is a boundary: the free surface where it
+//     faces up (z-, the domain's top), else a domain side (absorbing);
+//   - where the leaves fill the box, nothing else is;
+//   - otherwise (air cut away, or an imported octree's holes) a face whose
+//     neighbourhood could hold a hole asks the octant table what lies
+//     across it (mesh/face_neighbors.h): nothing, and the whole face is
+//     free surface; finer elements on some of its quarters only, and the
+//     others are.  A mesh built with a ground surface rules out the
+//     elements whose neighbourhood lies wholly below the ground (the
+//     surface read again, as the octant table's metadata names it).
+// Any face up (z-) with nothing across it is free surface; any other face
+// inside the box with nothing across it faces the air too.  The table is
+// written by sorted append and committed (publish) on its own.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "db/database.h"
+#include "schema/status.h"
+#include "util/memory_budget.h"
+#include "util/progress.h"
+
+namespace weaver {
+
+struct BoundaryOptions {
+  MemoryBudget memory;
+  bool packed = true;
+  ProgressFn progress;           // elements visited, and their share
+  Database* writer = nullptr;    // a writer already open on the database
+};
+
+struct BoundaryResult {
+  uint64_t elements = 0;
+  uint64_t faces = 0;         // records: whole faces and quarters
+  uint64_t quarters = 0;      // of those, quarters
+  uint64_t free_surface = 0;  // of those, facing the air or the top
+  bool filled = true;         // the leaves fill the box they span
+  uint64_t asked = 0;         // elements whose neighbours were looked up
+  uint64_t table_bytes = 0;
+};
+
+Status build_boundary(const std::string& db_dir, const BoundaryOptions& options,
+                      BoundaryResult* result);
+
+}  // namespace weaver
