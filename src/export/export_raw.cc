@@ -11,6 +11,10 @@
 //   element_q         (elements, 2)  <f4  qp, qs (when its material has them)
 //   element_solid_fraction (elements,) <f4  the share of the element below the
 //                                         ground (a mesh built with --surface)
+//   boundary_faces    (boundary, 3)  <i8  element id, face (0-5: x-, x+, y-, y+, z- up,
+//                                         z+ down), part (0 whole, 1-4 a quarter):
+//                                         db/boundary_table.h (when the mesh has one)
+//   boundary_kind     (boundary,)    |u1  0 domain side (absorbing), 1 free surface
 //   dangling_nodes    (dangling,)    <i8  the node ids of dangling nodes
 //   dangling_anchors  (dangling, 4)  <i8  their anchors' ids, -1 past 2 for edges
 //   node_global_id    (nodes,)       <i8  with --box: the node's id in the whole mesh
@@ -31,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "export/boundary_faces.h"
 #include "export/shared_nodes.h"
 #include "export/writers.h"
 
@@ -65,6 +70,8 @@ enum : int {
   kLonLat,
   kQ,
   kSolid,
+  kBoundaryFaces,
+  kBoundaryKind,
   kArrays
 };
 
@@ -72,7 +79,7 @@ enum : int {
 // out of mesh.json.
 // shared: the part's (node, other part) pairs, or -1 outside a partition.
 std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool material, bool q,
-                          bool selected, int64_t shared, bool geo, bool solid) {
+                          bool selected, int64_t shared, bool geo, bool solid, uint64_t b) {
   std::vector<Array> a = {
       {"node_coords", ticks ? "<u4" : "<f8", n, 3, ticks ? 4u : 8u, ticks ? "ticks" : "m"},
       {"node_kind", "|u1", n, 0, 1, ""},
@@ -87,7 +94,9 @@ std::vector<Array> layout(uint64_t n, uint64_t e, uint64_t d, bool ticks, bool m
       {"shared_parts", "<i4", uint64_t(std::max<int64_t>(shared, 0)), 0, 4, ""},
       {"node_lonlat", "<f8", geo ? n : 0, 2, 8, "degrees"},
       {"element_q", "<f4", q ? e : 0, 2, 4, ""},
-      {"element_solid_fraction", "<f4", solid ? e : 0, 0, 4, ""}};
+      {"element_solid_fraction", "<f4", solid ? e : 0, 0, 4, ""},
+      {"boundary_faces", "<i8", b, 3, 8, ""},
+      {"boundary_kind", "|u1", b, 0, 1, ""}};
   a[kDangling].always = a[kAnchors].always = true;
   a[kSharedNodes].always = a[kSharedParts].always = shared >= 0;
   uint64_t at = 0;
@@ -249,7 +258,8 @@ Status install_dir(const std::string& tmp, const std::string& out) {
 
 Status write_raw_files(ExportJob& job, const std::string& dir, SharedNodes* shared) {
   const bool material = job.mesh.has_material();
-  uint64_t dangling = 0;
+  uint64_t dangling = 0, boundary = 0;
+  WEAVER_RETURN_IF_ERROR(count_boundary(job, &boundary));
   WEAVER_RETURN_IF_ERROR(count_dangling(job, &dangling));
   const int64_t pairs = shared != nullptr ? int64_t(shared->count(job.sel.part)) : -1;
   GeoFrame geo;
@@ -257,7 +267,8 @@ Status write_raw_files(ExportJob& job, const std::string& dir, SharedNodes* shar
   const GeoTransform transform(geo);
   const std::vector<Array> arrays = layout(
       job.node_count(), job.element_count(), dangling, job.options.units == ExportUnits::kTicks,
-      material, job.mesh.has_q(), !job.sel.whole(), pairs, georeferenced, job.mesh.has_solid());
+      material, job.mesh.has_q(), !job.sel.whole(), pairs, georeferenced, job.mesh.has_solid(),
+      boundary);
   OutputFile bin(dir + "/mesh.bin");
   WEAVER_RETURN_IF_ERROR(bin.open());
   std::vector<Section> out;
@@ -265,6 +276,13 @@ Status write_raw_files(ExportJob& job, const std::string& dir, SharedNodes* shar
   WEAVER_RETURN_IF_ERROR(write_nodes(job, out, georeferenced ? &transform : nullptr));
   WEAVER_RETURN_IF_ERROR(write_elements(job, out, material, job.mesh.has_q()));
   if (shared != nullptr) WEAVER_RETURN_IF_ERROR(write_shared(job, *shared, out));
+  if (boundary > 0) {
+    WEAVER_RETURN_IF_ERROR(for_each_boundary(job, [&](const BoundaryRecord& r) {
+      const int64_t f[3] = {int64_t(r.element), r.face, r.part};
+      WEAVER_RETURN_IF_ERROR(out[kBoundaryFaces].put(f, sizeof f));
+      return out[kBoundaryKind].value(r.kind);
+    }));
+  }
   for (Section& s : out) WEAVER_RETURN_IF_ERROR(s.flush());
   uint64_t bytes = 0;
   for (const Array& a : arrays) bytes = std::max(bytes, a.offset + a.bytes());

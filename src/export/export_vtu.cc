@@ -23,6 +23,7 @@
 
 #include <vector>
 
+#include "export/boundary_faces.h"
 #include "export/writers.h"
 
 namespace weaver {
@@ -231,7 +232,10 @@ Status write_vtu(ExportJob& job) {
     }
     WEAVER_RETURN_IF_ERROR(job.select(s, false, job.options.out + ".scratch"));
   }
-  return write_vtu_file(job, job.options.out);
+  WEAVER_RETURN_IF_ERROR(write_vtu_file(job, job.options.out));
+  // The boundary beside the mesh, so that readers of the mesh see no change.
+  if (!job.mesh.has_boundary()) return Status::Ok();
+  return write_boundary_vtu(job, boundary_vtu_path(job.options.out));
 }
 
 namespace {

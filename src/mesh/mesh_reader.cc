@@ -1,5 +1,7 @@
 #include "mesh/mesh_reader.h"
 
+#include "db/boundary_table.h"
+
 #include <cstdlib>
 
 #include "db/aggregate_table.h"
@@ -45,6 +47,9 @@ Status Mesh::open(const std::string& db_dir, uint64_t octant_pool, uint64_t node
     if (m->partition_parts_ == 0) {
       return Status::Corruption(m->partition_->file_name() + ": no part count in its metadata");
     }
+  }
+  if (m->db_->has_table(kBoundaryTable)) {
+    WEAVER_RETURN_IF_ERROR(m->db_->open_table(kBoundaryTable, octant_pool / 8, &m->boundary_));
   }
   if (m->db_->has_table(kAggregateTable)) {
     WEAVER_RETURN_IF_ERROR(m->db_->open_table(kAggregateTable, octant_pool / 8, &m->aggregates_));

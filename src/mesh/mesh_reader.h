@@ -75,6 +75,9 @@ class Mesh {
   const std::string& partition_method() const { return partition_method_; }
   Status partition(PartMap* out) { return PartMap::of_table(*partition_, partition_parts_, out); }
   BTree& partition_table() { return *partition_; }
+  // The boundary table (`weaver boundary`, db/boundary_table.h), if any.
+  bool has_boundary() const { return boundary_ != nullptr; }
+  BTree& boundary() { return *boundary_; }
   // The aggregate table (`weaver aggregate`, query/aggregates.h), if any.
   bool has_aggregates() const { return aggregates_ != nullptr; }
   BTree& aggregates() { return *aggregates_; }
@@ -105,6 +108,7 @@ class Mesh {
   RecordSchema schema_;
   const Field *vp_ = nullptr, *vs_ = nullptr, *rho_ = nullptr, *qp_ = nullptr, *qs_ = nullptr;
   const Field* solid_ = nullptr;
+  std::unique_ptr<BTree> boundary_;
   double top_elevation_ = 0;
   bool has_ground_ = false;
   std::unique_ptr<BTree> partition_, aggregates_;

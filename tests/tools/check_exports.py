@@ -477,6 +477,65 @@ def main():
     print(f"basin: {check_box(db, m, d, raw)}")
     print(f"basin: {check_msh(db, m, d, raw)}")
     check_layered_q()
+    check_ground()
+
+
+def check_ground():
+    """A mesh under a DEM (the test's own raster): VTK reads the vtu's
+    solid_fraction and the boundary's quads beside it, numpy raw's arrays;
+    the quads lie on their elements' faces, have their faces' or quarters'
+    areas, and the domain sides are exactly the records on the box's sides."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import make_ground
+    d = os.path.join(WORK, "ground")
+    shutil.rmtree(d, ignore_errors=True)
+    os.makedirs(d)
+    dem = d + "/hill.asc"
+    ground = make_ground.hills(100000, 2000)
+    make_ground.write_asc(dem, 51, 51, -1000, -1000, 2000, lambda c, r: ground(r * 2000, c * 2000))
+    db = d + "/db"
+    run(WEAVER, "mesh", db, "--model", "basin", "--freq", "0.05", "--surface", "asc:" + dem,
+        "--quiet")
+    m = Mesh(db, d + "/csv")
+    raw, msg = check_raw(db, m, d)
+    solid = raw_array(d + "/m.raw", raw, "element_solid_fraction")
+    check(solid.min() > 0 and solid.max() <= 1 and (solid < 1).any(), "solid fractions")
+    check(raw["top_elevation_m"] >= 2000, raw.get("top_elevation_m"))
+    vtu = check_vtu(db, m, d, raw)
+    r = vtk.vtkXMLUnstructuredGridReader()
+    r.SetFileName(d + "/m.vtu")
+    r.Update()
+    got = vtk_to_numpy(r.GetOutput().GetCellData().GetArray("solid_fraction"))
+    check(np.array_equal(got, solid), "the vtu's solid_fraction is not raw's")
+    faces = raw_array(d + "/m.raw", raw, "boundary_faces")
+    kind = raw_array(d + "/m.raw", raw, "boundary_kind")
+    b = vtk.vtkXMLUnstructuredGridReader()
+    b.SetFileName(d + "/m_boundary.vtu")
+    b.Update()
+    g = b.GetOutput()
+    check(g.GetNumberOfCells() == len(faces), (g.GetNumberOfCells(), len(faces)))
+    check(np.array_equal(vtk_to_numpy(g.GetCellData().GetArray("element_id")), faces[:, 0]))
+    check(np.array_equal(vtk_to_numpy(g.GetCellData().GetArray("kind")), kind))
+    pts = vtk_to_numpy(g.GetPoints().GetData()).reshape(-1, 4, 3)
+    tick, origin = raw["tick_m"], np.array(raw["origin_m"])
+    el = faces[:, 0]
+    corner = np.stack([m.e["x"][el], m.e["y"][el], m.e["z"][el]], axis=1) * tick + origin
+    edge = m.edge[el] * tick
+    axis, side = faces[:, 1] // 2, faces[:, 1] % 2
+    plane = corner[np.arange(len(el)), axis] + side * edge
+    check(np.allclose(pts[np.arange(len(el)), :, axis], plane[:, None]), "a quad off its face")
+    span = np.where(faces[:, 2] == 0, edge, edge / 2)
+    side_a = np.linalg.norm(pts[:, 1] - pts[:, 0], axis=1)
+    side_b = np.linalg.norm(pts[:, 2] - pts[:, 1], axis=1)
+    check(np.allclose(side_a, span) and np.allclose(side_b, span), "a quad of the wrong size")
+    lo = np.array([m.e["x"].min(), m.e["y"].min(), m.e["z"].min()]) * tick + origin
+    hi = np.array([(m.e["x"] + m.edge).max(), (m.e["y"] + m.edge).max(),
+                   (m.e["z"] + m.edge).max()]) * tick + origin
+    on_box = np.where(side == 1, np.isclose(plane, hi[axis]), np.isclose(plane, lo[axis]))
+    domain_side = on_box & (faces[:, 1] != 4)
+    check(np.array_equal(kind == 0, domain_side), "domain sides are not the box's sides")
+    check((kind == 1).sum() > 0 and (faces[:, 2] > 0).any(), "no free surface, or no quarters")
+    print(f"ground: {len(m.e['id'])} elements, {len(faces)} boundary faces: {msg}; {vtu}")
 
 
 # Southern California's 1-D model (Hadley and Kanamori), with Qp and Qs: a
