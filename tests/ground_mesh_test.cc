@@ -187,6 +187,10 @@ void check_ground_case(const GroundCase& c, const testing::TempDir& dir) {
   ASSERT_OK(build_boundary(db, BoundaryOptions{}, &br));
   EXPECT_FALSE(br.filled);
   EXPECT_LT(br.asked, leaves.size());
+  // The least edge / vp, found by construct's workers and by the boundary's
+  // scan alike, is the least of every leaf's.
+  EXPECT_EQ(br.least_dt, r.least_dt);
+  EXPECT_EQ(br.least_dt_element, r.least_dt_element);
   {
     const auto want = reference::boundary(octants);
     std::unique_ptr<Database> bd;

@@ -1,6 +1,7 @@
 #include "boundary/boundary.h"
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <memory>
 #include <vector>
@@ -167,19 +168,32 @@ Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, Memo
   }
   FaceFinder finder(octants);
   BoundaryWriter w(out, span, r);
+  const Field* vp = octants.options().schema.find("vp");
   LeafReader reader;
-  WEAVER_RETURN_IF_ERROR(reader.open(octants));
+  WEAVER_RETURN_IF_ERROR(reader.open(octants, 0, vp != nullptr));
   const uint64_t total = octants.size();
+  Units units;
+  units_from_metadata(octants.options().metadata, &units);
+  double least = HUGE_VAL;
   for (uint64_t id = 0; reader.valid(); ++id) {
-    WEAVER_RETURN_IF_ERROR(w.element(id, octant_from_key(reader.key()), &finder, ground));
+    const Octant leaf = octant_from_key(reader.key());
+    if (vp != nullptr) {
+      const double dt =
+          octant_edge(leaf) * units.tick_m / RecordSchema::get_double(reader.payload(), *vp);
+      if (dt < least) least = dt, r->least_dt_element = id;
+    }
+    WEAVER_RETURN_IF_ERROR(w.element(id, leaf, &finder, ground));
     ++r->elements;
     if (o.progress && (id & 0xFFFFF) == 0xFFFFF) o.progress(id + 1, double(id + 1) / total);
     WEAVER_RETURN_IF_ERROR(reader.next());
   }
-  char meta[128];
-  std::snprintf(meta, sizeof meta, "faces=%llu;free_surface=%llu;sides=%llu",
+  r->least_dt = vp != nullptr && r->elements > 0 ? least : 0;
+  char meta[256];
+  std::snprintf(meta, sizeof meta,
+                "faces=%llu;free_surface=%llu;sides=%llu;least_dt=%.17g;least_dt_element=%llu",
                 (unsigned long long)r->faces, (unsigned long long)r->free_surface,
-                (unsigned long long)(r->faces - r->free_surface));
+                (unsigned long long)(r->faces - r->free_surface), r->least_dt,
+                (unsigned long long)r->least_dt_element);
   out.set_metadata(meta);
   return Status::Ok();
 }

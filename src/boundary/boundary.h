@@ -15,6 +15,8 @@
 //     others are.  A mesh built with a ground surface rules out the
 //     elements whose neighbourhood lies wholly below the ground (the
 //     surface read again, as the octant table's metadata names it).
+// The same pass finds the element of least edge / vp (an explicit solver's
+// time step is a Courant number times it), for 'weaver stat'.
 // Any face up (z-) with nothing across it is free surface; any other face
 // inside the box with nothing across it faces the air too.  The table is
 // written by sorted append and committed (publish) on its own.
@@ -45,6 +47,10 @@ struct BoundaryResult {
   bool filled = true;         // the leaves fill the box they span
   uint64_t asked = 0;         // elements whose neighbours were looked up
   uint64_t table_bytes = 0;
+  // Met on the way (a mesh with material): the least edge / vp of any
+  // element (seconds) and its id, kept in the table's metadata too.
+  double least_dt = 0;
+  uint64_t least_dt_element = 0;
 };
 
 Status build_boundary(const std::string& db_dir, const BoundaryOptions& options,

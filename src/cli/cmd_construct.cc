@@ -1,6 +1,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 
@@ -263,6 +264,11 @@ void print_construct_result(const ConstructResult& r, double secs) {
       "%d, worst %.2f points per wavelength, %.2f bytes/leaf\n",
       (unsigned long long)r.elements, secs, r.elements / secs, r.smallest_edge_m, r.largest_edge_m,
       finest_level(r.levels), r.worst_ppw, double(r.table_bytes) / r.elements);
+  if (r.elements > 0 && r.least_dt < HUGE_VAL) {
+    std::printf("time step  least edge / vp %.6g s, at element %llu (an explicit solver's step is "
+                "a Courant number times it)\n",
+                r.least_dt, (unsigned long long)r.least_dt_element);
+  }
   print_construct_balance(r);
 }
 

@@ -48,6 +48,8 @@ struct Slot {
   SubtreeLeaves leaves;
   uint64_t descended = 0;  // leaves before the balance
   uint64_t air = 0, cut = 0;  // carved: leaves dropped, leaves cut (carve.h)
+  double least_dt = HUGE_VAL;  // the least edge / vp of its leaves (s), and where
+  size_t least_dt_at = 0;
   bool done = false;       // set by the worker (WorkQueue)
 };
 
@@ -74,10 +76,24 @@ class SubtreeVisitor {
     if (descent_.plan().carved) {
       carve_leaves(descent_.plan(), descent_.payload_bytes(), &s->leaves, &s->air, &s->cut);
     }
+    least_time_step(s);
   }
   uint64_t neighbours() const { return balancer_.neighbours_collected(); }
 
  private:
+  // The leaf with the least edge / vp (vp the payload's first f32): what an
+  // explicit solver's time step is a Courant number times.
+  void least_time_step(Slot* s) const {
+    const size_t bytes = descent_.payload_bytes();
+    const double tick = descent_.plan().tick_m;
+    for (size_t i = 0; i < s->leaves.keys.size(); ++i) {
+      float vp;
+      std::memcpy(&vp, s->leaves.payloads.data() + i * bytes, 4);
+      const double dt = octant_edge(octant_key_level(s->leaves.keys[i])) * tick / vp;
+      if (dt < s->least_dt) s->least_dt = dt, s->least_dt_at = i;
+    }
+  }
+
   const Descent& descent_;
   size_t cap_;
   bool balanced_;
@@ -185,6 +201,10 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     r->descended += head->descended;
     r->air += head->air;
     r->cut += head->cut;
+    if (head->least_dt < r->least_dt) {
+      r->least_dt = head->least_dt;
+      r->least_dt_element = r->elements - leaves.keys.size() + head->least_dt_at;
+    }
     if (o.progress && !leaves.keys.empty()) {
       o.progress(r->elements, share.fraction_before(leaves.keys.back()));
     }
@@ -386,6 +406,12 @@ Status write_octree(const ConstructOptions& o, const ConstructPlan& p, const Vel
                   p.ground.top_elevation, model_z_name(p.ground.model_z), o.surface_edge_m);
     ground_meta = ";surface=" + p.surface_source + buf;
     if (p.carved && o.surface_crs == SurfaceCrs::kLonLat) ground_meta += ";surface_crs=lonlat";
+  }
+  std::string proj = model.projection();
+  if (!proj.empty()) {
+    // Kept as text: ';' separates the metadata's items, so none may be in it.
+    std::replace(proj.begin(), proj.end(), ';', ' ');
+    ground_meta += ";proj=" + proj;
   }
   table.set_metadata(units_to_metadata(u) + levels_to_metadata(r->levels) + model_meta +
                      ground_meta);

@@ -139,6 +139,10 @@ struct ConstructResult {
   // Carved: the leaves dropped as wholly above the ground, and the kept
   // leaves the ground crosses (solid fraction below 1).
   uint64_t air = 0, cut = 0;
+  // The least edge / vp of any leaf (seconds) and its element id: an
+  // explicit solver's time step is a Courant number times it.
+  double least_dt = HUGE_VAL;
+  uint64_t least_dt_element = 0;
 };
 
 Status plan_construct(const ConstructOptions& options, ConstructPlan* plan);

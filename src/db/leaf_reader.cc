@@ -4,9 +4,10 @@
 
 namespace weaver {
 
-Status LeafReader::open(BTree& octants, uint64_t from) {
+Status LeafReader::open(BTree& octants, uint64_t from, bool payloads) {
   file_ = octants.file_name();
-  WEAVER_RETURN_IF_ERROR(octants.seek_keys(from, &cursor_));
+  WEAVER_RETURN_IF_ERROR(payloads ? octants.seek_cursor(from, &cursor_)
+                                  : octants.seek_keys(from, &cursor_));
   return cursor_.valid() ? check_current() : Status::Ok();
 }
 

@@ -13,10 +13,13 @@ namespace weaver {
 
 class LeafReader {
  public:
-  // At the first leaf whose key is >= from.
-  Status open(BTree& octants, uint64_t from = 0);
+  // At the first leaf whose key is >= from; payloads decoded too only when
+  // asked (a scan of the keys alone is faster).
+  Status open(BTree& octants, uint64_t from = 0, bool payloads = false);
   bool valid() const { return cursor_.valid(); }
   uint64_t key() const { return cursor_.key(); }  // REQUIRES: valid()
+  // REQUIRES: valid(), opened with payloads.
+  const std::byte* payload() const { return cursor_.payload(); }
   Status next();                                  // REQUIRES: valid()
 
  private:

@@ -55,6 +55,7 @@ class GroundedModel final : public VelocityModel {
   bool has_q() const override { return inner_.has_q(); }
   std::string outside(const std::array<double, 3>& domain_m) const override;
   std::string geo() const override { return inner_.geo(); }
+  std::string projection() const override { return inner_.projection(); }
   std::string describe() const override { return inner_.describe(); }
 
  private:

@@ -59,6 +59,7 @@ class RfileModel final : public VelocityModel {
   // file's box.
   std::string outside(const std::array<double, 3>& domain_m) const override;
   std::string geo() const override;
+  std::string projection() const override { return h_.proj; }
   std::string describe() const override;
 
  private:

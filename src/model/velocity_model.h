@@ -80,6 +80,9 @@ class VelocityModel {
   // Where the model's frame lies on the Earth (model/geo_frame.h's text
   // form), "" when the model does not say.
   virtual std::string geo() const { return ""; }
+  // The model's own PROJ string (an rfile's), kept as text and never
+  // interpreted; "" when it has none.
+  virtual std::string projection() const { return ""; }
   // A one-line description with the parameters, for logs and metadata.
   virtual std::string describe() const = 0;
 };

@@ -1,14 +1,31 @@
 #include "query/table_stats.h"
 
 #include <cstdio>
+#include <cstdlib>
 
 #include "db/aggregate_table.h"
+#include "db/boundary_table.h"
 #include "db/octant_table.h"
 #include "schema/node.h"
 #include "schema/octant.h"
 #include "util/json_string.h"
 
 namespace weaver {
+namespace {
+
+// The value of "key=value" among the metadata's ';'-separated items.
+std::string metadata_item(const std::string& meta, const std::string& key) {
+  for (size_t start = 0; start <= meta.size();) {
+    size_t end = meta.find(';', start);
+    if (end == std::string::npos) end = meta.size();
+    if (meta.compare(start, key.size() + 1, key + "=") == 0)
+      return meta.substr(start + key.size() + 1, end - start - key.size() - 1);
+    start = end + 1;
+  }
+  return "";
+}
+
+}  // namespace
 
 Status table_stats(const std::string& name, BTree& table, TableStats* out) {
   TableStats s;
@@ -23,6 +40,26 @@ Status table_stats(const std::string& name, BTree& table, TableStats* out) {
   s.depth = table.height();
   s.packed = table.options().packed;
   const Field* kind = table.options().schema.find("kind");
+  const std::string& meta = table.options().metadata;
+  if (name == kBoundaryTable) {
+    s.notes = {{"free surface", metadata_item(meta, "free_surface")},
+               {"domain sides", metadata_item(meta, "sides")}};
+    const double dt = std::strtod(metadata_item(meta, "least_dt").c_str(), nullptr);
+    if (dt > 0) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf,
+                    "%.6g s at element %s (an explicit solver's step: a Courant number times it)",
+                    dt, metadata_item(meta, "least_dt_element").c_str());
+      s.notes.push_back({"least edge/vp", buf});
+    }
+    kind = nullptr;
+  }
+  if (name == kOctantTable) {
+    for (const char* key : {"model", "surface", "top_elevation_m", "model_z", "proj"}) {
+      const std::string v = metadata_item(meta, key);
+      if (!v.empty()) s.notes.push_back({key, v});
+    }
+  }
   if (s.key_kind == KeyKind::kNode && kind != nullptr) {
     BTreeCursor c;
     WEAVER_RETURN_IF_ERROR(table.seek_cursor(0, &c));
@@ -73,7 +110,11 @@ std::string stats_to_text(const TableStats& s) {
       out += buf;
     }
   }
-  if (s.key_kind == KeyKind::kNode) {
+  for (const auto& [k, v] : s.notes) {
+    std::snprintf(buf, sizeof buf, "  %-16s ", k.c_str());
+    out += buf + v + "\n";
+  }
+  if (s.key_kind == KeyKind::kNode && s.name != kBoundaryTable) {
     std::snprintf(buf, sizeof buf,
                   "  anchored         %llu\n  edge-dangling    %llu\n  face-dangling    %llu\n",
                   (unsigned long long)s.per_kind[0], (unsigned long long)s.per_kind[1],
@@ -105,7 +146,8 @@ std::string stats_to_json(const TableStats& s) {
     }
     out += "}";
   }
-  if (s.key_kind == KeyKind::kNode) {
+  for (const auto& [k, v] : s.notes) out += ", " + json_string(k) + ": " + json_string(v);
+  if (s.key_kind == KeyKind::kNode && s.name != kBoundaryTable) {
     out += ", \"anchored\": " + std::to_string(s.per_kind[0]) +
            ", \"edge_dangling\": " + std::to_string(s.per_kind[1]) +
            ", \"face_dangling\": " + std::to_string(s.per_kind[2]);

@@ -4,6 +4,8 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "schema/status.h"
 #include "storage/btree.h"
@@ -23,6 +25,10 @@ struct TableStats {
   bool packed = false;                   // packed leaf pages (storage/packed_leaf.h)
   std::array<uint64_t, 21> per_level{};  // octant tables only
   std::array<uint64_t, 3> per_kind{};    // node tables: anchored, edge, face
+  // What the metadata says of the mesh, as (name, text) lines: the model,
+  // the ground and the rfile's PROJ string (octant table); the boundary's
+  // kinds and least edge / vp (boundary table).
+  std::vector<std::pair<std::string, std::string>> notes;
 
   // Raw size: an 8-byte key and the payload per record, nothing else.
   uint64_t raw_bytes() const { return records * (8 + uint64_t{payload_bytes}); }
