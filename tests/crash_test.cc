@@ -134,6 +134,14 @@ class CrashTest : public ::testing::Test {
     ASSERT_OK(generate_octree(g, &b));
     text_a_ = dir_.file("a.txt");
     text_b_ = dir_.file("b.txt");
+    // A ground for the carved mesh: a ridge across the 100 km box, 0 to 3 km.
+    dem_ = dir_.file("ridge.asc");
+    std::ofstream dem(dem_);
+    dem << "ncols 11\nnrows 11\nxllcenter 0\nyllcenter 0\ncellsize 10000\n";
+    for (int r = 10; r >= 0; --r) {
+      for (int c = 0; c <= 10; ++c) dem << 300 * (5 - std::abs(c - 5)) << " ";
+      dem << "\n";
+    }
     ASSERT_OK(write_octant_text(text_a_, a, ""));
     std::shuffle(b.begin(), b.end(), std::mt19937_64(3));  // out of order: the sort spills
     ASSERT_OK(write_octant_text(text_b_, b, ""));
@@ -278,7 +286,7 @@ class CrashTest : public ::testing::Test {
   }
 
   testing::TempDir dir_;
-  std::string text_a_, text_b_;
+  std::string text_a_, text_b_, dem_;
   int points_ = 0, fired_ = 0, old_states_ = 0, new_states_ = 0;
   int faults_reported_ = 0, faults_absorbed_ = 0;
   std::string writer_;                      // the writer tortured now
@@ -301,6 +309,11 @@ class CrashTest : public ::testing::Test {
     f({"mesh over a mesh",
        {"mesh", "{db}", "--model", "basin", "--freq", "0.08", "--memory", "1M", "--quiet"}},
       {import_a, balance, extract});
+    f({"mesh with a ground over a mesh",
+       {"mesh", "{db}", "--model", "basin", "--freq", "0.08", "--surface", "asc:" + dem_,
+        "--memory", "1M", "--quiet"}},
+      {import_a, balance, extract});
+    f({"boundary", {"boundary", "{db}", "--memory", "1M", "--quiet"}}, {import_a, balance, extract});
     f({"extract (sort)", extract}, {import_a, balance});
     f({"extract (search, lsm)",
        {"extract", "{db}", "--algorithm", "search", "--store", "lsm", "--memory", "1M"}},
@@ -322,7 +335,7 @@ TEST_F(CrashTest, IoErrorsAtEveryStepLeaveTheOldState) {
   EXPECT_GT(old_states_, 0);
   // Each writer failed, and said so, at least once: one that ignored the
   // injected faults (every step absorbed) would pass the totals above.
-  EXPECT_EQ(reported_by_.size(), 7u);
+  EXPECT_EQ(reported_by_.size(), 9u);
   for (const auto& [name, n] : reported_by_) EXPECT_GT(n, 0) << name << " reported no fault";
 }
 
@@ -345,6 +358,10 @@ TEST_F(CrashTest, EveryWriterLeavesTheOldOrTheNewState) {
   // A re-mesh: construct stages its table, extract commits both at once.
   torture({"mesh over a mesh",
            {"mesh", "{db}", "--model", "basin", "--freq", "0.08", "--memory", "1M", "--quiet"}},
+          {import_of(text_a_), balance, {"extract", "{db}", "--memory", "1M"}}, steps, kills);
+  torture({"mesh with a ground over a mesh",
+           {"mesh", "{db}", "--model", "basin", "--freq", "0.08", "--surface", "asc:" + dem_,
+            "--memory", "1M", "--quiet"}},
           {import_of(text_a_), balance, {"extract", "{db}", "--memory", "1M"}}, steps, kills);
   torture({"extract (sort)", {"extract", "{db}", "--memory", "1M"}}, {import_of(text_a_), balance},
           steps, kills);

@@ -232,8 +232,28 @@ TEST_F(Robustness, MeshSaysWhichStagesCommittedWhenALaterOneFails) {
   const CommandRun count = run(with(dir_.file("count")), "WEAVER_CRASH_AT=0 ");
   ASSERT_EQ(count.code, 0) << count.err;
   const uint64_t steps = std::stoull(count.err.substr(count.err.find("crash steps: ") + 13));
-  const CommandRun late =
-      run(with(dir_.file("late")), "WEAVER_FAIL_AT=" + std::to_string(steps - 6) + " ");
+  // The boundary's steps come last (its commit makes the mesh live).
+  const CommandRun bound = run("boundary " + dir_.file("count"), "WEAVER_CRASH_AT=0 ");
+  ASSERT_EQ(bound.code, 0) << bound.err;
+  const uint64_t boundary_steps =
+      std::stoull(bound.err.substr(bound.err.find("crash steps: ") + 13));
+  ASSERT_GT(steps, boundary_steps + 6);
+  const CommandRun in_boundary =
+      run(with(dir_.file("in-boundary")), "WEAVER_FAIL_AT=" + std::to_string(steps - 1) + " ");
+  EXPECT_EQ(in_boundary.code, 1);
+  EXPECT_NE(in_boundary.err.find("boundary failed"), std::string::npos) << in_boundary.err;
+  EXPECT_NE(in_boundary.err.find("nothing committed: the database is as it was"),
+            std::string::npos)
+      << in_boundary.err;
+  // The last steps of extract lie just before the boundary's (a step or
+  // two either way: find one that fails in extract).
+  CommandRun late;
+  for (uint64_t back = 1; back <= 12; ++back) {
+    std::filesystem::remove_all(dir_.file("late"));
+    late = run(with(dir_.file("late")),
+               "WEAVER_FAIL_AT=" + std::to_string(steps - boundary_steps - back) + " ");
+    if (late.err.find("extract failed") != std::string::npos) break;
+  }
   EXPECT_EQ(late.code, 1);
   EXPECT_EQ(lines(late.err), 1) << late.err;
   EXPECT_NE(late.err.find("extract failed"), std::string::npos) << late.err;

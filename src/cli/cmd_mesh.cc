@@ -161,7 +161,9 @@ int cmd_mesh(int argc, char** argv) {
     if (st.ok()) st = Database::open(db, Database::Mode::kWrite, true, &writer);
     if (!st.ok()) return report("mesh", st);
     co.writer = eo.writer = writer.get();
-    co.stage = true;
+    // Construct and extract stage their tables; the boundary's commit
+    // makes all three live at once.
+    co.stage = eo.stage = true;
   }
   const Stage total;
 
@@ -208,8 +210,8 @@ int cmd_mesh(int argc, char** argv) {
   }
   stage_line("extract", er.nodes, "nodes", s3);
 
-  // The boundary faces, committed on their own after the mesh (timed apart:
-  // the stages before are the paper's pipeline).
+  // The boundary faces (timed apart: the stages before are the paper's
+  // pipeline), committed with the mesh's tables.
   reset_peak();
   Stage s4;
   BoundaryOptions bo;
@@ -221,7 +223,11 @@ int cmd_mesh(int argc, char** argv) {
   BoundaryResult br;
   st = build_boundary(db, bo, &br);
   boundary_line.finish();
-  if (!st.ok()) return report_after("boundary", st, "the mesh is committed, its boundary table not");
+  if (!st.ok()) {
+    return report_after("boundary", st,
+                        co.balanced ? "nothing committed: the database is as it was"
+                                    : "the mesh is committed, its boundary table not");
+  }
   stage_line("boundary", br.faces, "faces", s4);
 
   std::printf("\nmesh at %g Hz, %g points per wavelength, in %.2fs\n", co.freq, co.ppw,

@@ -147,7 +147,9 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
   } else {
     st = extract_by_sort(*db, *octants, *nodes, scratch, memory, options, result);
   }
-  WEAVER_RETURN_IF_ERROR(db->publish(kNodeTable, file, nodes, st));
+  WEAVER_RETURN_IF_ERROR(options.stage && options.writer != nullptr
+                             ? db->stage(kNodeTable, file, nodes, st)
+                             : db->publish(kNodeTable, file, nodes, st));
   result->node_table_bytes = nodes->file_bytes();
   return Status::Ok();
 }

@@ -60,6 +60,10 @@ struct ExtractOptions {
   // its octant table may be staged (Database::stage), and then goes live
   // with the node table.
   Database* writer = nullptr;
+  // Stage the node table in the writer too (Database::stage) rather than
+  // commit: a later table's commit (weaver mesh's boundary) makes them all
+  // live at once.
+  bool stage = false;
   // A rank's extract_shard (weaver-mpi mesh): the octant table is these
   // shards, which the run's rank 0 has staged but not committed.
   std::vector<ShardEntry> staged_octants;

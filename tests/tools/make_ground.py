@@ -103,23 +103,24 @@ def main():
 
 
 def write_rfile_benchmark(path, size, depth, height, mb, ground):
-    """Blocks of 50, 100, 200, 400 m (hv = hh), the finest on top, five
-    components, sized to about mb megabytes by the top block's thickness."""
+    """Blocks of 50, 100, 200, 400 m (hv = hh), the finest on top from the
+    highest ground down, five components, about mb megabytes: the top
+    blocks' thicknesses scale to fit, the last reaches down to --depth.
+    Each block starts where the one above ends (SW4 stacks them so)."""
     import numpy as np  # the benchmark's writer: numpy for speed
     spacings = [50.0, 100.0, 200.0, 400.0]
     n = [int(size // h) + 1 for h in spacings]
-    target = mb * 1e6 / 20  # points
-    # Thicknesses: the top blocks thin, the last to the bottom.
-    tops = [-height]
-    thick = [1000.0, 2000.0, 6000.0]
-    for t in thick:
-        tops.append(tops[-1] + t)
-    points = sum(n[b] ** 2 * (int(thick[b] / spacings[b]) + 1) for b in range(3))
-    scale = max(0.1, (target - n[3] ** 2 * int((depth - tops[3]) / 400 + 1)) / points)
-    thick = [t * scale for t in thick]
-    tops = [-height]
-    for t in thick:
-        tops.append(tops[-1] + t)
+    target = mb * 1e6 / 20  # grid points of five float32 values
+    thick = np.array([1000.0, 2000.0, 6000.0])
+    per_m = sum(n[b] ** 2 / spacings[b] * thick[b] for b in range(3)) / thick.sum()
+    last = n[3] ** 2 * max(2, (depth - (thick.sum() - height)) / 400 + 1)
+    thick *= max(0.05, (target - last) / per_m / thick.sum())
+    nks, tops = [], [-height]
+    for b, h in enumerate(spacings):
+        bottom = tops[b] + thick[b] if b < 3 else depth
+        nk = max(2, int(round((bottom - tops[b]) / h)) + 1)
+        nks.append(nk)
+        tops.append(tops[b] + (nk - 1) * h)
     e = "<"
     with open(path, "wb") as f:
         f.write(struct.pack(e + "iii", 1, 4, 1))
@@ -129,23 +130,20 @@ def write_rfile_benchmark(path, size, depth, height, mb, ground):
         f.write(struct.pack(e + "i", 5))
         nt = int(size // 100) + 1
         f.write(struct.pack(e + "dddiiii", 100.0, 100.0, 0.0, 1, nt, nt, 1))
-        nks = []
         for b, h in enumerate(spacings):
-            bottom = tops[b + 1] if b < 3 else depth
-            nk = int(round((bottom - tops[b]) / h)) + 1
-            nks.append(nk)
-            f.write(struct.pack(e + "dddiiii", h, h, tops[b], 5, n[b], n[b], nk))
+            f.write(struct.pack(e + "dddiiii", h, h, tops[b], 5, n[b], n[b], nks[b]))
         xs = np.arange(nt) * 100.0
         topo = np.array([[ground(x, y) for y in xs] for x in xs], dtype="<f4")
         f.write(topo.tobytes())
         for b, h in enumerate(spacings):
             z = tops[b] + np.arange(nks[b]) * h
-            depth_below = np.maximum(z + 0.0, 0.0)
-            vs = np.minimum(500 + 0.1 * depth_below, 3500).astype("<f4")
-            vals = np.stack([2000 + 0.02 * depth_below, vs * 1.8, vs,
+            # Air above the ground is -999 in SW4's files; here the values
+            # grow with depth below sea level, the same in every column.
+            below = np.maximum(z, 0.0)
+            vs = np.minimum(500 + 0.1 * below, 3500)
+            vals = np.stack([2000 + 0.02 * below, vs * 1.8, vs,
                              np.full_like(vs, 100.0), np.full_like(vs, 50.0)], axis=1)
-            col = vals.astype("<f4").tobytes()
-            row = col * n[b]
+            row = vals.astype("<f4").tobytes() * n[b]
             for _ in range(n[b]):
                 f.write(row)
 
