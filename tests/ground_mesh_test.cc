@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <random>
@@ -338,6 +339,39 @@ TEST(GroundMesh, AnRfileBringsItsOwnGroundAndItsBlocksBeneath) {
   const Status st = plan_construct(c.o, &plan);
   EXPECT_FALSE(st.ok());
   EXPECT_NE(st.message().find("above --top-elevation"), std::string::npos) << st.message();
+}
+
+}  // namespace
+}  // namespace weaver
+
+namespace weaver {
+namespace {
+
+TEST(GroundMesh, VerifyFindsElementsAboveTheGroundItWasBuiltUnder) {
+  testing::TempDir dir;
+  const std::string dem = dir.file("hill.asc");
+  make_test_dem(9, [](double x, double) { return 200 + 0.2 * x; }).write(dem);
+  const std::string db = dir.file("db");
+  ConstructPlan plan;
+  ConstructResult r;
+  ASSERT_OK(construct_octree(db, ground_options_for("asc:" + dem), &plan, &r));
+  ExtractResult er;
+  ASSERT_OK(extract_mesh(db, ExtractOptions{}, &er));
+  VerifyReport report;
+  ASSERT_OK(verify_database(db, VerifyOptions{}, &report));
+  EXPECT_TRUE(report.ok()) << report.problems[0];
+  // The ground the metadata names, lowered by 1 km: the top elements of the
+  // mountain side now stand in the air.
+  make_test_dem(9, [](double x, double) { return -800 + 0.2 * x; }).write(dem);
+  ASSERT_OK(verify_database(db, VerifyOptions{}, &report));
+  ASSERT_FALSE(report.ok());
+  EXPECT_NE(report.problems[0].find("lies wholly above the ground"), std::string::npos)
+      << report.problems[0];
+  std::filesystem::remove(dem);
+  ASSERT_OK(verify_database(db, VerifyOptions{}, &report));
+  ASSERT_FALSE(report.ok());
+  EXPECT_NE(report.problems[0].find("cannot be read again"), std::string::npos)
+      << report.problems[0];
 }
 
 }  // namespace

@@ -11,7 +11,6 @@
 #include "db/octant_table.h"
 #include "mesh/face_neighbors.h"
 #include "mesh/mesh_reader.h"
-#include "model/geo_frame.h"
 #include "model/ground_model.h"
 
 namespace weaver {
@@ -56,18 +55,7 @@ struct GroundCheck {
   bool ready = false;
 
   void load(const std::string& metadata, const Units& units, MemoryBudget memory) {
-    const std::string source = metadata_value(metadata, "surface");
-    const std::string top = metadata_value(metadata, "top_elevation_m");
-    if (source.empty() || top.empty()) return;
-    SurfaceSource s;
-    if (!parse_surface_source(source, &s).ok()) return;
-    if (metadata_value(metadata, "surface_crs") == "lonlat") s.crs = SurfaceCrs::kLonLat;
-    GeoFrame geo;
-    const bool has_geo = !units.geo.empty() && GeoFrame::parse(units.geo, &geo).ok();
-    if (!load_surface(s, has_geo ? &geo : nullptr, memory.bytes(), &surface).ok() || !surface)
-      return;
-    ground.surface = surface.get();
-    ground.top_elevation = std::strtod(top.c_str(), nullptr);
+    if (!ground_of_metadata(metadata, memory.bytes(), &surface, &ground).ok()) return;
     tick_m = units.tick_m;
     ready = true;
   }

@@ -13,11 +13,10 @@ constexpr int kFractionPoints = 8;
 }  // namespace
 
 double solid_fraction(const Ground& g, const double lo[3], const double hi[3]) {
-  double g_lo = g.top_elevation, g_hi = g.top_elevation;
-  if (g.surface) g.surface->range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);
+  const GroundSide side = side_of_ground(g, lo, hi);
+  if (side == GroundSide::kAir) return 0;
+  if (side == GroundSide::kSolid) return 1;
   const double top = g.top_elevation, height = hi[2] - lo[2];
-  if (hi[2] <= top - g_hi) return 0;
-  if (lo[2] >= top - g_lo) return 1;
   const double sx = (hi[0] - lo[0]) / kFractionPoints, sy = (hi[1] - lo[1]) / kFractionPoints;
   double sum = 0;
   for (int j = 0; j < kFractionPoints; ++j) {
@@ -30,6 +29,8 @@ double solid_fraction(const Ground& g, const double lo[3], const double hi[3]) {
   if (f > 0) return f;
   // The ground reaches into the leaf between the points: the most it can
   // hold there, shared by one point's part.
+  double g_lo, g_hi;
+  g.surface->range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);
   return std::min(1.0, (hi[2] - (top - g_hi)) / height) / (kFractionPoints * kFractionPoints);
 }
 

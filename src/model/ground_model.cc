@@ -1,6 +1,9 @@
 #include "model/ground_model.h"
 
 #include <algorithm>
+#include <cstdlib>
+
+#include "model/geo_frame.h"
 
 namespace weaver {
 
@@ -23,16 +26,96 @@ double Ground::model_z_of(double x, double y, double z) const {
   return model_z == ModelZ::kElevation ? -e : ground - e;
 }
 
+// Settled by the cheapest test that can: the ground's whole range, the
+// ground at the box's centre (inside the box's height: cut), the pyramid's
+// loose bounds, and only then the exact range over the footprint.
 GroundSide side_of_ground(const Ground& g, const double lo[3], const double hi[3]) {
-  double g_lo = g.top_elevation, g_hi = g.top_elevation;
-  if (g.surface) g.surface->range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);
-  if (hi[2] <= g.top_elevation - g_hi) return GroundSide::kAir;
-  if (lo[2] >= g.top_elevation - g_lo) return GroundSide::kSolid;
-  return GroundSide::kCut;
+  const double top = g.top_elevation;
+  const Surface* s = g.surface;
+  const auto side = [&](double g_lo, double g_hi) {
+    if (hi[2] <= top - g_hi) return GroundSide::kAir;
+    if (lo[2] >= top - g_lo) return GroundSide::kSolid;
+    return GroundSide::kCut;
+  };
+  if (s == nullptr) return side(top, top);
+  const GroundSide global = side(s->lowest(), s->highest());
+  if (global != GroundSide::kCut) return global;
+  const double centre = top - s->elevation((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2);
+  if (lo[2] < centre && centre < hi[2]) return GroundSide::kCut;
+  double g_lo, g_hi;
+  s->loose_range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);
+  const GroundSide loose = side(g_lo, g_hi);
+  if (loose != GroundSide::kCut) return loose;
+  s->range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);
+  return side(g_lo, g_hi);
+}
+
+namespace {
+
+std::string metadata_item(const std::string& meta, const std::string& key) {
+  for (size_t start = 0; start <= meta.size();) {
+    size_t end = meta.find(';', start);
+    if (end == std::string::npos) end = meta.size();
+    if (meta.compare(start, key.size() + 1, key + "=") == 0)
+      return meta.substr(start + key.size() + 1, end - start - key.size() - 1);
+    start = end + 1;
+  }
+  return "";
+}
+
+}  // namespace
+
+Status ground_of_metadata(const std::string& metadata, uint64_t max_bytes,
+                          std::unique_ptr<Surface>* surface, Ground* ground) {
+  const std::string source = metadata_item(metadata, "surface");
+  const std::string top = metadata_item(metadata, "top_elevation_m");
+  if (source.empty() || source == "flat" || top.empty())
+    return Status::NotFound("the mesh has no ground surface");
+  SurfaceSource s;
+  WEAVER_RETURN_IF_ERROR(parse_surface_source(source, &s));
+  if (metadata_item(metadata, "surface_crs") == "lonlat") s.crs = SurfaceCrs::kLonLat;
+  GeoFrame geo;
+  const std::string geo_text = metadata_item(metadata, "geo");
+  const bool has_geo = !geo_text.empty() && GeoFrame::parse(geo_text, &geo).ok();
+  WEAVER_RETURN_IF_ERROR(load_surface(s, has_geo ? &geo : nullptr, max_bytes, surface));
+  *ground = Ground{};
+  ground->surface = surface->get();
+  ground->top_elevation = std::strtod(top.c_str(), nullptr);
+  ModelZ z;
+  if (parse_model_z(metadata_item(metadata, "model_z"), &z).ok()) ground->model_z = z;
+  return Status::Ok();
 }
 
 Material GroundedModel::at(double x, double y, double z) const {
   return inner_.at(x, y, g_.model_z_of(x, y, z));
+}
+
+void GroundedModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                                  float* out) const {
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double ground = g_.ground_at(xs[i], ys[j]);
+      for (int k = 0; k < n; ++k) {
+        const double e = std::min(g_.top_elevation - zs[k], ground);
+        const double mz = g_.model_z == ModelZ::kElevation ? -e : ground - e;
+        out[(k * n + j) * n + i] = inner_.at(xs[i], ys[j], mz).vs;
+      }
+    }
+  }
+}
+
+void GroundedModel::materials_on_lattice(const double* xs, const double* ys, const double* zs,
+                                         int n, Material* out) const {
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double ground = g_.ground_at(xs[i], ys[j]);
+      for (int k = 0; k < n; ++k) {
+        const double e = std::min(g_.top_elevation - zs[k], ground);
+        const double mz = g_.model_z == ModelZ::kElevation ? -e : ground - e;
+        out[(k * n + j) * n + i] = inner_.at(xs[i], ys[j], mz);
+      }
+    }
+  }
 }
 
 // The model's z rises with the domain's z; with the ground it falls
@@ -40,7 +123,8 @@ Material GroundedModel::at(double x, double y, double z) const {
 void GroundedModel::model_box(const double lo[3], const double hi[3], double mlo[3],
                               double mhi[3]) const {
   double g_lo = g_.top_elevation, g_hi = g_.top_elevation;
-  if (g_.surface) g_.surface->range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);
+  // Loose bounds will do: a wider box only costs samples.
+  if (g_.surface) g_.surface->loose_range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);
   const double top = g_.top_elevation;
   mlo[0] = lo[0], mlo[1] = lo[1], mhi[0] = hi[0], mhi[1] = hi[1];
   if (g_.model_z == ModelZ::kElevation) {

@@ -9,6 +9,7 @@
 //                built-in models, etree, grid, layers and xyz
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -43,12 +44,23 @@ struct Ground {
 enum class GroundSide { kAir, kCut, kSolid };
 GroundSide side_of_ground(const Ground& g, const double lo[3], const double hi[3]);
 
+// The ground a mesh was built under, read again as its octant table's
+// metadata names it (surface=, top_elevation_m=, surface_crs=, geo=).
+// NotFound for a flat mesh; the surface's own error when it cannot be read.
+Status ground_of_metadata(const std::string& metadata, uint64_t max_bytes,
+                          std::unique_ptr<Surface>* surface, Ground* ground);
+
 class GroundedModel final : public VelocityModel {
  public:
   GroundedModel(std::unique_ptr<VelocityModel> inner, Ground g)
       : own_(std::move(inner)), inner_(*own_), g_(g) {}
 
   Material at(double x, double y, double z) const override;
+  // The ground once a column of the lattice, not once a point.
+  void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                     float* out) const override;
+  void materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                            Material* out) const override;
   bool vs_bounds(const double lo[3], const double hi[3], float* vs_lo,
                  float* vs_hi) const override;
   void focus(const double lo[3], const double hi[3]) const override;

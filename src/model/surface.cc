@@ -120,6 +120,31 @@ void Surface::range(double x0, double x1, double y0, double y1, double* lo, doub
   block_range(int(levels_.size()) - 1, 0, 0, ci0, ci1, cj0, cj1, u0, u1, v0, v1, lo, hi);
 }
 
+void Surface::loose_range(double x0, double x1, double y0, double y1, double* lo,
+                          double* hi) const {
+  const double u0 = std::clamp((x0 - x0_) / dx_, 0.0, double(nx_ - 1));
+  const double u1 = std::clamp((x1 - x0_) / dx_, 0.0, double(nx_ - 1));
+  const double v0 = std::clamp((y0 - y0_) / dy_, 0.0, double(ny_ - 1));
+  const double v1 = std::clamp((y1 - y0_) / dy_, 0.0, double(ny_ - 1));
+  const int ci0 = std::min(int(u0), nx_ - 2), cj0 = std::min(int(v0), ny_ - 2);
+  const int ci1 = std::clamp(int(std::ceil(u1)) - 1, ci0, nx_ - 2);
+  const int cj1 = std::clamp(int(std::ceil(v1)) - 1, cj0, ny_ - 2);
+  // The level whose blocks are at least as wide as the span of cells: it
+  // meets at most 2 of them along each axis.
+  int level = 0;
+  while (level + 1 < int(levels_.size()) &&
+         ((ci1 - ci0 + 1) > (1 << level) || (cj1 - cj0 + 1) > (1 << level)))
+    ++level;
+  const Level& l = levels_[level];
+  *lo = HUGE_VAL, *hi = -HUGE_VAL;
+  for (int bj = cj0 >> level; bj <= cj1 >> level; ++bj) {
+    for (int bi = ci0 >> level; bi <= ci1 >> level; ++bi) {
+      *lo = std::min<double>(*lo, l.lo[size_t(bj) * l.w + bi]);
+      *hi = std::max<double>(*hi, l.hi[size_t(bj) * l.w + bi]);
+    }
+  }
+}
+
 std::string Surface::outside(double lx, double ly) const {
   const double tol_x = 1e-6 * std::max(1.0, lx), tol_y = 1e-6 * std::max(1.0, ly);
   std::string sides;

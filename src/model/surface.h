@@ -47,6 +47,9 @@ class Surface {
   double elevation(double x, double y) const;
   // The least and greatest ground over the closed rectangle [x0, x1] x [y0, y1].
   void range(double x0, double x1, double y0, double y1, double* lo, double* hi) const;
+  // Bounds on them, *lo at most the least and *hi at least the greatest:
+  // from at most 2 x 2 blocks of the pyramid, in constant time.
+  void loose_range(double x0, double x1, double y0, double y1, double* lo, double* hi) const;
   double highest() const { return max_; }
   double lowest() const { return min_; }
   // The grid's box, and the cells NODATA left (filled from their neighbours).

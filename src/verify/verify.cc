@@ -12,6 +12,7 @@
 #include "db/leaf_reader.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
+#include "model/ground_model.h"
 #include "modeldb/import_source.h"
 #include "modeldb/model_table.h"
 #include "query/aggregates.h"
@@ -215,6 +216,44 @@ VerifyMemory::VerifyMemory(MemoryBudget budget) : plan(budget) {
   balance_check = plan.take_budget("balance check", 1, 2);
 }
 
+// A mesh under a ground surface: every solid fraction in (0, 1], and no
+// element wholly above the ground (the surface read again as the metadata
+// names it; a surface that cannot be read is a problem too).
+Status check_ground(Database& db, const VerifyMemory& memory, Problems& problems) {
+  std::unique_ptr<BTree> t;
+  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &t));
+  const Field* solid = t->options().schema.find("solid");
+  if (solid == nullptr) return Status::Ok();
+  std::unique_ptr<Surface> surface;
+  Ground ground;
+  const Status loaded =
+      ground_of_metadata(t->options().metadata, memory.plan.budget().bytes() / 4, &surface, &ground);
+  if (!loaded.ok()) problems.add("table octants: its ground cannot be read again: " + loaded.message());
+  Units units;
+  units_from_metadata(t->options().metadata, &units);
+  BTreeCursor c;
+  WEAVER_RETURN_IF_ERROR(t->seek_cursor(0, &c));
+  for (uint64_t id = 0; c.valid() && !problems.full(); ++id) {
+    const double f = RecordSchema::get_double(c.payload(), *solid);
+    const Octant o = octant_from_key(c.key());
+    if (!(f > 0 && f <= 1)) {
+      problems.add("element " + std::to_string(id) + " (" + describe_octant(o) +
+                   "): solid fraction " + std::to_string(f) + ", not in (0, 1]");
+    } else if (loaded.ok()) {
+      const double e = octant_edge(o) * units.tick_m;
+      const double lo[3] = {o.x * units.tick_m, o.y * units.tick_m, o.z * units.tick_m};
+      const double hi[3] = {lo[0] + e, lo[1] + e, lo[2] + e};
+      if (side_of_ground(ground, lo, hi) == GroundSide::kAir) {
+        problems.add("element " + std::to_string(id) + " (" + describe_octant(o) +
+                     ") lies wholly above the ground");
+      }
+    }
+    WEAVER_RETURN_IF_ERROR(c.next());
+  }
+  problems.progress("ground: solid fractions and the surface: checked");
+  return Status::Ok();
+}
+
 Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyReport* r) {
   *r = VerifyReport{};
   Problems problems(o, r);
@@ -235,6 +274,9 @@ Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyRep
   }
   if (octants_usable && db->has_table(kAggregateTable) && !problems.full()) {
     WEAVER_RETURN_IF_ERROR(check_aggregate_table(*db, memory, problems));
+  }
+  if (octants_usable && o.mesh && !problems.full()) {
+    WEAVER_RETURN_IF_ERROR(check_ground(*db, memory, problems));
   }
   if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, memory, o, problems, r));
   return Status::Ok();
