@@ -27,6 +27,7 @@
 #include "db/octant_table.h"
 #include "export/export.h"
 #include "extract/extract.h"
+#include "query/explorer.h"
 #include "reference/boundary_reference.h"
 #include "reference/reference_mesh.h"
 #include "rfile_writer.h"
@@ -181,6 +182,26 @@ void check_ground_case(const GroundCase& c, const testing::TempDir& dir) {
     ASSERT_EQ(morton_decode(cur.key()), want.c);
     ASSERT_EQ(static_cast<NodeKind>(cur.payload()[0]), want.kind);
     ASSERT_OK(cur.next());
+  }
+  // locate: a point above the ground is in a cut element or, where none
+  // holds it, in the air; one beside the domain is not in the air.
+  {
+    std::unique_ptr<Explorer> ex;
+    ASSERT_OK(Explorer::open(db, MemoryBudget(16 << 20), &ex));
+    int air = 0;
+    for (int n = 0; n < 400; ++n) {
+      const double x = u(rng), y = u(rng), z = w(rng);
+      const Coord p{uint32_t(x / t), uint32_t(y / t), uint32_t(z / t)};
+      PointHit h;
+      ASSERT_OK(ex->locate(p, &h));
+      const bool above = top - z > c.ground(x, y) + 1e-6;
+      if (!above) continue;
+      if (h.inside) continue;  // a cut element reaches above the ground here
+      ASSERT_TRUE(ex->in_air(p)) << x << " " << y << " " << z;
+      ++air;
+    }
+    EXPECT_GT(air, 0);
+    EXPECT_FALSE(ex->in_air({uint32_t((kGroundSide + 500) / t), 0, 0}));
   }
   // The boundary table, the ground ruling out the buried elements, against
   // the reference's from the leaves alone.

@@ -381,7 +381,9 @@ class BatchRunner {
       }
       const bool found = o_.query == PointQuery::kNodeAt ? nodes_[i].found : hits_[i].inside;
       w.text(bad_[i]  ? "bad"
-             : !found ? (o_.query == PointQuery::kNodeAt ? "none" : "outside")
+             : !found ? (o_.query == PointQuery::kNodeAt ? "none"
+                         : ex_.in_air(points_[i])        ? "air"
+                                                         : "outside")
                       : (o_.query == PointQuery::kNodeAt ? "node" : "inside"));
       missed += !bad_[i] && !found;
       write_answer(w, i, found);

@@ -126,6 +126,11 @@ int Query::run_point_text(PointQuery q, Coord c) {
   if (q == PointQuery::kMaterial && !ex.mesh().has_material()) {
     return fail(Status::NotFound("this mesh has no material (it was not built from a model)"));
   }
+  if (!h.inside && ex.in_air(c)) {
+    std::fprintf(out, "point (%s) is in the air, above the ground (elevation %.6g m there)\n",
+                 asked.c_str(), ex.ground_at(c));
+    return 0;
+  }
   if (!h.inside) return std::fprintf(out, "point (%s) is outside the domain\n", asked.c_str()), 0;
   if (q == PointQuery::kMaterial) {
     std::fprintf(out, "point (%s): %s (element %llu)\n", asked.c_str(), material_text(e).c_str(),

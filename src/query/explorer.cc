@@ -1,5 +1,7 @@
 #include "query/explorer.h"
 
+#include <cmath>
+
 #include <algorithm>
 
 #include "util/huge_pages.h"
@@ -52,6 +54,38 @@ class DensityWatch {
 uint64_t octant_key_at(Coord c, int level) { return octant_key_ancestor(pixel_key(c), level); }
 
 }  // namespace
+
+bool Explorer::load_ground() {
+  if (ground_state_ == 0) {
+    ground_state_ = -1;
+    if (mesh_->has_ground() &&
+        ground_of_metadata(mesh_->octants().options().metadata, 64ull << 20, &surface_, &ground_)
+            .ok()) {
+      ground_state_ = 1;
+    }
+  }
+  return ground_state_ == 1;
+}
+
+double Explorer::ground_at(Coord p) {
+  if (!load_ground()) return NAN;
+  const Units& u = mesh_->units();
+  return ground_.ground_at(u.origin_m[0] + u.tick_m * p.x, u.origin_m[1] + u.tick_m * p.y);
+}
+
+bool Explorer::in_air(Coord p) {
+  if (!load_ground()) return false;
+  const Units& u = mesh_->units();
+  const double ground = ground_at(p);
+  const double elevation = ground_.top_elevation - (u.origin_m[2] + u.tick_m * p.z);
+  if (!(elevation > ground)) return false;
+  // Above the ground, and over it: an element holds the point a tick below
+  // the ground in the same column (else the point is beside the domain).
+  const double below = std::ceil((ground_.top_elevation - ground - u.origin_m[2]) / u.tick_m) + 1;
+  if (!(below >= 0 && below < double(kRootEdge))) return false;
+  PointHit h;
+  return locate({p.x, p.y, uint32_t(below)}, &h).ok() && h.inside;
+}
 
 Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
                       std::unique_ptr<Explorer>* out) {

@@ -13,6 +13,7 @@
 
 #include "db/leaf_window.h"
 #include "mesh/mesh_reader.h"
+#include "model/ground_model.h"
 #include "query/aggregates.h"
 #include "schema/octant.h"
 #include "schema/status.h"
@@ -87,6 +88,12 @@ class Explorer {
 
   // The leaf holding tick point p; any p (past the root is outside).
   Status locate(Coord p, PointHit* out);
+  // Whether tick point p, which no leaf holds, lies above the ground of a
+  // mesh built under one (the surface read again, once, as its metadata
+  // names it); false for any other mesh.
+  bool in_air(Coord p);
+  // The ground's elevation at tick point p's column (metres), NaN without one.
+  double ground_at(Coord p);
   // The same for n points in any order: sorted by Morton code inside, then
   // answered in one forward walk over the octant table.  out[i] answers p[i].
   Status locate_batch(const Coord* p, size_t n, PointHit* out);
@@ -136,6 +143,13 @@ class Explorer {
   // Visits region r (across direction d of element o): emits the leaf that
   // covers it, or recurses into the children that touch o.
   Status visit_across(const Octant& o, Direction d, const Octant& r, std::vector<Neighbor>* out);
+
+  // The ground, loaded on first need (ground_state_: 0 not yet, 1 loaded,
+  // -1 none).
+  bool load_ground();
+  std::unique_ptr<Surface> surface_;
+  Ground ground_;
+  int ground_state_ = 0;
 
   std::unique_ptr<Mesh> mesh_;
   std::unique_ptr<LeafWindow> octant_window_, node_window_, aggregate_window_;
