@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "boundary/boundary.h"
+#include "cli_run.h"
 #include "construct/construct.h"
 #include "db/boundary_table.h"
 #include "db/database.h"
@@ -393,6 +394,48 @@ TEST(GroundMesh, VerifyFindsElementsAboveTheGroundItWasBuiltUnder) {
   ASSERT_FALSE(report.ok());
   EXPECT_NE(report.problems[0].find("cannot be read again"), std::string::npos)
       << report.problems[0];
+}
+
+}  // namespace
+}  // namespace weaver
+
+namespace weaver {
+namespace {
+
+// Queries take z as the domain's depth, as elevation or as depth below the
+// local ground: the three name the same point.
+TEST(GroundMesh, QueriesTakeElevationAndDepthBelowTheGround) {
+  testing::TempDir dir;
+  const std::string dem = dir.file("plane.asc");
+  auto ground = [](double x, double y) { return 300 + 0.1 * x + 0.05 * y; };
+  make_test_dem(9, ground).write(dem);
+  const std::string db = dir.file("db");
+  ConstructPlan plan;
+  ConstructResult r;
+  ASSERT_OK(construct_octree(db, ground_options_for("asc:" + dem), &plan, &r));
+  ExtractResult er;
+  ASSERT_OK(extract_mesh(db, ExtractOptions{}, &er));
+  const double top = plan.ground.top_elevation, x = 3000, y = 5000, depth = 700;
+  const double z = top - ground(x, y) + depth;
+  auto row = [&](const std::string& point, const std::string& mode) {
+    const testing::CommandRun q =
+        testing::run("query " + db + " locate " + point + " --units m --format csv --z " + mode);
+    EXPECT_EQ(q.code, 0) << q.err;
+    return q.out.substr(q.out.find('\n') + 1);
+  };
+  char domain[96], elevation[96], below[96];
+  std::snprintf(domain, sizeof domain, "%.17g %.17g %.17g", x, y, z);
+  std::snprintf(elevation, sizeof elevation, "%.17g %.17g %.17g", x, y, ground(x, y) - depth);
+  std::snprintf(below, sizeof below, "%.17g %.17g %.17g", x, y, depth);
+  const std::string want = row(domain, "domain");
+  EXPECT_NE(want.find(",inside,"), std::string::npos) << want;
+  // The element and its material agree (the z column is the domain's).
+  auto tail = [](const std::string& s) { return s.substr(s.find(",inside,")); };
+  EXPECT_EQ(tail(row(elevation, "elevation")), tail(want));
+  EXPECT_EQ(tail(row(below, "depth")), tail(want));
+  // 600 m above the ground, past any cut element's reach: the air.
+  std::snprintf(elevation, sizeof elevation, "%.17g %.17g %.17g", x, y, ground(x, y) + 600);
+  EXPECT_NE(row(elevation, "elevation").find(",air,"), std::string::npos);
 }
 
 }  // namespace

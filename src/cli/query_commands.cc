@@ -25,14 +25,19 @@ const char kQueryHelp[] =
     "Options:\n"
     "  --units ticks|m       coordinates in and out in ticks (default) or metres\n"
     "  --geo                 locate, material, node-at: points as LON LAT DEPTH (WGS84\n"
-    "                        degrees, metres down), in a georeferenced database\n"
+    "                        degrees, metres down: below the local ground in a mesh\n"
+    "                        built with --surface), in a georeferenced database\n"
     "                        (construct --origin-geo); answers in metres\n"
+    "  --z domain|elevation|depth  locate, material, node-at: what a point's z is:\n"
+    "                        depth below the domain's top (domain, the default, in\n"
+    "                        --units), elevation in metres (up), or metres below the\n"
+    "                        local ground (a mesh built with --surface)\n"
     "  --format MODE         text (default), table, json (one document), jsonl (one object\n"
     "                        a line; also ndjson), csv or tsv; --json = --format json\n";
 
 namespace {
 
-const std::set<std::string> kValueOptions = {"format", "units", "points", "memory"};
+const std::set<std::string> kValueOptions = {"format", "units", "points", "memory", "z"};
 const std::set<std::string> kFlags = {"json", "list", "faces", "edges", "corners", "all", "geo"};
 
 }  // namespace
@@ -52,9 +57,16 @@ int Query::run() {
   if (args.values.count("points") && !point_query) {
     return usage("--points is for locate, material and node-at");
   }
-  if (args.flags.count("geo")) {
+  std::string z = "domain";
+  if (args.values.count("z")) {
+    z = args.values.at("z");
+    if (z != "domain" && z != "elevation" && z != "depth")
+      return usage("--z is domain, elevation or depth, not '" + z + "'");
+    if (!point_query) return usage("--z is for locate, material and node-at");
+  }
+  if (args.flags.count("geo") || z != "domain") {
     if (!point_query) return usage("--geo is for locate, material and node-at");
-    const Status st = to_frame_metres();
+    const Status st = to_frame_metres(args.flags.count("geo") != 0, z);
     if (st.is_invalid_argument()) return usage(st.message());
     if (!st.ok()) return fail(st);
   }
@@ -89,8 +101,9 @@ Status check_query(const std::vector<std::string>& words) {
   if (a.positional.size() != want + 1) {
     return Status::InvalidArgument(q + " takes " + std::to_string(want) + " number(s)");
   }
-  const bool metres =
-      (a.values.count("units") && a.values.at("units") == "m") || a.flags.count("geo");
+  const bool metres = (a.values.count("units") && a.values.at("units") == "m") ||
+                      a.flags.count("geo") ||
+                      (a.values.count("z") && a.values.at("z") != "domain");
   for (size_t i = 1; i <= want; ++i) {
     double d = 0;
     uint64_t v = 0;

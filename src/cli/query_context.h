@@ -123,7 +123,9 @@ struct Query {
   int run_point_text(PointQuery q, Coord c);
   // --geo: the point arguments, or the points file, from LON LAT DEPTH to
   // the frame's metres (and --units m from here on).
-  Status to_frame_metres();
+  // Points given as --geo's LON LAT DEPTH and/or with --z elevation|depth,
+  // into the frame's metres (z down from the domain's top).
+  Status to_frame_metres(bool geo, const std::string& z);
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> geo_points{nullptr, std::fclose};
   std::string geo_points_name;  // the file the converted points came from
   int run_range();

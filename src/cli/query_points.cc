@@ -8,20 +8,35 @@
 
 namespace weaver::cli {
 
-Status Query::to_frame_metres() {
-  if (units().geo.empty()) {
+Status Query::to_frame_metres(bool geo, const std::string& z) {
+  if (geo && units().geo.empty()) {
     return Status::NotFound(
         "this database is not georeferenced (construct it with --origin-geo LON,LAT)");
   }
   GeoFrame frame;
-  WEAVER_RETURN_IF_ERROR(GeoFrame::parse(units().geo, &frame));
+  if (geo) WEAVER_RETURN_IF_ERROR(GeoFrame::parse(units().geo, &frame));
   const GeoTransform g(frame);
+  const bool grounded = ex.mesh().has_ground();
+  // --geo's depth is below the local ground where the mesh has one.
+  const std::string zmode = geo && z == "domain" ? (grounded ? "depth" : "domain") : z;
+  if (zmode == "depth" && !grounded)
+    return Status::InvalidArgument("--z depth needs a mesh built with --surface");
+  const double top = ex.mesh().top_elevation();
+  const Units& u = units();
   s.metres = true;
-  auto convert = [&](double lon, double lat, double depth) {
-    double x, y;
-    g.to_frame(lon, lat, &x, &y);
+  auto convert = [&](double a, double b, double c) {
+    double x = a, y = b;
+    if (geo) g.to_frame(a, b, &x, &y);
+    double zd = c;
+    if (zmode == "elevation") zd = top - c;
+    if (zmode == "depth") {
+      const Coord column{uint32_t(std::clamp((x - u.origin_m[0]) / u.tick_m, 0.0, double(kRootEdge))),
+                         uint32_t(std::clamp((y - u.origin_m[1]) / u.tick_m, 0.0, double(kRootEdge))),
+                         0};
+      zd = top - ex.ground_at(column) + c;
+    }
     char buf[128];
-    std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g", x, y, depth);
+    std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g", x, y, zd);
     return std::string(buf);
   };
   if (!args.values.count("points")) {
