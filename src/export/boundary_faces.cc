@@ -1,6 +1,9 @@
 #include "export/boundary_faces.h"
 
+#include <algorithm>
+
 #include "db/boundary_table.h"
+#include "schema/node.h"
 
 namespace weaver {
 
@@ -22,6 +25,7 @@ Status for_each_boundary(ExportJob& job, const std::function<Status(const Bounda
     r.element = local++;
     r.global = e.id;
     r.octant = e.octant;
+    r.mesh_element = &e;
     while (c.valid() && boundary_element(c.key()) == e.id) {
       r.face = boundary_face(c.key());
       r.part = boundary_part(c.key());
@@ -145,6 +149,92 @@ Status write_boundary_vtu(ExportJob& job, const std::string& path) {
   WEAVER_RETURN_IF_ERROR(file.write_at(head.size() + at, tail.data(), tail.size()));
   job.result->bytes += head.size() + at + tail.size();
   return file.finish();
+}
+
+Status MshBoundary::tag_of(ExportJob& job, Coord c, uint64_t* tag, bool* extra) const {
+  uint64_t global = 0, local = 0;
+  bool present = false;
+  WEAVER_RETURN_IF_ERROR(job.mesh.nodes().rank_exact(node_key(c), &global, &present));
+  *extra = !present || !job.local->local_id(global, &local).ok();
+  if (!*extra) {
+    *tag = local + 1;
+    return Status::Ok();
+  }
+  const auto it = std::lower_bound(extra_.begin(), extra_.end(), node_key(c));
+  *tag = nodes_ + 1 + uint64_t(it - extra_.begin());
+  return Status::Ok();
+}
+
+Status MshBoundary::plan(ExportJob& job) {
+  present_ = job.mesh.has_boundary();
+  if (!present_) return Status::Ok();
+  nodes_ = job.node_count();
+  std::vector<uint64_t> found;
+  WEAVER_RETURN_IF_ERROR(for_each_boundary(job, [&](const BoundaryRecord& r) {
+    ++counts_[r.kind != 0];
+    if (r.part == 0) return Status::Ok();  // an element's own corners
+    for (const Coord& c : boundary_quad(r.octant, r.face, r.part)) {
+      uint64_t tag;
+      bool extra = false;
+      WEAVER_RETURN_IF_ERROR(tag_of(job, c, &tag, &extra));
+      if (extra) found.push_back(node_key(c));
+    }
+    return Status::Ok();
+  }));
+  std::sort(found.begin(), found.end());
+  found.erase(std::unique(found.begin(), found.end()), found.end());
+  extra_ = std::move(found);
+  return Status::Ok();
+}
+
+std::string MshBoundary::head() const {
+  std::string s =
+      "$PhysicalNames\n3\n2 1 \"free_surface\"\n2 2 \"absorbing\"\n3 3 \"volume\"\n"
+      "$EndPhysicalNames\n";
+  // No points or curves; surfaces 1 (free surface) and 2 (absorbing), volume
+  // 1: tag, a box (Gmsh recomputes it), physical tags, bounding entities.
+  return s + "$Entities\n0 0 2 1\n1 0 0 0 0 0 0 1 1 0\n2 0 0 0 0 0 0 1 2 0\n" +
+         "1 0 0 0 0 0 0 1 3 0\n$EndEntities\n";
+}
+
+Status MshBoundary::write_extra_nodes(ExportJob& job, Section& out, uint64_t first_tag) const {
+  WEAVER_RETURN_IF_ERROR(out.text("2 1 0 " + std::to_string(extra_.size()) + "\n"));
+  LineBuffer line;
+  for (uint64_t i = 0; i < extra_.size(); ++i) line.field(first_tag + i), line.ch('\n');
+  WEAVER_RETURN_IF_ERROR(line.emit(out));
+  for (uint64_t key : extra_) {
+    const Coord c = morton_decode(key);
+    line.field(job.coord(0, c.x)), line.ch(' '), line.field(job.coord(1, c.y)), line.ch(' ');
+    line.field(job.coord(2, c.z)), line.ch('\n');
+    WEAVER_RETURN_IF_ERROR(line.emit(out));
+  }
+  return Status::Ok();
+}
+
+Status MshBoundary::for_each_quad(ExportJob& job, int kind,
+                                  const std::function<Status(const MeshElement&)>& fn) {
+  return for_each_boundary(job, [&](const BoundaryRecord& r) {
+    return (r.kind != 0) == (kind != 0) ? fn(*r.mesh_element) : Status::Ok();
+  });
+}
+
+Status MshBoundary::write_quads(ExportJob& job, Section& out, int kind, uint64_t* tag) {
+  const int entity = kind == 1 ? 1 : 2;
+  WEAVER_RETURN_IF_ERROR(out.text("2 " + std::to_string(entity) + " 3 " +
+                                  std::to_string(counts_[kind != 0]) + "\n"));
+  LineBuffer line;
+  return for_each_boundary(job, [&](const BoundaryRecord& r) {
+    if ((r.kind != 0) != (kind != 0)) return Status::Ok();
+    line.field(++*tag);
+    for (const Coord& c : boundary_quad(r.octant, r.face, r.part)) {
+      uint64_t t = 0;
+      bool extra = false;
+      WEAVER_RETURN_IF_ERROR(tag_of(job, c, &t, &extra));
+      line.ch(' '), line.field(t);
+    }
+    line.ch('\n');
+    return line.emit(out);
+  });
 }
 
 }  // namespace weaver

@@ -535,6 +535,19 @@ def check_ground():
     domain_side = on_box & (faces[:, 1] != 4)
     check(np.array_equal(kind == 0, domain_side), "domain sides are not the box's sides")
     check((kind == 1).sum() > 0 and (faces[:, 2] > 0).any(), "no free surface, or no quarters")
+    # msh: the physical groups free_surface and absorbing, read by meshio,
+    # whose quads are the boundary vtu's (same corners, as point sets).
+    run(WEAVER, "export", db, "--format", "msh", "--out", d + "/m.msh", "--quiet")
+    msh = meshio.read(d + "/m.msh")
+    groups = {name: sum(len(ids) for ids in blocks) for name, blocks in msh.cell_sets.items()}
+    check(groups.get("free_surface") == (kind == 1).sum(), groups)
+    check(groups.get("absorbing") == (kind == 0).sum(), groups)
+    check(groups.get("volume") == len(m.e["id"]), groups)
+    quads = np.concatenate([c.data for c in msh.cells if c.type == "quad"])
+    msh_corners = np.sort(msh.points[quads].round(6), axis=1)
+    order = np.concatenate([np.flatnonzero(kind == 1), np.flatnonzero(kind == 0)])
+    vtu_corners = np.sort(pts[order].round(6), axis=1)
+    check(np.array_equal(msh_corners, vtu_corners), "msh's quads are not the boundary's")
     print(f"ground: {len(m.e['id'])} elements, {len(faces)} boundary faces: {msg}; {vtu}")
 
 
