@@ -13,7 +13,7 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver export DB --format FORMAT --out PATH [--units m|ticks]\n"
+    "usage: weaver export DB --format FORMAT --out PATH [--units m|ticks] [--z-up]\n"
     "                        [--box X0,Y0,Z0,X1,Y1,Z1] [--parts N] [--memory BYTES] [--quiet]\n"
     "       weaver export DB [--nodes FILE] [--elements FILE]     (csv, as --format csv)\n"
     "\n"
@@ -42,6 +42,9 @@ constexpr char kUsage[] =
     "                       csv coordinates are in ticks\n"
     "  --units m|ticks      coordinates of vtu, msh, raw and --box (default m: origin +\n"
     "                       tick size times ticks, as the octant table's metadata says)\n"
+    "  --z-up               z as elevation, metres up (the top's elevation minus\n"
+    "                       the depth; raw's mesh.json says z_up), so that ParaView\n"
+    "                       shows the ground's mountains upright\n"
     "  --box X0,Y0,Z0,X1,Y1,Z1  vtu, pvtu, msh, raw: only the elements sharing a point\n"
     "                       with the box, and the nodes they use (raw: and their\n"
     "                       anchors), renumbered compactly; node_id / element_id\n"
@@ -85,6 +88,9 @@ Status parse_export_options(const ParsedArgs& args, ExportOptions* o) {
     }
     o->units = u == "m" ? ExportUnits::kMetres : ExportUnits::kTicks;
   }
+  o->z_up = args.flags.count("z-up") != 0;
+  if (o->z_up && o->units == ExportUnits::kTicks)
+    return Status::InvalidArgument("--z-up writes metres: not with --units ticks");
   if (values.count("box")) {
     std::vector<double> box;
     st = parse_double_list(values["box"], "--box", 6, &box);
@@ -124,7 +130,7 @@ int cmd_export(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(argc, argv, 2,
                          {"nodes", "elements", "memory", "format", "out", "units", "box", "parts"},
-                         {"quiet"}, &args);
+                         {"quiet", "z-up"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("export", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("export", "expected one DB", kUsage);

@@ -134,7 +134,9 @@ Status write_boundary_vtu(ExportJob& job, const std::string& path) {
       WEAVER_RETURN_IF_ERROR(out[kFace].value(uint8_t(r.face)));
       WEAVER_RETURN_IF_ERROR(out[kPart].value(uint8_t(r.part)));
       WEAVER_RETURN_IF_ERROR(out[kKind].value(r.kind));
-      for (const Coord& p : boundary_quad(r.octant, r.face, r.part)) {
+      std::array<Coord, 4> q = boundary_quad(r.octant, r.face, r.part);
+      if (job.options.z_up) std::reverse(q.begin(), q.end());  // z mirrored: still outward
+      for (const Coord& p : q) {
         const double xyz[3] = {job.coord(0, p.x), job.coord(1, p.y), job.coord(2, p.z)};
         WEAVER_RETURN_IF_ERROR(out[kPoints].put(xyz, sizeof xyz));
       }
@@ -226,7 +228,9 @@ Status MshBoundary::write_quads(ExportJob& job, Section& out, int kind, uint64_t
   return for_each_boundary(job, [&](const BoundaryRecord& r) {
     if ((r.kind != 0) != (kind != 0)) return Status::Ok();
     line.field(++*tag);
-    for (const Coord& c : boundary_quad(r.octant, r.face, r.part)) {
+    std::array<Coord, 4> q = boundary_quad(r.octant, r.face, r.part);
+    if (job.options.z_up) std::reverse(q.begin(), q.end());  // z mirrored: still outward
+    for (const Coord& c : q) {
       uint64_t t = 0;
       bool extra = false;
       WEAVER_RETURN_IF_ERROR(tag_of(job, c, &t, &extra));

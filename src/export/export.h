@@ -41,6 +41,10 @@ struct ExportOptions {
   std::string out;
   // Coordinates of vtu, msh and raw (csv is always in ticks), and of the box.
   ExportUnits units = ExportUnits::kMetres;
+  // z written as elevation, up (metres: the top's elevation minus the
+  // depth), so that viewers show mountains upright; hexahedra keep a
+  // positive orientation (their corners taken top face first).
+  bool z_up = false;
   // vtu, pvtu, msh, raw: only the elements that share a point with the box
   // x0,y0,z0,x1,y1,z1 (in the units), with just the nodes they use (and, for
   // raw, the anchors of those that dangle), numbered compactly in global id

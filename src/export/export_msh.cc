@@ -48,7 +48,7 @@ Status write_elements(ExportJob& job, Section& out, MshBoundary& b) {
   uint64_t tag = 0;
   WEAVER_RETURN_IF_ERROR(for_each_element(job, true, [&](const MeshElement& el) {
     line.field(++tag);
-    for (int i = 0; i < 8; ++i) line.ch(' '), line.field(el.nodes[kVtkHexCorner[i]] + 1);
+    for (int i = 0; i < 8; ++i) line.ch(' '), line.field(el.nodes[job.hex_corner(i)] + 1);
     line.ch('\n');
     return line.emit(out);
   }));

@@ -124,6 +124,7 @@ std::string json(const std::vector<Array>& arrays, const ExportJob& job, uint64_
   if (job.mesh.has_ground()) {
     s += "  \"top_elevation_m\": " + number(job.mesh.top_elevation()) + ",\n";
   }
+  if (job.options.z_up) s += "  \"z_up\": true,\n";
   if (!u.geo.empty()) s += "  \"geo\": \"" + u.geo + "\",\n";
   s += "  \"corner_order\": \"corner k at (x + s*(k&1), y + s*((k>>1)&1), z + s*((k>>2)&1))\",\n";
   s += "  \"node_kinds\": [\"anchored\", \"edge\", \"face\"],\n  \"arrays\": {";

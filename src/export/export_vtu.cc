@@ -173,7 +173,7 @@ Status write_cells(ExportJob& job, std::vector<Section>& out, Present has) {
       WEAVER_RETURN_IF_ERROR(out[kQs].value(e.qs));
     }
     int64_t conn[8];
-    for (int i = 0; i < 8; ++i) conn[i] = int64_t(e.nodes[kVtkHexCorner[i]]);
+    for (int i = 0; i < 8; ++i) conn[i] = int64_t(e.nodes[job.hex_corner(i)]);
     WEAVER_RETURN_IF_ERROR(out[kConn].put(conn, sizeof conn));
     WEAVER_RETURN_IF_ERROR(out[kOffsets].value(int64_t(8 * ++cells)));
     return out[kTypes].value(kVtkHexahedron);

@@ -20,6 +20,8 @@ namespace weaver {
 // around the bottom face, then the top one; weaver's corner k has x fastest.
 // Point i of a VTK or Gmsh hexahedron is weaver's corner kVtkHexCorner[i].
 inline constexpr std::array<int, 8> kVtkHexCorner = {0, 1, 3, 2, 4, 5, 7, 6};
+// The same with z mirrored (export --z-up): the deeper face first.
+inline constexpr std::array<int, 8> kVtkHexCornerZUp = {4, 5, 7, 6, 0, 1, 3, 2};
 
 struct ExportJob {
   ExportJob(Mesh& m, const ExportOptions& o, size_t buffer, uint64_t scratch, ExportResult* r)
@@ -53,11 +55,14 @@ struct ExportJob {
   void tick() {
     if (options.progress && ++done % (1 << 16) == 0) options.progress(done, double(done) / total);
   }
-  // A coordinate in ticks, in the job's units.
+  // A coordinate in ticks, in the job's units (z as elevation with z_up).
   double coord(int axis, uint32_t ticks) const {
     if (options.units == ExportUnits::kTicks) return ticks;
-    return mesh.units().origin_m[axis] + mesh.units().tick_m * ticks;
+    const double m = mesh.units().origin_m[axis] + mesh.units().tick_m * ticks;
+    return axis == 2 && options.z_up ? mesh.top_elevation() - m : m;
   }
+  // VTK's and Gmsh's hexahedron corner i as weaver's corner.
+  int hex_corner(int i) const { return (options.z_up ? kVtkHexCornerZUp : kVtkHexCorner)[i]; }
   double length(uint32_t ticks) const {
     return options.units == ExportUnits::kTicks ? ticks : mesh.units().tick_m * ticks;
   }

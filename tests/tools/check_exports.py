@@ -548,6 +548,15 @@ def check_ground():
     order = np.concatenate([np.flatnonzero(kind == 1), np.flatnonzero(kind == 0)])
     vtu_corners = np.sort(pts[order].round(6), axis=1)
     check(np.array_equal(msh_corners, vtu_corners), "msh's quads are not the boundary's")
+    # --z-up: elevations, the same points mirrored about the top.
+    run(WEAVER, "export", db, "--format", "vtu", "--out", d + "/up.vtu", "--z-up", "--quiet")
+    up = vtk.vtkXMLUnstructuredGridReader()
+    up.SetFileName(d + "/up.vtu")
+    up.Update()
+    z_up = vtk_to_numpy(up.GetOutput().GetPoints().GetData())[:, 2]
+    z_down = vtk_to_numpy(r.GetOutput().GetPoints().GetData())[:, 2]
+    check(np.allclose(z_up, raw["top_elevation_m"] - z_down), "--z-up is not the top minus z")
+    check(abs(z_up.max() - raw["top_elevation_m"]) < 1, "the top is not the highest point")
     print(f"ground: {len(m.e['id'])} elements, {len(faces)} boundary faces: {msg}; {vtu}")
 
 
