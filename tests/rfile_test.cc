@@ -15,6 +15,8 @@
 #include "model/rfile.h"
 #include "model/rfile_model.h"
 #include "model/surface.h"
+#include "modeldb/db_model.h"
+#include "modeldb/model_import.h"
 #include "rfile_writer.h"
 #include "test_util.h"
 
@@ -254,6 +256,55 @@ TEST(Surface, AscRasterTakesKeywordsInAnyCaseAndRowsFromTheNorth) {
     const Status st = load_surface(src, nullptr, 1 << 20, &s);
     EXPECT_FALSE(st.ok()) << bad;
     EXPECT_EQ(st.message().find('\n'), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace weaver
+
+namespace weaver {
+namespace {
+
+// `model import --from rfile:`: every model octant holds the file's value
+// at its centre (as RfileModel samples it), no octant is coarser than its
+// block's spacing unless its merged siblings agreed, and the box and the
+// origin come from the file.
+TEST(Rfile, ImportsAsAModelDatabaseOfItsBlocksCells) {
+  testing::TempDir dir;
+  RfileWriter w;
+  const std::string path = dir.file("m.rfile");
+  write_file(path, w.bytes(linear_blocks()));
+  ModelImportOptions o;
+  o.from = "rfile:" + path;
+  ModelImportResult r;
+  const std::string db = dir.file("model.db");
+  ASSERT_OK(import_model(db, o, &r));
+  EXPECT_TRUE(r.info.has_q);
+  EXPECT_DOUBLE_EQ(r.info.origin_m[2], -200);
+  EXPECT_DOUBLE_EQ(r.info.extent_m[0], 300);
+  EXPECT_EQ(r.info.geo, "-118.25,34.5,12.5");
+  std::unique_ptr<RfileModel> file;
+  ASSERT_OK(RfileModel::open(path, MemoryBudget(1 << 20), 1, &file));
+  std::unique_ptr<DbModel> model;
+  ASSERT_OK(DbModel::open(db, MemoryBudget(4 << 20), 1, &model));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> ux(0, 299), uy(0, 179), uz(-199, 1499);
+  for (int n = 0; n < 2000; ++n) {
+    const double x = ux(rng), y = uy(rng), z = uz(rng);
+    ModelHit h;
+    ASSERT_OK(model->lookup(x, y, z, &h));
+    const double t = r.info.tick_m, e = octant_edge(h.octant) * t;
+    const Material want =
+        file->at(std::min(h.octant.x * t + e / 2, 300.0), std::min(h.octant.y * t + e / 2, 180.0),
+                 std::min(h.octant.z * t + e / 2 - 200, 1500.0));
+    // Merged octants hold their children's common value: the one at the
+    // centre of the child holding the point is the same.
+    ASSERT_NEAR(h.values[1], want.vs, 0.05 * e) << x << " " << y << " " << z;
+    // Within a cell's gradient of the file's own value, but where a cell
+    // straddles the blocks' boundary (z = 100 m), whose values jump.
+    if (std::abs(z - 100) > e) {
+      EXPECT_LE(std::abs(h.values[1] - file->at(x, y, z).vs), 0.05 * e + 1e-3) << z;
+    }
   }
 }
 

@@ -12,7 +12,7 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver model import MODEL.db --from etree:FILE|grid:FILE|layers:FILE|xyz:FILE\n"
+    "usage: weaver model import MODEL.db --from etree:FILE|grid:FILE|layers:FILE|xyz:FILE|rfile:FILE\n"
     "                           [--tolerance REL] [--root-edge METRES] [--memory BYTES]\n"
     "                           [--plain]\n"
     "       weaver model material MODEL.db X Y Z | --points FILE [--outside clamp|error]\n"
@@ -37,6 +37,11 @@ constexpr char kUsage[] =
     "  --from xyz:FILE    a regular grid as ASCII 'x y z vp vs rho' lines in any\n"
     "                     order (SPECFEM3D tomography style), every point once;\n"
     "                     placed on disk in grid order first, never held whole\n"
+    "  --from rfile:FILE  an SW4 rfile (docs/ground.md): each block's cells, as fine\n"
+    "                     as its smaller spacing (to a power of two of the tick),\n"
+    "                     valued as SW4 samples the file at their centres; z is\n"
+    "                     metres down from sea level ('mesh --model rfile:FILE'\n"
+    "                     samples the file itself)\n"
     "  --tolerance REL    merge siblings whose values differ by at most REL of the\n"
     "                     smallest (default 0: exactly equal)\n"
     "  --root-edge M      etree: the edge of the etree's root in metres, when its\n"

@@ -13,6 +13,7 @@
 #include "model/material_merge.h"
 #include "modeldb/grid_import.h"
 #include "modeldb/import_source.h"
+#include "modeldb/rfile_import.h"
 #include "schema/octant.h"
 
 namespace weaver {
@@ -74,6 +75,7 @@ struct SourcePlan {
   GridPlan grid;
   LayerPlan layers;
   XyzGrid xyz;
+  RfilePlan rfile;
   bool has_q = false;
 };
 
@@ -82,9 +84,11 @@ Status plan_source(const ModelImportOptions& o, SourcePlan* s, ModelInfo* info) 
   s->kind = o.from.substr(0, colon == std::string::npos ? 0 : colon);
   s->path = colon == std::string::npos ? "" : o.from.substr(colon + 1);
   const std::string& k = s->kind;
-  if ((k != "etree" && k != "grid" && k != "layers" && k != "xyz") || s->path.empty()) {
+  if ((k != "etree" && k != "grid" && k != "layers" && k != "xyz" && k != "rfile") ||
+      s->path.empty()) {
     return Status::InvalidArgument(
-        "--from must be etree:FILE, grid:FILE, layers:FILE or xyz:FILE, not '" + o.from + "'");
+        "--from must be etree:FILE, grid:FILE, layers:FILE, xyz:FILE or rfile:FILE, not '" +
+        o.from + "'");
   }
   info->source = k + " " + s->path;
   if (k == "etree") {
@@ -92,6 +96,11 @@ Status plan_source(const ModelImportOptions& o, SourcePlan* s, ModelInfo* info) 
     s->has_q = s->etree->field("Qp") && s->etree->field("Qs");
   } else if (k == "grid") {
     WEAVER_RETURN_IF_ERROR(plan_grid(s->path, &s->grid, info));
+  } else if (k == "rfile") {
+    // Its column cache: a quarter of the budget, beside the table pool.
+    WEAVER_RETURN_IF_ERROR(
+        plan_rfile(s->path, MemoryBudget(o.memory.bytes() / 4), &s->rfile, info));
+    s->has_q = info->has_q;
   } else if (k == "layers") {
     WEAVER_RETURN_IF_ERROR(plan_layers(s->path, &s->layers, info));
     s->has_q = s->layers.table.has_q;
@@ -111,6 +120,7 @@ Status emit_source(SourcePlan& s, const ModelImportOptions& o, MemoryBudget bloc
   };
   if (s.kind == "etree") return import_etree(s.etree.get(), o, info, read, emit);
   if (s.kind == "layers") return import_layers(s.layers, read, emit);
+  if (s.kind == "rfile") return import_rfile(s.rfile, *info, read, emit);
   if (s.kind == "grid") return import_grid(s.grid, s.path, blocks, read, merger);
   const std::string grid = db_dir + "/xyz-import.grid.tmp";
   WEAVER_RETURN_IF_ERROR(write_xyz_as_grid(s.path, s.xyz, grid));

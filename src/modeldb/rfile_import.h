@@ -1,0 +1,35 @@
+// An SW4 rfile (model/rfile.h) into a model database (`weaver model import
+// --from rfile:FILE`): an octree over the file's box (x, y from 0; z from
+// the first material block's top, metres down from sea level) whose leaves
+// are each block's cells, as fine as its smaller spacing rounded down to a
+// power of two of the tick, each holding the file's value at its centre as
+// SW4 samples it (trilinear, -999 filled from below: model/rfile_model.h).
+// Equal siblings merge (model/material_merge.h).  A database answers
+// piecewise constant values where SW4 interpolates: within one cell of the
+// file's own spacing of them, never past the nearest grid values; `weaver
+// mesh --model rfile:FILE` samples the file itself and is exact.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "model/material_merge.h"
+#include "model/rfile_model.h"
+#include "modeldb/import_source.h"
+#include "modeldb/model_table.h"
+#include "util/memory_budget.h"
+
+namespace weaver {
+
+struct RfilePlan {
+  std::unique_ptr<RfileModel> model;
+  double root_m = 0;
+};
+
+// Opens and checks the file; sets the model's placement in *info.
+Status plan_rfile(const std::string& path, MemoryBudget memory, RfilePlan* p, ModelInfo* info);
+// The leaves in key order into emit; *read counts them.
+Status import_rfile(const RfilePlan& p, const ModelInfo& info, uint64_t* read,
+                    const ModelEmit& emit);
+
+}  // namespace weaver
