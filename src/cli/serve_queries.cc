@@ -25,7 +25,7 @@ ParsedArgs query_args(const serve::ApiQuery& q) {
                                        "neighbors", "node-elements", "depends", "range"};
   ParsedArgs a;
   a.positional = {kNames[int(q.kind)]};
-  const bool metres = q.metres || q.geo;
+  const bool metres = q.metres || q.geo || q.z_mode != 0;
   if (q.kind == Kind::kLocate || q.kind == Kind::kMaterial || q.kind == Kind::kNodeAt) {
     if (q.batch) a.values["points"] = "-";
     for (int i = 0; i < 3 && !q.batch; ++i)
@@ -44,6 +44,8 @@ ParsedArgs query_args(const serve::ApiQuery& q) {
   }
   if (q.metres) a.values["units"] = "m";
   if (q.geo) a.flags.insert("geo");
+  static const char* const kZModes[] = {"domain", "elevation", "depth"};
+  if (q.z_mode != 0) a.values["z"] = kZModes[q.z_mode];
   a.values["format"] = "json";
   return a;
 }

@@ -87,11 +87,13 @@ Status paint_from(Explorer& ex, const Request& r, Paint* out) {
   return paint_of(ex, kFields[field], kSummaries[summary], out);
 }
 
-// The units and geo of a point question: ?units=ticks|m, ?geo=0|1.
+// The units, geo and z of a point question: ?units=ticks|m, ?geo=0|1,
+// ?z_mode=domain|elevation|depth.
 Status coordinate_options(const Params& p, ApiQuery* q) {
   int units = 0;
   WEAVER_RETURN_IF_ERROR(p.choice("units", {"ticks", "m"}, &units));
   q->metres = units == 1;
+  WEAVER_RETURN_IF_ERROR(p.choice("z_mode", {"domain", "elevation", "depth"}, &q->z_mode));
   return p.flag("geo", &q->geo);
 }
 
@@ -254,7 +256,7 @@ Response Service::api(const Request& r, Explorer& ex) {
   using Kind = ApiQuery::Kind;
   if (what == "locate" && parts.size() == 2) {
     Status st = coordinate_options(p, &q);
-    const bool metres = q.metres || q.geo;
+    const bool metres = q.metres || q.geo || q.z_mode != 0;
     static const char* const kAxes[] = {"x", "y", "z"};
     for (int a = 0; a < 3 && st.ok(); ++a) st = coordinate(p, kAxes[a], metres, &q.point[a]);
     if (!st.ok()) return status_response(st);

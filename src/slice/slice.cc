@@ -220,6 +220,26 @@ Status mark_danglings(Explorer& ex, Slicer& s, Canvas& c, const Layout& l, int a
 
 }  // namespace
 
+// The ground where it crosses a vertical section (a mesh built under a
+// surface): a dark line over the elements, a pixel column at a time, the
+// surface as construct read it (bilinear between its grid points).
+void draw_ground(Explorer& ex, Canvas& c, const Layout& l, int ua, int axis, uint32_t at) {
+  const Units& u = ex.units();
+  const double top = ex.mesh().top_elevation();
+  for (int px = l.left; px < l.left + l.plot_w; ++px) {
+    const double tick = l.u0 + (px + 0.5 - l.left) / l.scale;
+    uint32_t p[3] = {0, 0, 0};
+    p[axis] = at;
+    p[ua] = uint32_t(std::clamp(tick, 0.0, double(kRootEdge - 1)));
+    const double ground = ex.ground_at({p[0], p[1], p[2]});
+    if (std::isnan(ground)) return;
+    const double y = l.y((top - ground - u.origin_m[2]) / u.tick_m);
+    if (y < l.top || y > l.top + l.plot_h) continue;
+    c.rect(px, std::max(double(l.top), y - 1), px + 1, std::min(double(l.top + l.plot_h), y + 1),
+           Rgb{20, 20, 20}, false);
+  }
+}
+
 Status render_slice(const std::string& db, const SliceOptions& o, const std::string& out,
                     SliceResult* r) {
   *r = SliceResult{};
@@ -297,6 +317,7 @@ Status render_slice(const std::string& db, const SliceOptions& o, const std::str
     const double y1 = std::min(std::max(ya, yb), double(l.top + l.plot_h));
     if (x1 > x0 && y1 > y0) c->rect(x0, y0, x1, y1, colormap((cut.value - r->min) / span), true);
   }));
+  if (s.v() == 2 && ex->mesh().has_ground()) draw_ground(*ex, *c, l, s.u(), o.axis, r->at_ticks);
   if (o.danglings) {
     WEAVER_RETURN_IF_ERROR(mark_danglings(*ex, s, *c, l, o.axis, r->at_ticks, &r->danglings));
   }

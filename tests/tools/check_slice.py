@@ -129,6 +129,36 @@ def vs_of(e):
 
 n3, c3 = check_png(basin, "y", 400000, "vs", 700, vs_of)
 
+# A mesh under a ground (a ramp along y, from 0 to 3 km): the vertical
+# section x = 50 km draws the ground line where the test's own ramp puts it.
+dem = os.path.join(work, "ramp.asc")
+with open(dem, "w") as f:
+    f.write("ncols 11\nnrows 11\nxllcenter 0\nyllcenter 0\ncellsize 10000\n")
+    for r in range(10, -1, -1):
+        f.write(" ".join(str(300 * c) for c in range(11)) + "\n")
+ground_db = os.path.join(work, "ground")
+run("mesh", ground_db, "--model", "loh1", "--freq", "0.15", "--surface", "asc:" + dem, "--quiet")
+top = float(run("stat", ground_db, "--json").stdout.split('"top_elevation_m": "')[1].split('"')[0])
+out = os.path.join(work, "ground.png")
+run("slice", ground_db, "--axis", "x", "--at", "50000", "--units", "m", "--out", out)
+w, h, rows, text = read_png(out)
+px0, py0, px1, py1 = map(int, text["weaver.plot"].split())
+u0, v0, u1, v1 = map(float, text["weaver.world"].split())
+scale = (px1 - px0) / (u1 - u0)
+tick = 100000 / 1048576
+dark = 0
+for px in range(px0 + 5, px1 - 5, 37):
+    y_m = (u0 + (px + 0.5 - px0) / scale) * tick
+    z_ticks = (top - 0.03 * y_m) / tick
+    py = py0 + (z_ticks - v0) * scale
+    if not (py0 + 2 <= py <= py1 - 2):
+        continue
+    if not any(close(pixel(rows, px, int(py) + d), (20, 20, 20), 2) for d in (-1, 0, 1)):
+        fail(f"no ground line at pixel ({px}, {py:.1f})")
+    dark += 1
+if dark < 10:
+    fail(f"the ground line was checked at {dark} columns only")
+
 # SVG: well-formed, one outlined rectangle per element cut.
 svg = os.path.join(work, "s.svg")
 run("slice", sphere, "--axis", "z", "--at", "524288", "--out", svg, "--width", "800")
