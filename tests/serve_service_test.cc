@@ -5,12 +5,15 @@
 // Runs under ThreadSanitizer too (the "tsan" preset takes *Thread* tests).
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <map>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "cli/serve_queries.h"
+#include "construct/construct.h"
+#include "extract/extract.h"
 #include "serve/service.h"
 #include "test_mesh.h"
 #include "test_octrees.h"
@@ -99,6 +102,53 @@ TEST(ServeServiceThreads, ManyThreadsAnswerAsOne) {
           << "thread " << t << ", request " << k << ": " << g.substr(0, 160);
     }
   }
+}
+
+}  // namespace
+}  // namespace weaver
+
+namespace weaver {
+namespace {
+
+// z_mode on a mesh under a ground: the same point as the domain's depth and
+// as an elevation answers the same element; above the ground, status air;
+// an unknown mode is refused.
+TEST(ServeService, LocateTakesZModesOnAMeshWithAGround) {
+  testing::TempDir dir;
+  const std::string dem = dir.file("ramp.asc");
+  {
+    std::ofstream f(dem);
+    f << "ncols 3\nnrows 3\nxllcenter 0\nyllcenter 0\ncellsize 4000\n";
+    for (int r = 2; r >= 0; --r) f << "0 300 600\n";
+  }
+  ConstructOptions o;
+  o.model = "loh1";
+  o.freq = 0.5;
+  o.domain_m = {8000, 8000, 4000};
+  o.surface = "asc:" + dem;
+  ConstructPlan plan;
+  ConstructResult cr;
+  const std::string db = dir.file("db");
+  ASSERT_OK(construct_octree(db, o, &plan, &cr));
+  ExtractResult er;
+  ASSERT_OK(extract_mesh(db, ExtractOptions{}, &er));
+  serve::Service service(db, MemoryBudget(16 << 20), 4 << 20, cli::serve_query_runner(), 4096);
+  service.set_callers(serve::caller_policy("127.0.0.1", 8080, {}));
+  const double top = plan.ground.top_elevation;
+  char domain[160], elevation[160];
+  std::snprintf(domain, sizeof domain, "/api/locate?x=1000&y=6000&z=%.17g&units=m", top - 100);
+  std::snprintf(elevation, sizeof elevation, "/api/locate?x=1000&y=6000&z=100&z_mode=elevation");
+  const std::string a = answer(service, request_of("GET", domain));
+  const std::string b = answer(service, request_of("GET", elevation));
+  ASSERT_EQ(a.rfind("200 ", 0), 0u) << a;
+  EXPECT_NE(a.find("\"status\": \"inside\""), std::string::npos) << a;
+  EXPECT_EQ(a.substr(a.find("\"status\"")), b.substr(b.find("\"status\"")));
+  const std::string air =
+      answer(service, request_of("GET", "/api/locate?x=1000&y=500&z=590&z_mode=elevation"));
+  EXPECT_NE(air.find("\"status\": \"air\""), std::string::npos) << air;
+  const std::string bad =
+      answer(service, request_of("GET", "/api/locate?x=1&y=1&z=1&z_mode=--points"));
+  EXPECT_EQ(bad.rfind("400 ", 0), 0u) << bad;
 }
 
 }  // namespace
