@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <cmath>
 #include <sstream>
 
 #include "cli/cli.h"
@@ -34,7 +35,10 @@ struct Outcome {
     s << shard.records << ' ' << shard.first_key << ' ' << shard.last_key << ' ' << result.elements
       << ' ' << result.smallest_edge_m << ' ' << result.largest_edge_m << ' ' << result.worst_ppw
       << ' ' << result.table_bytes << ' ' << result.subtrees << ' ' << result.subtrees_over << ' '
-      << result.descended << ' ' << result.neighbours << ' ' << seconds << ' ' << peak_rss;
+      << result.descended << ' ' << result.neighbours << ' ' << seconds << ' ' << peak_rss << ' '
+      << result.air << ' ' << result.cut << ' '
+      << (std::isfinite(result.least_dt) ? result.least_dt : -1.0) << ' '  // no leaf: -1
+      << result.least_dt_element;
     for (uint64_t l : result.levels) s << ' ' << l;
     s << ' ' << shard.file << '\n' << error;
     return s.str();
@@ -45,7 +49,9 @@ struct Outcome {
     s >> o.shard.records >> o.shard.first_key >> o.shard.last_key >> o.result.elements >>
         o.result.smallest_edge_m >> o.result.largest_edge_m >> o.result.worst_ppw >>
         o.result.table_bytes >> o.result.subtrees >> o.result.subtrees_over >> o.result.descended >>
-        o.result.neighbours >> o.seconds >> o.peak_rss;
+        o.result.neighbours >> o.seconds >> o.peak_rss >> o.result.air >> o.result.cut >>
+        o.result.least_dt >> o.result.least_dt_element;
+    if (o.result.least_dt < 0) o.result.least_dt = HUGE_VAL;
     for (uint64_t& l : o.result.levels) s >> l;
     s >> o.shard.file;
     s.ignore(1);
@@ -65,8 +71,12 @@ ConstructResult combine(const std::vector<Outcome>& all) {
     r.subtrees_over += x.subtrees_over;
     r.descended += x.descended;
     r.neighbours += x.neighbours;
+    r.air += x.air;
+    r.cut += x.cut;
     for (size_t l = 0; l < r.levels.size(); ++l) r.levels[l] += x.levels[l];
     if (x.elements == 0) continue;
+    // A rank's element ids start after the earlier ranks' elements.
+    if (x.least_dt < r.least_dt) r.least_dt = x.least_dt, r.least_dt_element = r.elements + x.least_dt_element;
     r.smallest_edge_m = first ? x.smallest_edge_m : std::min(r.smallest_edge_m, x.smallest_edge_m);
     r.largest_edge_m = std::max(r.largest_edge_m, x.largest_edge_m);
     r.worst_ppw = first ? x.worst_ppw : std::min(r.worst_ppw, x.worst_ppw);
