@@ -1,6 +1,7 @@
 #include "mesh/mesh_reader.h"
 
 #include "db/boundary_table.h"
+#include "util/metadata_text.h"
 
 #include <cstdlib>
 
@@ -59,18 +60,7 @@ Status Mesh::open(const std::string& db_dir, uint64_t octant_pool, uint64_t node
 }
 
 std::string metadata_value(const std::string& metadata, const std::string& key) {
-  size_t start = 0;
-  while (start <= metadata.size()) {
-    size_t end = metadata.find(';', start);
-    if (end == std::string::npos) end = metadata.size();
-    const std::string item = metadata.substr(start, end - start);
-    if (item.size() > key.size() && item.compare(0, key.size(), key) == 0 &&
-        item[key.size()] == '=') {
-      return item.substr(key.size() + 1);
-    }
-    start = end + 1;
-  }
-  return "";
+  return metadata_item(metadata, key);
 }
 
 Status Mesh::element(uint64_t id, bool with_nodes, MeshElement* out) {

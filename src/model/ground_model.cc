@@ -4,6 +4,7 @@
 #include <cstdlib>
 
 #include "model/geo_frame.h"
+#include "util/metadata_text.h"
 
 namespace weaver {
 
@@ -50,21 +51,6 @@ GroundSide side_of_ground(const Ground& g, const double lo[3], const double hi[3
   return side(g_lo, g_hi);
 }
 
-namespace {
-
-std::string metadata_item(const std::string& meta, const std::string& key) {
-  for (size_t start = 0; start <= meta.size();) {
-    size_t end = meta.find(';', start);
-    if (end == std::string::npos) end = meta.size();
-    if (meta.compare(start, key.size() + 1, key + "=") == 0)
-      return meta.substr(start + key.size() + 1, end - start - key.size() - 1);
-    start = end + 1;
-  }
-  return "";
-}
-
-}  // namespace
-
 Status ground_of_metadata(const std::string& metadata, uint64_t max_bytes,
                           std::unique_ptr<Surface>* surface, Ground* ground) {
   const std::string source = metadata_item(metadata, "surface");
@@ -90,32 +76,31 @@ Material GroundedModel::at(double x, double y, double z) const {
   return inner_.at(x, y, g_.model_z_of(x, y, z));
 }
 
-void GroundedModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
-                                  float* out) const {
+// fn(index, x, y, model z) at every lattice point, the ground once a column.
+template <class Fn>
+void for_lattice(const Ground& g, const double* xs, const double* ys, const double* zs, int n,
+                 Fn fn) {
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
-      const double ground = g_.ground_at(xs[i], ys[j]);
+      const double ground = g.ground_at(xs[i], ys[j]);
       for (int k = 0; k < n; ++k) {
-        const double e = std::min(g_.top_elevation - zs[k], ground);
-        const double mz = g_.model_z == ModelZ::kElevation ? -e : ground - e;
-        out[(k * n + j) * n + i] = inner_.at(xs[i], ys[j], mz).vs;
+        const double e = std::min(g.top_elevation - zs[k], ground);
+        fn((k * n + j) * n + i, xs[i], ys[j], g.model_z == ModelZ::kElevation ? -e : ground - e);
       }
     }
   }
 }
 
+void GroundedModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                                  float* out) const {
+  for_lattice(g_, xs, ys, zs, n,
+              [&](int at, double x, double y, double mz) { out[at] = inner_.at(x, y, mz).vs; });
+}
+
 void GroundedModel::materials_on_lattice(const double* xs, const double* ys, const double* zs,
                                          int n, Material* out) const {
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const double ground = g_.ground_at(xs[i], ys[j]);
-      for (int k = 0; k < n; ++k) {
-        const double e = std::min(g_.top_elevation - zs[k], ground);
-        const double mz = g_.model_z == ModelZ::kElevation ? -e : ground - e;
-        out[(k * n + j) * n + i] = inner_.at(xs[i], ys[j], mz);
-      }
-    }
-  }
+  for_lattice(g_, xs, ys, zs, n,
+              [&](int at, double x, double y, double mz) { out[at] = inner_.at(x, y, mz); });
 }
 
 // The model's z rises with the domain's z; with the ground it falls

@@ -108,27 +108,29 @@ void Surface::block_range(int level, int bi, int bj, int ci0, int ci1, int cj0, 
   }
 }
 
+Surface::Span Surface::span_of(double x0, double x1, double y0, double y1) const {
+  Span s;
+  s.u0 = std::clamp((x0 - x0_) / dx_, 0.0, double(nx_ - 1));
+  s.u1 = std::clamp((x1 - x0_) / dx_, 0.0, double(nx_ - 1));
+  s.v0 = std::clamp((y0 - y0_) / dy_, 0.0, double(ny_ - 1));
+  s.v1 = std::clamp((y1 - y0_) / dy_, 0.0, double(ny_ - 1));
+  s.ci0 = std::min(int(s.u0), nx_ - 2), s.cj0 = std::min(int(s.v0), ny_ - 2);
+  s.ci1 = std::clamp(int(std::ceil(s.u1)) - 1, s.ci0, nx_ - 2);
+  s.cj1 = std::clamp(int(std::ceil(s.v1)) - 1, s.cj0, ny_ - 2);
+  return s;
+}
+
 void Surface::range(double x0, double x1, double y0, double y1, double* lo, double* hi) const {
-  const double u0 = std::clamp((x0 - x0_) / dx_, 0.0, double(nx_ - 1));
-  const double u1 = std::clamp((x1 - x0_) / dx_, 0.0, double(nx_ - 1));
-  const double v0 = std::clamp((y0 - y0_) / dy_, 0.0, double(ny_ - 1));
-  const double v1 = std::clamp((y1 - y0_) / dy_, 0.0, double(ny_ - 1));
-  const int ci0 = std::min(int(u0), nx_ - 2), cj0 = std::min(int(v0), ny_ - 2);
-  const int ci1 = std::clamp(int(std::ceil(u1)) - 1, ci0, nx_ - 2);
-  const int cj1 = std::clamp(int(std::ceil(v1)) - 1, cj0, ny_ - 2);
+  const Span s = span_of(x0, x1, y0, y1);
   *lo = HUGE_VAL, *hi = -HUGE_VAL;
-  block_range(int(levels_.size()) - 1, 0, 0, ci0, ci1, cj0, cj1, u0, u1, v0, v1, lo, hi);
+  block_range(int(levels_.size()) - 1, 0, 0, s.ci0, s.ci1, s.cj0, s.cj1, s.u0, s.u1, s.v0, s.v1,
+              lo, hi);
 }
 
 void Surface::loose_range(double x0, double x1, double y0, double y1, double* lo,
                           double* hi) const {
-  const double u0 = std::clamp((x0 - x0_) / dx_, 0.0, double(nx_ - 1));
-  const double u1 = std::clamp((x1 - x0_) / dx_, 0.0, double(nx_ - 1));
-  const double v0 = std::clamp((y0 - y0_) / dy_, 0.0, double(ny_ - 1));
-  const double v1 = std::clamp((y1 - y0_) / dy_, 0.0, double(ny_ - 1));
-  const int ci0 = std::min(int(u0), nx_ - 2), cj0 = std::min(int(v0), ny_ - 2);
-  const int ci1 = std::clamp(int(std::ceil(u1)) - 1, ci0, nx_ - 2);
-  const int cj1 = std::clamp(int(std::ceil(v1)) - 1, cj0, ny_ - 2);
+  const Span s = span_of(x0, x1, y0, y1);
+  const int ci0 = s.ci0, ci1 = s.ci1, cj0 = s.cj0, cj1 = s.cj1;
   // The level whose blocks are at least as wide as the span of cells: it
   // meets at most 2 of them along each axis.
   int level = 0;

@@ -68,6 +68,13 @@ class Surface {
  private:
   Surface() = default;
   void build_pyramid();
+  // A rectangle in the grid's cells: its span in cell units (clamped to the
+  // grid) and the cells it meets.
+  struct Span {
+    double u0, u1, v0, v1;
+    int ci0, ci1, cj0, cj1;
+  };
+  Span span_of(double x0, double x1, double y0, double y1) const;
   // Range of the bilinear cell (i, j) over its part in the rectangle.
   void cell_range(int i, int j, double x0, double x1, double y0, double y1, double* lo,
                   double* hi) const;

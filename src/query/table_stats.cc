@@ -9,24 +9,9 @@
 #include "schema/node.h"
 #include "schema/octant.h"
 #include "util/json_string.h"
+#include "util/metadata_text.h"
 
 namespace weaver {
-namespace {
-
-// The value of "key=value" among the metadata's ';'-separated items.
-std::string metadata_item(const std::string& meta, const std::string& key) {
-  for (size_t start = 0; start <= meta.size();) {
-    size_t end = meta.find(';', start);
-    if (end == std::string::npos) end = meta.size();
-    if (meta.compare(start, key.size() + 1, key + "=") == 0)
-      return meta.substr(start + key.size() + 1, end - start - key.size() - 1);
-    start = end + 1;
-  }
-  return "";
-}
-
-}  // namespace
-
 Status table_stats(const std::string& name, BTree& table, TableStats* out) {
   TableStats s;
   s.name = name;
