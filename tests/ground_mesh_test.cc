@@ -28,6 +28,7 @@
 #include "db/octant_table.h"
 #include "export/export.h"
 #include "extract/extract.h"
+#include "model/geo_frame.h"
 #include "query/explorer.h"
 #include "reference/boundary_reference.h"
 #include "reference/reference_mesh.h"
@@ -436,6 +437,62 @@ TEST(GroundMesh, QueriesTakeElevationAndDepthBelowTheGround) {
   // 600 m above the ground, past any cut element's reach: the air.
   std::snprintf(elevation, sizeof elevation, "%.17g %.17g %.17g", x, y, ground(x, y) + 600);
   EXPECT_NE(row(elevation, "elevation").find(",air,"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace weaver
+
+namespace weaver {
+namespace {
+
+// A DEM that misses part of the domain: said in the plan, refused with
+// --outside error; NODATA likewise.  A raster in degrees (--surface-crs
+// lonlat) resampled through the mesh's frame puts the ground where its own
+// longitude and latitude say.
+TEST(GroundMesh, SurfacesOutsideTheDomainOrInDegrees) {
+  testing::TempDir dir;
+  const std::string small = dir.file("small.asc");
+  {
+    std::ofstream f(small);  // 4 km x 4 km of an 8 km domain
+    f << "ncols 3\nnrows 3\nxllcenter 0\nyllcenter 0\ncellsize 2000\n";
+    for (int r = 0; r < 3; ++r) f << "100 200 300\n";
+  }
+  ConstructOptions o = ground_options_for("asc:" + small);
+  ConstructPlan plan;
+  ASSERT_OK(plan_construct(o, &plan));
+  EXPECT_NE(plan.surface_outside.find("x+, y+"), std::string::npos) << plan.surface_outside;
+  o.outside_error = true;
+  const Status refused = plan_construct(o, &plan);
+  EXPECT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("does not cover"), std::string::npos) << refused.message();
+  // In degrees: a raster 0.2 degrees a side around the origin, its ground
+  // rising 1 m per 0.001 degree of longitude (east).
+  const std::string deg = dir.file("deg.asc");
+  {
+    std::ofstream f(deg);
+    f << "ncols 201\nnrows 201\nxllcenter -118.1\nyllcenter 33.9\ncellsize 0.001\n";
+    for (int r = 200; r >= 0; --r) {
+      for (int c = 0; c <= 200; ++c) f << 500 + c << " ";
+      f << "\n";
+    }
+  }
+  ConstructOptions d = ground_options_for("asc:" + deg);
+  d.geo = "-118,34,0";
+  d.surface_crs = SurfaceCrs::kLonLat;
+  ASSERT_OK(plan_construct(d, &plan));
+  ASSERT_TRUE(plan.carved);
+  GeoFrame g;
+  ASSERT_OK(GeoFrame::parse("-118,34,0", &g));
+  for (double x : {500.0, 4000.0, 7500.0}) {
+    for (double y : {500.0, 4000.0, 7500.0}) {
+      double lon, lat;
+      g.to_geo(x, y, &lon, &lat);
+      const double want = 500 + (lon + 118.1) / 0.001;
+      // Resampled at the raster's own spacing (111 m north): within the
+      // ground's change over a cell of it.
+      EXPECT_NEAR(plan.surface->elevation(x, y), want, 1.5) << x << " " << y;
+    }
+  }
 }
 
 }  // namespace
