@@ -89,8 +89,16 @@ class BoundaryWriter {
       const int a = f / 2;
       on_side[f] = (f & 1) ? c[a] + e == span_.hi[a] : c[a] == span_.lo[a];
     }
+    if (span_.filled) {  // nothing open inside the box: its sides alone
+      for (int f = 0; f < 6; ++f) {
+        if (!on_side[f]) continue;
+        WEAVER_RETURN_IF_ERROR(emit(id, f, 0, f == 4 ? BoundaryKind::kFreeSurface
+                                                    : BoundaryKind::kDomainSide));
+      }
+      return Status::Ok();
+    }
     std::array<uint8_t, 6> missing{};  // per face: bit p set when part p lies open
-    if (!span_.filled && !ground.buried(o)) {
+    if (!ground.buried(o)) {
       ++r_->asked;
       neighbours_.clear();
       WEAVER_RETURN_IF_ERROR(finder->find(o, &neighbours_));
@@ -156,7 +164,7 @@ Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, Memo
   }
   FaceFinder finder(octants);
   BoundaryWriter w(out, span, r);
-  const Field* vp = octants.options().schema.find("vp");
+  const Field* vp = o.known_least_dt > 0 ? nullptr : octants.options().schema.find("vp");
   LeafReader reader;
   WEAVER_RETURN_IF_ERROR(reader.open(octants, 0, vp != nullptr));
   const uint64_t total = octants.size();
@@ -176,6 +184,7 @@ Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, Memo
     WEAVER_RETURN_IF_ERROR(reader.next());
   }
   r->least_dt = vp != nullptr && r->elements > 0 ? least : 0;
+  if (o.known_least_dt > 0) r->least_dt = o.known_least_dt, r->least_dt_element = o.known_least_dt_element;
   char meta[256];
   std::snprintf(meta, sizeof meta,
                 "faces=%llu;free_surface=%llu;sides=%llu;least_dt=%.17g;least_dt_element=%llu",

@@ -37,6 +37,11 @@ struct BoundaryOptions {
   bool packed = true;
   ProgressFn progress;           // elements visited, and their share
   Database* writer = nullptr;    // a writer already open on the database
+  // The least edge / vp and its element when the caller knows them (weaver
+  // mesh: construct found them): the scan then reads keys alone.  0: found
+  // here, from the leaves' vp.
+  double known_least_dt = 0;
+  uint64_t known_least_dt_element = 0;
 };
 
 struct BoundaryResult {

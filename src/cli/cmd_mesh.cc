@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -218,6 +219,12 @@ int cmd_mesh(int argc, char** argv) {
   bo.memory = co.memory;
   bo.packed = co.packed;
   bo.writer = writer.get();
+  // Construct found the least edge / vp of the leaves it wrote; a balance
+  // after it (--unbalanced) splits some, so then the boundary's scan finds it.
+  if (co.balanced && cr.least_dt < HUGE_VAL) {
+    bo.known_least_dt = cr.least_dt;
+    bo.known_least_dt_element = cr.least_dt_element;
+  }
   ProgressLine boundary_line(style, "boundary", "elements");
   bo.progress = boundary_line.fn();
   BoundaryResult br;
