@@ -11,6 +11,7 @@
 //              the units), vp vs rho Float32 (when the mesh has material),
 //              qp qs Float32 (when its material has them), solid_fraction
 //              Float32 (a mesh built with --surface: the share below ground)
+//   FieldData  top_elevation_m Float64 (a mesh built with --surface)
 //   Points     Float64 x 3 (metres by default, or ticks)
 //   Cells      connectivity Int64 (VTK's corner order), offsets Int64,
 //              types UInt8 (12, VTK_HEXAHEDRON)
@@ -131,9 +132,21 @@ constexpr char kVtkFile[] = "<?xml version=\"1.0\"?>\n<VTKFile type=\"";
 constexpr char kVtkFileEnd[] =
     "\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
 
-std::string header(const std::vector<Array>& a, uint64_t n, uint64_t e, Present has) {
+// The mesh's own facts as field data: the top's elevation of a mesh built
+// under a ground (z = 0 there), for readers that turn depth into elevation.
+std::string field_data(const Mesh& m) {
+  if (!m.has_ground()) return "";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", m.top_elevation());
+  return std::string("    <FieldData>\n      <DataArray type=\"Float64\" Name=\"top_elevation_m\" "
+                     "NumberOfTuples=\"1\" format=\"ascii\">") +
+         buf + "</DataArray>\n    </FieldData>\n";
+}
+
+std::string header(const std::vector<Array>& a, uint64_t n, uint64_t e, Present has,
+                   const std::string& fields) {
   std::string s = std::string(kVtkFile) + "UnstructuredGrid" + kVtkFileEnd +
-                  "  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"" + std::to_string(n) +
+                  "  <UnstructuredGrid>\n" + fields + "    <Piece NumberOfPoints=\"" + std::to_string(n) +
                   "\" NumberOfCells=\"" + std::to_string(e) + "\">\n";
   s += declarations(a, has, false);
   s += "      <Cells>\n" + data_array(a[kConn]) + data_array(a[kOffsets]) + data_array(a[kTypes]) +
@@ -187,7 +200,7 @@ Status write_vtu_file(ExportJob& job, const std::string& path) {
   const Present has = present(job, &geo);
   const GeoTransform transform(geo);
   const std::vector<Array> arrays = layout(n, e, has);
-  const std::string head = header(arrays, n, e, has);
+  const std::string head = header(arrays, n, e, has, field_data(job.mesh));
   OutputFile file(path);
   WEAVER_RETURN_IF_ERROR(file.open());
   WEAVER_RETURN_IF_ERROR(file.write_at(0, head.data(), head.size()));

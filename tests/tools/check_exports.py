@@ -507,6 +507,9 @@ def check_ground():
     r.Update()
     got = vtk_to_numpy(r.GetOutput().GetCellData().GetArray("solid_fraction"))
     check(np.array_equal(got, solid), "the vtu's solid_fraction is not raw's")
+    top_field = r.GetOutput().GetFieldData().GetArray("top_elevation_m")
+    check(top_field is not None and abs(top_field.GetValue(0) - raw["top_elevation_m"]) < 1e-6,
+          "the vtu's field data lacks top_elevation_m")
     faces = raw_array(d + "/m.raw", raw, "boundary_faces")
     kind = raw_array(d + "/m.raw", raw, "boundary_kind")
     b = vtk.vtkXMLUnstructuredGridReader()
