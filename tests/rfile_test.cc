@@ -79,6 +79,7 @@ TEST(Rfile, SamplesLinearFieldsExactlyInTheBlockSw4Picks) {
         // SW4: block 2 from its top z0 = 100 down, block 1 above.
         const int b = z >= 100 ? 2 : 1;
         const Material got = m->at(x, y, z);
+        ASSERT_EQ(m->vs_at(x, y, z), got.vs);  // the Vs-only path, to the bit
         const double tol = precision == 4 ? 2e-3 : 1e-3;
         ASSERT_NEAR(got.rho, field(b, 0, x, y, z), tol * 5) << x << " " << y << " " << z;
         ASSERT_NEAR(got.vp, field(b, 1, x, y, z), tol * 5);

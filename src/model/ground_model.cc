@@ -94,7 +94,7 @@ void for_lattice(const Ground& g, const double* xs, const double* ys, const doub
 void GroundedModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                                   float* out) const {
   for_lattice(g_, xs, ys, zs, n,
-              [&](int at, double x, double y, double mz) { out[at] = inner_.at(x, y, mz).vs; });
+              [&](int at, double x, double y, double mz) { out[at] = inner_.vs_at(x, y, mz); });
 }
 
 void GroundedModel::materials_on_lattice(const double* xs, const double* ys, const double* zs,

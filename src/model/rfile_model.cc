@@ -157,7 +157,7 @@ const double* RfileModel::column(Cache& c, int b, int i, int j) const {
   return slot;
 }
 
-Material RfileModel::at(double x, double y, double z) const {
+RfileModel::Cell RfileModel::cell_of(double x, double y, double z) const {
   x = std::clamp(x, 0.0, x_extent());
   y = std::clamp(y, 0.0, y_extent());
   z = std::clamp(z, z_top(), z_bottom());
@@ -165,13 +165,46 @@ Material RfileModel::at(double x, double y, double z) const {
   while (gr >= 1 && z < h_.blocks[gr].z0) --gr;
   if (gr == 0) gr = 1;
   const RfileBlock& k = h_.blocks[gr];
-  const int i0 = clamp_index(x / k.hh, k.ni - 1);
-  const int j0 = clamp_index(y / k.hh, k.nj - 1);
-  const int k0 = clamp_index((z - k.z0) / k.hv, k.nk - 1);
-  const double wx = (x - i0 * k.hh) / k.hh;
-  const double wy = (y - j0 * k.hh) / k.hh;
-  const double wz = (z - (k0 * k.hv + k.z0)) / k.hv;
-  const int nc = k.nc;
+  Cell c;
+  c.block = gr;
+  c.i0 = clamp_index(x / k.hh, k.ni - 1);
+  c.j0 = clamp_index(y / k.hh, k.nj - 1);
+  c.k0 = clamp_index((z - k.z0) / k.hv, k.nk - 1);
+  c.wx = (x - c.i0 * k.hh) / k.hh;
+  c.wy = (y - c.j0 * k.hh) / k.hh;
+  c.wz = (z - (c.k0 * k.hv + k.z0)) / k.hv;
+  return c;
+}
+
+float RfileModel::vs_at(double x, double y, double z) const {
+  const Cell cell = cell_of(x, y, z);
+  const int nc = h_.blocks[cell.block].nc;
+  double v[2][2][2];
+  Cache& c = cache();
+  for (int di = 0; di < 2; ++di) {
+    for (int dj = 0; dj < 2; ++dj) {
+      const double* col = column(c, cell.block, cell.i0 + di, cell.j0 + dj) + size_t(cell.k0) * nc;
+      v[di][dj][0] = col[2], v[di][dj][1] = col[nc + 2];
+    }
+  }
+  const double wx = cell.wx, wy = cell.wy, wz = cell.wz;
+  const auto lerp_x = [&](int dj, int dk) { return (1 - wx) * v[0][dj][dk] + wx * v[1][dj][dk]; };
+  return float((1 - wz) * ((1 - wy) * lerp_x(0, 0) + wy * lerp_x(1, 0)) +
+               wz * ((1 - wy) * lerp_x(0, 1) + wy * lerp_x(1, 1)));
+}
+
+void RfileModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                               float* out) const {
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) out[(k * n + j) * n + i] = vs_at(xs[i], ys[j], zs[k]);
+}
+
+Material RfileModel::at(double x, double y, double z) const {
+  const Cell cell = cell_of(x, y, z);
+  const int gr = cell.block, i0 = cell.i0, j0 = cell.j0, k0 = cell.k0;
+  const double wx = cell.wx, wy = cell.wy, wz = cell.wz;
+  const int nc = h_.blocks[gr].nc;
   // v[di][dj][dk][component], copied out at once: the next column may
   // take the slot of this one.
   double v[2][2][2][5];

@@ -54,6 +54,10 @@ class RfileModel final : public VelocityModel {
   Status error() const;
 
   Material at(double x, double y, double z) const override;
+  // Vs alone: the same cell and weights, one component interpolated.
+  float vs_at(double x, double y, double z) const override;
+  void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                     float* out) const override;
   bool has_q() const override { return h_.has_q(); }
   // Sides of [0, domain_m] (x, y; z counted down from sea level) past the
   // file's box.
@@ -71,6 +75,12 @@ class RfileModel final : public VelocityModel {
   const double* column(Cache& c, int b, int i, int j) const;
   Status load_column(Cache& c, int b, int i, int j, double* out) const;
   void fail(const Status& s) const;
+  // The cell of (x, y, z) as SW4 finds it: its block, first point and weights.
+  struct Cell {
+    int block, i0, j0, k0;
+    double wx, wy, wz;
+  };
+  Cell cell_of(double x, double y, double z) const;
 
   std::string path_;
   RfileHeader h_;

@@ -31,6 +31,8 @@ class VelocityModel {
  public:
   virtual ~VelocityModel() = default;
   virtual Material at(double x, double y, double z) const = 0;
+  // at(x, y, z).vs, to the bit; models override it where Vs alone is cheaper.
+  virtual float vs_at(double x, double y, double z) const { return at(x, y, z).vs; }
   // Vs, rounded as at() rounds it, at every point (xs[i], ys[j], zs[k]) of
   // an n x n x n lattice, into out[(k * n + j) * n + i]: what construct asks
   // of every octant it splits (n = 5: the 3 x 3 x 3 sample points of all
