@@ -12,7 +12,7 @@ namespace {
 constexpr char kUsage[] =
     "usage: weaver slice DB --at COORD --out FILE.png|FILE.svg [--axis x|y|z] [--units ticks|m]\n"
     "                    [--color level|vp|vs|rho] [--width PIXELS] [--region A0,B0,A1,B1]\n"
-    "                    [--danglings]\n"
+    "                    [--danglings] [--z domain|elevation]\n"
     "\n"
     "A picture of the mesh cut by the plane AXIS = COORD: the elements the plane\n"
     "cuts, outlined and filled by a field on a colour scale (viridis), with a colour\n"
@@ -21,6 +21,9 @@ constexpr char kUsage[] =
     "  --axis x|y|z       the plane's normal (default z: a map view; x or y: sections)\n"
     "  --at COORD         where the plane crosses the axis, in ticks, or metres with\n"
     "                     --units m; an element holds corner <= p < corner + edge\n"
+    "  --z domain|elevation  a z plane's --at as the domain's depth (default) or as\n"
+    "                     an elevation in metres up (a mesh built with --surface:\n"
+    "                     z = its top's elevation minus --at; implies --units m)\n"
     "  --color FIELD      level (default), or vp, vs, rho for a mesh built from a model\n"
     "  --width PIXELS     the picture's width (default 1600; 200 to 20000); the height\n"
     "                     follows the section's shape\n"
@@ -39,7 +42,8 @@ constexpr char kUsage[] =
 int cmd_slice(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(argc, argv, 2,
-                         {"axis", "at", "units", "out", "color", "width", "region", "memory"},
+                         {"axis", "at", "units", "out", "color", "width", "region", "memory",
+                          "z"},
                          {"danglings", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("slice", st.message(), kUsage);
@@ -56,6 +60,12 @@ int cmd_slice(int argc, char** argv) {
     st = Status::InvalidArgument("--units is ticks or m");
   o.axis = axis[0] - 'x';
   o.at_is_ticks = units == "ticks";
+  if (st.ok() && args.values.count("z")) {
+    const std::string& z = args.values.at("z");
+    if (z != "domain" && z != "elevation") st = Status::InvalidArgument("--z is domain or elevation");
+    o.at_is_elevation = z == "elevation";
+    if (o.at_is_elevation) o.at_is_ticks = false;
+  }
   if (st.ok()) st = parse_double(args.values.at("at"), "--at", &o.at_m);
   if (st.ok() && args.values.count("color")) o.color = args.values.at("color");
   uint64_t width = uint64_t(o.width);

@@ -168,9 +168,11 @@ void draw_colour_bar(Canvas& c, const Layout& l, double lo, double hi, bool leve
   }
 }
 
-Status plane_tick(const Explorer& ex, const SliceOptions& o, uint32_t* at) {
+Status plane_tick(Explorer& ex, const SliceOptions& o, uint32_t* at) {
   const Units& u = ex.units();
-  const double t = o.at_is_ticks ? o.at_m : std::floor((o.at_m - u.origin_m[o.axis]) / u.tick_m);
+  const double at_m =
+      o.at_is_elevation && o.axis == 2 ? ex.mesh().top_elevation() - o.at_m : o.at_m;
+  const double t = o.at_is_ticks ? at_m : std::floor((at_m - u.origin_m[o.axis]) / u.tick_m);
   if (!(t >= 0 && t < kRootEdge)) {
     return Status::InvalidArgument("the plane " + std::string(1, "xyz"[o.axis]) + " = " +
                                    number_text(o.at_m) + (o.at_is_ticks ? " ticks" : " m") +

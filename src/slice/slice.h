@@ -18,6 +18,9 @@ struct SliceOptions {
   int axis = 2;     // the plane's normal: 0 x, 1 y, 2 z
   double at_m = 0;  // where it crosses that axis, in metres (see at_ticks)
   bool at_is_ticks = false;
+  // A z plane given as an elevation (metres up): z = the top's elevation
+  // minus at_m, for a mesh built under a ground (slice --z elevation).
+  bool at_is_elevation = false;
   std::string color = "level";  // level, vp, vs, rho
   int width = 1600;             // pixels, margins and colour bar included
   bool danglings = false;       // mark the dangling nodes on the plane

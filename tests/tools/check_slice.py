@@ -158,6 +158,13 @@ for px in range(px0 + 5, px1 - 5, 37):
     dark += 1
 if dark < 10:
     fail(f"the ground line was checked at {dark} columns only")
+# --z elevation: the z plane at the top's elevation minus --at.
+by_elevation = os.path.join(work, "elev.png")
+by_depth = os.path.join(work, "depth.png")
+run("slice", ground_db, "--axis", "z", "--at", "1000", "--z", "elevation", "--out", by_elevation)
+run("slice", ground_db, "--axis", "z", "--at", repr(top - 1000), "--units", "m", "--out", by_depth)
+if read_png(by_elevation)[3]["weaver.plane"] != read_png(by_depth)[3]["weaver.plane"]:
+    fail("slice --z elevation 1000 is not the plane z = top - 1000")
 
 # SVG: well-formed, one outlined rectangle per element cut.
 svg = os.path.join(work, "s.svg")
