@@ -276,11 +276,42 @@ Status write_piece(ExportJob& job, const Parts& parts, const Selection& box, uin
   s.has_box = box.has_box, s.lo = box.lo, s.hi = box.hi;
   WEAVER_RETURN_IF_ERROR(job.select(s, false, job.options.out + ".scratch-" + std::to_string(p)));
   const std::string stem = pvtu_stem(job.options.out);
-  return write_vtu_file(job, stem + "/" + base_name(piece_name(stem, p)));
+  const std::string piece = stem + "/" + base_name(piece_name(stem, p));
+  WEAVER_RETURN_IF_ERROR(write_vtu_file(job, piece));
+  // The piece's boundary beside it (boundary_faces.h), named by its own index.
+  if (!job.mesh.has_boundary()) return Status::Ok();
+  return write_boundary_vtu(job, boundary_vtu_path(piece));
 }
 
-// The index ParaView opens, naming every piece: written last.
+// STEM_boundary.pvtu: the pieces' boundary quads, for ParaView to open
+// beside STEM.pvtu.
+Status write_boundary_index(ExportJob& job) {
+  const std::string stem = pvtu_stem(job.options.out);
+  std::string pieces;
+  for (uint32_t p = 0; p < job.options.parts; ++p) {
+    pieces += "    <Piece Source=\"" + boundary_vtu_path(piece_name(stem, p)) + "\"/>\n";
+  }
+  const std::string index =
+      std::string(kVtkFile) + "PUnstructuredGrid" + kVtkFileEnd +
+      "  <PUnstructuredGrid GhostLevel=\"0\">\n    <PCellData>\n"
+      "      <PDataArray type=\"Int64\" Name=\"element_id\"/>\n"
+      "      <PDataArray type=\"UInt8\" Name=\"face\"/>\n"
+      "      <PDataArray type=\"UInt8\" Name=\"part\"/>\n"
+      "      <PDataArray type=\"UInt8\" Name=\"kind\"/>\n    </PCellData>\n    <PPoints>\n"
+      "      <PDataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"/>\n"
+      "    </PPoints>\n" +
+      pieces + "  </PUnstructuredGrid>\n</VTKFile>\n";
+  OutputFile file(stem + "_boundary.pvtu");
+  WEAVER_RETURN_IF_ERROR(file.open());
+  WEAVER_RETURN_IF_ERROR(file.write_at(0, index.data(), index.size()));
+  job.result->bytes += index.size();
+  return file.finish();
+}
+
+// The index ParaView opens, naming every piece: written last (after the
+// boundary's index, where the mesh has a boundary table).
 Status write_pvtu_index(ExportJob& job) {
+  if (job.mesh.has_boundary()) WEAVER_RETURN_IF_ERROR(write_boundary_index(job));
   const std::string stem = pvtu_stem(job.options.out);
   std::string pieces;
   for (uint32_t p = 0; p < job.options.parts; ++p) {

@@ -551,6 +551,14 @@ def check_ground():
     order = np.concatenate([np.flatnonzero(kind == 1), np.flatnonzero(kind == 0)])
     vtu_corners = np.sort(pts[order].round(6), axis=1)
     check(np.array_equal(msh_corners, vtu_corners), "msh's quads are not the boundary's")
+    # pvtu pieces: each with its boundary beside it, an index for them all.
+    run(WEAVER, "export", db, "--format", "pvtu", "--parts", "3", "--out", d + "/p.pvtu", "--quiet")
+    pb = vtk.vtkXMLPUnstructuredGridReader()
+    pb.SetFileName(d + "/p_boundary.pvtu")
+    pb.Update()
+    check(pb.GetOutput().GetNumberOfCells() == len(faces), "the pieces' boundary is not the whole")
+    pieces_ids = np.sort(vtk_to_numpy(pb.GetOutput().GetCellData().GetArray("element_id")))
+    check(np.array_equal(pieces_ids, np.sort(faces[:, 0])), "the pieces' boundary elements differ")
     # --z-up: elevations, the same points mirrored about the top.
     run(WEAVER, "export", db, "--format", "vtu", "--out", d + "/up.vtu", "--z-up", "--quiet")
     up = vtk.vtkXMLUnstructuredGridReader()
