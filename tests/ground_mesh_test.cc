@@ -377,16 +377,24 @@ TEST(GroundMesh, AnRfileBringsItsOwnGroundAndItsBlocksBeneath) {
 namespace weaver {
 namespace {
 
+// A mesh (construct, extract) under the DEM of `ground` written to `dem`;
+// its database's path.
+std::string mesh_under(const testing::TempDir& dir, const std::string& dem,
+                       const std::function<double(double, double)>& ground, ConstructPlan* plan) {
+  make_test_dem(9, ground).write(dem);
+  const std::string db = dir.file("db");
+  ConstructResult r;
+  EXPECT_OK(construct_octree(db, ground_options_for("asc:" + dem), plan, &r));
+  ExtractResult er;
+  EXPECT_OK(extract_mesh(db, ExtractOptions{}, &er));
+  return db;
+}
+
 TEST(GroundMesh, VerifyFindsElementsAboveTheGroundItWasBuiltUnder) {
   testing::TempDir dir;
   const std::string dem = dir.file("hill.asc");
-  make_test_dem(9, [](double x, double) { return 200 + 0.2 * x; }).write(dem);
-  const std::string db = dir.file("db");
   ConstructPlan plan;
-  ConstructResult r;
-  ASSERT_OK(construct_octree(db, ground_options_for("asc:" + dem), &plan, &r));
-  ExtractResult er;
-  ASSERT_OK(extract_mesh(db, ExtractOptions{}, &er));
+  const std::string db = mesh_under(dir, dem, [](double x, double) { return 200 + 0.2 * x; }, &plan);
   VerifyReport report;
   ASSERT_OK(verify_database(db, VerifyOptions{}, &report));
   EXPECT_TRUE(report.ok()) << report.problems[0];
@@ -416,13 +424,8 @@ TEST(GroundMesh, QueriesTakeElevationAndDepthBelowTheGround) {
   testing::TempDir dir;
   const std::string dem = dir.file("plane.asc");
   auto ground = [](double x, double y) { return 300 + 0.1 * x + 0.05 * y; };
-  make_test_dem(9, ground).write(dem);
-  const std::string db = dir.file("db");
   ConstructPlan plan;
-  ConstructResult r;
-  ASSERT_OK(construct_octree(db, ground_options_for("asc:" + dem), &plan, &r));
-  ExtractResult er;
-  ASSERT_OK(extract_mesh(db, ExtractOptions{}, &er));
+  const std::string db = mesh_under(dir, dem, ground, &plan);
   const double top = plan.ground.top_elevation, x = 3000, y = 5000, depth = 700;
   const double z = top - ground(x, y) + depth;
   auto row = [&](const std::string& point, const std::string& mode) {

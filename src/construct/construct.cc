@@ -257,9 +257,19 @@ Status plan_ground(const ConstructOptions& o, const VelocityModel& model, uint64
   GeoFrame geo;
   const std::string geo_text = o.geo.empty() ? model.geo() : o.geo;
   if (!geo_text.empty()) WEAVER_RETURN_IF_ERROR(GeoFrame::parse(geo_text, &geo));
-  std::unique_ptr<Surface> surface;
-  WEAVER_RETURN_IF_ERROR(load_surface(s, geo_text.empty() ? nullptr : &geo, surface_bytes, &surface));
+  // A plan planned again (weaver mesh plans, then construct plans once
+  // more) keeps the surface it read: a DEM is read once a run.
+  std::shared_ptr<const Surface> surface;
+  if (p->surface != nullptr && p->surface_source == s.text && p->surface_crs == s.crs) {
+    surface = p->surface;
+  } else {
+    std::unique_ptr<Surface> loaded;
+    WEAVER_RETURN_IF_ERROR(
+        load_surface(s, geo_text.empty() ? nullptr : &geo, surface_bytes, &loaded));
+    surface = std::move(loaded);
+  }
   p->surface_source = s.text;
+  p->surface_crs = s.crs;
   double top = std::isnan(o.top_elevation) ? 0 : o.top_elevation;
   if (surface) {
     const double highest = surface->highest();

@@ -119,6 +119,7 @@ struct ConstructPlan {
   // cut away and each leaf carries its solid fraction.
   std::shared_ptr<const Surface> surface;
   std::string surface_source = "flat";
+  SurfaceCrs surface_crs = SurfaceCrs::kFrame;
   Ground ground;
   bool carved = false;
   double estimated_elements = 0;  // from a coarse sampling (construct/estimate.h)

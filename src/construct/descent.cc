@@ -89,10 +89,14 @@ Descent::Settled Descent::settle(const Octant& o, double* floor) const {
 }
 
 Judgement Descent::judge(const Octant& o) const {
+  return judge_on(o, p_.carved ? ground_side(o) : GroundSide::kSolid);
+}
+
+Judgement Descent::judge_on(const Octant& o, GroundSide side) const {
   Judgement j;
   j.floor = o_.vs_min;
-  if (p_.carved && ground_side(o) == GroundSide::kAir) {
-    apply_ground(o, &j);
+  if (side == GroundSide::kAir) {
+    apply_ground(o, side, &j);
     return j;
   }
   const Settled s = settle(o, &j.floor);
@@ -104,7 +108,7 @@ Judgement Descent::judge(const Octant& o) const {
     j.vs = vs_min_of(samples);
     j.split = splits(o, j.vs);
   }
-  if (p_.carved) apply_ground(o, &j);
+  apply_ground(o, side, &j);
   return j;
 }
 
@@ -114,8 +118,8 @@ GroundSide Descent::ground_side(const Octant& o) const {
   return side_of_ground(p_.ground, lo, hi);
 }
 
-void Descent::apply_ground(const Octant& o, Judgement* j) const {
-  switch (ground_side(o)) {
+void Descent::apply_ground(const Octant& o, GroundSide side, Judgement* j) const {
+  switch (side) {
     case GroundSide::kAir:
       // Nothing of it is meshed: no samples, no split but --min-level's.
       j->split = o.level < o_.min_level;
@@ -145,9 +149,12 @@ void Descent::judge_children(const Octant& o, double floor, const bool* want,
     const Octant child = octant_child(o, c);
     Judgement& j = out[c];
     j = Judgement{false, floor, -1};
-    if (p_.carved && ground_side(child) != GroundSide::kSolid) {
-      j = judge(child);
-      continue;
+    if (p_.carved) {
+      const GroundSide side = ground_side(child);
+      if (side != GroundSide::kSolid) {
+        j = judge_on(child, side);
+        continue;
+      }
     }
     if (!splits(child, floor)) continue;
     const Settled s = settle(child, &j.floor);

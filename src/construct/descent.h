@@ -97,7 +97,9 @@ class Descent {
   bool visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const;
   // Where the ground decides: air is never split (but for --min-level), a
   // leaf it crosses is split down to --surface-edge.
-  void apply_ground(const Octant& o, Judgement* j) const;
+  void apply_ground(const Octant& o, GroundSide side, Judgement* j) const;
+  // judge() with o's side of the ground known (kSolid when not carved).
+  Judgement judge_on(const Octant& o, GroundSide side) const;
   GroundSide ground_side(const Octant& o) const;
   bool emit_siblings(const Octant& o, const Judgement* children, size_t cap,
                      SubtreeLeaves* out) const;

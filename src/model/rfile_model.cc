@@ -193,13 +193,6 @@ float RfileModel::vs_at(double x, double y, double z) const {
                wz * ((1 - wy) * lerp_x(0, 1) + wy * lerp_x(1, 1)));
 }
 
-void RfileModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
-                               float* out) const {
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) out[(k * n + j) * n + i] = vs_at(xs[i], ys[j], zs[k]);
-}
-
 Material RfileModel::at(double x, double y, double z) const {
   const Cell cell = cell_of(x, y, z);
   const int gr = cell.block, i0 = cell.i0, j0 = cell.j0, k0 = cell.k0;

@@ -56,8 +56,6 @@ class RfileModel final : public VelocityModel {
   Material at(double x, double y, double z) const override;
   // Vs alone: the same cell and weights, one component interpolated.
   float vs_at(double x, double y, double z) const override;
-  void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
-                     float* out) const override;
   bool has_q() const override { return h_.has_q(); }
   // Sides of [0, domain_m] (x, y; z counted down from sea level) past the
   // file's box.

@@ -41,7 +41,7 @@ class VelocityModel {
                              float* out) const {
     for (int k = 0; k < n; ++k)
       for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) out[(k * n + j) * n + i] = at(xs[i], ys[j], zs[k]).vs;
+        for (int i = 0; i < n; ++i) out[(k * n + j) * n + i] = vs_at(xs[i], ys[j], zs[k]);
   }
   // at() at every point (xs[i], ys[j], zs[k]) of an n x n x n lattice, into
   // out[(k * n + j) * n + i], the same to the bit: construct asks it for the

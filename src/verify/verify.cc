@@ -214,6 +214,7 @@ VerifyMemory::VerifyMemory(MemoryBudget budget) : plan(budget) {
   node_pool = plan.take("node table pool", 1, 8);
   // The balance check sorts the leaves' requirements out of core.
   balance_check = plan.take_budget("balance check", 1, 2);
+  surface = table_pool;
 }
 
 // A mesh under a ground surface: every solid fraction in (0, 1], and no
@@ -227,7 +228,7 @@ Status check_ground(Database& db, const VerifyMemory& memory, Problems& problems
   std::unique_ptr<Surface> surface;
   Ground ground;
   const Status loaded =
-      ground_of_metadata(t->options().metadata, memory.plan.budget().bytes() / 4, &surface, &ground);
+      ground_of_metadata(t->options().metadata, memory.surface, &surface, &ground);
   if (!loaded.ok()) problems.add("table octants: its ground cannot be read again: " + loaded.message());
   Units units;
   units_from_metadata(t->options().metadata, &units);

@@ -44,6 +44,9 @@ struct VerifyMemory {
   uint64_t octant_pool = 0;    // the mesh check: leaves found by aggregate hits
   uint64_t node_pool = 0;      // the mesh check: nodes read in order and found by key
   MemoryBudget balance_check;  // the balance check's own budget (balance.h)
+  // A carved mesh's surface, read again: the storage check's share, free
+  // again by then (the ground check runs after it).
+  uint64_t surface = 0;
 };
 
 struct VerifyReport {
