@@ -2,11 +2,12 @@
 // boundary on generated octrees: filled ones (a non-cube block domain,
 // random refinement), the same with leaves taken away at random (holes,
 // as an imported octree or a carved mesh has), and a graded sphere.
+#include "boundary/boundary.h"
+
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "boundary/boundary.h"
 #include "db/boundary_table.h"
 #include "db/database.h"
 #include "reference/boundary_reference.h"
@@ -46,8 +47,8 @@ void expect_boundary_matches(const std::vector<Octant>& leaves, bool filled) {
   const auto got = stored_boundary(db);
   ASSERT_EQ(got.size(), want.size());
   for (size_t i = 0; i < want.size(); ++i) {
-    ASSERT_TRUE(got[i] == want[i]) << "record " << i << ": element " << want[i].element
-                                   << " face " << want[i].face << " part " << want[i].part;
+    ASSERT_TRUE(got[i] == want[i]) << "record " << i << ": element " << want[i].element << " face "
+                                   << want[i].face << " part " << want[i].part;
   }
   EXPECT_EQ(r.faces, want.size());
 }
@@ -56,8 +57,7 @@ TEST(Boundary, MatchesTheReferenceOnFilledAndHoledOctrees) {
   const int rounds = testing::scaled(6, 2);
   for (int seed = 1; seed <= rounds; ++seed) {
     SCOPED_TRACE(seed);
-    const std::vector<Octant> full =
-        testing::random_balanced(seed, 3, 2, 1 + seed % 2, 2, 300, 6);
+    const std::vector<Octant> full = testing::random_balanced(seed, 3, 2, 1 + seed % 2, 2, 300, 6);
     ASSERT_NO_FATAL_FAILURE(expect_boundary_matches(full, true));
     // Holes: what remains of a balanced octree stays balanced.
     std::mt19937_64 rng(seed);

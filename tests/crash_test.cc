@@ -313,7 +313,8 @@ class CrashTest : public ::testing::Test {
        {"mesh", "{db}", "--model", "basin", "--freq", "0.08", "--surface", "asc:" + dem_,
         "--memory", "1M", "--quiet"}},
       {import_a, balance, extract});
-    f({"boundary", {"boundary", "{db}", "--memory", "1M", "--quiet"}}, {import_a, balance, extract});
+    f({"boundary", {"boundary", "{db}", "--memory", "1M", "--quiet"}},
+      {import_a, balance, extract});
     f({"extract (sort)", extract}, {import_a, balance});
     f({"extract (search, lsm)",
        {"extract", "{db}", "--algorithm", "search", "--store", "lsm", "--memory", "1M"}},

@@ -73,7 +73,8 @@ TestDem make_test_dem(int n, const std::function<double(double, double)>& g) {
   TestDem d;
   d.n = n;
   for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) d.z.push_back(g(i * kGroundSide / (n - 1), j * kGroundSide / (n - 1)));
+    for (int j = 0; j < n; ++j)
+      d.z.push_back(g(i * kGroundSide / (n - 1), j * kGroundSide / (n - 1)));
   return d;
 }
 
@@ -100,7 +101,7 @@ struct GroundCase {
   std::string name;
   ConstructOptions o;
   std::function<double(double, double)> ground;  // the test's own, metres
-  bool plane = false;                             // analytic fractions
+  bool plane = false;                            // analytic fractions
 };
 
 void check_ground_case(const GroundCase& c, const testing::TempDir& dir) {
@@ -125,14 +126,16 @@ void check_ground_case(const GroundCase& c, const testing::TempDir& dir) {
   for (const auto& [o, f] : leaves) {
     ASSERT_GT(f, 0.0f);
     ASSERT_LE(f, 1.0f);
-    const double e = octant_edge(o) * t, x0 = o.x * t, y0 = o.y * t, bottom = (o.z + octant_edge(o)) * t;
+    const double e = octant_edge(o) * t, x0 = o.x * t, y0 = o.y * t,
+                 bottom = (o.z + octant_edge(o)) * t;
     double highest = -HUGE_VAL;
     for (int i = 0; i <= 16; ++i)
-      for (int j = 0; j <= 16; ++j) highest = std::max(highest, c.ground(x0 + e * i / 16, y0 + e * j / 16));
+      for (int j = 0; j <= 16; ++j)
+        highest = std::max(highest, c.ground(x0 + e * i / 16, y0 + e * j / 16));
     // The lattice may miss the very top of the ground by its slope times
     // a sixteenth of the edge: an eighth of the edge is let be.
-    ASSERT_GT(bottom + e / 8, top - highest) << o.x << " " << o.y << " " << o.z << " level "
-                                             << int(o.level);
+    ASSERT_GT(bottom + e / 8, top - highest)
+        << o.x << " " << o.y << " " << o.z << " level " << int(o.level);
     (void)highest;
     if (f < 1) ++cut;
     if (c.plane && f < 1) {
@@ -238,7 +241,8 @@ void check_ground_case(const GroundCase& c, const testing::TempDir& dir) {
   ExportResult xr;
   ASSERT_OK(export_mesh(db, eo, &xr));
   std::ifstream json_in(eo.out + "/mesh.json");
-  const std::string json((std::istreambuf_iterator<char>(json_in)), std::istreambuf_iterator<char>());
+  const std::string json((std::istreambuf_iterator<char>(json_in)),
+                         std::istreambuf_iterator<char>());
   const size_t at = json.find("\"element_solid_fraction\"");
   ASSERT_NE(at, std::string::npos);
   const size_t off = json.find("\"offset\": ", at);
@@ -272,19 +276,21 @@ ConstructOptions ground_options_for(const std::string& surface) {
 TEST(GroundMesh, CarvedOctreesAreBalancedCompleteAndExtractAsTheReference) {
   testing::TempDir dir;
   std::vector<GroundCase> cases;
-  auto ground_dem_case = [&](const std::string& name, int n, std::function<double(double, double)> g,
-                      bool plane = false) {
+  auto ground_dem_case = [&](const std::string& name, int n,
+                             std::function<double(double, double)> g, bool plane = false) {
     const TestDem d = make_test_dem(n, g);
     const std::string path = dir.file(name + ".asc");
     d.write(path);
-    GroundCase c{name, ground_options_for("asc:" + path), [d](double x, double y) { return d.ground(x, y); },
-           plane};
+    GroundCase c{name, ground_options_for("asc:" + path),
+                 [d](double x, double y) { return d.ground(x, y); }, plane};
     cases.push_back(c);
     return &cases.back();
   };
-  ground_dem_case("plane", 9, [](double x, double y) { return 300 + 0.1 * x + 0.05 * y; }, true);
+  ground_dem_case(
+      "plane", 9, [](double x, double y) { return 300 + 0.1 * x + 0.05 * y; }, true);
   ground_dem_case("hill", 41, [](double x, double y) {
-    return 1500 * std::exp(-((x - 3000) * (x - 3000) + (y - 5000) * (y - 5000)) / (2 * 1200.0 * 1200));
+    return 1500 *
+           std::exp(-((x - 3000) * (x - 3000) + (y - 5000) * (y - 5000)) / (2 * 1200.0 * 1200));
   });
   // A cliff of 400 m across one 50 m cell, narrower than the 125 m leaves
   // --surface-edge 150 asks for along the ground.
@@ -295,14 +301,15 @@ TEST(GroundMesh, CarvedOctreesAreBalancedCompleteAndExtractAsTheReference) {
   // own value: whichever of them the fill takes, the ground is the one the
   // test computes with the holes filled.
   {
-    TestDem d = make_test_dem(17, [](double x, double y) {
-      return 900 + 800 * std::sin(x / 1500) * std::cos(y / 2000);
-    });
+    TestDem d = make_test_dem(
+        17, [](double x, double y) { return 900 + 800 * std::sin(x / 1500) * std::cos(y / 2000); });
     const int holes[3][2] = {{5, 5}, {5, 6}, {12, 3}};
     for (const auto& h : holes) {
       const double v = d.at(h[0], h[1]);
-      for (const auto& n : {std::array<int, 2>{h[0] - 1, h[1]}, {h[0] + 1, h[1]},
-                            {h[0], h[1] - 1}, {h[0], h[1] + 1}}) {
+      for (const auto& n : {std::array<int, 2>{h[0] - 1, h[1]},
+                            {h[0] + 1, h[1]},
+                            {h[0], h[1] - 1},
+                            {h[0], h[1] + 1}}) {
         const bool hole = (n[0] == 5 && (n[1] == 5 || n[1] == 6)) || (n[0] == 12 && n[1] == 3);
         if (!hole) d.z[size_t(n[0]) * 17 + n[1]] = v;
       }
@@ -315,7 +322,8 @@ TEST(GroundMesh, CarvedOctreesAreBalancedCompleteAndExtractAsTheReference) {
                      [filled](double x, double y) { return filled.ground(x, y); }});
   }
   // The top set at the peak itself: the ground touches z = 0.
-  GroundCase* touch = ground_dem_case("touch", 9, [](double x, double) { return x >= 4000 ? 1000.0 : 200.0; });
+  GroundCase* touch =
+      ground_dem_case("touch", 9, [](double x, double) { return x >= 4000 ? 1000.0 : 200.0; });
   touch->o.top_elevation = 1000;
   for (const GroundCase& c : cases) ASSERT_NO_FATAL_FAILURE(check_ground_case(c, dir));
 }
@@ -347,7 +355,8 @@ TEST(GroundMesh, AnRfileBringsItsOwnGroundAndItsBlocksBeneath) {
     const int i = std::min(int(u), 39), j = std::min(int(v), 39);
     const double a = u - i, bb = v - j;
     auto g = [&](int p, int q) { return topo(p, q, 0)[0]; };
-    return (1 - a) * ((1 - bb) * g(i, j) + bb * g(i, j + 1)) + a * ((1 - bb) * g(i + 1, j) + bb * g(i + 1, j + 1));
+    return (1 - a) * ((1 - bb) * g(i, j) + bb * g(i, j + 1)) +
+           a * ((1 - bb) * g(i + 1, j) + bb * g(i + 1, j + 1));
   };
   ASSERT_NO_FATAL_FAILURE(check_ground_case(c, dir));
   // The plan: the rfile's ground, its z read as depth below sea level, the
@@ -394,7 +403,8 @@ TEST(GroundMesh, VerifyFindsElementsAboveTheGroundItWasBuiltUnder) {
   testing::TempDir dir;
   const std::string dem = dir.file("hill.asc");
   ConstructPlan plan;
-  const std::string db = mesh_under(dir, dem, [](double x, double) { return 200 + 0.2 * x; }, &plan);
+  const std::string db = mesh_under(
+      dir, dem, [](double x, double) { return 200 + 0.2 * x; }, &plan);
   VerifyReport report;
   ASSERT_OK(verify_database(db, VerifyOptions{}, &report));
   EXPECT_TRUE(report.ok()) << report.problems[0];

@@ -54,9 +54,9 @@ TEST(LayeringTest, SrcFoldersIncludeOnlyWhatSrcReadmeAllows) {
   const std::set<std::string> engine = {"schema", "storage", "util"};
   const std::set<std::string> stage = {"schema", "storage", "util", "db", "sort", "model"};
   std::map<std::string, std::set<std::string>> allowed = {
-      {"util", base},       {"model", base},   {"gen", base},        {"sort", engine},
-      {"db", engine},       {"import", stage}, {"construct", stage}, {"balance", stage},
-      {"extract", stage},   {"export", stage}, {"query", stage},     {"verify", stage},
+      {"util", base},       {"model", base},     {"gen", base},        {"sort", engine},
+      {"db", engine},       {"import", stage},   {"construct", stage}, {"balance", stage},
+      {"extract", stage},   {"export", stage},   {"query", stage},     {"verify", stage},
       {"partition", stage}, {"boundary", stage},
   };
   allowed["verify"].insert({"balance", "query"});

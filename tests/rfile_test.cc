@@ -2,6 +2,8 @@
 // (model/surface.h), against the test's own writer and independent
 // arithmetic: linear fields (which trilinear sampling reproduces exactly),
 // SW4's fill rule worked by hand, and brute-force ranges.
+#include "model/rfile.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,7 +14,6 @@
 #include <string>
 #include <vector>
 
-#include "model/rfile.h"
 #include "model/rfile_model.h"
 #include "model/surface.h"
 #include "modeldb/db_model.h"
@@ -34,9 +35,8 @@ double field(int block, int c, double x, double y, double z) {
 
 std::vector<Block> linear_blocks() {
   std::vector<Block> b;
-  b.push_back({30, 30, 0, 1, 11, 7, 1, [](int i, int j, int) {
-                 return std::vector<double>{100 + i * 3.0 + j};
-               }});
+  b.push_back({30, 30, 0, 1, 11, 7, 1,
+               [](int i, int j, int) { return std::vector<double>{100 + i * 3.0 + j}; }});
   // hh 30 m, hv 25 m: spans 300 x 180 m, z -200 .. 100.  Then hh 60,
   // hv 70 (no power-of-two part of anything), z 100 .. 1500.
   const double hh[3] = {0, 30, 60}, hv[3] = {0, 25, 70}, z0[3] = {0, -200, 100};
@@ -239,20 +239,20 @@ TEST(Surface, AscRasterTakesKeywordsInAnyCaseAndRowsFromTheNorth) {
   EXPECT_DOUBLE_EQ(s->elevation(150, 200), 16);
   EXPECT_DOUBLE_EQ(s->highest(), 32);
   // dx, dy and xllcenter; NODATA (the default -9999) filled from a neighbour.
-  write_file(path,
-             "ncols 2\nnrows 2\nxllcenter 0\nyllcenter 0\ndx 10\ndy 20\n5 -9999\n1 2\n");
+  write_file(path, "ncols 2\nnrows 2\nxllcenter 0\nyllcenter 0\ndx 10\ndy 20\n5 -9999\n1 2\n");
   ASSERT_OK(load_surface(src, nullptr, 1 << 20, &s));
   EXPECT_EQ(s->filled, 1u);
-  EXPECT_DOUBLE_EQ(s->elevation(0, 0), 1);   // south-west
-  EXPECT_DOUBLE_EQ(s->elevation(20, 0), 5);  // north-west
-  EXPECT_DOUBLE_EQ(s->elevation(20, 10), 5); // north-east, filled from its west
+  EXPECT_DOUBLE_EQ(s->elevation(0, 0), 1);    // south-west
+  EXPECT_DOUBLE_EQ(s->elevation(20, 0), 5);   // north-west
+  EXPECT_DOUBLE_EQ(s->elevation(20, 10), 5);  // north-east, filled from its west
   // Bad rasters: one line each.
-  for (const char* bad : {"ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n",
-                          "ncols 2\nnrows 2\nxllcorner 0\ncellsize 1\n1 2 3 4\n",
-                          "ncols x\nnrows 2\n", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\n"
-                                                "cellsize 0\n1 2 3 4\n",
-                          "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n"
-                          "-9999 -9999 -9999 -9999\n"}) {
+  for (const char* bad :
+       {"ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n",
+        "ncols 2\nnrows 2\nxllcorner 0\ncellsize 1\n1 2 3 4\n", "ncols x\nnrows 2\n",
+        "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\n"
+        "cellsize 0\n1 2 3 4\n",
+        "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n"
+        "-9999 -9999 -9999 -9999\n"}) {
     write_file(path, bad);
     const Status st = load_surface(src, nullptr, 1 << 20, &s);
     EXPECT_FALSE(st.ok()) << bad;

@@ -242,8 +242,7 @@ TEST_F(Robustness, MeshSaysWhichStagesCommittedWhenALaterOneFails) {
       run(with(dir_.file("in-boundary")), "WEAVER_FAIL_AT=" + std::to_string(steps - 1) + " ");
   EXPECT_EQ(in_boundary.code, 1);
   EXPECT_NE(in_boundary.err.find("boundary failed"), std::string::npos) << in_boundary.err;
-  EXPECT_NE(in_boundary.err.find("nothing committed: the database is as it was"),
-            std::string::npos)
+  EXPECT_NE(in_boundary.err.find("nothing committed: the database is as it was"), std::string::npos)
       << in_boundary.err;
   // The last steps of extract lie just before the boundary's (a step or
   // two either way: find one that fails in extract).

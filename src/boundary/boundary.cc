@@ -1,8 +1,8 @@
 #include "boundary/boundary.h"
 
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -78,8 +78,7 @@ void face_axes(int face, int* u, int* v) {
 
 class BoundaryWriter {
  public:
-  BoundaryWriter(BTree& out, const Span& span, BoundaryResult* r)
-      : out_(out), span_(span), r_(r) {}
+  BoundaryWriter(BTree& out, const Span& span, BoundaryResult* r) : out_(out), span_(span), r_(r) {}
 
   // The boundary records of element id (octant o), in key order.
   Status element(uint64_t id, const Octant& o, FaceFinder* finder, const GroundCheck& ground) {
@@ -92,8 +91,8 @@ class BoundaryWriter {
     if (span_.filled) {  // nothing open inside the box: its sides alone
       for (int f = 0; f < 6; ++f) {
         if (!on_side[f]) continue;
-        WEAVER_RETURN_IF_ERROR(emit(id, f, 0, f == 4 ? BoundaryKind::kFreeSurface
-                                                    : BoundaryKind::kDomainSide));
+        WEAVER_RETURN_IF_ERROR(
+            emit(id, f, 0, f == 4 ? BoundaryKind::kFreeSurface : BoundaryKind::kDomainSide));
       }
       return Status::Ok();
     }
@@ -122,8 +121,8 @@ class BoundaryWriter {
     }
     for (int f = 0; f < 6; ++f) {
       if (on_side[f]) {
-        WEAVER_RETURN_IF_ERROR(emit(id, f, 0, f == 4 ? BoundaryKind::kFreeSurface
-                                                    : BoundaryKind::kDomainSide));
+        WEAVER_RETURN_IF_ERROR(
+            emit(id, f, 0, f == 4 ? BoundaryKind::kFreeSurface : BoundaryKind::kDomainSide));
         continue;
       }
       for (int part = 0; part <= 4; ++part) {
@@ -184,7 +183,8 @@ Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, Memo
     WEAVER_RETURN_IF_ERROR(reader.next());
   }
   r->least_dt = vp != nullptr && r->elements > 0 ? least : 0;
-  if (o.known_least_dt > 0) r->least_dt = o.known_least_dt, r->least_dt_element = o.known_least_dt_element;
+  if (o.known_least_dt > 0)
+    r->least_dt = o.known_least_dt, r->least_dt_element = o.known_least_dt_element;
   char meta[256];
   std::snprintf(meta, sizeof meta,
                 "faces=%llu;free_surface=%llu;sides=%llu;least_dt=%.17g;least_dt_element=%llu",

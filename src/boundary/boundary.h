@@ -35,8 +35,8 @@ namespace weaver {
 struct BoundaryOptions {
   MemoryBudget memory;
   bool packed = true;
-  ProgressFn progress;           // elements visited, and their share
-  Database* writer = nullptr;    // a writer already open on the database
+  ProgressFn progress;         // elements visited, and their share
+  Database* writer = nullptr;  // a writer already open on the database
   // The least edge / vp and its element when the caller knows them (weaver
   // mesh: construct found them): the scan then reads keys alone.  0: found
   // here, from the leaves' vp.

@@ -86,22 +86,22 @@ Status memory_option(const ParsedArgs& args, MemoryBudget* budget);
 // (default: no, it takes the nearest model cell's values).
 Status outside_option(const ParsedArgs& args, bool* error);
 // The ground's options of construct, mesh and weaver-mpi, in their --help.
-#define WEAVER_GROUND_USAGE                                                              \
-  "  --surface SOURCE   the ground the mesh follows: flat (the default, a flat top;\n"    \
+#define WEAVER_GROUND_USAGE                                                            \
+  "  --surface SOURCE   the ground the mesh follows: flat (the default, a flat top;\n" \
   "                     an rfile model brings its own unless this says flat),\n"       \
-  "                     rfile:FILE (its topography block) or asc:FILE (an ESRI\n"     \
+  "                     rfile:FILE (its topography block) or asc:FILE (an ESRI\n"      \
   "                     ASCII raster: columns east = the mesh's y, rows north =\n"     \
-  "                     its x, metres).  Air is never meshed; a leaf the ground\n"    \
+  "                     its x, metres).  Air is never meshed; a leaf the ground\n"     \
   "                     crosses carries its solid fraction (column 'solid')\n"         \
-  "  --surface-crs frame|lonlat  with --origin-geo: the raster in the frame's\n"      \
+  "  --surface-crs frame|lonlat  with --origin-geo: the raster in the frame's\n"       \
   "                     metres (default) or in degrees of longitude, latitude\n"       \
-  "  --top-elevation E  elevation of z = 0, metres (default: the highest ground,\n"   \
+  "  --top-elevation E  elevation of z = 0, metres (default: the highest ground,\n"    \
   "                     rounded up to a tick; 0 when flat); --domain's LZ counts\n"    \
-  "                     down from it\n"                                                 \
-  "  --model-z depth|elevation  how the model reads z: depth below the local\n"       \
+  "                     down from it\n"                                                \
+  "  --model-z depth|elevation  how the model reads z: depth below the local\n"        \
   "                     ground (default, but for an rfile) or down from sea level\n"   \
-  "                     (an rfile's default)\n"                                         \
-  "  --surface-edge M   split leaves the ground crosses down to this edge, metres\n"  \
+  "                     (an rfile's default)\n"                                        \
+  "  --surface-edge M   split leaves the ground crosses down to this edge, metres\n"   \
   "                     (default: the wavelength rule alone, its samples in the air\n" \
   "                     taken at the ground below them)\n"
 Status threads_option(const ParsedArgs& args, int default_threads, int* threads);

@@ -39,9 +39,10 @@ void print_boundary(const BoundaryResult& r, double secs) {
                : ("neighbours looked up for " + std::to_string(r.asked) + " elements").c_str(),
       secs);
   if (r.least_dt > 0) {
-    std::printf("  time step  least edge / vp %.6g s, at element %llu (an explicit solver's step "
-                "is a Courant number times it)\n",
-                r.least_dt, (unsigned long long)r.least_dt_element);
+    std::printf(
+        "  time step  least edge / vp %.6g s, at element %llu (an explicit solver's step "
+        "is a Courant number times it)\n",
+        r.least_dt, (unsigned long long)r.least_dt_element);
   }
 }
 

@@ -1,8 +1,8 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 #include "cli/cli.h"
@@ -58,8 +58,7 @@ constexpr char kUsage[] =
     "  --outside clamp|error  where the domain reaches past a model database's\n"
     "                     box: take the nearest model cell's values (clamp, the\n"
     "                     default, said in the plan) or refuse to start (error)\n"
-    "  --min-level L, --max-level L   bounds on leaf levels (default 0, 20)\n"
-    WEAVER_GROUND_USAGE
+    "  --min-level L, --max-level L   bounds on leaf levels (default 0, 20)\n" WEAVER_GROUND_USAGE
     "  --max-elements N   refuse to start when a coarse sampling of the model\n"
     "                     estimates more leaves than N (default 5G), or more\n"
     "                     disk than is free; the estimate is printed first\n"
@@ -199,10 +198,11 @@ void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
                 p.outside.c_str());
   }
   if (p.carved) {
-    std::printf("ground     %s: %g to %g m; top (z = 0) at elevation %g m; the model read by %s%s\n",
-                p.surface_source.c_str(), p.surface->lowest(), p.surface->highest(),
-                p.ground.top_elevation, model_z_name(p.ground.model_z),
-                p.ground.model_z == ModelZ::kDepth ? " below the ground" : " (down from sea level)");
+    std::printf(
+        "ground     %s: %g to %g m; top (z = 0) at elevation %g m; the model read by %s%s\n",
+        p.surface_source.c_str(), p.surface->lowest(), p.surface->highest(), p.ground.top_elevation,
+        model_z_name(p.ground.model_z),
+        p.ground.model_z == ModelZ::kDepth ? " below the ground" : " (down from sea level)");
   } else if (p.ground.top_elevation != 0) {
     std::printf("ground     flat at elevation %g m; the model read by %s\n", p.ground.top_elevation,
                 model_z_name(p.ground.model_z));
@@ -215,12 +215,12 @@ void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
 int parse_construct_command(int argc, char** argv, std::string* db, ConstructOptions* o,
                             bool* quiet) {
   ParsedArgs args;
-  Status st = parse_args(
-      argc, argv, 2,
-      {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level", "memory",
-       "max-elements", "threads", "origin-geo", "azimuth", "utm-zone", "outside", "surface",
-       "surface-crs", "top-elevation", "model-z", "surface-edge"},
-      {"plain", "quiet", "unbalanced"}, &args);
+  Status st = parse_args(argc, argv, 2,
+                         {"model",   "grid",        "freq",          "ppw",      "vs-min",
+                          "domain",  "min-level",   "max-level",     "memory",   "max-elements",
+                          "threads", "origin-geo",  "azimuth",       "utm-zone", "outside",
+                          "surface", "surface-crs", "top-elevation", "model-z",  "surface-edge"},
+                         {"plain", "quiet", "unbalanced"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("construct", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("construct", "expected one DB", kUsage);
@@ -265,9 +265,10 @@ void print_construct_result(const ConstructResult& r, double secs) {
       (unsigned long long)r.elements, secs, r.elements / secs, r.smallest_edge_m, r.largest_edge_m,
       finest_level(r.levels), r.worst_ppw, double(r.table_bytes) / r.elements);
   if (r.elements > 0 && r.least_dt < HUGE_VAL) {
-    std::printf("time step  least edge / vp %.6g s, at element %llu (an explicit solver's step is "
-                "a Courant number times it)\n",
-                r.least_dt, (unsigned long long)r.least_dt_element);
+    std::printf(
+        "time step  least edge / vp %.6g s, at element %llu (an explicit solver's step is "
+        "a Courant number times it)\n",
+        r.least_dt, (unsigned long long)r.least_dt_element);
   }
   print_construct_balance(r);
 }
@@ -280,9 +281,10 @@ void print_construct_balance(const ConstructResult& r) {
       (unsigned long long)r.descended, (unsigned long long)(r.elements + r.air - r.descended),
       (unsigned long long)r.neighbours, 100.0 * r.neighbours / std::max<uint64_t>(1, r.descended));
   if (r.air > 0 || r.cut > 0) {
-    std::printf("carved     %llu leaves of air cut away after the balance, %llu elements cut by "
-                "the ground (solid fraction below 1)\n",
-                (unsigned long long)r.air, (unsigned long long)r.cut);
+    std::printf(
+        "carved     %llu leaves of air cut away after the balance, %llu elements cut by "
+        "the ground (solid fraction below 1)\n",
+        (unsigned long long)r.air, (unsigned long long)r.cut);
   }
 }
 

@@ -1,6 +1,6 @@
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -119,10 +119,10 @@ int report_after(const char* stage, const Status& st, const char* committed) {
 int cmd_mesh(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(
-      argc, argv, 2,
-      {"model", "grid", "freq", "ppw", "vs-min", "domain", "min-level", "max-level", "memory",
-       "threads", "max-elements", "origin-geo", "azimuth", "utm-zone", "outside", "surface",
-       "surface-crs", "top-elevation", "model-z", "surface-edge"},
+      argc, argv, 2, {"model",        "grid",        "freq",          "ppw",      "vs-min",
+                      "domain",       "min-level",   "max-level",     "memory",   "threads",
+                      "max-elements", "origin-geo",  "azimuth",       "utm-zone", "outside",
+                      "surface",      "surface-crs", "top-elevation", "model-z",  "surface-edge"},
       {"plain", "quiet", "unbalanced"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("mesh", st.message(), kUsage);

@@ -12,7 +12,8 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver model import MODEL.db --from etree:FILE|grid:FILE|layers:FILE|xyz:FILE|rfile:FILE\n"
+    "usage: weaver model import MODEL.db --from "
+    "etree:FILE|grid:FILE|layers:FILE|xyz:FILE|rfile:FILE\n"
     "                           [--tolerance REL] [--root-edge METRES] [--memory BYTES]\n"
     "                           [--plain]\n"
     "       weaver model material MODEL.db X Y Z | --points FILE [--outside clamp|error]\n"

@@ -42,8 +42,7 @@ constexpr char kUsage[] =
 int cmd_slice(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(argc, argv, 2,
-                         {"axis", "at", "units", "out", "color", "width", "region", "memory",
-                          "z"},
+                         {"axis", "at", "units", "out", "color", "width", "region", "memory", "z"},
                          {"danglings", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("slice", st.message(), kUsage);
@@ -62,7 +61,8 @@ int cmd_slice(int argc, char** argv) {
   o.at_is_ticks = units == "ticks";
   if (st.ok() && args.values.count("z")) {
     const std::string& z = args.values.at("z");
-    if (z != "domain" && z != "elevation") st = Status::InvalidArgument("--z is domain or elevation");
+    if (z != "domain" && z != "elevation")
+      st = Status::InvalidArgument("--z is domain or elevation");
     o.at_is_elevation = z == "elevation";
     if (o.at_is_elevation) o.at_is_ticks = false;
   }

@@ -102,8 +102,7 @@ Status check_query(const std::vector<std::string>& words) {
     return Status::InvalidArgument(q + " takes " + std::to_string(want) + " number(s)");
   }
   const bool metres = (a.values.count("units") && a.values.at("units") == "m") ||
-                      a.flags.count("geo") ||
-                      (a.values.count("z") && a.values.at("z") != "domain");
+                      a.flags.count("geo") || (a.values.count("z") && a.values.at("z") != "domain");
   for (size_t i = 1; i <= want; ++i) {
     double d = 0;
     uint64_t v = 0;

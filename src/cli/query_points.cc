@@ -30,9 +30,9 @@ Status Query::to_frame_metres(bool geo, const std::string& z) {
     double zd = c;
     if (zmode == "elevation") zd = top - c;
     if (zmode == "depth") {
-      const Coord column{uint32_t(std::clamp((x - u.origin_m[0]) / u.tick_m, 0.0, double(kRootEdge))),
-                         uint32_t(std::clamp((y - u.origin_m[1]) / u.tick_m, 0.0, double(kRootEdge))),
-                         0};
+      const Coord column{
+          uint32_t(std::clamp((x - u.origin_m[0]) / u.tick_m, 0.0, double(kRootEdge))),
+          uint32_t(std::clamp((y - u.origin_m[1]) / u.tick_m, 0.0, double(kRootEdge))), 0};
       zd = top - ex.ground_at(column) + c;
     }
     char buf[128];

@@ -46,11 +46,11 @@ constexpr size_t kSubtreesPerThread = 8;
 struct Slot {
   Octant root;
   SubtreeLeaves leaves;
-  uint64_t descended = 0;  // leaves before the balance
-  uint64_t air = 0, cut = 0;  // carved: leaves dropped, leaves cut (carve.h)
+  uint64_t descended = 0;      // leaves before the balance
+  uint64_t air = 0, cut = 0;   // carved: leaves dropped, leaves cut (carve.h)
   double least_dt = HUGE_VAL;  // the least edge / vp of its leaves (s), and where
   size_t least_dt_at = 0;
-  bool done = false;       // set by the worker (WorkQueue)
+  bool done = false;  // set by the worker (WorkQueue)
 };
 
 // New leaves take the model's material at their centre where weaver balance
@@ -247,8 +247,9 @@ bool is_rfile(const std::string& model) { return model.rfind("rfile:", 0) == 0; 
 // The ground: its surface, the top's elevation, how the model reads z.
 Status plan_ground(const ConstructOptions& o, const VelocityModel& model, uint64_t surface_bytes,
                    ConstructPlan* p) {
-  const std::string source =
-      !o.surface.empty() ? o.surface : is_rfile(o.model) ? o.model : std::string("flat");
+  const std::string source = !o.surface.empty()  ? o.surface
+                             : is_rfile(o.model) ? o.model
+                                                 : std::string("flat");
   SurfaceSource s;
   WEAVER_RETURN_IF_ERROR(parse_surface_source(source, &s));
   s.crs = o.surface_crs;
@@ -339,8 +340,8 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
   }
   const ConstructMemory memory(o.memory);
   std::unique_ptr<VelocityModel> model;
-  WEAVER_RETURN_IF_ERROR(open_velocity_model(o.model, o.grid_file, memory.model,
-                                             std::max(1, o.threads), &model));
+  WEAVER_RETURN_IF_ERROR(
+      open_velocity_model(o.model, o.grid_file, memory.model, std::max(1, o.threads), &model));
   WEAVER_RETURN_IF_ERROR(plan_ground(o, *model, memory.surface, p));
   ground_model(*p, &model);
   p->model = model->describe();
@@ -384,10 +385,11 @@ TableOptions octant_table_options(const ConstructOptions& o, const ConstructPlan
   t.schema = material_schema(model.has_q());
   if (p.carved) {
     std::string error;
-    t.schema = *RecordSchema::parse(std::string(model.has_q() ? "vp:f32,vs:f32,rho:f32,qp:f32,qs:f32"
-                                                               : "vp:f32,vs:f32,rho:f32") +
-                                        ",solid:f32",
-                                    &error);
+    t.schema =
+        *RecordSchema::parse(std::string(model.has_q() ? "vp:f32,vs:f32,rho:f32,qp:f32,qs:f32"
+                                                       : "vp:f32,vs:f32,rho:f32") +
+                                 ",solid:f32",
+                             &error);
   }
   t.packed = o.packed;
   return t;
@@ -476,8 +478,8 @@ Status construct_shard(const std::string& db_dir, const ConstructOptions& o,
   std::unique_ptr<VelocityModel> model;
   WEAVER_RETURN_IF_ERROR(plan_and_open(o, memory, p, &model));
   std::unique_ptr<BTree> table;
-  WEAVER_RETURN_IF_ERROR(
-      create_shard_table(db_dir, file, octant_table_options(o, *p, *model), memory.table_pool, &table));
+  WEAVER_RETURN_IF_ERROR(create_shard_table(db_dir, file, octant_table_options(o, *p, *model),
+                                            memory.table_pool, &table));
   ShardPlace place;
   Status st = write_octree(o, *p, *model, memory, *table, r, &place);
   return finish_shard(db_dir, table, st, place, entry, &r->table_bytes);

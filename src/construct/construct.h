@@ -11,16 +11,16 @@
 #pragma once
 
 #include <array>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
 
 #include "db/database.h"
+#include "db/octant_table.h"
 #include "model/ground_model.h"
 #include "model/surface.h"
-#include "db/octant_table.h"
 #include "schema/octant.h"
 #include "schema/status.h"
 #include "util/memory_budget.h"
@@ -111,10 +111,10 @@ struct ConstructPlan {
   int block_level = 0;
   std::array<uint32_t, 3> blocks = {1, 1, 1};
   std::array<double, 3> domain_m = {0, 0, 0};  // as covered by the blocks
-  bool rounded_up = false;        // no blocks tiled the domain exactly: rounded up to them
-  std::string model;              // the model's description
-  std::string outside;            // where the domain reaches past the model's box ("": nowhere)
-  std::string surface_outside;    // where the domain reaches past the surface's grid ("": nowhere)
+  bool rounded_up = false;      // no blocks tiled the domain exactly: rounded up to them
+  std::string model;            // the model's description
+  std::string outside;          // where the domain reaches past the model's box ("": nowhere)
+  std::string surface_outside;  // where the domain reaches past the surface's grid ("": nowhere)
   // The ground the mesh follows: surface null when flat.  carved: air is
   // cut away and each leaf carries its solid fraction.
   std::shared_ptr<const Surface> surface;

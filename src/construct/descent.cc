@@ -1,10 +1,10 @@
 #include "construct/descent.h"
 
-#include "construct/carve.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+
+#include "construct/carve.h"
 
 namespace weaver {
 
@@ -131,8 +131,7 @@ void Descent::apply_ground(const Octant& o, GroundSide side, Judgement* j) const
           o.level < o_.max_level)
         j->split = true;
       return;
-    case GroundSide::kSolid:
-      return;
+    case GroundSide::kSolid: return;
   }
 }
 

@@ -1,7 +1,5 @@
 #include "db/database.h"
 
-#include "db/boundary_table.h"
-
 #include <fcntl.h>
 #include <sys/file.h>
 #include <unistd.h>
@@ -17,6 +15,7 @@
 #include <sstream>
 
 #include "db/aggregate_table.h"
+#include "db/boundary_table.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "db/partition_table.h"

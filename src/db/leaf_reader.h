@@ -20,7 +20,7 @@ class LeafReader {
   uint64_t key() const { return cursor_.key(); }  // REQUIRES: valid()
   // REQUIRES: valid(), opened with payloads.
   const std::byte* payload() const { return cursor_.payload(); }
-  Status next();                                  // REQUIRES: valid()
+  Status next();  // REQUIRES: valid()
 
  private:
   Status check_current();

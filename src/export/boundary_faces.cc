@@ -103,10 +103,11 @@ Status write_boundary_vtu(ExportJob& job, const std::string& path) {
   uint64_t n = 0;
   WEAVER_RETURN_IF_ERROR(count_boundary(job, &n));
   enum { kElement, kFace, kPart, kKind, kPoints, kConn, kOffsets, kTypes, kCount };
-  std::vector<QuadArray> a = {{"element_id", "Int64", 1, 8 * n}, {"face", "UInt8", 1, n},
-                              {"part", "UInt8", 1, n},          {"kind", "UInt8", 1, n},
-                              {"Points", "Float64", 3, 96 * n}, {"connectivity", "Int64", 1, 32 * n},
-                              {"offsets", "Int64", 1, 8 * n},   {"types", "UInt8", 1, n}};
+  std::vector<QuadArray> a = {
+      {"element_id", "Int64", 1, 8 * n}, {"face", "UInt8", 1, n},
+      {"part", "UInt8", 1, n},           {"kind", "UInt8", 1, n},
+      {"Points", "Float64", 3, 96 * n},  {"connectivity", "Int64", 1, 32 * n},
+      {"offsets", "Int64", 1, 8 * n},    {"types", "UInt8", 1, n}};
   uint64_t at = 0;
   for (QuadArray& x : a) x.offset = at, at += 8 + x.bytes;
   std::string head =
@@ -222,8 +223,8 @@ Status MshBoundary::for_each_quad(ExportJob& job, int kind,
 
 Status MshBoundary::write_quads(ExportJob& job, Section& out, int kind, uint64_t* tag) {
   const int entity = kind == 1 ? 1 : 2;
-  WEAVER_RETURN_IF_ERROR(out.text("2 " + std::to_string(entity) + " 3 " +
-                                  std::to_string(counts_[kind != 0]) + "\n"));
+  WEAVER_RETURN_IF_ERROR(
+      out.text("2 " + std::to_string(entity) + " 3 " + std::to_string(counts_[kind != 0]) + "\n"));
   LineBuffer line;
   return for_each_boundary(job, [&](const BoundaryRecord& r) {
     if ((r.kind != 0) != (kind != 0)) return Status::Ok();

@@ -18,7 +18,7 @@ struct BoundaryRecord {
   uint64_t global = 0;   // its id in the whole mesh
   Octant octant;
   int face = 0, part = 0;
-  uint8_t kind = 0;  // BoundaryKind
+  uint8_t kind = 0;                           // BoundaryKind
   const MeshElement* mesh_element = nullptr;  // the element, with its material
 };
 

@@ -2,11 +2,11 @@
 // 3 of dimension 3), hexahedra (type 5) in Gmsh's corner order; with a
 // boundary table, $PhysicalNames and $Entities too, and the boundary's
 // quadrilaterals (type 3) in the physical groups free_surface and absorbing
-// (boundary_faces.h: MshBoundary), the hexahedra in "volume"; then one $ElementData view per field: level, and vp, vs, rho
-// when the mesh has material (and qp, qs when it has them).  Tags are 1-based positions: id + 1 for
-// the whole mesh, the local id + 1 with --box.  Coordinates in metres by default, or ticks. Written
-// in one sequential stream: a pass over the nodes for their tags, one for their coordinates, one
-// over the elements for their corners, and one a field.
+// (boundary_faces.h: MshBoundary), the hexahedra in "volume"; then one $ElementData view per field:
+// level, and vp, vs, rho when the mesh has material (and qp, qs when it has them).  Tags are
+// 1-based positions: id + 1 for the whole mesh, the local id + 1 with --box.  Coordinates in metres
+// by default, or ticks. Written in one sequential stream: a pass over the nodes for their tags, one
+// for their coordinates, one over the elements for their corners, and one a field.
 #include <string>
 
 #include "export/boundary_faces.h"

@@ -266,10 +266,10 @@ Status write_raw_files(ExportJob& job, const std::string& dir, SharedNodes* shar
   GeoFrame geo;
   const bool georeferenced = job.georeferenced(&geo);
   const GeoTransform transform(geo);
-  const std::vector<Array> arrays = layout(
-      job.node_count(), job.element_count(), dangling, job.options.units == ExportUnits::kTicks,
-      material, job.mesh.has_q(), !job.sel.whole(), pairs, georeferenced, job.mesh.has_solid(),
-      boundary);
+  const std::vector<Array> arrays =
+      layout(job.node_count(), job.element_count(), dangling,
+             job.options.units == ExportUnits::kTicks, material, job.mesh.has_q(), !job.sel.whole(),
+             pairs, georeferenced, job.mesh.has_solid(), boundary);
   OutputFile bin(dir + "/mesh.bin");
   WEAVER_RETURN_IF_ERROR(bin.open());
   std::vector<Section> out;

@@ -79,8 +79,7 @@ struct Present {
 
 // Which optional arrays the job's mesh has; *geo its frame when georeferenced.
 Present present(ExportJob& job, GeoFrame* geo) {
-  return {job.mesh.has_material(), job.mesh.has_q(), job.georeferenced(geo),
-          job.mesh.has_solid()};
+  return {job.mesh.has_material(), job.mesh.has_q(), job.georeferenced(geo), job.mesh.has_solid()};
 }
 
 // Arrays the mesh does not have (vp, vs, rho without material; qp, qs
@@ -89,15 +88,23 @@ Present present(ExportJob& job, GeoFrame* geo) {
 std::vector<Array> layout(uint64_t n, uint64_t e, Present has) {
   const uint64_t m = has.material ? 4 * e : 0, q = has.q ? 4 * e : 0, g = has.geo ? 8 * n : 0;
   const uint64_t solid = has.solid ? 4 * e : 0;
-  std::vector<Array> a = {{"node_id", "Int64", 1, 8 * n},    {"kind", "UInt8", 1, n},
-                          {"longitude", "Float64", 1, g},    {"latitude", "Float64", 1, g},
-                          {"element_id", "Int64", 1, 8 * e}, {"level", "UInt8", 1, e},
-                          {"edge", "Float64", 1, 8 * e},     {"vp", "Float32", 1, m},
-                          {"vs", "Float32", 1, m},           {"rho", "Float32", 1, m},
-                          {"qp", "Float32", 1, q},           {"qs", "Float32", 1, q},
+  std::vector<Array> a = {{"node_id", "Int64", 1, 8 * n},
+                          {"kind", "UInt8", 1, n},
+                          {"longitude", "Float64", 1, g},
+                          {"latitude", "Float64", 1, g},
+                          {"element_id", "Int64", 1, 8 * e},
+                          {"level", "UInt8", 1, e},
+                          {"edge", "Float64", 1, 8 * e},
+                          {"vp", "Float32", 1, m},
+                          {"vs", "Float32", 1, m},
+                          {"rho", "Float32", 1, m},
+                          {"qp", "Float32", 1, q},
+                          {"qs", "Float32", 1, q},
                           {"solid_fraction", "Float32", 1, solid},
-                          {"Points", "Float64", 3, 24 * n},  {"connectivity", "Int64", 1, 64 * e},
-                          {"offsets", "Int64", 1, 8 * e},    {"types", "UInt8", 1, e}};
+                          {"Points", "Float64", 3, 24 * n},
+                          {"connectivity", "Int64", 1, 64 * e},
+                          {"offsets", "Int64", 1, 8 * e},
+                          {"types", "UInt8", 1, e}};
   uint64_t at = 0;
   for (int i = 0; i < kArrays; ++i) {
     if (has(i)) a[i].offset = at, at += 8 + a[i].bytes;
@@ -138,16 +145,17 @@ std::string field_data(const Mesh& m) {
   if (!m.has_ground()) return "";
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.17g", m.top_elevation());
-  return std::string("    <FieldData>\n      <DataArray type=\"Float64\" Name=\"top_elevation_m\" "
-                     "NumberOfTuples=\"1\" format=\"ascii\">") +
+  return std::string(
+             "    <FieldData>\n      <DataArray type=\"Float64\" Name=\"top_elevation_m\" "
+             "NumberOfTuples=\"1\" format=\"ascii\">") +
          buf + "</DataArray>\n    </FieldData>\n";
 }
 
 std::string header(const std::vector<Array>& a, uint64_t n, uint64_t e, Present has,
                    const std::string& fields) {
   std::string s = std::string(kVtkFile) + "UnstructuredGrid" + kVtkFileEnd +
-                  "  <UnstructuredGrid>\n" + fields + "    <Piece NumberOfPoints=\"" + std::to_string(n) +
-                  "\" NumberOfCells=\"" + std::to_string(e) + "\">\n";
+                  "  <UnstructuredGrid>\n" + fields + "    <Piece NumberOfPoints=\"" +
+                  std::to_string(n) + "\" NumberOfCells=\"" + std::to_string(e) + "\">\n";
   s += declarations(a, has, false);
   s += "      <Cells>\n" + data_array(a[kConn]) + data_array(a[kOffsets]) + data_array(a[kTypes]) +
        "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n_";

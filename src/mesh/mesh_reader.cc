@@ -1,14 +1,13 @@
 #include "mesh/mesh_reader.h"
 
-#include "db/boundary_table.h"
-#include "util/metadata_text.h"
-
 #include <cstdlib>
 
 #include "db/aggregate_table.h"
+#include "db/boundary_table.h"
 #include "db/model_table_name.h"
 #include "db/node_table.h"
 #include "db/partition_table.h"
+#include "util/metadata_text.h"
 
 namespace weaver {
 

@@ -61,8 +61,7 @@ class GroundedModel final : public VelocityModel {
                      float* out) const override;
   void materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                             Material* out) const override;
-  bool vs_bounds(const double lo[3], const double hi[3], float* vs_lo,
-                 float* vs_hi) const override;
+  bool vs_bounds(const double lo[3], const double hi[3], float* vs_lo, float* vs_hi) const override;
   void focus(const double lo[3], const double hi[3]) const override;
   bool has_q() const override { return inner_.has_q(); }
   std::string outside(const std::array<double, 3>& domain_m) const override;

@@ -83,9 +83,9 @@ class RfileModel final : public VelocityModel {
   std::string path_;
   RfileHeader h_;
   int fd_ = -1;
-  size_t stride_ = 0;       // doubles a cached column holds: the most nk x nc of any block
-  size_t slots_ = 0;        // a cache's columns (a power of two)
-  uint64_t serial_ = 0;     // tells this model's caches from a former one's at the same address
+  size_t stride_ = 0;    // doubles a cached column holds: the most nk x nc of any block
+  size_t slots_ = 0;     // a cache's columns (a power of two)
+  uint64_t serial_ = 0;  // tells this model's caches from a former one's at the same address
   mutable std::mutex mu_;
   mutable std::unordered_map<std::thread::id, std::unique_ptr<Cache>> caches_;
   mutable std::atomic<bool> failed_{false};

@@ -123,8 +123,8 @@ Surface::Span Surface::span_of(double x0, double x1, double y0, double y1) const
 void Surface::range(double x0, double x1, double y0, double y1, double* lo, double* hi) const {
   const Span s = span_of(x0, x1, y0, y1);
   *lo = HUGE_VAL, *hi = -HUGE_VAL;
-  block_range(int(levels_.size()) - 1, 0, 0, s.ci0, s.ci1, s.cj0, s.cj1, s.u0, s.u1, s.v0, s.v1,
-              lo, hi);
+  block_range(int(levels_.size()) - 1, 0, 0, s.ci0, s.ci1, s.cj0, s.cj1, s.u0, s.u1, s.v0, s.v1, lo,
+              hi);
 }
 
 void Surface::loose_range(double x0, double x1, double y0, double y1, double* lo,
@@ -198,7 +198,7 @@ Status read_text_file(const std::string& path, uint64_t max_bytes, std::string* 
   if (!S_ISREG(st.st_mode)) return Status::IOError(path + ": not a regular file");
   if (uint64_t(st.st_size) > max_bytes)
     return Status::InvalidArgument(path + ": " + std::to_string(st.st_size >> 20) +
-                                     " MiB of text, more than --memory allows for the surface");
+                                   " MiB of text, more than --memory allows for the surface");
   std::ifstream in(path, std::ios::binary);
   out->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   if (!in.good() && !in.eof()) return Status::IOError(path + ": read error");
@@ -221,7 +221,8 @@ Status load_rfile_surface(const std::string& path, uint64_t max_bytes,
   for (int i = 0; i < t.ni && st.ok(); ++i) {
     for (int j = 0; j < t.nj && st.ok(); ++j) {
       st = read_rfile_column(fd, h, 0, i, j, &row[j]);
-      if (st.ok() && !std::isfinite(row[j])) st = Status::Corruption(path + ": a topography value that is not a number");
+      if (st.ok() && !std::isfinite(row[j]))
+        st = Status::Corruption(path + ": a topography value that is not a number");
       if (st.ok()) z[size_t(j) * t.ni + i] = float(row[j] == kRfileNoData ? NAN : row[j]);
     }
   }
@@ -298,7 +299,8 @@ Status parse_asc(const std::string& text, const std::string& what, uint64_t max_
       break;
     }
     std::string value;
-    if (!(in >> value)) return Status::Corruption(what + ": header keyword '" + key + "' has no value");
+    if (!(in >> value))
+      return Status::Corruption(what + ": header keyword '" + key + "' has no value");
     char* end = nullptr;
     const double v = std::strtod(value.c_str(), &end);
     if (end == value.c_str() || *end != '\0' || !std::isfinite(v))
@@ -329,11 +331,12 @@ Status parse_asc(const std::string& text, const std::string& what, uint64_t max_
     return Status::Corruption(what + ": no xllcorner/xllcenter or yllcorner/yllcenter");
   r->dx = dx > 0 ? dx : cellsize;
   r->dy = dy > 0 ? dy : cellsize;
-  if (!(r->dx > 0) || !(r->dy > 0)) return Status::Corruption(what + ": no positive cellsize (or dx, dy)");
+  if (!(r->dx > 0) || !(r->dy > 0))
+    return Status::Corruption(what + ": no positive cellsize (or dx, dy)");
   if (uint64_t(r->ncols) * r->nrows > max_cells)
     return Status::InvalidArgument(what + ": " + std::to_string(r->ncols) + " x " +
-                                     std::to_string(r->nrows) +
-                                     " cells, more than --memory allows for the surface");
+                                   std::to_string(r->nrows) +
+                                   " cells, more than --memory allows for the surface");
   r->xll = x_centre ? x : x + r->dx / 2;
   r->yll = y_centre ? y : y + r->dy / 2;
   r->z.resize(size_t(r->ncols) * r->nrows);
@@ -389,8 +392,9 @@ Status load_surface(const SurfaceSource& s, const GeoFrame* geo, uint64_t max_by
   text = std::string();
   if (s.crs == SurfaceCrs::kLonLat) {
     if (geo == nullptr)
-      return Status::InvalidArgument("--surface-crs lonlat needs --origin-geo (or a model that "
-                                     "places itself on the Earth)");
+      return Status::InvalidArgument(
+          "--surface-crs lonlat needs --origin-geo (or a model that "
+          "places itself on the Earth)");
     if (fill_nodata(r.ncols, r.nrows, &r.z) == r.z.size())
       return Status::Corruption(path + ": no data at all");
     uint64_t filled = 0;

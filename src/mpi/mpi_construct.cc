@@ -5,10 +5,10 @@
 // every rank has written and synced its file.  Any rank's failure fails the
 // command, naming the rank, and leaves the old database.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <cmath>
 #include <sstream>
 
 #include "cli/cli.h"
@@ -76,7 +76,8 @@ ConstructResult combine(const std::vector<Outcome>& all) {
     for (size_t l = 0; l < r.levels.size(); ++l) r.levels[l] += x.levels[l];
     if (x.elements == 0) continue;
     // A rank's element ids start after the earlier ranks' elements.
-    if (x.least_dt < r.least_dt) r.least_dt = x.least_dt, r.least_dt_element = r.elements + x.least_dt_element;
+    if (x.least_dt < r.least_dt)
+      r.least_dt = x.least_dt, r.least_dt_element = r.elements + x.least_dt_element;
     r.smallest_edge_m = first ? x.smallest_edge_m : std::min(r.smallest_edge_m, x.smallest_edge_m);
     r.largest_edge_m = std::max(r.largest_edge_m, x.largest_edge_m);
     r.worst_ppw = first ? x.worst_ppw : std::min(r.worst_ppw, x.worst_ppw);

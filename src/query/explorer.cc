@@ -1,8 +1,7 @@
 #include "query/explorer.h"
 
-#include <cmath>
-
 #include <algorithm>
+#include <cmath>
 
 #include "util/huge_pages.h"
 #include "util/radix_sort.h"

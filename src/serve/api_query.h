@@ -36,7 +36,7 @@ struct ApiQuery {
   // What a point's z is (?z_mode=): 0 domain (depth below the top), 1
   // elevation, 2 depth below the local ground; 1 and 2 are metres.
   int z_mode = 0;
-  unsigned neighbor_kinds = 0;         // bit 0 faces, 1 edges, 2 corners; 0: faces
+  unsigned neighbor_kinds = 0;  // bit 0 faces, 1 edges, 2 corners; 0: faces
   // range: list the leaves, a page of them (list_from, at most list_limit);
   // the runner sets *list_next and *list_count.
   bool list = false;

@@ -229,7 +229,8 @@ Status check_ground(Database& db, const VerifyMemory& memory, Problems& problems
   Ground ground;
   const Status loaded =
       ground_of_metadata(t->options().metadata, memory.surface, &surface, &ground);
-  if (!loaded.ok()) problems.add("table octants: its ground cannot be read again: " + loaded.message());
+  if (!loaded.ok())
+    problems.add("table octants: its ground cannot be read again: " + loaded.message());
   Units units;
   units_from_metadata(t->options().metadata, &units);
   BTreeCursor c;
