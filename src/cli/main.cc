@@ -42,7 +42,7 @@ const char* g_command = "";  // for the out-of-memory line
 
 // Running out of memory anywhere, on any thread, ends in one line and exit
 // status 1.  A writer interrupted so leaves its last committed state (the
-// same as a crash: see "Guarantees" in the README).
+// same as a crash: see "Guarantees" in docs/storage.md).
 [[noreturn]] void out_of_memory() {
   std::fprintf(stderr, "weaver %s: out of memory (try a smaller --memory)\n", g_command);
   std::fflush(stderr);

@@ -77,7 +77,7 @@ namespace {
 
 // Adds node `id` to `out` with its anchors, and theirs where they dangle
 // too: next to holes in the domain finer than the leaves' parents, an
-// anchor can (README, extract), and a part that holds a dangling node must
+// anchor can (docs/pipeline.md, extract), and a part that holds a dangling node must
 // hold all the nodes its value follows from.  Where the leaves fill their
 // parents every anchor is anchored, and this costs a kind lookup an anchor.
 // Each node's tag is its kind, so that the node set counts its dangling.

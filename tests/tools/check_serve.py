@@ -19,7 +19,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from picture import pixel, read_png, viridis  # noqa: E402
-from serve_client import exchange  # noqa: E402
+from serve_client import exchange, stop_server  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "src",
                                 "api", "python"))
@@ -395,12 +395,9 @@ try:
     # descriptors as before the clients (waiting out the idle timeout).
     descriptors_back_to(descriptors, "before the clients came", tries=100)
 finally:
-    server.send_signal(signal.SIGTERM)
-    try:
-        code = server.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        server.kill()
-        fail("the server did not stop on SIGTERM")
+    code = stop_server(server)
+if code is None:
+    fail("the server did not stop on SIGTERM")
 if code != 0:
     fail(f"the server exited {code}: {open(log_path).read()[-2000:]}")
 # The log: a line a request, with its status.

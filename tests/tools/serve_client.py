@@ -11,3 +11,16 @@ def exchange(port, method, path, body=None, headers=None, timeout=60):
     data = r.read()
     c.close()
     return r.status, dict(r.getheaders()), data
+
+
+def stop_server(server, timeout=10):
+    """SIGTERM to a weaver serve process: its exit status, or None (and the
+    process killed) when it does not stop within timeout seconds."""
+    import signal
+    import subprocess
+    server.send_signal(signal.SIGTERM)
+    try:
+        return server.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        server.kill()
+        return None
