@@ -119,6 +119,8 @@ void build_both(const ModelCase& c, const std::string& reference, const std::str
   if (unbalanced.elements <= 20000) want = reference::balance(leaves_of(reference));
   BalanceOptions closure;
   closure.algorithm = BalanceOptions::Algorithm::kClosure;
+  // A model database is named by its identity: balance is told where it is.
+  if (o.model.rfind("db:", 0) == 0) closure.model_dirs.push_back(o.model.substr(3));
   BalanceResult br;
   ASSERT_OK(balance_octree(reference, closure, &br));
   EXPECT_FALSE(br.by_windows);

@@ -12,22 +12,34 @@
 #include "balance/window_balance.h"
 #include "db/database.h"
 #include "model/velocity_model.h"
+#include "modeldb/model_identity.h"
 #include "modeldb/open_model.h"
 #include "schema/octant.h"
 
 namespace weaver {
 namespace {
 
-// The model named in the table's metadata, if it is a built-in one or a
-// model database ("db:MODEL.db", read within `memory` by `threads` threads).
-std::unique_ptr<VelocityModel> model_of(const std::string& metadata, MemoryBudget memory,
-                                        int threads) {
+// The model named in the table's metadata: a built-in one, an older
+// build's "db:PATH", or a model database's identity, looked for in
+// model_dirs (read within `memory` by `threads` threads).  Null where a
+// name does not open (a grid file's table keeps its parents' values).
+Status model_of(const std::string& metadata, const std::vector<std::string>& model_dirs,
+                MemoryBudget memory, int threads, std::unique_ptr<VelocityModel>* out) {
+  out->reset();
   const size_t at = metadata.find("model=");
-  if (at == std::string::npos) return nullptr;
-  const std::string name = metadata.substr(at + 6, metadata.find(';', at) - at - 6);
-  std::unique_ptr<VelocityModel> m;
-  if (name == "grid" || !open_velocity_model(name, "", memory, threads, &m).ok()) return nullptr;
-  return m;
+  if (at == std::string::npos) return Status::Ok();
+  std::string name = metadata.substr(at + 6, metadata.find(';', at) - at - 6);
+  if (is_model_identity(name)) {
+    const std::string dir = find_model_database(name, model_dirs);
+    if (dir.empty()) {
+      return Status::NotFound("the octants were built from model " + name +
+                              ", which is not this database's model table: name its model "
+                              "database with --model db:PATH");
+    }
+    name = "db:" + dir;
+  }
+  if (name == "grid" || !open_velocity_model(name, "", memory, threads, out).ok()) out->reset();
+  return Status::Ok();
 }
 
 FillPayload fill_from(const VelocityModel* model, const TableOptions& table) {
@@ -53,10 +65,12 @@ FillPayload fill_from(const VelocityModel* model, const TableOptions& table) {
 
 }  // namespace
 
-FillPayload model_material_fill(const TableOptions& table, MemoryBudget memory, int threads,
-                                std::unique_ptr<VelocityModel>* model) {
-  *model = model_of(table.metadata, memory, std::max(1, threads));
-  return fill_from(model->get(), table);
+Status model_material_fill(const TableOptions& table, const std::vector<std::string>& model_dirs,
+                           MemoryBudget memory, int threads, std::unique_ptr<VelocityModel>* model,
+                           FillPayload* fill) {
+  WEAVER_RETURN_IF_ERROR(model_of(table.metadata, model_dirs, memory, std::max(1, threads), model));
+  *fill = fill_from(model->get(), table);
+  return Status::Ok();
 }
 
 BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
@@ -141,7 +155,11 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   TableOptions topt = leaves->options();
   if (o.output_packed >= 0) topt.packed = o.output_packed == 1;
   std::unique_ptr<VelocityModel> model;
-  const FillPayload fill = model_material_fill(topt, memory.model, o.threads, &model);
+  FillPayload fill;
+  std::vector<std::string> model_dirs = o.model_dirs;
+  model_dirs.push_back(db_dir);
+  WEAVER_RETURN_IF_ERROR(
+      model_material_fill(topt, model_dirs, memory.model, o.threads, &model, &fill));
   const bool windows = o.algorithm != BalanceOptions::Algorithm::kClosure;
   if (windows && o.keep_from == 0 && o.keep_to == UINT64_MAX) {
     // Auto: one window of all the leaves where the memory holds it (it

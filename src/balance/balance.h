@@ -49,6 +49,9 @@ struct BalanceOptions {
   enum class Algorithm { kAuto, kWindows, kClosure };
   Algorithm algorithm = Algorithm::kAuto;
   uint64_t window_leaves = 0;  // tests: windows at most this long (0: as the memory allows)
+  // Model databases to look in, beside DB itself, for the model the octant
+  // table names by its identity (--model db:PATH): its new leaves' material.
+  std::vector<std::string> model_dirs;
   // The output's page format: as the input's (-1), packed (1) or plain (0).
   // A parallel balance reads its scratch input from plain pages (its many
   // aggregate hits along a ragged boundary decode no packed leaves) and

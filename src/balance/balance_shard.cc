@@ -232,7 +232,11 @@ Status shard_by_windows(Database& db, BTree& t, const Cut& cut, const BalanceOpt
     WEAVER_RETURN_IF_ERROR(t.rank(cut.key[rank + 1], &wo.end_leaf));
   }
   std::unique_ptr<VelocityModel> model;
-  const FillPayload fill = model_material_fill(t.options(), memory.model, o.threads, &model);
+  FillPayload fill;
+  std::vector<std::string> model_dirs = o.model_dirs;
+  model_dirs.push_back(db.dir());
+  WEAVER_RETURN_IF_ERROR(
+      model_material_fill(t.options(), model_dirs, memory.model, o.threads, &model, &fill));
   std::unique_ptr<BTree> out;
   WEAVER_RETURN_IF_ERROR(create_shard_table(db.dir(), file, t.options(), memory.output_pool, &out));
   Status st = balance_in_windows(wo, fill, *out, &r->balance, fitted);
@@ -332,6 +336,7 @@ Status balance_shard(const std::string& db_dir, const BalanceOptions& options, i
   own.keep_from = cut.key[rank];
   own.keep_to = cut.key[rank + 1];
   own.output_packed = t->options().packed ? 1 : 0;
+  own.model_dirs.push_back(db_dir);  // the scratch database has no model table
   BalanceResult scratch_result;
   if (st.ok()) st = balance_octree(scratch, own, &scratch_result);
   if (st.ok()) st = adopt_shard(db_dir, scratch, file, r, entry);

@@ -28,9 +28,12 @@ using FillPayload = std::function<void(const Octant& o, std::byte* payload)>;
 // metadata names, opened into *model within `memory` for `threads`
 // threads): the model's vp, vs and rho (and qp, qs) at the leaf's centre,
 // where the schema has those fields; empty for other tables, whose new
-// leaves keep their parent's values.
-FillPayload model_material_fill(const TableOptions& table, MemoryBudget memory, int threads,
-                                std::unique_ptr<VelocityModel>* model);
+// leaves keep their parent's values.  A model database named by its
+// identity (modeldb/model_identity.h) is looked for in model_dirs; not
+// finding it is an error naming it.
+Status model_material_fill(const TableOptions& table, const std::vector<std::string>& model_dirs,
+                           MemoryBudget memory, int threads, std::unique_ptr<VelocityModel>* model,
+                           FillPayload* fill);
 
 // Writes the refinement of `leaves` by `required` (key order, as from
 // Closure::required) into `out`, which has the payload size of `leaves`.

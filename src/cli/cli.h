@@ -107,6 +107,9 @@ Status outside_option(const ParsedArgs& args, bool* error);
 Status threads_option(const ParsedArgs& args, int default_threads, int* threads);
 // --algorithm auto|windows|closure of balance (weaver's and weaver-mpi's).
 Status balance_algorithm_option(const ParsedArgs& args, BalanceOptions::Algorithm* algorithm);
+// --model db:PATH of balance: a model database the octant table's model may
+// be in, besides DB itself (BalanceOptions::model_dirs).
+Status balance_model_option(const ParsedArgs& args, std::vector<std::string>* model_dirs);
 // The number of cores (at least 1): the default of every --threads.
 int default_threads();
 

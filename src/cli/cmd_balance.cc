@@ -9,8 +9,8 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver balance DB [--algorithm auto|windows|closure] [--memory BYTES]\n"
-    "                         [--threads N] [--check] [--quiet]\n"
+    "usage: weaver balance DB [--algorithm auto|windows|closure] [--model db:PATH]\n"
+    "                         [--memory BYTES] [--threads N] [--check] [--quiet]\n"
     "\n"
     "Replaces the octant table of DB by its minimal face+edge 2:1 balanced\n"
     "refinement: every leaf is kept or split, and nothing is split unless the\n"
@@ -30,6 +30,10 @@ constexpr char kUsage[] =
     "                   auto (default): windows, or the closure where a\n"
     "                     window's layer outweighs the window (coarse leaves\n"
     "                     among fine ones)\n"
+    "  --model db:PATH  the model database the octants were built from, where it\n"
+    "                   is not DB's own model table: split leaves take their\n"
+    "                   material from it (the octant table names it by its\n"
+    "                   source's file name and a digest, never by a path)\n"
     "  --check          only verify; name the first violation (exit status 1 if\n"
     "                   the octree is not balanced)\n"
     "  --memory BYTES   memory budget (default 256M): the table caches, and the\n"
@@ -50,8 +54,8 @@ constexpr char kUsage[] =
 
 int cmd_balance(int argc, char** argv) {
   ParsedArgs args;
-  Status st =
-      parse_args(argc, argv, 2, {"algorithm", "memory", "threads"}, {"check", "quiet"}, &args);
+  Status st = parse_args(argc, argv, 2, {"algorithm", "model", "memory", "threads"},
+                         {"check", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("balance", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("balance", "expected one DB", kUsage);
@@ -60,6 +64,7 @@ int cmd_balance(int argc, char** argv) {
   st = memory_option(args, &o.memory);
   if (st.ok()) st = threads_option(args, default_threads(), &o.threads);
   if (st.ok()) st = balance_algorithm_option(args, &o.algorithm);
+  if (st.ok()) st = balance_model_option(args, &o.model_dirs);
   if (!st.ok()) return usage_error("balance", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "balance", "leaves");

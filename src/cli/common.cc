@@ -77,6 +77,18 @@ Status balance_algorithm_option(const ParsedArgs& args, BalanceOptions::Algorith
   return Status::Ok();
 }
 
+Status balance_model_option(const ParsedArgs& args, std::vector<std::string>* model_dirs) {
+  if (!args.values.count("model")) return Status::Ok();
+  const std::string& m = args.values.at("model");
+  if (m.rfind("db:", 0) != 0 || m.size() == 3) {
+    return Status::InvalidArgument(
+        "--model takes db:PATH, the model database the octants were "
+        "built from");
+  }
+  model_dirs->push_back(m.substr(3));
+  return Status::Ok();
+}
+
 int default_threads() {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }

@@ -17,6 +17,7 @@
 #include "db/database.h"
 #include "model/geo_frame.h"
 #include "model/velocity_model.h"
+#include "modeldb/model_identity.h"
 #include "modeldb/open_model.h"
 #include "schema/octant.h"
 #include "util/work_queue.h"
@@ -345,6 +346,10 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
   WEAVER_RETURN_IF_ERROR(plan_ground(o, *model, memory.surface, p));
   ground_model(*p, &model);
   p->model = model->describe();
+  p->model_name = o.model;
+  if (o.model.rfind("db:", 0) == 0) {
+    WEAVER_RETURN_IF_ERROR(model_table_identity(o.model.substr(3), &p->model_name));
+  }
   p->outside = model->outside(p->domain_m);
   if (!p->outside.empty() && o.outside_error) {
     return Status::NotFound(p->outside +
@@ -408,9 +413,9 @@ Status write_octree(const ConstructOptions& o, const ConstructPlan& p, const Vel
   Units u;
   u.tick_m = p.tick_m;
   u.geo = o.geo.empty() ? model.geo() : o.geo;
-  char model_meta[256];
-  std::snprintf(model_meta, sizeof model_meta, ";model=%s;freq=%.17g;ppw=%.17g;vs_min=%.17g",
-                o.model.c_str(), o.freq, o.ppw, o.vs_min);
+  char rule[160];
+  std::snprintf(rule, sizeof rule, ";freq=%.17g;ppw=%.17g;vs_min=%.17g", o.freq, o.ppw, o.vs_min);
+  const std::string model_meta = ";model=" + p.model_name + rule;
   std::string ground_meta;
   if (p.carved || p.ground.top_elevation != 0) {
     char buf[160];

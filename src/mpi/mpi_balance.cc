@@ -38,13 +38,16 @@ constexpr char kUsage[] =
     "shards into the serial balance's file.\n"
     "\n"
     "  --memory BYTES   each rank's budget (default 256M), cut as weaver balance's\n"
-    "  --threads N      threads a rank (default 1)\n";
+    "  --threads N      threads a rank (default 1)\n"
+    "  --model db:PATH  the model database the octants were built from, where it\n"
+    "                   is not DB's own (as weaver balance's)\n";
 
 }  // namespace
 
 int balance(const Comm& comm, int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"algorithm", "memory", "threads"}, {"quiet"}, &args);
+  Status st =
+      parse_args(argc, argv, 2, {"algorithm", "model", "memory", "threads"}, {"quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return cli::usage_error("balance", st.message(), kUsage);
   if (args.positional.size() != 1) return cli::usage_error("balance", "expected one DB", kUsage);
@@ -52,6 +55,7 @@ int balance(const Comm& comm, int argc, char** argv) {
   st = cli::memory_option(args, &o.memory);
   if (st.ok()) st = cli::threads_option(args, 1, &o.threads);
   if (st.ok()) st = cli::balance_algorithm_option(args, &o.algorithm);
+  if (st.ok()) st = cli::balance_model_option(args, &o.model_dirs);
   if (!st.ok()) return cli::usage_error("balance", st.message(), kUsage);
   return run_balance(comm, args.positional[0], o);
 }

@@ -10,9 +10,10 @@
 # file.  Export of raw and pvtu parts, one a rank, as the serial export's
 # files.  Then: more ranks than work (balance and extract too), ranks given
 # different arguments, a database some rank cannot see, a sharded mesh that
-# lost its MANIFEST (weaver recover), a rank killed at each of its durable
-# steps and one whose write fails at three of them (the old database stays,
-# byte for byte).
+# lost its MANIFEST (weaver recover), rank 1 and rank 0 (which commits)
+# each killed at each of its durable steps and failing at three of them (the
+# old database stays, byte for byte, or where rank 0 dies at its last step,
+# after the commit's rename, the new one).
 #
 # usage: check_mpi.sh WEAVER WEAVER_MPI SCRATCH
 set -euo pipefail
@@ -34,9 +35,16 @@ live_md5() { (cd "$1" && md5sum MANIFEST $(awk '$1 == "table" || $1 == "shard" {
 check_model() {  # name, construct options...
   local name=$1; shift
   local serial=$tmp/$name.serial want balanced nodes
+  # A model database is named in the octants by its identity, not its path:
+  # balance is told where it is.
+  local balance_model=() prev=""
+  for a in "$@"; do
+    [ "$prev" = --model ] && [ "${a#db:}" != "$a" ] && balance_model=(--model "$a")
+    prev=$a
+  done
   "$weaver" construct "$serial" "$@" --quiet >/dev/null
   want=$(table_md5 "$serial")
-  "$weaver" balance "$serial" --quiet >/dev/null
+  "$weaver" balance "$serial" "${balance_model[@]}" --quiet >/dev/null
   balanced=$(table_md5 "$serial")
   cp -r "$serial" "$serial.x"
   "$weaver" extract "$serial.x" --quiet >/dev/null
@@ -49,10 +57,11 @@ check_model() {  # name, construct options...
     "$weaver" stat "$db" >/dev/null || fail "$name -np $np: stat"
     cp -r "$db" "$db.b"
     cp -r "$db" "$db.mb"
-    "$weaver" balance "$db.b" --quiet >/dev/null
+    "$weaver" balance "$db.b" "${balance_model[@]}" --quiet >/dev/null
     [ "$(table_md5 "$db.b")" = "$balanced" ] || fail "$name -np $np: balance from shards differs"
     # Balance on the ranks, from the sharded leaves: the serial balance's table.
-    on "$np" balance "$db.mb" --quiet >"$tmp/out" || fail "$name: -np $np balance"
+    on "$np" balance "$db.mb" "${balance_model[@]}" --quiet >"$tmp/out" ||
+      fail "$name: -np $np balance"
     "$weaver" verify "$db.mb" >/dev/null || fail "$name -np $np: verify of the balanced shards"
     "$weaver" compact "$db.mb" >/dev/null
     [ "$(table_md5 "$db.mb")" = "$balanced" ] || fail "$name -np $np: balance on ranks differs"
@@ -266,20 +275,35 @@ set -e
 echo "ok  a database some rank cannot see: one line naming the rank"
 
 # A rank whose write fails, and a rank killed at each of its durable steps, in
-# each stage: the command fails (naming the failed rank), and the old
-# database is intact, byte for byte.
-faults() {  # stage, the database before it (copied fresh for every try), stage options...
-  local stage=$1 base=$2; shift 2
-  local old=$tmp/old steps code
+# each stage, rank 1 and rank 0 (which also commits the manifest, and for
+# mesh publishes the staged shards): the command fails (naming the failed
+# rank), and the database is the old one, byte for byte, or, where rank 0
+# died after its commit's rename, the new one, byte for byte as the run that
+# was not killed left it.
+faults() {  # rank, stage, the database before it (copied fresh for every try), stage options...
+  local rank=$1 stage=$2 base=$3; shift 3
+  local old=$tmp/old steps code new_md5 new_seen=0
+  # mpirun's two groups: the rank under test gets the environment.
+  run_ranks() {  # env words for the rank under test, then the database
+    local envs=$1 db=$2
+    if [ "$rank" = 0 ]; then
+      timeout 300 mpirun -np 1 env $envs "$mpi" "$stage" "$db" "${opts[@]}" --quiet : \
+                         -np 1 "$mpi" "$stage" "$db" "${opts[@]}" --quiet
+    else
+      timeout 300 mpirun -np 1 "$mpi" "$stage" "$db" "${opts[@]}" --quiet : \
+                         -np 1 env $envs "$mpi" "$stage" "$db" "${opts[@]}" --quiet
+    fi
+  }
+  local opts=("$@")
   rm -rf "$tmp/count" && cp -r "$base" "$tmp/count"
-  # Rank 1's own steps, counted in the same two-rank run the kills use.
+  # The rank's own steps, counted in the same two-rank run the kills use.
   # (Its stderr goes nowhere, so the count goes to a file.)
   rm -f "$tmp/steps"
-  mpirun -np 1 "$mpi" "$stage" "$tmp/count" "$@" --quiet : \
-         -np 1 env WEAVER_CRASH_AT=0 WEAVER_CRASH_STEPS_FILE="$tmp/steps" \
-         "$mpi" "$stage" "$tmp/count" "$@" --quiet >/dev/null 2>&1 || fail "$stage: counting run"
+  run_ranks "WEAVER_CRASH_AT=0 WEAVER_CRASH_STEPS_FILE=$tmp/steps" "$tmp/count" \
+    >/dev/null 2>&1 || fail "$stage: counting run"
+  new_md5=$(live_md5 "$tmp/count")
   steps=$(cat "$tmp/steps" 2>/dev/null || true)
-  [ -n "$steps" ] && [ "$steps" -gt 0 ] || fail "$stage: no step count for rank 1"
+  [ -n "$steps" ] && [ "$steps" -gt 0 ] || fail "$stage: no step count for rank $rank"
   local fired=0
   for step in $(seq 1 "$steps"); do
     # Killed at every step; a failed write (an error, handled as any other)
@@ -290,47 +314,60 @@ faults() {  # stage, the database before it (copied fresh for every try), stage 
     fi
     for what in $kinds; do
       rm -rf "$old" && cp -r "$base" "$old"
-      local old_md5
+      local old_md5 now_md5
       old_md5=$(live_md5 "$old")
       set +e
-      mpirun -np 1 "$mpi" "$stage" "$old" "$@" --quiet : \
-             -np 1 env WEAVER_${what}_AT=$step "$mpi" "$stage" "$old" "$@" --quiet \
-             >/dev/null 2>"$tmp/err"
+      run_ranks "WEAVER_${what}_AT=$step" "$old" >/dev/null 2>"$tmp/err"
       code=$?
       set -e
-      # Every step counted is one rank 1 takes: the point armed there fires,
+      [ "$code" != 124 ] || fail "$stage: $what at step $step of rank $rank: the job hung"
+      # Every step counted is one the rank takes: the point armed there fires,
       # a death (the simulator's exit status 137) or a one-line failure.
-      [ "$code" != 0 ] || fail "$stage: $what at step $step of $steps did not fire"
+      [ "$code" != 0 ] || fail "$stage: $what at step $step of $steps (rank $rank) did not fire"
       if [ "$what" = CRASH ]; then
         grep -q "Exit code: *137" "$tmp/err" ||
-          fail "$stage: CRASH at step $step: rank 1 did not die there: $(cat "$tmp/err")"
+          fail "$stage: CRASH at step $step: rank $rank did not die there: $(cat "$tmp/err")"
       fi
       fired=$((fired + 1))
       if [ "$what" = FAIL ]; then
         # mesh names the stage that failed.
         local names=$stage
         [ "$stage" = mesh ] && names="construct|balance|extract"
-        grep -Eq "^weaver-mpi ($names): rank 1: " "$tmp/err" ||
-          fail "$stage FAIL at $step: $(cat "$tmp/err")"
+        grep -Eq "^weaver-mpi ($names): rank $rank: " "$tmp/err" ||
+          fail "$stage FAIL at $step of rank $rank: $(cat "$tmp/err")"
         # mpirun adds its own banner about the exit status; weaver says one line.
-        [ "$(grep -c '^weaver-mpi' "$tmp/err")" = 1 ] || fail "$stage FAIL at $step: $(cat "$tmp/err")"
+        [ "$(grep -c '^weaver-mpi' "$tmp/err")" = 1 ] ||
+          fail "$stage FAIL at $step of rank $rank: $(cat "$tmp/err")"
       fi
-      [ "$(live_md5 "$old")" = "$old_md5" ] ||
-        fail "$stage: $what at step $step of rank 1: the old database changed"
-      "$weaver" verify "$old" >/dev/null || fail "$stage $what at $step: old database does not verify"
+      now_md5=$(live_md5 "$old")
+      if [ "$now_md5" != "$old_md5" ]; then
+        # Only rank 0 commits, and only its last steps (the manifest's rename
+        # and the directory's sync) may leave the new state.
+        [ "$rank" = 0 ] && [ "$now_md5" = "$new_md5" ] ||
+          fail "$stage: $what at step $step of rank $rank: neither the old database nor the new"
+        [ "$step" = "$steps" ] ||
+          fail "$stage: $what at step $step of $steps (rank 0) left the new database before its last step"
+        new_seen=$((new_seen + 1))
+      fi
+      "$weaver" verify "$old" >/dev/null || fail "$stage $what at $step: the database does not verify"
     done
   done
-  echo "ok  $stage: rank 1 killed at each of its $steps durable steps (failing at 3; $fired points fired) leaves the old database"
+  echo "ok  $stage: rank $rank killed at each of its $steps durable steps (failing at 3; $fired points fired) leaves the old database ($new_seen times the new one)"
 }
 "$weaver" construct "$tmp/f.built" --model basin --freq 0.1 --quiet >/dev/null
-faults construct "$tmp/f.built" --model basin --freq 0.2
-faults balance "$tmp/f.built"
+for rank in 1 0; do
+  faults $rank construct "$tmp/f.built" --model basin --freq 0.2
+  faults $rank balance "$tmp/f.built"
+done
 cp -r "$tmp/f.built" "$tmp/f.balanced"
 "$weaver" balance "$tmp/f.balanced" --quiet >/dev/null
-faults extract "$tmp/f.balanced"
+faults 1 extract "$tmp/f.balanced"
+faults 0 extract "$tmp/f.balanced"
 # mesh as a whole, over a finished mesh: construct's shards (or balance's in
 # their place) are staged and go live with extract's, so a rank killed
 # anywhere leaves the old mesh, both tables, byte for byte.
 "$weaver" mesh "$tmp/f.mesh" --model basin --freq 0.1 --quiet >/dev/null
-faults mesh "$tmp/f.mesh" --model basin --freq 0.2
-faults mesh "$tmp/f.mesh" --model basin --freq 0.2 --unbalanced
+for rank in 1 0; do
+  faults $rank mesh "$tmp/f.mesh" --model basin --freq 0.2
+  faults $rank mesh "$tmp/f.mesh" --model basin --freq 0.2 --unbalanced
+done
