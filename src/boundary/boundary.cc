@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -76,9 +77,14 @@ void face_axes(int face, int* u, int* v) {
   *v = axis == 2 ? 1 : 2;
 }
 
+// Where the records go, in key order: the new table, or verify's comparison
+// with the stored one.
+using BoundarySink = std::function<Status(uint64_t key, uint8_t kind)>;
+
 class BoundaryWriter {
  public:
-  BoundaryWriter(BTree& out, const Span& span, BoundaryResult* r) : out_(out), span_(span), r_(r) {}
+  BoundaryWriter(BoundarySink out, const Span& span, BoundaryResult* r)
+      : out_(std::move(out)), span_(span), r_(r) {}
 
   // The boundary records of element id (octant o), in key order.
   Status element(uint64_t id, const Octant& o, FaceFinder* finder, const GroundCheck& ground) {
@@ -141,17 +147,18 @@ class BoundaryWriter {
     ++r_->faces;
     r_->quarters += part != 0;
     r_->free_surface += kind == BoundaryKind::kFreeSurface;
-    return out_.append(key, reinterpret_cast<const std::byte*>(&k));
+    return out_(key, k);
   }
 
-  BTree& out_;
+  BoundarySink out_;
   const Span& span_;
   BoundaryResult* r_;
   std::vector<FaceNeighbor> neighbours_;
 };
 
-Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, MemoryBudget surface,
-                      BoundaryResult* r) {
+// The boundary records of the octant table, into `out` in key order.
+Status derive_boundary(BTree& octants, const BoundarySink& out, const BoundaryOptions& o,
+                       MemoryBudget surface, BoundaryResult* r) {
   Span span;
   WEAVER_RETURN_IF_ERROR(span_of(octants, &span));
   r->filled = span.filled;
@@ -185,6 +192,15 @@ Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, Memo
   r->least_dt = vp != nullptr && r->elements > 0 ? least : 0;
   if (o.known_least_dt > 0)
     r->least_dt = o.known_least_dt, r->least_dt_element = o.known_least_dt_element;
+  return Status::Ok();
+}
+
+Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, MemoryBudget surface,
+                      BoundaryResult* r) {
+  const BoundarySink append = [&out](uint64_t key, uint8_t kind) {
+    return out.append(key, reinterpret_cast<const std::byte*>(&kind));
+  };
+  WEAVER_RETURN_IF_ERROR(derive_boundary(octants, append, o, surface, r));
   char meta[256];
   std::snprintf(meta, sizeof meta,
                 "faces=%llu;free_surface=%llu;sides=%llu;least_dt=%.17g;least_dt_element=%llu",
@@ -225,6 +241,45 @@ Status build_boundary(const std::string& db_dir, const BoundaryOptions& o, Bound
   const Status st = write_boundary(*octants, *table, o, surface, r);
   WEAVER_RETURN_IF_ERROR(db->publish(kBoundaryTable, file, table, st));
   r->table_bytes = table->file_bytes();
+  return Status::Ok();
+}
+
+Status check_boundary(BTree& octants, BTree& stored, MemoryBudget surface, size_t max_problems,
+                      std::vector<std::string>* problems) {
+  std::unique_ptr<Cursor> c;
+  WEAVER_RETURN_IF_ERROR(stored.seek(0, &c));
+  auto where = [](uint64_t key) {
+    return "element " + std::to_string(key >> 6) + " face " + std::to_string(key >> 3 & 7) +
+           " part " + std::to_string(key & 7);
+  };
+  auto add = [&](std::string p) {
+    if (problems->size() < max_problems) problems->push_back("table boundary: " + std::move(p));
+  };
+  // Both sides come in key order: walk them together.
+  const BoundarySink compare = [&](uint64_t key, uint8_t kind) -> Status {
+    while (c->valid() && c->key() < key) {
+      add(where(c->key()) + " is stored, but is not a boundary");
+      WEAVER_RETURN_IF_ERROR(c->next());
+    }
+    if (!c->valid() || c->key() != key) {
+      add(where(key) + " is a boundary, but is not stored");
+      return Status::Ok();
+    }
+    const auto got = static_cast<uint8_t>(*c->payload());
+    if (got != kind) {
+      add(where(key) + " is stored as kind " + std::to_string(got) + ", not " +
+          std::to_string(kind));
+    }
+    return c->next();
+  };
+  BoundaryOptions o;
+  o.known_least_dt = 1;  // the time step is not the table's: keys alone
+  BoundaryResult r;
+  WEAVER_RETURN_IF_ERROR(derive_boundary(octants, compare, o, surface, &r));
+  while (c->valid()) {
+    add(where(c->key()) + " is stored, but is not a boundary");
+    WEAVER_RETURN_IF_ERROR(c->next());
+  }
   return Status::Ok();
 }
 

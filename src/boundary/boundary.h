@@ -24,6 +24,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "db/database.h"
 #include "schema/status.h"
@@ -60,5 +61,12 @@ struct BoundaryResult {
 
 Status build_boundary(const std::string& db_dir, const BoundaryOptions& options,
                       BoundaryResult* result);
+
+// `weaver verify`: the boundary records derived again from `octants`
+// against the `stored` table, record by record; each difference (up to
+// max_problems) named by element, face and part in *problems.  A carved
+// mesh's surface is read within `surface`.
+Status check_boundary(BTree& octants, BTree& stored, MemoryBudget surface, size_t max_problems,
+                      std::vector<std::string>* problems);
 
 }  // namespace weaver

@@ -7,7 +7,9 @@
 #include <memory>
 
 #include "balance/balance.h"
+#include "boundary/boundary.h"
 #include "db/aggregate_table.h"
+#include "db/boundary_table.h"
 #include "db/database.h"
 #include "db/leaf_reader.h"
 #include "db/node_table.h"
@@ -177,6 +179,20 @@ Status check_aggregate_table(const Database& db, const VerifyMemory& memory, Pro
   return Status::Ok();
 }
 
+// The boundary table against the records derived again from the octants.
+Status check_boundary_table(const Database& db, const VerifyMemory& memory, Problems& problems) {
+  std::unique_ptr<BTree> octants, stored;
+  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &octants));
+  WEAVER_RETURN_IF_ERROR(db.open_table(kBoundaryTable, memory.node_pool, &stored));
+  std::vector<std::string> found;
+  WEAVER_RETURN_IF_ERROR(
+      check_boundary(*octants, *stored, MemoryBudget(memory.surface), 20, &found));
+  for (std::string& p : found) problems.add(std::move(p));
+  problems.progress(std::string("table boundary: the faces derived again: ") +
+                    (found.empty() ? "ok" : "PROBLEMS"));
+  return Status::Ok();
+}
+
 Status check_mesh(const Database& db, const VerifyMemory& memory, const VerifyOptions& o,
                   Problems& problems, VerifyReport* r) {
   BalanceResult br;
@@ -279,6 +295,9 @@ Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyRep
   }
   if (octants_usable && o.mesh && !problems.full()) {
     WEAVER_RETURN_IF_ERROR(check_ground(*db, memory, problems));
+  }
+  if (octants_usable && o.mesh && db->has_table(kBoundaryTable) && !problems.full()) {
+    WEAVER_RETURN_IF_ERROR(check_boundary_table(*db, memory, problems));
   }
   if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, memory, o, problems, r));
   return Status::Ok();
