@@ -160,7 +160,11 @@ class BoundaryWriter {
 Status derive_boundary(BTree& octants, const BoundarySink& out, const BoundaryOptions& o,
                        MemoryBudget surface, BoundaryResult* r) {
   Span span;
-  WEAVER_RETURN_IF_ERROR(span_of(octants, &span));
+  if (o.known_filled_box) {
+    span.lo = o.box_lo, span.hi = o.box_hi, span.filled = true;
+  } else {
+    WEAVER_RETURN_IF_ERROR(span_of(octants, &span));
+  }
   r->filled = span.filled;
   GroundCheck ground;
   if (!span.filled) {

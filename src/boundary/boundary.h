@@ -22,6 +22,7 @@
 // written by sorted append and committed (publish) on its own.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -43,6 +44,11 @@ struct BoundaryOptions {
   // here, from the leaves' vp.
   double known_least_dt = 0;
   uint64_t known_least_dt_element = 0;
+  // The box the leaves fill, in ticks, when the caller knows they fill it
+  // (weaver mesh of a construct that cut no air: its blocks): the first
+  // scan, which finds the box, is skipped.
+  bool known_filled_box = false;
+  std::array<uint32_t, 3> box_lo{}, box_hi{};
 };
 
 struct BoundaryResult {
