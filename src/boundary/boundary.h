@@ -3,7 +3,8 @@
 // quarters of faces, that a solver must treat as a boundary.
 //
 // Two scans of the octant table in key order.  The first finds the box the
-// leaves span and whether they fill it (their volumes add up to its).  The
+// leaves span and whether they fill it (their volumes add up to its); a
+// caller that knows the box they fill skips it (known_filled_box).  The
 // second visits each element's six faces:
 //   - a face on the box's side is a boundary: the free surface where it
 //     faces up (z-, the domain's top), else a domain side (absorbing);
