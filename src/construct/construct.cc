@@ -346,10 +346,6 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
   WEAVER_RETURN_IF_ERROR(plan_ground(o, *model, memory.surface, p));
   ground_model(*p, &model);
   p->model = model->describe();
-  p->model_name = o.model;
-  if (o.model.rfind("db:", 0) == 0) {
-    WEAVER_RETURN_IF_ERROR(model_table_identity(o.model.substr(3), &p->model_name));
-  }
   p->outside = model->outside(p->domain_m);
   if (!p->outside.empty() && o.outside_error) {
     return Status::NotFound(p->outside +
@@ -415,7 +411,13 @@ Status write_octree(const ConstructOptions& o, const ConstructPlan& p, const Vel
   u.geo = o.geo.empty() ? model.geo() : o.geo;
   char rule[160];
   std::snprintf(rule, sizeof rule, ";freq=%.17g;ppw=%.17g;vs_min=%.17g", o.freq, o.ppw, o.vs_min);
-  const std::string model_meta = ";model=" + p.model_name + rule;
+  // A model database is named by its identity (read once, here: a plan is
+  // made twice), never by its path.
+  std::string model_name = o.model;
+  if (o.model.rfind("db:", 0) == 0) {
+    WEAVER_RETURN_IF_ERROR(model_table_identity(o.model.substr(3), &model_name));
+  }
+  const std::string model_meta = ";model=" + model_name + rule;
   std::string ground_meta;
   if (p.carved || p.ground.top_elevation != 0) {
     char buf[160];

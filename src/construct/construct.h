@@ -111,11 +111,8 @@ struct ConstructPlan {
   int block_level = 0;
   std::array<uint32_t, 3> blocks = {1, 1, 1};
   std::array<double, 3> domain_m = {0, 0, 0};  // as covered by the blocks
-  bool rounded_up = false;  // no blocks tiled the domain exactly: rounded up to them
-  std::string model;        // the model's description
-  // What the octant table's metadata calls the model: --model, except that
-  // a model database is named by its identity (modeldb/model_identity.h).
-  std::string model_name;
+  bool rounded_up = false;      // no blocks tiled the domain exactly: rounded up to them
+  std::string model;            // the model's description
   std::string outside;          // where the domain reaches past the model's box ("": nowhere)
   std::string surface_outside;  // where the domain reaches past the surface's grid ("": nowhere)
   // The ground the mesh follows: surface null when flat.  carved: air is
