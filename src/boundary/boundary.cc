@@ -10,6 +10,7 @@
 #include "db/boundary_table.h"
 #include "db/leaf_reader.h"
 #include "db/octant_table.h"
+#include "db/table_files.h"
 #include "mesh/face_neighbors.h"
 #include "mesh/mesh_reader.h"
 #include "model/ground_model.h"
@@ -19,31 +20,70 @@ namespace {
 
 // The box the leaves span (ticks), and whether their volumes fill it.
 struct Span {
-  std::array<uint32_t, 3> lo{}, hi{};  // hi: the far side
-  bool filled = true;
-};
-
-Status span_of(BTree& octants, Span* s) {
-  LeafReader r;
-  WEAVER_RETURN_IF_ERROR(r.open(octants));
-  s->lo = {UINT32_MAX, UINT32_MAX, UINT32_MAX};
-  s->hi = {0, 0, 0};
+  std::array<uint32_t, 3> lo{UINT32_MAX, UINT32_MAX, UINT32_MAX}, hi{};  // hi: the far side
   unsigned __int128 volume = 0;
-  for (; r.valid();) {
-    const Octant o = octant_from_key(r.key());
+  bool filled = true;
+
+  void add(const Octant& o) {
     const uint32_t e = octant_edge(o), c[3] = {o.x, o.y, o.z};
     for (int a = 0; a < 3; ++a) {
-      s->lo[a] = std::min(s->lo[a], c[a]);
-      s->hi[a] = std::max(s->hi[a], c[a] + e);
+      lo[a] = std::min(lo[a], c[a]);
+      hi[a] = std::max(hi[a], c[a] + e);
     }
     volume += static_cast<unsigned __int128>(uint64_t{e} * e) * e;
+  }
+  void add(const Span& s) {
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], s.lo[a]), hi[a] = std::max(hi[a], s.hi[a]);
+    volume += s.volume;
+  }
+  // Once every leaf is in: whether they fill the box.
+  void settle() {
+    if (volume == 0) return;
+    unsigned __int128 box = 1;
+    for (int a = 0; a < 3; ++a) box *= hi[a] - lo[a];
+    filled = volume == box;
+  }
+};
+
+// The leaves with ids [first, stop) of the table: their span (not settled)
+// and, with vp, their least edge / vp and its element.
+struct Share {
+  Span span;
+  double least_dt = HUGE_VAL;
+  uint64_t least_dt_element = 0;
+};
+
+// The leaves with ids [first, stop) in key order: fn(id, leaf), and with vp
+// their least edge / vp (seconds) and its element into *least, *element.
+template <class Fn>
+Status walk_leaves(BTree& octants, uint64_t first, uint64_t stop, const Field* vp, double* least,
+                   uint64_t* element, Fn fn) {
+  if (first >= stop) return Status::Ok();
+  uint64_t key = 0;
+  WEAVER_RETURN_IF_ERROR(octants.select(first, &key, nullptr));
+  LeafReader r;
+  WEAVER_RETURN_IF_ERROR(r.open(octants, key, vp != nullptr));
+  Units units;
+  units_from_metadata(octants.options().metadata, &units);
+  for (uint64_t id = first; id < stop && r.valid(); ++id) {
+    const Octant leaf = octant_from_key(r.key());
+    if (vp != nullptr) {
+      const double dt =
+          octant_edge(leaf) * units.tick_m / RecordSchema::get_double(r.payload(), *vp);
+      if (dt < *least) *least = dt, *element = id;
+    }
+    WEAVER_RETURN_IF_ERROR(fn(id, leaf));
     WEAVER_RETURN_IF_ERROR(r.next());
   }
-  if (volume == 0) return Status::Ok();
-  unsigned __int128 box = 1;
-  for (int a = 0; a < 3; ++a) box *= s->hi[a] - s->lo[a];
-  s->filled = volume == box;
   return Status::Ok();
+}
+
+Status share_of(BTree& octants, uint64_t first, uint64_t stop, const Field* vp, Share* s) {
+  return walk_leaves(octants, first, stop, vp, &s->least_dt, &s->least_dt_element,
+                     [s](uint64_t, const Octant& leaf) {
+                       s->span.add(leaf);
+                       return Status::Ok();
+                     });
 }
 
 // The ground a carved mesh was built under, read again from the octant
@@ -156,15 +196,12 @@ class BoundaryWriter {
   std::vector<FaceNeighbor> neighbours_;
 };
 
-// The boundary records of the octant table, into `out` in key order.
-Status derive_boundary(BTree& octants, const BoundarySink& out, const BoundaryOptions& o,
-                       MemoryBudget surface, BoundaryResult* r) {
-  Span span;
-  if (o.known_filled_box) {
-    span.lo = o.box_lo, span.hi = o.box_hi, span.filled = true;
-  } else {
-    WEAVER_RETURN_IF_ERROR(span_of(octants, &span));
-  }
+// The boundary records of the elements with ids [first, stop) of the
+// octant table, into `out` in key order, the leaves spanning `span`
+// (settled); with vp, their least edge / vp is found on the way.
+Status derive_records(BTree& octants, const BoundarySink& out, const Span& span,
+                      MemoryBudget surface, uint64_t first, uint64_t stop, const Field* vp,
+                      const ProgressFn& progress, BoundaryResult* r) {
   r->filled = span.filled;
   GroundCheck ground;
   if (!span.filled) {
@@ -174,29 +211,58 @@ Status derive_boundary(BTree& octants, const BoundarySink& out, const BoundaryOp
   }
   FaceFinder finder(octants);
   BoundaryWriter w(out, span, r);
-  const Field* vp = o.known_least_dt > 0 ? nullptr : octants.options().schema.find("vp");
-  LeafReader reader;
-  WEAVER_RETURN_IF_ERROR(reader.open(octants, 0, vp != nullptr));
-  const uint64_t total = octants.size();
-  Units units;
-  units_from_metadata(octants.options().metadata, &units);
   double least = HUGE_VAL;
-  for (uint64_t id = 0; reader.valid(); ++id) {
-    const Octant leaf = octant_from_key(reader.key());
-    if (vp != nullptr) {
-      const double dt =
-          octant_edge(leaf) * units.tick_m / RecordSchema::get_double(reader.payload(), *vp);
-      if (dt < least) least = dt, r->least_dt_element = id;
-    }
-    WEAVER_RETURN_IF_ERROR(w.element(id, leaf, &finder, ground));
-    ++r->elements;
-    if (o.progress && (id & 0xFFFFF) == 0xFFFFF) o.progress(id + 1, double(id + 1) / total);
-    WEAVER_RETURN_IF_ERROR(reader.next());
-  }
+  WEAVER_RETURN_IF_ERROR(walk_leaves(
+      octants, first, stop, vp, &least, &r->least_dt_element, [&](uint64_t id, const Octant& leaf) {
+        WEAVER_RETURN_IF_ERROR(w.element(id, leaf, &finder, ground));
+        ++r->elements;
+        if (progress && (id & 0xFFFFF) == 0xFFFFF) {
+          progress(id + 1 - first, double(id + 1 - first) / double(stop - first));
+        }
+        return Status::Ok();
+      }));
   r->least_dt = vp != nullptr && r->elements > 0 ? least : 0;
+  return Status::Ok();
+}
+
+// The boundary records of the whole octant table, into `out` in key order.
+Status derive_boundary(BTree& octants, const BoundarySink& out, const BoundaryOptions& o,
+                       MemoryBudget surface, BoundaryResult* r) {
+  Span span;
+  if (o.known_filled_box) {
+    span.lo = o.box_lo, span.hi = o.box_hi, span.filled = true;
+  } else {
+    Share all;
+    WEAVER_RETURN_IF_ERROR(share_of(octants, 0, octants.size(), nullptr, &all));
+    span = all.span;
+    span.settle();
+  }
+  const Field* vp = o.known_least_dt > 0 ? nullptr : octants.options().schema.find("vp");
+  WEAVER_RETURN_IF_ERROR(
+      derive_records(octants, out, span, surface, 0, octants.size(), vp, o.progress, r));
   if (o.known_least_dt > 0)
     r->least_dt = o.known_least_dt, r->least_dt_element = o.known_least_dt_element;
   return Status::Ok();
+}
+
+TableOptions boundary_table_options(bool packed) {
+  TableOptions t;
+  t.key_kind = KeyKind::kNode;
+  std::string error;
+  t.schema = *RecordSchema::parse(kBoundarySchema, &error);
+  t.packed = packed;
+  return t;
+}
+
+// The boundary table's metadata: its counts and least edge / vp.
+std::string boundary_metadata(const BoundaryResult& r) {
+  char meta[256];
+  std::snprintf(meta, sizeof meta,
+                "faces=%llu;free_surface=%llu;sides=%llu;least_dt=%.17g;least_dt_element=%llu",
+                (unsigned long long)r.faces, (unsigned long long)r.free_surface,
+                (unsigned long long)(r.faces - r.free_surface), r.least_dt,
+                (unsigned long long)r.least_dt_element);
+  return meta;
 }
 
 Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, MemoryBudget surface,
@@ -205,13 +271,7 @@ Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, Memo
     return out.append(key, reinterpret_cast<const std::byte*>(&kind));
   };
   WEAVER_RETURN_IF_ERROR(derive_boundary(octants, append, o, surface, r));
-  char meta[256];
-  std::snprintf(meta, sizeof meta,
-                "faces=%llu;free_surface=%llu;sides=%llu;least_dt=%.17g;least_dt_element=%llu",
-                (unsigned long long)r->faces, (unsigned long long)r->free_surface,
-                (unsigned long long)(r->faces - r->free_surface), r->least_dt,
-                (unsigned long long)r->least_dt_element);
-  out.set_metadata(meta);
+  out.set_metadata(boundary_metadata(*r));
   return Status::Ok();
 }
 
@@ -234,18 +294,126 @@ Status build_boundary(const std::string& db_dir, const BoundaryOptions& o, Bound
   if (!db->has_table(kOctantTable)) return Status::NotFound(db_dir + ": no octant table");
   std::unique_ptr<BTree> octants;
   WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, octant_pool, &octants));
-  TableOptions t;
-  t.key_kind = KeyKind::kNode;
-  std::string error;
-  t.schema = *RecordSchema::parse(kBoundarySchema, &error);
-  t.packed = o.packed;
   std::unique_ptr<BTree> table;
   std::string file;
-  WEAVER_RETURN_IF_ERROR(db->create_table(kBoundaryTable, t, out_pool, &table, &file));
+  WEAVER_RETURN_IF_ERROR(
+      db->create_table(kBoundaryTable, boundary_table_options(o.packed), out_pool, &table, &file));
   const Status st = write_boundary(*octants, *table, o, surface, r);
   WEAVER_RETURN_IF_ERROR(db->publish(kBoundaryTable, file, table, st));
   r->table_bytes = table->file_bytes();
   return Status::Ok();
+}
+
+namespace {
+
+// A rank's share as text for the others ("" when it failed), and back.
+std::string share_text(const Share& s) {
+  char buf[320];
+  std::snprintf(buf, sizeof buf, "%u %u %u %u %u %u %llu %llu %a %llu", s.span.lo[0], s.span.lo[1],
+                s.span.lo[2], s.span.hi[0], s.span.hi[1], s.span.hi[2],
+                (unsigned long long)(s.span.volume >> 64), (unsigned long long)s.span.volume,
+                s.least_dt, (unsigned long long)s.least_dt_element);
+  return buf;
+}
+
+bool parse_share(const std::string& text, Share* s) {
+  unsigned long long hi = 0, lo = 0, element = 0;
+  char dt[64] = {};
+  if (std::sscanf(text.c_str(), "%u %u %u %u %u %u %llu %llu %63s %llu", &s->span.lo[0],
+                  &s->span.lo[1], &s->span.lo[2], &s->span.hi[0], &s->span.hi[1], &s->span.hi[2],
+                  &hi, &lo, dt, &element) != 10) {
+    return false;
+  }
+  s->span.volume = (static_cast<unsigned __int128>(hi) << 64) | lo;
+  s->least_dt = std::strtod(dt, nullptr);
+  s->least_dt_element = element;
+  return true;
+}
+
+// Every rank's share, combined as one scan of the whole table finds them
+// (the least edge / vp of the first rank that has it: the least id).
+// False when a rank failed (sent "").
+bool combine_shares(const std::vector<std::string>& texts, Share* all) {
+  *all = Share{};
+  for (const std::string& text : texts) {
+    Share s;
+    if (!parse_share(text, &s)) return false;
+    all->span.add(s.span);
+    if (s.least_dt < all->least_dt)
+      all->least_dt = s.least_dt, all->least_dt_element = s.least_dt_element;
+  }
+  all->span.settle();
+  return true;
+}
+
+}  // namespace
+
+Status boundary_shard(const std::string& db_dir, const BoundaryOptions& o, int rank, int ranks,
+                      const std::string& file, const RankAllGather& all_gather, BoundaryResult* r,
+                      ShardEntry* entry) {
+  *r = BoundaryResult{};
+  *entry = ShardEntry{file};
+  MemoryPlan plan(o.memory);
+  const uint64_t octant_pool = plan.take("octant table pool", 1, 4);
+  const uint64_t out_pool = plan.take("boundary table pool", 1, 8, 8ull << 20);
+  const MemoryBudget surface = plan.take_budget("surface", 1, 2);
+  // Up to each exchange, an error still takes part in it (sending "").
+  std::unique_ptr<Database> db;
+  std::unique_ptr<BTree> octants;
+  Status st = Database::open(db_dir, Database::Mode::kRead, false, &db);
+  if (st.ok() && !o.staged_octants.empty()) {
+    st = db->stage_shards(kOctantTable, o.staged_octants);
+  }
+  if (st.ok() && !db->has_table(kOctantTable)) st = Status::NotFound(db_dir + ": no octant table");
+  if (st.ok()) st = db->open_table(kOctantTable, octant_pool, &octants);
+  const uint64_t n = st.ok() ? octants->size() : 0;
+  const uint64_t first = n * uint64_t(rank) / uint64_t(ranks);
+  const uint64_t stop = n * uint64_t(rank + 1) / uint64_t(ranks);
+  const Field* vp = st.ok() ? octants->options().schema.find("vp") : nullptr;
+  Share mine, all;
+  if (st.ok()) st = share_of(*octants, first, stop, vp, &mine);
+  std::vector<std::string> texts;
+  WEAVER_RETURN_IF_ERROR(all_gather(st.ok() ? share_text(mine) : "", &texts));
+  WEAVER_RETURN_IF_ERROR(st);
+  if (!combine_shares(texts, &all)) return Status::Ok();  // another rank failed: it says why
+  // This rank's records, into a shard file of the table.
+  std::unique_ptr<BTree> table;
+  st = create_shard_table(db_dir, file, boundary_table_options(o.packed), out_pool, &table);
+  const BoundarySink append = [&table](uint64_t key, uint8_t kind) {
+    return table->append(key, reinterpret_cast<const std::byte*>(&kind));
+  };
+  if (st.ok())
+    st = derive_records(*octants, append, all.span, surface, first, stop, nullptr, o.progress, r);
+  // The counts of every rank, for the metadata every shard carries.
+  char counts[96];
+  std::snprintf(counts, sizeof counts, "%llu %llu", (unsigned long long)r->faces,
+                (unsigned long long)r->free_surface);
+  const Status gathered = all_gather(st.ok() ? counts : "", &texts);
+  BoundaryResult total = *r;
+  total.faces = total.free_surface = 0;
+  std::vector<bool> writes;
+  bool peer_failed = false;
+  for (const std::string& text : texts) {
+    unsigned long long faces = 0, free_surface = 0;
+    if (std::sscanf(text.c_str(), "%llu %llu", &faces, &free_surface) != 2) {
+      peer_failed = true;
+      break;
+    }
+    total.faces += faces, total.free_surface += free_surface;
+    writes.push_back(faces > 0);
+  }
+  if (st.ok()) st = gathered;
+  total.least_dt = vp != nullptr && n > 0 ? all.least_dt : 0;
+  total.least_dt_element = vp != nullptr ? all.least_dt_element : 0;
+  r->least_dt = total.least_dt, r->least_dt_element = total.least_dt_element;
+  if (table == nullptr) return st;
+  // A failed rank says why; the others only drop their files.
+  const bool drop = st.ok() && peer_failed;
+  if (st.ok() && !drop) table->set_metadata(boundary_metadata(total));
+  const ShardPlace place = st.ok() && !drop ? shard_place_among(writes, rank) : ShardPlace{};
+  const Status finished = finish_shard(db_dir, table, drop ? Status::Internal("dropped") : st,
+                                       place, entry, &r->table_bytes);
+  return drop ? Status::Ok() : finished;
 }
 
 Status check_boundary(BTree& octants, BTree& stored, MemoryBudget surface, size_t max_problems,

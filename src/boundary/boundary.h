@@ -25,10 +25,12 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "db/database.h"
+#include "db/table_files.h"
 #include "schema/status.h"
 #include "util/memory_budget.h"
 #include "util/progress.h"
@@ -50,6 +52,9 @@ struct BoundaryOptions {
   // scan, which finds the box, is skipped.
   bool known_filled_box = false;
   std::array<uint32_t, 3> box_lo{}, box_hi{};
+  // boundary_shard (weaver-mpi mesh): the octant table is these shards,
+  // which the run's rank 0 has staged but not committed.
+  std::vector<ShardEntry> staged_octants;
 };
 
 struct BoundaryResult {
@@ -68,6 +73,24 @@ struct BoundaryResult {
 
 Status build_boundary(const std::string& db_dir, const BoundaryOptions& options,
                       BoundaryResult* result);
+
+// One rank's all-gather (weaver-mpi): its text out, every rank's in rank
+// order back.
+using RankAllGather = std::function<Status(const std::string& mine, std::vector<std::string>* all)>;
+
+// weaver-mpi mesh: rank `rank` of `ranks` writes the boundary records of the
+// elements with ids [n rank / ranks, n (rank + 1) / ranks) of db_dir's
+// octant table (n its size) as shard file `file`, synced and described in
+// *entry (no file when it holds no record).  The box the leaves span and
+// whether they fill it, the least edge / vp and the counts in the table's
+// metadata are every rank's together, gathered twice, so that the shards
+// compact to the table build_boundary writes, byte for byte.  A rank that
+// fails still takes part in both gathers (sending ""), and the others then
+// drop their files and return OK: the failed rank's error is the one to
+// report.  The caller commits the shards.
+Status boundary_shard(const std::string& db_dir, const BoundaryOptions& options, int rank,
+                      int ranks, const std::string& file, const RankAllGather& all_gather,
+                      BoundaryResult* result, ShardEntry* entry);
 
 // `weaver verify`: the boundary records derived again from `octants`
 // against the `stored` table, record by record; each difference (up to

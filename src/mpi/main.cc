@@ -20,7 +20,9 @@ constexpr char kUsage[] =
     "  construct DB      the octree of a velocity model, one shard a rank\n"
     "  balance DB        2:1 balance the octant table in two message rounds\n"
     "  extract DB        the mesh nodes of a balanced octree, one shard a rank\n"
-    "  mesh DB ...       construct, balance and extract (construct's options)\n"
+    "  boundary DB       the boundary faces of a mesh, one shard a rank\n"
+    "  mesh DB ...       construct, balance, extract and boundary (construct's\n"
+    "                    options)\n"
     "  export DB ...     raw --parts N or pvtu, one part a rank (N = ranks)\n"
     "\n"
     "The other commands (query, export of one file, verify, stat, ...) are\n"
@@ -61,6 +63,7 @@ int main(int argc, char** argv) {
   if (cmd == "extract") return weaver::mpi::extract(comm, argc, argv);
   if (cmd == "balance") return weaver::mpi::balance(comm, argc, argv);
   if (cmd == "mesh") return weaver::mpi::mesh(comm, argc, argv);
+  if (cmd == "boundary") return weaver::mpi::boundary(comm, argc, argv);
   if (cmd == "export") return weaver::mpi::export_parts(comm, argc, argv);
   std::fprintf(stderr, "weaver-mpi: unknown command '%s'\n\n%s", cmd.c_str(), kUsage);
   return 2;

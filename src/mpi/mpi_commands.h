@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "balance/balance.h"
+#include "boundary/boundary.h"
 #include "extract/extract.h"
 #include "mpi/comm.h"
 
@@ -16,6 +17,7 @@ int construct(const Comm& comm, int argc, char** argv);
 int extract(const Comm& comm, int argc, char** argv);
 int balance(const Comm& comm, int argc, char** argv);
 int mesh(const Comm& comm, int argc, char** argv);
+int boundary(const Comm& comm, int argc, char** argv);
 int export_parts(const Comm& comm, int argc, char** argv);
 // The stages on an open command line's options (weaver-mpi mesh runs all three).
 // With options.staged_octants (every rank's copy of what rank 0 staged on
@@ -26,6 +28,10 @@ int run_balance(const Comm& comm, const std::string& dir, const BalanceOptions& 
                 Database* held = nullptr, std::vector<ShardEntry>* staged = nullptr);
 int run_extract(const Comm& comm, const std::string& dir, const ExtractOptions& options,
                 Database* held = nullptr);
+// The boundary table, committed on its own; on_held (the same on every
+// rank): on rank 0's writer held (weaver-mpi mesh's, after extract).
+int run_boundary(const Comm& comm, const std::string& dir, const BoundaryOptions& options,
+                 Database* held = nullptr, bool on_held = false);
 
 // What weaver-mpi mesh's construct leaves for its extract: rank 0's writer,
 // with the octant table's shards staged, and (on every rank) those shards.

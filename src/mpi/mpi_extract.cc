@@ -78,8 +78,11 @@ int run_extract(const Comm& comm, const std::string& dir, const ExtractOptions& 
        << x.ghosts_sent << "), sent " << x.bytes_sent << " B in " << messages
        << " messages, received " << x.bytes_received << " B, wrote " << r.node_table_bytes
        << " B, peak RSS " << peak_rss_bytes() << " B";
+  // With o.stage (weaver-mpi mesh), the node shards go live with the
+  // boundary's commit.
+  std::vector<ShardEntry> staged;
   return finish_stage(comm, db, "extract", kNodeTable, entry, st.ok() ? "" : cli::error_text(st),
-                      line.str(), r.nodes, "nodes", t0);
+                      line.str(), r.nodes, "nodes", t0, o.stage ? &staged : nullptr);
 }
 
 }  // namespace weaver::mpi

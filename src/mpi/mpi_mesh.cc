@@ -1,8 +1,9 @@
-// weaver-mpi mesh: construct (balanced as it descends) and extract on the
-// ranks, each stage a sharded table (the commands' own code, one after the
-// other), committed once: construct's shards (with --unbalanced, balance's
-// in their place) are staged on rank 0's writer and go live with extract's,
-// so a run killed or failing anywhere leaves the old database.
+// weaver-mpi mesh: construct (balanced as it descends), extract and the
+// boundary on the ranks, each stage a sharded table (the commands' own code,
+// one after the other), committed once: construct's shards (with
+// --unbalanced, balance's in their place) and extract's are staged on rank
+// 0's writer and go live with the boundary's, as weaver mesh commits, so a
+// run killed or failing anywhere leaves the old database.
 #include <cstdio>
 
 #include "cli/cli.h"
@@ -33,7 +34,13 @@ int mesh(const Comm& comm, int argc, char** argv) {
   x.threads = o.threads;
   x.packed = o.packed;
   x.staged_octants = staged.shards;
-  return run_extract(comm, dir, x, staged.db.get());
+  x.stage = true;
+  if (const int code = run_extract(comm, dir, x, staged.db.get())) return code;
+  BoundaryOptions b;
+  b.memory = o.memory;
+  b.packed = o.packed;
+  b.staged_octants = staged.shards;
+  return run_boundary(comm, dir, b, staged.db.get(), true);
 }
 
 }  // namespace weaver::mpi

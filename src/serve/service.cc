@@ -87,6 +87,24 @@ Status paint_from(Explorer& ex, const Request& r, Paint* out) {
   return paint_of(ex, kFields[field], kSummaries[summary], out);
 }
 
+// A section's plane in the domain's metres along axis.  ?z_mode=elevation
+// takes a z plane's POSITION as an elevation (metres up: z = the mesh's
+// top_elevation_m minus it), as `weaver slice --z elevation` does; depth is
+// refused, since a plane at one depth below a ground is not flat.
+Status plane_metres(Explorer& ex, const Params& p, int axis, double position, double* at_m) {
+  int mode = 0;
+  if (p.has("z_mode")) {
+    WEAVER_RETURN_IF_ERROR(p.choice("z_mode", {"domain", "elevation", "depth"}, &mode));
+    if (mode == 2) {
+      return Status::InvalidArgument(
+          "z_mode is domain or elevation for sections and tiles (a depth section would be "
+          "curved)");
+    }
+  }
+  *at_m = mode == 1 && axis == 2 ? ex.mesh().top_elevation() - position : position;
+  return Status::Ok();
+}
+
 // The units, geo and z of a point question: ?units=ticks|m, ?geo=0|1,
 // ?z_mode=domain|elevation|depth.
 Status coordinate_options(const Params& p, ApiQuery* q) {
@@ -405,8 +423,12 @@ Response Service::stat(Explorer& ex) {
   j += "], \"geo\": " + json_string(u.geo) + ", \"fields\": [\"level\", \"edge\"";
   if (ex.mesh().has_material()) j += ", \"vp\", \"vs\", \"rho\"";
   if (ex.mesh().has_q()) j += ", \"qp\", \"qs\"";
+  // The elevation of z = 0 for a mesh under a ground (z_mode=elevation
+  // counts from it); null for a flat-topped box.
+  j += "], \"top_elevation_m\": ";
+  j += ex.mesh().has_ground() ? number(ex.mesh().top_elevation()) : "null";
   // The finest level the aggregate table summarises (null without one).
-  j += "], \"aggregates\": ";
+  j += ", \"aggregates\": ";
   j += ex.aggregate_finest() < 0 ? "null" : std::to_string(ex.aggregate_finest());
   return {200, "application/json", j + "}\n"};
 }
@@ -421,6 +443,7 @@ Response Service::section(Explorer& ex, const std::vector<std::string>& parts, c
   Paint paint;
   Status st = paint_from(ex, r, &paint);
   const double* extent = nullptr;
+  if (st.ok()) st = plane_metres(ex, Params(r), axis_of(parts[2]), at, &at);
   if (st.ok()) st = snapshot_extent(ex, &extent);
   if (st.ok()) st = section_of(ex, extent, axis_of(parts[2]), at, &s);
   if (st.ok()) st = shared_range(ex, s, paint, &range);
@@ -467,6 +490,7 @@ Response Service::tile(Explorer& ex, const std::vector<std::string>& parts, cons
   Paint paint;
   if (st.ok()) st = paint_from(ex, r, &paint);
   const double* extent = nullptr;
+  if (st.ok()) st = plane_metres(ex, p, axis_of(parts[2]), at, &at);
   if (st.ok()) st = snapshot_extent(ex, &extent);
   if (st.ok()) st = section_of(ex, extent, axis_of(parts[2]), at, &s);
   if (st.ok() && !p.has("min")) st = shared_range(ex, s, paint, &range);

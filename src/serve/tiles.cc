@@ -11,6 +11,10 @@
 namespace weaver::serve {
 namespace {
 
+// What a pixel outside every element shows: transparent (the PNG's one
+// transparent colour, which nothing else paints).
+constexpr Rgb kClear{0, 0, 0};
+
 // How far the domain reaches along axis a from the origin corner: the first
 // tick where a point on that edge is outside (a binary search by locate).
 // A domain without its origin corner is taken as the whole root.
@@ -212,6 +216,25 @@ Status mark_danglings(Explorer& ex, const Section& s, const std::vector<TilePixe
   return Status::Ok();
 }
 
+// Where the pixel columns of a vertical section's tile cross the ground (a
+// mesh under a surface): a line two pixels thick, the surface as construct
+// read it (bilinear between its grid points), as `weaver slice` draws it.
+void draw_ground(Explorer& ex, const Section& s, double u0, double v0, double pixel, Image* image) {
+  const Units& u = ex.units();
+  const double top = ex.mesh().top_elevation();
+  for (int i = 0; i < kTile; ++i) {
+    const double across = u0 + (i + 0.5) * pixel;
+    if (!(across >= 0 && across < kRootEdge)) continue;
+    uint32_t p[3];
+    p[s.axis] = s.at, p[s.u] = uint32_t(across), p[s.v] = 0;
+    const double ground = ex.ground_at({p[0], p[1], p[2]});
+    if (std::isnan(ground)) return;                              // no surface to read
+    const double z = (top - ground - u.origin_m[2]) / u.tick_m;  // ticks down
+    const int j = int(std::floor((z - v0) / pixel));
+    image->set(i, j - 1, kGroundLine), image->set(i, j, kGroundLine);
+  }
+}
+
 }  // namespace
 
 Status domain_extent(Explorer& ex, double extent[3]) {
@@ -317,7 +340,7 @@ Status render_tile(Explorer& ex, const Section& s, const Paint& paint, double lo
                    int zoom, int64_t x, int64_t y, std::string* png, bool danglings) {
   std::vector<TilePixel> pixels;
   WEAVER_RETURN_IF_ERROR(tile_pixels(ex, s, paint, zoom, x, y, &pixels));
-  Image image(kTile, kTile, Rgb{255, 255, 255});
+  Image image(kTile, kTile, kClear);
   const double span = s.side / std::ldexp(1.0, zoom);
   const double pixel = span / kTile;  // ticks a pixel
   for (int j = 0; j < kTile; ++j) {
@@ -336,11 +359,12 @@ Status render_tile(Explorer& ex, const Section& s, const Paint& paint, double lo
       image.set(i, j, c);
     }
   }
+  const double u0 = x * span, v0 = s.down ? y * span : s.side - y * span;
+  if (s.v == 2 && ex.mesh().has_ground()) draw_ground(ex, s, u0, v0, pixel, &image);
   if (danglings && ex.has_nodes()) {
-    const double u0 = x * span, v0 = s.down ? y * span : s.side - y * span;
     WEAVER_RETURN_IF_ERROR(mark_danglings(ex, s, pixels, u0, v0, pixel, &image));
   }
-  *png = encode_png(image, {});
+  *png = encode_png(image, {}, &kClear);
   return Status::Ok();
 }
 

@@ -101,7 +101,9 @@ Status tile_pixels(Explorer& ex, const Section& s, const Paint& paint, int zoom,
                    int64_t y, std::vector<TilePixel>* out);
 
 // Tile (zoom, x, y) of the section as PNG bytes, coloured by paint over
-// [lo, hi] on the viridis scale; outside the domain is transparent white.
+// [lo, hi] on the viridis scale; a pixel outside every element (beside the
+// domain, or in the air over a ground) is transparent.  A vertical section
+// of a mesh under a ground draws the ground line across it.
 // With danglings, the dangling nodes that lie on the plane are marked as
 // `weaver slice --danglings` marks them (edge-dangling red, face-dangling
 // white), on elements at least 6 pixels wide: only a plane on element

@@ -37,5 +37,7 @@ std::unique_ptr<Canvas> png_canvas(int width, int height, OutputFile* file);
 std::unique_ptr<Canvas> svg_canvas(int width, int height, OutputFile* file);
 
 inline constexpr Rgb kOutline{40, 40, 40};
+// The ground line on vertical sections of a mesh under a surface.
+inline constexpr Rgb kGroundLine{20, 20, 20};
 
 }  // namespace weaver

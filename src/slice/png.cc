@@ -163,7 +163,8 @@ std::string zlib_compress(const std::vector<uint8_t>& data) {
 }
 
 std::string encode_png(const Image& image,
-                       const std::vector<std::pair<std::string, std::string>>& text) {
+                       const std::vector<std::pair<std::string, std::string>>& text,
+                       const Rgb* transparent) {
   const size_t stride = size_t(image.width()) * 3;
   std::vector<uint8_t> filtered;
   filtered.reserve((stride + 1) * size_t(image.height()));
@@ -186,6 +187,10 @@ std::string encode_png(const Image& image,
   std::string ihdr = be32(uint32_t(image.width())) + be32(uint32_t(image.height()));
   ihdr += std::string("\x08\x02\x00\x00\x00", 5);  // 8-bit RGB, deflate, no interlace
   chunk(&png, "IHDR", ihdr);
+  if (transparent) {  // three 16-bit samples, as the bit depth is 8
+    const Rgb& c = *transparent;
+    chunk(&png, "tRNS", std::string{'\0', char(c.r), '\0', char(c.g), '\0', char(c.b)});
+  }
   for (const auto& [key, value] : text) chunk(&png, "tEXt", key + std::string(1, '\0') + value);
   chunk(&png, "IDAT", zlib_compress(filtered));
   chunk(&png, "IEND", "");

@@ -39,9 +39,12 @@ class Image {
   std::vector<uint8_t> rgb_;
 };
 
-// The PNG file of the image, with tEXt chunks (keyword, text).
+// The PNG file of the image, with tEXt chunks (keyword, text).  With
+// transparent, the pixels of exactly that colour are transparent (a tRNS
+// chunk: every PNG reader honours it, and the pixels stay RGB).
 std::string encode_png(const Image& image,
-                       const std::vector<std::pair<std::string, std::string>>& text);
+                       const std::vector<std::pair<std::string, std::string>>& text,
+                       const Rgb* transparent = nullptr);
 
 uint32_t crc32(const uint8_t* data, size_t n, uint32_t crc = 0);
 uint32_t adler32(const uint8_t* data, size_t n, uint32_t adler = 1);

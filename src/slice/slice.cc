@@ -238,7 +238,7 @@ void draw_ground(Explorer& ex, Canvas& c, const Layout& l, int ua, int axis, uin
     const double y = l.y((top - ground - u.origin_m[2]) / u.tick_m);
     if (y < l.top || y > l.top + l.plot_h) continue;
     c.rect(px, std::max(double(l.top), y - 1), px + 1, std::min(double(l.top + l.plot_h), y + 1),
-           Rgb{20, 20, 20}, false);
+           kGroundLine, false);
   }
 }
 

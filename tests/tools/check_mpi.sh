@@ -81,7 +81,7 @@ check_model() {  # name, construct options...
 
 # Every command has --help; an unknown one is a usage error (exit 2).
 "$mpi" --help >"$tmp/out" || fail "weaver-mpi --help"
-for cmd in construct balance extract mesh export; do
+for cmd in construct balance extract boundary mesh export; do
   grep -q "^  $cmd " "$tmp/out" || fail "weaver-mpi --help does not name $cmd"
   "$mpi" "$cmd" --help >"$tmp/help" && grep -q "usage:" "$tmp/help" || fail "weaver-mpi $cmd --help"
 done
@@ -106,7 +106,8 @@ printf '0 1800 1000 2000\n500 4000 2300 2400\n3000 6000 3464 2700\n' >"$tmp/laye
 ranks="2 3" check_model layers --model "db:$tmp/layers.db" --freq 0.3 --domain 20000,20000,10000
 
 # A mesh under a ground (a ridge across the box): the carved tables of 1 to
-# 4 ranks compact to the serial mesh's, byte for byte.
+# 4 ranks, and the boundary table the ranks derive, compact to the serial
+# mesh's, byte for byte.
 { printf 'ncols 11\nnrows 11\nxllcenter 0\nyllcenter 0\ncellsize 10000\n'
   for r in 0 1 2 3 4 5 6 7 8 9 10; do
     for c in 0 1 2 3 4 5 6 7 8 9 10; do printf '%d ' $(( 300 * (5 - (c > 5 ? c - 5 : 5 - c)) )); done
@@ -119,13 +120,21 @@ for np in 1 2 3 4; do
     --surface "asc:$tmp/ridge.asc" --quiet >"$tmp/out" || fail "ground mesh -np $np"
   grep -q "^carved " "$tmp/out" || fail "ground mesh -np $np: no carve in the summary"
   "$weaver" compact "$tmp/ground.$np" >/dev/null
-  for t in octants nodes; do
+  for t in octants nodes boundary; do
     [ "$(md5sum "$tmp/ground.$np"/$t-*.bt | cut -d' ' -f1)" = \
       "$(md5sum "$tmp/ground.serial"/$t-*.bt | cut -d' ' -f1)" ] ||
       fail "ground mesh -np $np: compacted $t differ from the serial mesh's"
   done
 done
-echo "ok  a mesh under a ground on 1 to 4 ranks compacts to the serial tables"
+# weaver-mpi boundary alone, over the serial mesh (its octants one file).
+cp -r "$tmp/ground.serial" "$tmp/ground.b"
+run 3 "$mpi" boundary "$tmp/ground.b" >"$tmp/out" || fail "boundary -np 3"
+grep -q "^boundary: [0-9]* faces in .* on 3 ranks" "$tmp/out" || fail "boundary: no summary"
+"$weaver" compact "$tmp/ground.b" >/dev/null
+[ "$(md5sum "$tmp/ground.b"/boundary-*.bt | cut -d' ' -f1)" = \
+  "$(md5sum "$tmp/ground.serial"/boundary-*.bt | cut -d' ' -f1)" ] ||
+  fail "weaver-mpi boundary on 3 ranks: the compacted table differs from the serial one"
+echo "ok  a mesh under a ground on 1 to 4 ranks compacts to the serial tables, boundary included"
 
 # mesh: the three stages on 3 ranks, both tables as the serial mesh's.
 "$weaver" mesh "$tmp/mesh.serial" --model basin --freq 0.2 --quiet >/dev/null
@@ -135,9 +144,9 @@ run 3 "$mpi" mesh "$tmp/mesh" --model basin --freq 0.2 --quiet >"$tmp/out" || fa
 # ranks' files, and they compact to the serial mesh's.
 cp -r "$tmp/mesh" "$tmp/mesh.lost" && rm "$tmp/mesh.lost/MANIFEST"
 "$weaver" recover "$tmp/mesh.lost" >"$tmp/out" || fail "recover of the sharded mesh"
-[ "$(grep -c 'shards)$' "$tmp/out")" = 2 ] || fail "recover: not both tables from shards"
+[ "$(grep -c 'shards)$' "$tmp/out")" = 3 ] || fail "recover: not the three tables from shards"
 "$weaver" compact "$tmp/mesh.lost" >/dev/null
-for t in octants nodes; do
+for t in octants nodes boundary; do
   [ "$(md5sum "$tmp/mesh.lost"/$t-*.bt | cut -d' ' -f1)" = \
     "$(md5sum "$tmp/mesh.serial"/$t-*.bt | cut -d' ' -f1)" ] || fail "recover: $t differ"
 done
@@ -151,10 +160,8 @@ export_parts() {  # name, np, db, serial db, suffix, export options...
   run "$np" "$mpi" export "$db" "$@" --out "$tmp/$name.mpi$ext" >"$tmp/out" || fail "export $name"
   grep -q "^export: $np parts" "$tmp/out" || fail "export $name: no summary"
 }
-# weaver-mpi mesh leaves the boundary table to weaver boundary (one scan on
-# one process, over the shards): then each part's boundary_faces too are
-# the serial export's.
-"$weaver" boundary "$tmp/mesh" --quiet >/dev/null || fail "boundary over the shards"
+# weaver-mpi mesh derived the boundary table too: each part's
+# boundary_faces are the serial export's.
 export_parts raw 3 "$tmp/mesh" "$tmp/mesh.serial" "" --format raw
 diff -r "$tmp/raw.serial" "$tmp/raw.mpi" >/dev/null || fail "export raw on 3 ranks differs"
 export_parts pvtu 3 "$tmp/mesh" "$tmp/mesh.serial" .pvtu --format pvtu --box 0,0,0,60000,40000,20000
@@ -332,7 +339,7 @@ faults() {  # rank, stage, the database before it (copied fresh for every try), 
       if [ "$what" = FAIL ]; then
         # mesh names the stage that failed.
         local names=$stage
-        [ "$stage" = mesh ] && names="construct|balance|extract"
+        [ "$stage" = mesh ] && names="construct|balance|extract|boundary"
         grep -Eq "^weaver-mpi ($names): rank $rank: " "$tmp/err" ||
           fail "$stage FAIL at $step of rank $rank: $(cat "$tmp/err")"
         # mpirun adds its own banner about the exit status; weaver says one line.
@@ -364,8 +371,8 @@ cp -r "$tmp/f.built" "$tmp/f.balanced"
 faults 1 extract "$tmp/f.balanced"
 faults 0 extract "$tmp/f.balanced"
 # mesh as a whole, over a finished mesh: construct's shards (or balance's in
-# their place) are staged and go live with extract's, so a rank killed
-# anywhere leaves the old mesh, both tables, byte for byte.
+# their place) and extract's are staged and go live with the boundary's, so
+# a rank killed anywhere leaves the old mesh, every table, byte for byte.
 "$weaver" mesh "$tmp/f.mesh" --model basin --freq 0.1 --quiet >/dev/null
 for rank in 1 0; do
   faults $rank mesh "$tmp/f.mesh" --model basin --freq 0.2

@@ -19,7 +19,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from picture import pixel, read_png, viridis  # noqa: E402
-from serve_client import exchange, stop_server  # noqa: E402
+from serve_client import exchange, start_server, stop_server  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "src",
                                 "api", "python"))
@@ -56,14 +56,8 @@ def descriptors_back_to(descriptors, when, tries):
 db = os.path.join(work, "basin.db")
 run("mesh", db, "--model", "basin", "--freq", "0.05", "--quiet")
 log_path = os.path.join(work, "serve.log")
-log_file = open(log_path, "w")
-server = subprocess.Popen([weaver_bin, "serve", db, "--port", "0", "--threads", "3"],
-                          stdout=subprocess.PIPE, stderr=log_file, text=True)
+server, port = start_server(weaver_bin, db, log_path, "--threads", "3")
 try:
-    first = server.stdout.readline()
-    if "http://127.0.0.1:" not in first:
-        fail(f"no URL on the first line: {first!r} {open(log_path).read()}")
-    port = int(first.split("http://127.0.0.1:")[1].split("/")[0])
 
     def request(method, path, body=None, headers=None):
         if time.monotonic() > DEADLINE:
@@ -412,10 +406,8 @@ if not any(" GET /api/stat 200 " in line for line in log_lines) or \
 model = os.path.join(work, "model.db")
 fixture = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "etree", "cmu.e")
 run("model", "import", model, "--from", "etree:" + fixture)
-server = subprocess.Popen([weaver_bin, "serve", model, "--port", "0", "--quiet"], stdout=subprocess.PIPE,
-                          stderr=subprocess.PIPE, text=True)
+server, port = start_server(weaver_bin, model, os.path.join(work, "model-serve.log"), "--quiet")
 try:
-    port = int(server.stdout.readline().split("http://127.0.0.1:")[1].split("/")[0])
     stat = api("/api/stat")
     if stat["kind"] != "model" or stat["nodes"] != 0 or "vs" not in stat["fields"]:
         fail(f"a model database's /api/stat: {stat}")

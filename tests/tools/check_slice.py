@@ -14,6 +14,7 @@ import sys
 import xml.etree.ElementTree as ET
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import make_ground  # noqa: E402
 from picture import pixel, read_png, viridis  # noqa: E402
 
 weaver_bin, work = sys.argv[1:3]
@@ -132,10 +133,7 @@ n3, c3 = check_png(basin, "y", 400000, "vs", 700, vs_of)
 # A mesh under a ground (a ramp along y, from 0 to 3 km): the vertical
 # section x = 50 km draws the ground line where the test's own ramp puts it.
 dem = os.path.join(work, "ramp.asc")
-with open(dem, "w") as f:
-    f.write("ncols 11\nnrows 11\nxllcenter 0\nyllcenter 0\ncellsize 10000\n")
-    for r in range(10, -1, -1):
-        f.write(" ".join(str(300 * c) for c in range(11)) + "\n")
+make_ground.write_asc(dem, 11, 11, 0, 0, 10000, lambda c, r: 300 * c, centre=True)
 ground_db = os.path.join(work, "ground")
 run("mesh", ground_db, "--model", "loh1", "--freq", "0.15", "--surface", "asc:" + dem, "--quiet")
 top = float(run("stat", ground_db, "--json").stdout.split('"top_elevation_m": "')[1].split('"')[0])

@@ -13,6 +13,20 @@ def exchange(port, method, path, body=None, headers=None, timeout=60):
     return r.status, dict(r.getheaders()), data
 
 
+def start_server(weaver, db, log_path, *options):
+    """weaver serve DB on a port of the system's choosing: the process and
+    its port, read from the URL on its first line (its stderr to log_path)."""
+    import subprocess
+    log = open(log_path, "w")
+    server = subprocess.Popen([weaver, "serve", db, "--port", "0", *options],
+                              stdout=subprocess.PIPE, stderr=log, text=True)
+    first = server.stdout.readline()
+    if "http://127.0.0.1:" not in first:
+        server.kill()
+        raise RuntimeError(f"no URL on the first line: {first!r} {open(log_path).read()}")
+    return server, int(first.split("http://127.0.0.1:")[1].split("/")[0])
+
+
 def stop_server(server, timeout=10):
     """SIGTERM to a weaver serve process: its exit status, or None (and the
     process killed) when it does not stop within timeout seconds."""
