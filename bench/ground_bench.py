@@ -21,6 +21,7 @@ import os
 import re
 import shutil
 import statistics
+import struct
 import subprocess
 import sys
 import time
@@ -58,6 +59,25 @@ def median(runs, key):
     return statistics.median(key(r) for r in runs)
 
 
+def rfile_grid_points(path):
+    """The grid points of an rfile's material blocks (blocks 2 on)."""
+    with open(path, "rb") as f:
+        head = f.read(4096)
+    e = "<" if struct.unpack("<i", head[:4])[0] == 1 else ">"
+    at = 12 + 24
+    (n,) = struct.unpack(e + "i", head[at:at + 4])
+    at += 4 + n
+    (blocks,) = struct.unpack(e + "i", head[at:at + 4])
+    at += 4
+    total = 0
+    for b in range(blocks):
+        _, _, _, _, ni, nj, nk = struct.unpack(e + "dddiiii", head[at:at + 40])
+        at += 40
+        if b > 0:
+            total += ni * nj * nk
+    return total
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--weaver", default=os.path.join(HERE, "..", "build", "release", "weaver"))
@@ -76,7 +96,7 @@ def main():
         make_ground.write_asc(dem, 1001, 1001, -cell / 2, -cell / 2, cell,
                               lambda c, r: ground(r * cell, c * cell))
     result = {"machine": os.uname().nodename, "memory": a.memory, "freqs": {}}
-    for f in [float(x) for x in a.freqs.split(",")]:
+    for f in [float(x) for x in a.freqs.split(",") if x]:
         common = ["--model", "basin", "--freq", str(f), "--domain", "100000,100000,37500"]
         flat, carved = [], []
         for _ in range(a.repeat):
@@ -101,6 +121,18 @@ def main():
         if not os.path.exists(rfile):
             ground = make_ground.hills(100000, 2000)
             make_ground.write_rfile_benchmark(rfile, 100000, 37500, 2000, a.rfile_mb, ground)
+        points = rfile_grid_points(rfile)
+        times = []
+        for _ in range(a.repeat):
+            db = os.path.join(a.work, "rfile-model.db")
+            shutil.rmtree(db, ignore_errors=True)
+            t0 = time.monotonic()
+            subprocess.run([a.weaver, "model", "import", db, "--from", "rfile:" + rfile,
+                            "--memory", a.memory], check=True, stdout=subprocess.DEVNULL)
+            times.append(time.monotonic() - t0)
+        result["rfile_import"] = {"grid_points": points, "s": statistics.median(times),
+                                  "runs_s": times,
+                                  "points_per_s": points / statistics.median(times)}
         r = run_mesh(a.weaver, os.path.join(a.work, "rfile.db"),
                      ["--model", "rfile:" + rfile, "--freq", str(a.rfile_freq), "--domain",
                       "100000,100000,37500"], a.memory)
@@ -119,6 +151,10 @@ def main():
             print(f"{f:>5} {name:>7} {x['elements']:>12} {x['construct_s']:>10.2f} "
                   f"{x['extract_s']:>8.2f} {x['boundary_s']:>9.2f} {x['peak_mb']:>8.1f} "
                   f"{x['db_mb']:>8.1f} {ratio:>6}")
+    if "rfile_import" in result:
+        x = result["rfile_import"]
+        print(f"rfile import: {x['grid_points']} grid points in {x['s']:.2f} s (median of "
+              f"{len(x['runs_s'])}, whole process): {x['points_per_s'] / 1e6:.1f}M points/s")
     if "rfile" in result:
         x = result["rfile"]
         print(f"rfile {x['file_mb']:.0f} MB at {x['freq']} Hz: {x['elements']} elements, "

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -59,6 +60,18 @@ Status open_bytes(const testing::TempDir& dir, const std::string& bytes,
   return RfileModel::open(path, MemoryBudget(1 << 20), 1, m);
 }
 
+// linear_blocks with no data (-999 Vs) in block 1 where hole(i, j, k).
+std::vector<Block> blocks_with_holes(std::function<bool(int, int, int)> hole) {
+  std::vector<Block> b = linear_blocks();
+  const auto base = b[1].value;
+  b[1].value = [base, hole](int i, int j, int k) {
+    std::vector<double> v = base(i, j, k);
+    if (hole(i, j, k)) v[2] = -999;
+    return v;
+  };
+  return b;
+}
+
 TEST(Rfile, SamplesLinearFieldsExactlyInTheBlockSw4Picks) {
   testing::TempDir dir;
   for (bool big : {false, true}) {
@@ -96,15 +109,10 @@ TEST(Rfile, SamplesLinearFieldsExactlyInTheBlockSw4Picks) {
 
 TEST(Rfile, NoDataTakesTheFirstValidValueBelowAsSw4Fills) {
   testing::TempDir dir;
-  std::vector<Block> b = linear_blocks();
   // Block 1: -999 above level 4 in column (2, 3); everything -999 in (5, 5).
   // Block 2 has valid values everywhere.
-  const auto base = b[1].value;
-  b[1].value = [base](int i, int j, int k) {
-    std::vector<double> v = base(i, j, k);
-    if ((i == 2 && j == 3 && k < 4) || (i == 5 && j == 5)) v[2] = -999;
-    return v;
-  };
+  const std::vector<Block> b = blocks_with_holes(
+      [](int i, int j, int k) { return (i == 2 && j == 3 && k < 4) || (i == 5 && j == 5); });
   RfileWriter w;
   std::unique_ptr<RfileModel> m;
   ASSERT_OK(open_bytes(dir, w.bytes(b), &m));
@@ -128,6 +136,50 @@ TEST(Rfile, NoDataTakesTheFirstValidValueBelowAsSw4Fills) {
   const Status st = open_bytes(dir, w.bytes(bad), &m);
   EXPECT_FALSE(st.ok());
   EXPECT_NE(st.message().find("i=1 j=1"), std::string::npos) << st.message();
+}
+
+// lattice_at (model import's path) against at(), point by point, to the
+// bit: lattices across both blocks, past the box, over filled -999 columns,
+// with a cache small enough to lose columns between lookups.
+TEST(Rfile, LatticeGivesWhatAtGivesToTheBit) {
+  testing::TempDir dir;
+  const std::vector<Block> b = blocks_with_holes([](int i, int j, int k) {
+    return (i == 2 && j == 3 && k < 4) || (i == 5 && j == 5) || (i == 9 && k < 7);
+  });
+  for (int precision : {4, 8}) {
+    RfileWriter w;
+    w.precision = precision;
+    const std::string path = dir.file("lattice.rfile");
+    write_file(path, w.bytes(b));
+    std::unique_ptr<RfileModel> m;
+    ASSERT_OK(RfileModel::open(path, MemoryBudget(64 << 10), 1, &m));
+    std::mt19937 rng(precision);
+    std::uniform_real_distribution<double> ux(-20, 320), uy(-20, 200), uz(-260, 1600);
+    std::uniform_int_distribution<int> count(1, 9);
+    for (int n = 0; n < 300; ++n) {
+      std::vector<double> axis[3];
+      for (int a = 0; a < 3; ++a) {
+        axis[a].resize(count(rng));
+        for (double& v : axis[a]) v = a == 0 ? ux(rng) : a == 1 ? uy(rng) : uz(rng);
+        std::sort(axis[a].begin(), axis[a].end());
+      }
+      const int nx = int(axis[0].size()), ny = int(axis[1].size()), nz = int(axis[2].size());
+      std::vector<Material> got(size_t(nx) * ny * nz);
+      m->lattice_at(axis[0].data(), nx, axis[1].data(), ny, axis[2].data(), nz, got.data());
+      for (int c = 0; c < nz; ++c) {
+        for (int y = 0; y < ny; ++y) {
+          for (int x = 0; x < nx; ++x) {
+            const Material want = m->at(axis[0][x], axis[1][y], axis[2][c]);
+            const Material& g = got[(size_t(c) * ny + y) * nx + x];
+            ASSERT_EQ(std::memcmp(&g, &want, sizeof want), 0)
+                << axis[0][x] << " " << axis[1][y] << " " << axis[2][c] << ": vs " << g.vs
+                << " against " << want.vs;
+          }
+        }
+      }
+    }
+    ASSERT_OK(m->error());
+  }
 }
 
 TEST(Rfile, RefusesDamagedTruncatedAndLyingFiles) {

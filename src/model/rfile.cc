@@ -213,9 +213,15 @@ Status read_rfile_header(const std::string& path, RfileHeader* out) {
 }
 
 Status read_rfile_column(int fd, const RfileHeader& h, int b, int i, int j, double* out) {
+  return read_rfile_columns(fd, h, b, i, j, 1, out);
+}
+
+Status read_rfile_columns(int fd, const RfileHeader& h, int b, int i, int j, int columns,
+                          double* out) {
   const RfileBlock& k = h.blocks[b];
-  const size_t count = size_t(k.nk) * k.nc;
-  const uint64_t first = (uint64_t(i) * k.nj + j) * count;
+  const size_t per_column = size_t(k.nk) * k.nc;
+  const size_t count = per_column * size_t(columns);
+  const uint64_t first = (uint64_t(i) * k.nj + j) * per_column;
   unsigned char raw[8 * 4096];
   size_t done = 0;
   while (done < count) {
@@ -224,18 +230,20 @@ Status read_rfile_column(int fd, const RfileHeader& h, int b, int i, int j, doub
     const ssize_t got =
         ::pread(fd, raw, bytes, off_t(k.offset + (first + done) * uint64_t(h.precision)));
     if (got != ssize_t(bytes)) return Status::IOError("cannot read the rfile's values");
-    for (size_t v = 0; v < take; ++v) {
-      unsigned char* p = raw + v * h.precision;
-      if (h.swap) {
+    if (h.swap) {
+      for (size_t v = 0; v < take; ++v) {
+        unsigned char* p = raw + v * h.precision;
         for (int a = 0; a < h.precision / 2; ++a) std::swap(p[a], p[h.precision - 1 - a]);
       }
-      if (h.precision == 4) {
+    }
+    if (h.precision == 4) {
+      for (size_t v = 0; v < take; ++v) {
         float f;
-        std::memcpy(&f, p, 4);
+        std::memcpy(&f, raw + v * 4, 4);
         out[done + v] = f;
-      } else {
-        std::memcpy(&out[done + v], p, 8);
       }
+    } else {
+      std::memcpy(&out[done], raw, take * 8);
     }
     done += take;
   }

@@ -68,6 +68,10 @@ Status read_rfile_header(const std::string& path, RfileHeader* out);
 // The values of column (i, j) of block b, nk x nc of them (k, then the
 // component), as doubles in the machine's order.
 Status read_rfile_column(int fd, const RfileHeader& h, int b, int i, int j, double* out);
+// The same for `count` columns (i, j), (i, j + 1), ... one after the other
+// (they lie so in the file: one read).  REQUIRES: j + count <= the block's nj.
+Status read_rfile_columns(int fd, const RfileHeader& h, int b, int i, int j, int count,
+                          double* out);
 
 // The file's value for "no data".
 constexpr double kRfileNoData = -999;

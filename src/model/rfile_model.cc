@@ -16,6 +16,10 @@ struct RfileModel::Cache {
   std::vector<uint64_t> tags;  // block, i, j of each slot, plus one; 0: empty
   std::vector<double> values;  // slots x stride
   std::vector<double> scratch;
+  // A run of columns as read, a buffer a block: filling one may look up the
+  // block below's (whose own run then goes to its own buffer).
+  std::vector<std::vector<double>> runs;
+  std::vector<double> lattice;  // lattice_in_block's columns
 };
 
 namespace {
@@ -36,6 +40,41 @@ int clamp_index(double v, int last) {
   const double t = std::trunc(v);
   if (!(t > 0)) return 0;
   return t >= last - 1 ? last - 1 : static_cast<int>(t);
+}
+
+// A coordinate's cell along one axis of a block (points origin + i h, n of
+// them): its first point and the weight of the next.
+struct AxisPlace {
+  int i;
+  double w;
+};
+AxisPlace place_on(double v, double origin, double h, int n) {
+  const int i = clamp_index((v - origin) / h, n - 1);
+  return {i, (v - (i * h + origin)) / h};
+}
+
+// Columns a miss reads at once along j (they lie one after another).
+constexpr int kRunColumns = 16;
+
+// The trilinear value in a cell as SW4 weighs it: p[di][dj] the column of
+// corner (di, dj), its two levels nc values apart (rho, vp, vs [, qp, qs]);
+// Material's order out.  NC a constant, so the components unroll.
+template <int NC>
+Material blend_of(const double* const (&p)[2][2], double wx, double wy, double wz) {
+  double r[5] = {0, 0, 0, 0, 0};
+  for (int f = 0; f < NC; ++f) {
+    const auto lerp_x = [&](int dj, int dk) {
+      return (1 - wx) * p[0][dj][dk * NC + f] + wx * p[1][dj][dk * NC + f];
+    };
+    r[f] = (1 - wz) * ((1 - wy) * lerp_x(0, 0) + wy * lerp_x(1, 0)) +
+           wz * ((1 - wy) * lerp_x(0, 1) + wy * lerp_x(1, 1));
+  }
+  // rho, vp, vs [, qp, qs] in the file; Material is vp, vs, rho, qp, qs.
+  return Material{float(r[1]), float(r[2]), float(r[0]), float(r[3]), float(r[4])};
+}
+
+Material blend(const double* const (&p)[2][2], int nc, double wx, double wy, double wz) {
+  return nc == 5 ? blend_of<5>(p, wx, wy, wz) : blend_of<3>(p, wx, wy, wz);
 }
 
 }  // namespace
@@ -60,10 +99,18 @@ Status RfileModel::open(const std::string& path, MemoryBudget memory, int thread
   // from: SW4 reports it as an error, and so do we, before any sampling.
   const int last = int(m->h_.blocks.size()) - 1;
   const RfileBlock& k = m->h_.blocks[last];
-  std::vector<double> col(size_t(k.nk) * k.nc);
+  // Read in runs of columns along j (one read each), within 8 MB.
+  const size_t per = size_t(k.nk) * k.nc;
+  const int run = int(std::clamp<size_t>((size_t{1} << 20) / per, 1, size_t(k.nj)));
+  std::vector<double> cols(per * size_t(run));
   for (int i = 0; i < k.ni; ++i) {
     for (int j = 0; j < k.nj; ++j) {
-      WEAVER_RETURN_IF_ERROR(read_rfile_column(m->fd_, m->h_, last, i, j, col.data()));
+      const int q = j % run;
+      if (q == 0) {
+        WEAVER_RETURN_IF_ERROR(
+            read_rfile_columns(m->fd_, m->h_, last, i, j, std::min(run, k.nj - j), cols.data()));
+      }
+      const double* col = cols.data() + per * size_t(q);
       bool any = false;
       for (int z = 0; z < k.nk && !any; ++z) any = col[size_t(z) * k.nc + 2] != kRfileNoData;
       if (!any) {
@@ -112,12 +159,11 @@ Status RfileModel::error() const {
   return error_;
 }
 
-// Reads the column and fills its no-data levels as SW4 does: from the first
-// valid level below; a column without one from the top of the block below.
-Status RfileModel::load_column(Cache& c, int b, int i, int j, double* out) const {
+// Fills the column's no-data levels as SW4 does: from the first valid level
+// below; a column without one from the top of the block below.
+void RfileModel::fill_column(Cache& c, int b, int i, int j, double* out) const {
   const RfileBlock& k = h_.blocks[b];
   const int nc = k.nc;
-  WEAVER_RETURN_IF_ERROR(read_rfile_column(fd_, h_, b, i, j, out));
   int k0 = 0;
   while (out[size_t(k0) * nc + 2] == kRfileNoData && k0 < k.nk - 1) ++k0;
   if (out[size_t(k0) * nc + 2] == kRfileNoData) {
@@ -126,53 +172,60 @@ Status RfileModel::load_column(Cache& c, int b, int i, int j, double* out) const
     const RfileBlock& dk = h_.blocks[d];
     const int id = std::min(dk.ni - 1, static_cast<int>(std::trunc(i * k.hh / dk.hh)));
     const int jd = std::min(dk.nj - 1, static_cast<int>(std::trunc(j * k.hh / dk.hh)));
-    double top[5];
     const double* donor = column(c, d, id, jd);
-    std::memcpy(top, donor, sizeof(double) * size_t(nc));
-    std::memcpy(out + size_t(k0) * nc, top, sizeof(double) * size_t(nc));
+    std::memcpy(out + size_t(k0) * nc, donor, sizeof(double) * size_t(nc));
   }
   for (int z = 0; z < k0; ++z)
     std::memcpy(out + size_t(z) * nc, out + size_t(k0) * nc, sizeof(double) * size_t(nc));
-  return Status::Ok();
 }
 
 const double* RfileModel::column(Cache& c, int b, int i, int j) const {
   const uint64_t tag = column_tag(b, i, j);
   const size_t s = column_slot(tag, slots_);
-  double* slot = c.values.data() + s * stride_;
-  if (c.tags[s] == tag) return slot;
-  // Filled in a scratch column of its own: the donor's column may take
-  // this very slot.
-  std::vector<double> own(size_t(h_.blocks[b].nk) * h_.blocks[b].nc);
-  const Status st = load_column(c, b, i, j, own.data());
+  if (c.tags[s] == tag) return c.values.data() + s * stride_;
+  // A miss reads the run of columns from j on in one read, fills each in
+  // the run's buffer (a donor's lookup may take any slot meanwhile), then
+  // keeps them all, the asked one last, so that its slot holds it.
+  const RfileBlock& k = h_.blocks[b];
+  const int count = std::min(kRunColumns, k.nj - j);
+  const size_t per = size_t(k.nk) * k.nc;
+  if (c.runs.size() < h_.blocks.size()) c.runs.resize(h_.blocks.size());
+  std::vector<double>& run = c.runs[b];
+  run.resize(per * size_t(count));
+  const Status st = read_rfile_columns(fd_, h_, b, i, j, count, run.data());
   if (!st.ok()) {
     fail(st);
-    std::fill(own.begin(), own.end(), 0.0);
-    c.tags[s] = 0;
-    std::memcpy(c.scratch.data(), own.data(), own.size() * sizeof(double));
+    std::fill(c.scratch.begin(), c.scratch.end(), 0.0);
     return c.scratch.data();
   }
-  std::memcpy(slot, own.data(), own.size() * sizeof(double));
-  c.tags[s] = tag;
-  return slot;
+  for (int q = count - 1; q >= 0; --q) {
+    double* col = run.data() + per * size_t(q);
+    fill_column(c, b, i, j + q, col);
+    const uint64_t tag_q = column_tag(b, i, j + q);
+    const size_t s_q = column_slot(tag_q, slots_);
+    std::memcpy(c.values.data() + s_q * stride_, col, per * sizeof(double));
+    c.tags[s_q] = tag_q;
+  }
+  return c.values.data() + s * stride_;
+}
+
+int RfileModel::block_of(double z) const {
+  int gr = int(h_.blocks.size()) - 1;
+  while (gr >= 1 && z < h_.blocks[gr].z0) --gr;
+  return gr == 0 ? 1 : gr;
 }
 
 RfileModel::Cell RfileModel::cell_of(double x, double y, double z) const {
   x = std::clamp(x, 0.0, x_extent());
   y = std::clamp(y, 0.0, y_extent());
   z = std::clamp(z, z_top(), z_bottom());
-  int gr = int(h_.blocks.size()) - 1;
-  while (gr >= 1 && z < h_.blocks[gr].z0) --gr;
-  if (gr == 0) gr = 1;
-  const RfileBlock& k = h_.blocks[gr];
   Cell c;
-  c.block = gr;
-  c.i0 = clamp_index(x / k.hh, k.ni - 1);
-  c.j0 = clamp_index(y / k.hh, k.nj - 1);
-  c.k0 = clamp_index((z - k.z0) / k.hv, k.nk - 1);
-  c.wx = (x - c.i0 * k.hh) / k.hh;
-  c.wy = (y - c.j0 * k.hh) / k.hh;
-  c.wz = (z - (c.k0 * k.hv + k.z0)) / k.hv;
+  c.block = block_of(z);
+  const RfileBlock& k = h_.blocks[c.block];
+  const AxisPlace px = place_on(x, 0, k.hh, k.ni), py = place_on(y, 0, k.hh, k.nj);
+  const AxisPlace pz = place_on(z, k.z0, k.hv, k.nk);
+  c.i0 = px.i, c.j0 = py.i, c.k0 = pz.i;
+  c.wx = px.w, c.wy = py.w, c.wz = pz.w;
   return c;
 }
 
@@ -196,29 +249,72 @@ float RfileModel::vs_at(double x, double y, double z) const {
 Material RfileModel::at(double x, double y, double z) const {
   const Cell cell = cell_of(x, y, z);
   const int gr = cell.block, i0 = cell.i0, j0 = cell.j0, k0 = cell.k0;
-  const double wx = cell.wx, wy = cell.wy, wz = cell.wz;
   const int nc = h_.blocks[gr].nc;
-  // v[di][dj][dk][component], copied out at once: the next column may
-  // take the slot of this one.
-  double v[2][2][2][5];
+  // Copied out at once: the next column may take the slot of this one.
+  double v[2][2][10];
+  const double* p[2][2];
   Cache& c = cache();
   for (int di = 0; di < 2; ++di) {
     for (int dj = 0; dj < 2; ++dj) {
       const double* col = column(c, gr, i0 + di, j0 + dj) + size_t(k0) * nc;
-      for (int dk = 0; dk < 2; ++dk)
-        std::memcpy(v[di][dj][dk], col + size_t(dk) * nc, sizeof(double) * size_t(nc));
+      std::memcpy(v[di][dj], col, sizeof(double) * size_t(2 * nc));
+      p[di][dj] = v[di][dj];
     }
   }
-  double r[5] = {0, 0, 0, 0, 0};
-  for (int f = 0; f < nc; ++f) {
-    const auto lerp_x = [&](int dj, int dk) {
-      return (1 - wx) * v[0][dj][dk][f] + wx * v[1][dj][dk][f];
-    };
-    r[f] = (1 - wz) * ((1 - wy) * lerp_x(0, 0) + wy * lerp_x(1, 0)) +
-           wz * ((1 - wy) * lerp_x(0, 1) + wy * lerp_x(1, 1));
+  return blend(p, nc, cell.wx, cell.wy, cell.wz);
+}
+
+void RfileModel::lattice_at(const double* xs, int nx, const double* ys, int ny, const double* zs,
+                            int nz, Material* out) const {
+  Cache& c = cache();
+  // The z's in one block at a time (ascending: the blocks follow in turn).
+  for (int z0 = 0; z0 < nz;) {
+    const int b = block_of(std::clamp(zs[z0], z_top(), z_bottom()));
+    int z1 = z0 + 1;
+    while (z1 < nz && block_of(std::clamp(zs[z1], z_top(), z_bottom())) == b) ++z1;
+    lattice_in_block(c, b, xs, nx, ys, ny, zs + z0, z1 - z0, out + size_t(z0) * ny * nx);
+    z0 = z1;
   }
-  // rho, vp, vs [, qp, qs] in the file; Material is vp, vs, rho, qp, qs.
-  return Material{float(r[1]), float(r[2]), float(r[0]), float(r[3]), float(r[4])};
+}
+
+void RfileModel::lattice_in_block(Cache& c, int b, const double* xs, int nx, const double* ys,
+                                  int ny, const double* zs, int nz, Material* out) const {
+  const RfileBlock& k = h_.blocks[b];
+  const int nc = k.nc;
+  std::vector<AxisPlace> px(nx), py(ny), pz(nz);
+  for (int a = 0; a < nx; ++a) px[a] = place_on(std::clamp(xs[a], 0.0, x_extent()), 0, k.hh, k.ni);
+  for (int a = 0; a < ny; ++a) py[a] = place_on(std::clamp(ys[a], 0.0, y_extent()), 0, k.hh, k.nj);
+  for (int a = 0; a < nz; ++a) {
+    pz[a] = place_on(std::clamp(zs[a], z_top(), z_bottom()), k.z0, k.hv, k.nk);
+  }
+  // Ascending points: the first and last cells bound the columns and levels.
+  const int i_lo = px[0].i, ni = px[nx - 1].i + 2 - i_lo;
+  const int j_lo = py[0].i, nj = py[ny - 1].i + 2 - j_lo;
+  const int k_lo = pz[0].i, nk = pz[nz - 1].i + 2 - k_lo;
+  std::vector<double>& local = c.lattice;  // [i][j][k][component]
+  local.resize(size_t(ni) * nj * nk * nc);
+  for (int i = 0; i < ni; ++i) {
+    for (int j = 0; j < nj; ++j) {
+      const double* col = column(c, b, i_lo + i, j_lo + j) + size_t(k_lo) * nc;
+      std::memcpy(&local[(size_t(i) * nj + j) * nk * nc], col, sizeof(double) * nk * nc);
+    }
+  }
+  const auto at_local = [&](int i, int j, int kk) {
+    return &local[((size_t(i - i_lo) * nj + (j - j_lo)) * nk + (kk - k_lo)) * nc];
+  };
+  const double* p[2][2];
+  for (int cz = 0; cz < nz; ++cz) {
+    for (int cy = 0; cy < ny; ++cy) {
+      for (int cx = 0; cx < nx; ++cx) {
+        for (int di = 0; di < 2; ++di) {
+          for (int dj = 0; dj < 2; ++dj) {
+            p[di][dj] = at_local(px[cx].i + di, py[cy].i + dj, pz[cz].i);
+          }
+        }
+        out[(size_t(cz) * ny + cy) * nx + cx] = blend(p, nc, px[cx].w, py[cy].w, pz[cz].w);
+      }
+    }
+  }
 }
 
 std::string RfileModel::outside(const std::array<double, 3>& domain_m) const {

@@ -54,6 +54,12 @@ class RfileModel final : public VelocityModel {
   Status error() const;
 
   Material at(double x, double y, double z) const override;
+  // The values at the points (xs[a], ys[b], zs[c]) of a lattice, each list
+  // ascending, as at() finds each point, to the bit, into
+  // out[(c * ny + b) * nx + a]: each block's columns are looked up once for
+  // the lattice, not four times a point (model import's path).
+  void lattice_at(const double* xs, int nx, const double* ys, int ny, const double* zs, int nz,
+                  Material* out) const;
   // Vs alone: the same cell and weights, one component interpolated.
   float vs_at(double x, double y, double z) const override;
   bool has_q() const override { return h_.has_q(); }
@@ -71,7 +77,11 @@ class RfileModel final : public VelocityModel {
   // Column (i, j) of block b, filled, in the calling thread's cache: valid
   // until the next call on this thread.
   const double* column(Cache& c, int b, int i, int j) const;
-  Status load_column(Cache& c, int b, int i, int j, double* out) const;
+  // Fills the no-data levels of column (i, j) of block b, as read, in place.
+  void fill_column(Cache& c, int b, int i, int j, double* col) const;
+  // The lattice points of one block (zs all in it): lattice_at's work.
+  void lattice_in_block(Cache& c, int b, const double* xs, int nx, const double* ys, int ny,
+                        const double* zs, int nz, Material* out) const;
   void fail(const Status& s) const;
   // The cell of (x, y, z) as SW4 finds it: its block, first point and weights.
   struct Cell {
@@ -79,6 +89,8 @@ class RfileModel final : public VelocityModel {
     double wx, wy, wz;
   };
   Cell cell_of(double x, double y, double z) const;
+  // The block a depth (held to the box) falls in, as SW4 finds it.
+  int block_of(double z) const;
 
   std::string path_;
   RfileHeader h_;
