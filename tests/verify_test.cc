@@ -61,11 +61,14 @@ class VerifyTest : public ::testing::Test {
     ASSERT_OK(db->publish(kNodeTable, file, t, built));
   }
 
-  VerifyReport verify(int threads = 1) {
+  // independent: every node classified from the leaves around it, rather
+  // than the derived nodes compared (VerifyOptions::independent).
+  VerifyReport verify(int threads = 1, bool independent = false) {
     VerifyReport r;
     VerifyOptions o;
     o.memory = MemoryBudget(8 << 20);
     o.threads = threads;
+    o.independent = independent;
     EXPECT_OK(verify_database(db_, o, &r));
     return r;
   }
@@ -77,6 +80,11 @@ class VerifyTest : public ::testing::Test {
     bool seen = false;
     for (const std::string& p : r.problems) seen = seen || p.find(needle) != std::string::npos;
     EXPECT_TRUE(seen) << "first problem: " << r.problems[0] << "\nexpected: " << needle;
+    // The independent check finds it too.
+    const VerifyReport each = verify(2, true);
+    seen = false;
+    for (const std::string& p : each.problems) seen = seen || p.find(needle) != std::string::npos;
+    EXPECT_TRUE(seen) << "--independent: " << (each.ok() ? "no problem" : each.problems[0]);
   }
 
   size_t find_kind(NodeKind k, uint64_t seed) const {
@@ -118,6 +126,23 @@ TEST_F(VerifyTest, ReferenceMeshesPassWithTheirCounts) {
     for (const auto& n : nodes_) dangling += n.second != NodeKind::kAnchored;
     EXPECT_EQ(r.dangling, dangling);
     EXPECT_EQ(r.tables, 2u);
+  }
+}
+
+// Both node checks, derived and independent, pass the reference meshes with
+// the same counts.
+TEST_F(VerifyTest, IndependentCheckAgreesOnReferenceMeshes) {
+  for (int i = 0; i < 8; ++i) {
+    std::mt19937_64 rng(100 + i);
+    const uint32_t bx = 1 + rng() % 3, by = 1 + rng() % 3, bz = 1 + rng() % 2;
+    ASSERT_NO_FATAL_FAILURE(build(random_balanced(100 + i, bx, by, bz, 2, 300 + rng() % 2000, 6)));
+    const VerifyReport derived = verify(2), each = verify(2, true);
+    ASSERT_TRUE(derived.ok()) << derived.problems[0];
+    ASSERT_TRUE(each.ok()) << each.problems[0];
+    EXPECT_EQ(each.nodes, derived.nodes);
+    EXPECT_EQ(each.dangling, derived.dangling);
+    EXPECT_EQ(each.corners, derived.corners);
+    EXPECT_EQ(each.elements, derived.elements);
   }
 }
 

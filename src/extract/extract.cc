@@ -118,7 +118,26 @@ Status plan_extract(BTree& octants, const ExtractOptions& options, const Extract
   return Status::Ok();
 }
 
+// The sort's nodes appended to a table.
+NodeBatchSink appender(BTree& nodes) {
+  return [&nodes](const uint64_t* keys, const std::byte* kinds, size_t n) {
+    return nodes.append_batch(keys, kinds, n);
+  };
+}
+
 }  // namespace
+
+Status derive_nodes(const Database& db, const ExtractOptions& options,
+                    const std::string& scratch_dir, const NodeBatchSink& out,
+                    ExtractResult* result) {
+  *result = ExtractResult{};
+  const ExtractMemory memory(options);
+  std::unique_ptr<BTree> octants;
+  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &octants));
+  TableOptions unused;
+  WEAVER_RETURN_IF_ERROR(plan_extract(*octants, options, memory, result, &unused));
+  return extract_by_sort(db, *octants, out, scratch_dir, memory, options, result);
+}
 
 Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
                     ExtractResult* result) {
@@ -145,7 +164,7 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
     st = extract_by_search(*octants, *nodes, scratch, memory.search_store,
                            options.store == ExtractOptions::Store::kLsm, result);
   } else {
-    st = extract_by_sort(*db, *octants, *nodes, scratch, memory, options, result);
+    st = extract_by_sort(*db, *octants, appender(*nodes), scratch, memory, options, result);
   }
   WEAVER_RETURN_IF_ERROR(options.stage && options.writer != nullptr
                              ? db->stage(kNodeTable, file, nodes, st)
@@ -216,7 +235,8 @@ Status extract_shard(const std::string& db_dir, const ExtractOptions& options, i
   WEAVER_RETURN_IF_ERROR(create_shard_table(db_dir, file, topt, memory.node_pool, &nodes));
   const std::string scratch_dir =
       db_dir + "/tmp-extract-" + std::to_string(::getpid()) + "-" + std::to_string(rank);
-  st = extract_by_sort(*db, *octants, *nodes, scratch_dir, memory, options, result, &part);
+  st =
+      extract_by_sort(*db, *octants, appender(*nodes), scratch_dir, memory, options, result, &part);
   return finish_shard(db_dir, nodes, st, shard_place_among(start, rank), entry,
                       &result->node_table_bytes);
 }

@@ -88,6 +88,10 @@ struct ExtractMemory {
   uint64_t search_store = 0;  // the scratch node store
 };
 
+// Where the sort algorithm's nodes go, a bucket at a time in key order:
+// their keys and kinds (a NodeKind a byte).
+using NodeBatchSink = std::function<Status(const uint64_t* keys, const std::byte* kinds, size_t n)>;
+
 struct ExtractResult {
   uint64_t elements = 0;
   uint64_t nodes = 0, anchored = 0, edge = 0, face = 0;
@@ -104,6 +108,15 @@ struct ExtractResult {
 // with overlapping octants or one that is not face+edge 2:1 balanced, naming
 // two offending octants; the database is then left as it was.
 Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
+                    ExtractResult* result);
+
+// The node records of db's octant table as the sort algorithm derives them
+// (those extract_mesh writes, byte for byte), handed to `out` instead of
+// written: weaver verify compares them with the stored table.  Spills go
+// under scratch_dir (created and removed; nothing is written to db).
+// REQUIRES: the octree is balanced (an unbalanced one gives wrong kinds).
+Status derive_nodes(const Database& db, const ExtractOptions& options,
+                    const std::string& scratch_dir, const NodeBatchSink& out,
                     ExtractResult* result);
 
 // One rank's part of a parallel extract (weaver-mpi; the sort algorithm).

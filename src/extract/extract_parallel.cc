@@ -8,10 +8,9 @@
 
 namespace weaver {
 
-Status write_bucket(const BucketTask& t, BTree& nodes, uint64_t elements,
+Status write_bucket(const BucketTask& t, const NodeBatchSink& nodes, uint64_t elements,
                     const ExtractOptions& options, ExtractResult* result) {
-  WEAVER_RETURN_IF_ERROR(
-      nodes.append_batch(t.node_keys.data(), t.node_kinds.data(), t.node_keys.size()));
+  WEAVER_RETURN_IF_ERROR(nodes(t.node_keys.data(), t.node_kinds.data(), t.node_keys.size()));
   result->elements += t.counts.elements;
   result->nodes += t.counts.nodes;
   result->anchored += t.counts.anchored;
@@ -37,9 +36,9 @@ uint64_t task_bytes(const BucketTask& t) {
 
 }  // namespace
 
-Status run_parallel(Database& db, BTree& octants, BTree& nodes, const BucketPolicy& policy,
-                    SpillStore& spills, const ExtractMemory& memory, const ExtractOptions& options,
-                    ExtractResult* result) {
+Status run_parallel(const Database& db, BTree& octants, const NodeBatchSink& nodes,
+                    const BucketPolicy& policy, SpillStore& spills, const ExtractMemory& memory,
+                    const ExtractOptions& options, ExtractResult* result) {
   const int n = options.threads;
   // Each worker reads the octant table through its own handle: a buffer pool
   // serves one thread.

@@ -9,13 +9,13 @@
 
 namespace weaver {
 
-Status run_parallel(Database& db, BTree& octants, BTree& nodes, const BucketPolicy& policy,
-                    SpillStore& spills, const ExtractMemory& memory, const ExtractOptions& options,
-                    ExtractResult* result);
+Status run_parallel(const Database& db, BTree& octants, const NodeBatchSink& nodes,
+                    const BucketPolicy& policy, SpillStore& spills, const ExtractMemory& memory,
+                    const ExtractOptions& options, ExtractResult* result);
 
 // Appends a finished bucket's nodes, adds up its counts and reports
 // progress (elements done of `elements`).
-Status write_bucket(const BucketTask& t, BTree& nodes, uint64_t elements,
+Status write_bucket(const BucketTask& t, const NodeBatchSink& nodes, uint64_t elements,
                     const ExtractOptions& options, ExtractResult* result);
 
 }  // namespace weaver

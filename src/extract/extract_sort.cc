@@ -24,8 +24,8 @@ namespace weaver {
 namespace {
 
 // One thread: read, extract and write each bucket in turn.
-Status run_serial(BTree& octants, BTree& nodes, const BucketPolicy& policy, SpillStore& spills,
-                  const ExtractOptions& options, ExtractResult* result) {
+Status run_serial(BTree& octants, const NodeBatchSink& nodes, const BucketPolicy& policy,
+                  SpillStore& spills, const ExtractOptions& options, ExtractResult* result) {
   BucketWorker worker(octants, policy);
   LeafReader c;
   WEAVER_RETURN_IF_ERROR(c.open(octants, policy.first_leaf));
@@ -42,9 +42,9 @@ Status run_serial(BTree& octants, BTree& nodes, const BucketPolicy& policy, Spil
 
 }  // namespace
 
-Status extract_by_sort(Database& db, BTree& octants, BTree& nodes, const std::string& scratch_path,
-                       const ExtractMemory& memory, const ExtractOptions& options,
-                       ExtractResult* result, ExtractPart* part) {
+Status extract_by_sort(const Database& db, BTree& octants, const NodeBatchSink& nodes,
+                       const std::string& scratch_path, const ExtractMemory& memory,
+                       const ExtractOptions& options, ExtractResult* result, ExtractPart* part) {
   BucketPolicy policy{result->bucket_level, result->bucket_leaves};
   SpillStore spills(scratch_path, memory.spill);
   if (part != nullptr) {

@@ -1,5 +1,7 @@
 #include "verify/verify.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cstring>
@@ -14,6 +16,7 @@
 #include "db/leaf_reader.h"
 #include "db/node_table.h"
 #include "db/octant_table.h"
+#include "extract/extract.h"
 #include "model/ground_model.h"
 #include "modeldb/import_source.h"
 #include "modeldb/model_table.h"
@@ -129,11 +132,12 @@ struct NodeShare {
   VerifyReport report;
 };
 
-// The node check, its id range cut into one share a thread.  The shares'
-// problems are kept in share order, so the first ones named are those of
-// the lowest node ids, whatever the thread count.
-Status check_nodes(const Database& db, const VerifyMemory& memory, const VerifyOptions& o,
-                   Problems& problems, VerifyReport* r) {
+// The independent node check (--independent): every node classified again
+// from the leaves around it, its id range cut into one share a thread.  The
+// shares' problems are kept in share order, so the first ones named are
+// those of the lowest node ids, whatever the thread count.
+Status check_nodes_each(const Database& db, const VerifyMemory& memory, const VerifyOptions& o,
+                        Problems& problems, VerifyReport* r) {
   const int n = std::max(1, o.threads);
   std::vector<NodeShare> shares(static_cast<size_t>(n));
   for (NodeShare& s : shares) {
@@ -160,6 +164,47 @@ Status check_nodes(const Database& db, const VerifyMemory& memory, const VerifyO
     r->corners += s.report.corners;
   }
   return check_corner_total(*shares[0].octants, *shares[0].nodes, problems, r);
+}
+
+// The node check: the nodes derived again by the extraction's own bucket
+// sort (o.threads workers), compared with the stored table in key order
+// (NodeStreamCheck).  Its spills go to the system's temporary directory:
+// verify writes nothing into the database.
+Status check_nodes(const Database& db, const VerifyMemory& memory, const VerifyOptions& o,
+                   Problems& problems, VerifyReport* r, bool* balanced) {
+  std::unique_ptr<BTree> octants, nodes;
+  WEAVER_RETURN_IF_ERROR(db.open_table(kOctantTable, memory.octant_pool, &octants));
+  WEAVER_RETURN_IF_ERROR(db.open_table(kNodeTable, memory.node_pool, &nodes));
+  NodeStreamCheck check(*octants, *nodes, problems, r);
+  WEAVER_RETURN_IF_ERROR(check.open());
+  ExtractOptions x;
+  x.memory = memory.derive;
+  x.threads = std::max(1, o.threads);
+  if (o.nodes_progress) {
+    o.nodes_progress(0, 0.0);  // the node check starts
+    x.progress = o.nodes_progress;
+  }
+  const std::string scratch =
+      (std::filesystem::temp_directory_path() / ("weaver-verify-" + std::to_string(::getpid())))
+          .string();
+  ExtractResult er;
+  const Status st = derive_nodes(
+      db, x, scratch,
+      [&check](const uint64_t* keys, const std::byte* kinds, size_t n) {
+        return check.compare(keys, kinds, n);
+      },
+      &er);
+  // The derivation refuses what cannot be a mesh: leaves more than a level
+  // apart across a face or edge, or overlapping.
+  *balanced = st.code() != Status::Code::kInvalidArgument;
+  if (st.code() == Status::Code::kInvalidArgument) {
+    problems.add("mesh: not 2:1 balanced: " + st.message());
+    return Status::Ok();
+  }
+  if (st.code() == Status::Code::kCorruption)
+    return problems.add("mesh: " + st.message()), Status::Ok();
+  WEAVER_RETURN_IF_ERROR(st);
+  return check.finish(octants->size());
 }
 
 // The aggregate table against a summary of the octant table made again.
@@ -195,6 +240,21 @@ Status check_boundary_table(const Database& db, const VerifyMemory& memory, Prob
 
 Status check_mesh(const Database& db, const VerifyMemory& memory, const VerifyOptions& o,
                   Problems& problems, VerifyReport* r) {
+  if (!o.independent) {
+    // The derivation checks the balance as it goes (a node inside a leaf's
+    // face or edge away from its midpoint: a neighbour two levels finer).
+    r->mesh_checked = true;
+    const size_t before = r->problems.size();
+    bool balanced = true;
+    WEAVER_RETURN_IF_ERROR(check_nodes(db, memory, o, problems, r, &balanced));
+    problems.progress(std::string("mesh: 2:1 balance: ") + (balanced ? "ok" : "VIOLATED"));
+    if (!balanced) return Status::Ok();
+    problems.progress("mesh: " + count_text(r->nodes, "nodes") + " (" +
+                      count_text(r->dangling, "dangling") + "), " +
+                      count_text(r->corners, "element corners") +
+                      (r->problems.size() == before ? ": ok" : ": PROBLEMS"));
+    return Status::Ok();
+  }
   BalanceResult br;
   {
     std::unique_ptr<BTree> octants;  // closed before the node check opens its own
@@ -211,7 +271,7 @@ Status check_mesh(const Database& db, const VerifyMemory& memory, const VerifyOp
   if (problems.full()) return Status::Ok();
   r->mesh_checked = true;
   const size_t before = r->problems.size();
-  WEAVER_RETURN_IF_ERROR(check_nodes(db, memory, o, problems, r));
+  WEAVER_RETURN_IF_ERROR(check_nodes_each(db, memory, o, problems, r));
   problems.progress("mesh: " + count_text(r->nodes, "nodes") + " (" +
                     count_text(r->dangling, "dangling") + "), " +
                     count_text(r->corners, "element corners") +
@@ -224,12 +284,14 @@ Status check_mesh(const Database& db, const VerifyMemory& memory, const VerifyOp
 VerifyMemory::VerifyMemory(MemoryBudget budget) : plan(budget) {
   // The storage check reads one table at a time, in page order.
   table_pool = plan.take("table pool (storage check)", 1, 8);
-  // The mesh check finds the leaves around every node by aggregate hits
-  // near a cursor, and reads the nodes in order.
-  octant_pool = plan.take("octant table pool", 1, 4);
+  // The mesh check reads the nodes in order, looks up the anchors of the
+  // dangling ones, and looks for the leaves around a node that differs.
+  octant_pool = plan.take("octant table pool", 1, 8);
   node_pool = plan.take("node table pool", 1, 8);
-  // The balance check sorts the leaves' requirements out of core.
-  balance_check = plan.take_budget("balance check", 1, 2);
+  // The balance check sorts the leaves' requirements out of core; after
+  // it, the same share derives the nodes again (as weaver extract would).
+  balance_check = plan.take_budget("balance check, then the nodes derived again", 1, 2);
+  derive = balance_check;
   surface = table_pool;
 }
 

@@ -6,11 +6,13 @@
 // keys are node coordinates with a known kind.
 //
 // Mesh (when the octants and nodes tables are both present): the octree is
-// 2:1 balanced; every node, classified again from the leaves around it, has
-// the kind stored for it; every element corner is a node and every node a
-// corner of some element; the anchors of every dangling node exist and are
-// anchored.  The classification is independent of the extractor: it looks
-// at the up to 8 leaves touching the node (one aggregate hit each).
+// 2:1 balanced; every node has the kind stored for it; every element corner
+// is a node and every node a corner of some element; the anchors of every
+// dangling node exist and are anchored.  By default the nodes are derived
+// again by the extractor's bucket sort (derive_nodes) and compared with the
+// table in key order, a node that differs then checked alone for the reason;
+// with `independent`, every node is classified again from the up to 8 leaves
+// touching it (one aggregate hit each), independently of the extractor.
 #pragma once
 
 #include <cstdint>
@@ -28,10 +30,15 @@ struct VerifyOptions {
   MemoryBudget memory;
   bool mesh = true;          // also check the mesh invariants
   size_t max_problems = 20;  // stop collecting after this many
-  int threads = 1;  // the node check's share of nodes a thread (the same report for any count)
+  int threads = 1;           // the node check's threads (the same report for any count)
+  // Classify every node again from the leaves around it (8 lookups a node),
+  // independently of the extractor's code, rather than compare the table
+  // with the nodes the extractor's bucket sort derives again.
+  bool independent = false;
   std::function<void(const std::string& line)> progress;  // one line per finished check
-  // The mesh check's nodes: checked, and their fraction of the node table
-  // (first called with 0 when the node check starts; from one thread).
+  // The node check's progress: elements whose nodes were derived and
+  // compared, and their fraction (--independent: nodes checked, of the node
+  // table); first called with 0 when the node check starts; one thread.
   ProgressFn nodes_progress;
 };
 
@@ -44,6 +51,7 @@ struct VerifyMemory {
   uint64_t octant_pool = 0;    // the mesh check: leaves found by aggregate hits
   uint64_t node_pool = 0;      // the mesh check: nodes read in order and found by key
   MemoryBudget balance_check;  // the balance check's own budget (balance.h)
+  MemoryBudget derive;         // after it, the same share: the nodes derived again
   // A carved mesh's surface, read again: the storage check's share, free
   // again by then (the ground check runs after it).
   uint64_t surface = 0;
