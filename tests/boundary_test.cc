@@ -43,17 +43,25 @@ void expect_boundary_matches(const std::vector<Octant>& leaves, bool filled) {
   std::sort(sorted.begin(), sorted.end(),
             [](const Octant& a, const Octant& b) { return octant_key(a) < octant_key(b); });
   const std::string db = testing::build_mesh(sorted, dir);
-  BoundaryResult r;
-  ASSERT_OK(build_boundary(db, BoundaryOptions{}, &r));
-  EXPECT_EQ(r.filled, filled);
   const auto want = reference::boundary(sorted);
-  const auto got = stored_boundary(db);
-  ASSERT_EQ(got.size(), want.size());
-  for (size_t i = 0; i < want.size(); ++i) {
-    ASSERT_TRUE(got[i] == want[i]) << "record " << i << ": element " << want[i].element << " face "
-                                   << want[i].face << " part " << want[i].part;
+  // One thread; two; three whose later ones hold 7 records at most, so
+  // that the first derives the rest of their runs.
+  for (const auto& [threads, held] : {std::pair<int, uint64_t>{1, 0}, {2, 0}, {3, 7}}) {
+    SCOPED_TRACE("threads " + std::to_string(threads) + ", held " + std::to_string(held));
+    BoundaryOptions o;
+    o.threads = threads, o.held_records = held;
+    BoundaryResult r;
+    ASSERT_OK(build_boundary(db, o, &r));
+    EXPECT_EQ(r.filled, filled);
+    const auto got = stored_boundary(db);
+    ASSERT_EQ(got.size(), want.size());
+    for (size_t i = 0; i < want.size(); ++i) {
+      ASSERT_TRUE(got[i] == want[i]) << "record " << i << ": element " << want[i].element
+                                     << " face " << want[i].face << " part " << want[i].part;
+    }
+    EXPECT_EQ(r.faces, want.size());
+    EXPECT_EQ(r.elements, sorted.size());
   }
-  EXPECT_EQ(r.faces, want.size());
 }
 
 TEST(Boundary, MatchesTheReferenceOnFilledAndHoledOctrees) {

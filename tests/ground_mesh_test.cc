@@ -216,9 +216,20 @@ void check_ground_case(const GroundCase& c, const testing::TempDir& dir) {
   EXPECT_FALSE(br.filled);
   EXPECT_LT(br.asked, leaves.size());
   // The least edge / vp, found by construct's workers and by the boundary's
-  // scan alike, is the least of every leaf's.
+  // scan alike, is the least of every leaf's; the same on three threads
+  // (runs of the elements, the later ones cut short to 5 records held).
   EXPECT_EQ(br.least_dt, r.least_dt);
   EXPECT_EQ(br.least_dt_element, r.least_dt_element);
+  {
+    BoundaryOptions three;
+    three.threads = 3, three.held_records = 5;
+    BoundaryResult br3;
+    ASSERT_OK(build_boundary(db, three, &br3));
+    EXPECT_EQ(br3.least_dt, r.least_dt);
+    EXPECT_EQ(br3.least_dt_element, r.least_dt_element);
+    EXPECT_EQ(br3.faces, br.faces);
+    EXPECT_EQ(br3.asked, br.asked);
+  }
   {
     const auto want = reference::boundary(octants);
     std::unique_ptr<Database> bd;

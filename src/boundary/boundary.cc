@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -14,6 +15,7 @@
 #include "mesh/face_neighbors.h"
 #include "mesh/mesh_reader.h"
 #include "model/ground_model.h"
+#include "util/parallel.h"
 
 namespace weaver {
 namespace {
@@ -196,50 +198,123 @@ class BoundaryWriter {
   std::vector<FaceNeighbor> neighbours_;
 };
 
+// Elements done by every thread, reported by one.
+struct Tally {
+  std::atomic<uint64_t> done{0};
+  uint64_t total = 0;
+  ProgressFn report;  // called by the thread of range 0 alone
+};
+
+// The ground a carved mesh was built under, where the leaves leave holes.
+void load_ground(BTree& octants, const Span& span, MemoryBudget surface, GroundCheck* ground) {
+  if (span.filled) return;
+  Units units;
+  units_from_metadata(octants.options().metadata, &units);
+  ground->load(octants.options().metadata, units, surface);
+}
+
 // The boundary records of the elements with ids [first, stop) of the
 // octant table, into `out` in key order, the leaves spanning `span`
-// (settled); with vp, their least edge / vp is found on the way.
+// (settled); with vp, their least edge / vp is found on the way.  When
+// full() says so after an element, stops there; *reached: the first id
+// not done.
 Status derive_records(BTree& octants, const BoundarySink& out, const Span& span,
-                      MemoryBudget surface, uint64_t first, uint64_t stop, const Field* vp,
-                      const ProgressFn& progress, BoundaryResult* r) {
+                      const GroundCheck& ground, uint64_t first, uint64_t stop, const Field* vp,
+                      Tally* tally, bool reports, const std::function<bool()>& full,
+                      uint64_t* reached, BoundaryResult* r) {
   r->filled = span.filled;
-  GroundCheck ground;
-  if (!span.filled) {
-    Units units;
-    units_from_metadata(octants.options().metadata, &units);
-    ground.load(octants.options().metadata, units, surface);
-  }
+  *reached = first;
   FaceFinder finder(octants);
   BoundaryWriter w(out, span, r);
   double least = HUGE_VAL;
-  WEAVER_RETURN_IF_ERROR(walk_leaves(
+  const Status st = walk_leaves(
       octants, first, stop, vp, &least, &r->least_dt_element, [&](uint64_t id, const Octant& leaf) {
         WEAVER_RETURN_IF_ERROR(w.element(id, leaf, &finder, ground));
         ++r->elements;
-        if (progress && (id & 0xFFFFF) == 0xFFFFF) {
-          progress(id + 1 - first, double(id + 1 - first) / double(stop - first));
+        *reached = id + 1;
+        if ((id & 0xFFFFF) == 0xFFFFF) {
+          const uint64_t done = tally->done.fetch_add(0x100000) + 0x100000;
+          if (reports && tally->report) tally->report(done, double(done) / double(tally->total));
         }
-        return Status::Ok();
-      }));
+        return full && full() ? Status::Busy("full") : Status::Ok();
+      });
+  if (!st.ok() && st.code() != Status::Code::kBusy) return st;
   r->least_dt = vp != nullptr && r->elements > 0 ? least : 0;
   return Status::Ok();
 }
 
-// The boundary records of the whole octant table, into `out` in key order.
-Status derive_boundary(BTree& octants, const BoundarySink& out, const BoundaryOptions& o,
-                       MemoryBudget surface, BoundaryResult* r) {
+// Adds a later range's result to *r (ranges in id order: the first least
+// edge / vp kept on a tie, as one scan finds it).
+void add_result(const BoundaryResult& later, BoundaryResult* r) {
+  r->elements += later.elements, r->faces += later.faces, r->quarters += later.quarters;
+  r->free_surface += later.free_surface, r->asked += later.asked;
+  if (later.elements > 0 && later.least_dt > 0 &&
+      (r->least_dt == 0 || later.least_dt < r->least_dt))
+    r->least_dt = later.least_dt, r->least_dt_element = later.least_dt_element;
+}
+
+// The boundary records of the whole octant table, into `out` in key order,
+// on one thread a handle of the table (tables[0] the caller's): the ids cut
+// into equal ranges, range 0 derived straight into `out`, the others at the
+// same time into memory, up to cap records each, then handed on in turn
+// (the rest of a range whose worker stopped at its cap derived then).
+Status derive_boundary(const std::vector<BTree*>& tables, const BoundarySink& out,
+                       const BoundaryOptions& o, MemoryBudget surface, uint64_t cap,
+                       BoundaryResult* r) {
+  BTree& octants = *tables[0];
+  const int t = int(tables.size());
+  const uint64_t n = octants.size();
+  const auto cut = [&](int i) { return n * uint64_t(i) / uint64_t(t); };
   Span span;
   if (o.known_filled_box) {
     span.lo = o.box_lo, span.hi = o.box_hi, span.filled = true;
   } else {
-    Share all;
-    WEAVER_RETURN_IF_ERROR(share_of(octants, 0, octants.size(), nullptr, &all));
-    span = all.span;
+    std::vector<Share> shares(tables.size());
+    WEAVER_RETURN_IF_ERROR(run_shares(
+        t, [&](int i) { return share_of(*tables[i], cut(i), cut(i + 1), nullptr, &shares[i]); }));
+    for (const Share& s : shares) span.add(s.span);
     span.settle();
   }
+  GroundCheck ground;  // read-only once loaded: the threads share it
+  load_ground(octants, span, surface, &ground);
   const Field* vp = o.known_least_dt > 0 ? nullptr : octants.options().schema.find("vp");
-  WEAVER_RETURN_IF_ERROR(
-      derive_records(octants, out, span, surface, 0, octants.size(), vp, o.progress, r));
+  Tally tally;
+  tally.total = n, tally.report = o.progress;
+  struct Range {
+    std::vector<std::pair<uint64_t, uint8_t>> records;
+    uint64_t reached = 0;
+    BoundaryResult r;
+  };
+  std::vector<Range> ranges(tables.size());
+  WEAVER_RETURN_IF_ERROR(run_shares(t, [&](int i) {
+    Range& g = ranges[size_t(i)];
+    if (i == 0) {
+      return derive_records(octants, out, span, ground, 0, cut(1), vp, &tally, true, nullptr,
+                            &g.reached, &g.r);
+    }
+    const BoundarySink keep = [&g](uint64_t key, uint8_t kind) {
+      g.records.emplace_back(key, kind);
+      return Status::Ok();
+    };
+    return derive_records(
+        *tables[size_t(i)], keep, span, ground, cut(i), cut(i + 1), vp, &tally, false,
+        [&g, cap] { return g.records.size() >= cap; }, &g.reached, &g.r);
+  }));
+  *r = ranges[0].r;
+  for (int i = 1; i < t; ++i) {
+    Range& g = ranges[size_t(i)];
+    for (const auto& [key, kind] : g.records) WEAVER_RETURN_IF_ERROR(out(key, kind));
+    add_result(g.r, r);
+    std::vector<std::pair<uint64_t, uint8_t>>().swap(g.records);
+    if (g.reached < cut(i + 1)) {  // stopped at its cap: the rest here
+      BoundaryResult rest;
+      uint64_t reached = 0;
+      WEAVER_RETURN_IF_ERROR(derive_records(octants, out, span, ground, g.reached, cut(i + 1), vp,
+                                            &tally, true, nullptr, &reached, &rest));
+      add_result(rest, r);
+    }
+  }
+  r->filled = span.filled;
   if (o.known_least_dt > 0)
     r->least_dt = o.known_least_dt, r->least_dt_element = o.known_least_dt_element;
   return Status::Ok();
@@ -265,12 +340,12 @@ std::string boundary_metadata(const BoundaryResult& r) {
   return meta;
 }
 
-Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, MemoryBudget surface,
-                      BoundaryResult* r) {
+Status write_boundary(const std::vector<BTree*>& octants, BTree& out, const BoundaryOptions& o,
+                      MemoryBudget surface, uint64_t cap, BoundaryResult* r) {
   const BoundarySink append = [&out](uint64_t key, uint8_t kind) {
     return out.append(key, reinterpret_cast<const std::byte*>(&kind));
   };
-  WEAVER_RETURN_IF_ERROR(derive_boundary(octants, append, o, surface, r));
+  WEAVER_RETURN_IF_ERROR(derive_boundary(octants, append, o, surface, cap, r));
   out.set_metadata(boundary_metadata(*r));
   return Status::Ok();
 }
@@ -280,11 +355,18 @@ Status write_boundary(BTree& octants, BTree& out, const BoundaryOptions& o, Memo
 Status build_boundary(const std::string& db_dir, const BoundaryOptions& o, BoundaryResult* r) {
   *r = BoundaryResult{};
   MemoryPlan plan(o.memory);
-  // Both scans and the lookups read the octant table; the writer appends.
-  const uint64_t octant_pool = plan.take("octant table pool", 1, 4);
+  // Both scans and the lookups read the octant table (a handle a thread);
+  // the writer appends.
+  const int threads = std::max(1, o.threads);
+  const uint64_t octant_pool = plan.take("octant table pools", 1, 4) / uint64_t(threads);
   const uint64_t out_pool = plan.take("boundary table pool", 1, 8, 8ull << 20);
   // A carved mesh's surface, read again (model/surface.h).
-  const MemoryBudget surface = plan.take_budget("surface", 1, 2);
+  const MemoryBudget surface = plan.take_budget("surface", 1, 4);
+  // The records the threads past the first hold until their turn.
+  uint64_t cap = threads > 1 ? plan.take("records held by the other threads", 1, 4) /
+                                   (sizeof(std::pair<uint64_t, uint8_t>) * (threads - 1))
+                             : 0;
+  if (o.held_records > 0) cap = std::min(cap, o.held_records);
   std::unique_ptr<Database> own;
   Database* db = o.writer;
   if (db == nullptr) {
@@ -292,13 +374,17 @@ Status build_boundary(const std::string& db_dir, const BoundaryOptions& o, Bound
     db = own.get();
   }
   if (!db->has_table(kOctantTable)) return Status::NotFound(db_dir + ": no octant table");
-  std::unique_ptr<BTree> octants;
-  WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, octant_pool, &octants));
+  std::vector<std::unique_ptr<BTree>> handles(static_cast<size_t>(threads));
+  std::vector<BTree*> octants;
+  for (auto& h : handles) {
+    WEAVER_RETURN_IF_ERROR(db->open_table(kOctantTable, octant_pool, &h));
+    octants.push_back(h.get());
+  }
   std::unique_ptr<BTree> table;
   std::string file;
   WEAVER_RETURN_IF_ERROR(
       db->create_table(kBoundaryTable, boundary_table_options(o.packed), out_pool, &table, &file));
-  const Status st = write_boundary(*octants, *table, o, surface, r);
+  const Status st = write_boundary(octants, *table, o, surface, cap, r);
   WEAVER_RETURN_IF_ERROR(db->publish(kBoundaryTable, file, table, st));
   r->table_bytes = table->file_bytes();
   return Status::Ok();
@@ -382,8 +468,15 @@ Status boundary_shard(const std::string& db_dir, const BoundaryOptions& o, int r
   const BoundarySink append = [&table](uint64_t key, uint8_t kind) {
     return table->append(key, reinterpret_cast<const std::byte*>(&kind));
   };
-  if (st.ok())
-    st = derive_records(*octants, append, all.span, surface, first, stop, nullptr, o.progress, r);
+  if (st.ok()) {
+    GroundCheck ground;
+    load_ground(*octants, all.span, surface, &ground);
+    Tally tally;
+    tally.total = stop - first, tally.report = o.progress;
+    uint64_t reached = 0;
+    st = derive_records(*octants, append, all.span, ground, first, stop, nullptr, &tally, true,
+                        nullptr, &reached, r);
+  }
   // The counts of every rank, for the metadata every shard carries.
   char counts[96];
   std::snprintf(counts, sizeof counts, "%llu %llu", (unsigned long long)r->faces,
@@ -447,7 +540,7 @@ Status check_boundary(BTree& octants, BTree& stored, MemoryBudget surface, size_
   BoundaryOptions o;
   o.known_least_dt = 1;  // the time step is not the table's: keys alone
   BoundaryResult r;
-  WEAVER_RETURN_IF_ERROR(derive_boundary(octants, compare, o, surface, &r));
+  WEAVER_RETURN_IF_ERROR(derive_boundary({&octants}, compare, o, surface, 0, &r));
   while (c->valid()) {
     add(where(c->key()) + " is stored, but is not a boundary");
     WEAVER_RETURN_IF_ERROR(c->next());

@@ -39,6 +39,12 @@ namespace weaver {
 
 struct BoundaryOptions {
   MemoryBudget memory;
+  // Threads for the scan (build_boundary): the elements cut into equal
+  // ranges; the table is the same for any count.
+  int threads = 1;
+  // The records a thread past the first may hold until its turn (0: as
+  // the budget allows); past it, the first thread derives the rest.
+  uint64_t held_records = 0;
   bool packed = true;
   ProgressFn progress;         // elements visited, and their share
   Database* writer = nullptr;  // a writer already open on the database

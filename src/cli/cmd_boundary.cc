@@ -8,7 +8,7 @@ namespace weaver::cli {
 namespace {
 
 constexpr char kUsage[] =
-    "usage: weaver boundary DB [--memory BYTES] [--plain] [--quiet]\n"
+    "usage: weaver boundary DB [--memory BYTES] [--threads N] [--plain] [--quiet]\n"
     "\n"
     "Builds the boundary table of DB ('weaver mesh' builds it as its last step):\n"
     "every element face, or quarter of a face, with no element across it, as\n"
@@ -23,7 +23,10 @@ constexpr char kUsage[] =
     "table (a new mesh) drops it.\n"
     "\n"
     "  --memory BYTES   bounds the table caches and a carved mesh's surface,\n"
-    "                   read again (default 256M)\n"
+    "                   read again, and the records the threads past the first\n"
+    "                   hold until their turn (default 256M)\n"
+    "  --threads N      threads, each with an equal run of the elements (default:\n"
+    "                   the number of cores); the same table for every N\n"
     "  --plain          plain leaf pages (default: packed)\n"
     "  --quiet          no progress line on stderr\n";
 
@@ -48,13 +51,14 @@ void print_boundary(const BoundaryResult& r, double secs) {
 
 int cmd_boundary(int argc, char** argv) {
   ParsedArgs args;
-  Status st = parse_args(argc, argv, 2, {"memory"}, {"plain", "quiet"}, &args);
+  Status st = parse_args(argc, argv, 2, {"memory", "threads"}, {"plain", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("boundary", st.message(), kUsage);
   if (args.positional.size() != 1) return usage_error("boundary", "expected one DB", kUsage);
   BoundaryOptions o;
   o.packed = !args.flags.count("plain");
   st = memory_option(args, &o.memory);
+  if (st.ok()) st = threads_option(args, default_threads(), &o.threads);
   if (!st.ok()) return usage_error("boundary", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   BoundaryResult r;

@@ -219,6 +219,7 @@ int cmd_mesh(int argc, char** argv) {
   BoundaryOptions bo;
   bo.memory = co.memory;
   bo.packed = co.packed;
+  bo.threads = eo.threads;
   bo.writer = writer.get();
   // Construct found the least edge / vp of the leaves it wrote; a balance
   // after it (--unbalanced) splits some, so then the boundary's scan finds it.
