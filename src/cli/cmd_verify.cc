@@ -36,10 +36,9 @@ constexpr char kUsage[] =
     "                   derived again\n"
     "  --threads N      threads for the node check (default: the number of\n"
     "                   cores); the same report for every N\n"
-    "  --quiet          no progress line on stderr for the mesh check (default:\n"
-    "                   elements done, or nodes with --independent, updated on a\n"
-    "                   terminal, every 10 s otherwise); the line per finished\n"
-    "                   check is always printed\n";
+    "  --quiet          no progress line on stderr for the mesh check (default: nodes\n"
+    "                   checked of the node table, updated on a terminal, every 10 s\n"
+    "                   otherwise); the line per finished check is always printed\n";
 
 }  // namespace
 
@@ -64,10 +63,8 @@ int cmd_verify(int argc, char** argv) {
   // and time left count the node check alone, not the checks before it.
   std::unique_ptr<ProgressLine> line;
   const ProgressLine::Style style = ProgressLine::style_for_stderr(args.flags.count("quiet"));
-  const bool independent = o.independent;
-  o.nodes_progress = [&line, style, independent](uint64_t items, double fraction) {
-    if (!line)
-      line = std::make_unique<ProgressLine>(style, "verify", independent ? "nodes" : "elements");
+  o.nodes_progress = [&line, style](uint64_t items, double fraction) {
+    if (!line) line = std::make_unique<ProgressLine>(style, "verify", "nodes");
     line->update(items, fraction);
   };
   VerifyReport r;

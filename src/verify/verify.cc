@@ -180,18 +180,19 @@ Status check_nodes(const Database& db, const VerifyMemory& memory, const VerifyO
   ExtractOptions x;
   x.memory = memory.derive;
   x.threads = std::max(1, o.threads);
-  if (o.nodes_progress) {
-    o.nodes_progress(0, 0.0);  // the node check starts
-    x.progress = o.nodes_progress;
-  }
+  if (o.nodes_progress) o.nodes_progress(0, 0.0);  // the node check starts
+  const double total = std::max<double>(1, double(nodes->size()));
   const std::string scratch =
       (std::filesystem::temp_directory_path() / ("weaver-verify-" + std::to_string(::getpid())))
           .string();
   ExtractResult er;
   const Status st = derive_nodes(
       db, x, scratch,
-      [&check](const uint64_t* keys, const std::byte* kinds, size_t n) {
-        return check.compare(keys, kinds, n);
+      [&](const uint64_t* keys, const std::byte* kinds, size_t n) {
+        WEAVER_RETURN_IF_ERROR(check.compare(keys, kinds, n));
+        // Nodes compared, of the table (called from one thread).
+        if (o.nodes_progress) o.nodes_progress(r->nodes, double(r->nodes) / total);
+        return Status::Ok();
       },
       &er);
   // The derivation refuses what cannot be a mesh: leaves more than a level

@@ -36,9 +36,8 @@ struct VerifyOptions {
   // with the nodes the extractor's bucket sort derives again.
   bool independent = false;
   std::function<void(const std::string& line)> progress;  // one line per finished check
-  // The node check's progress: elements whose nodes were derived and
-  // compared, and their fraction (--independent: nodes checked, of the node
-  // table); first called with 0 when the node check starts; one thread.
+  // The mesh check's nodes: checked, and their fraction of the node table
+  // (first called with 0 when the node check starts; from one thread).
   ProgressFn nodes_progress;
 };
 
