@@ -100,8 +100,9 @@ void replace_boundary(const std::string& db_dir,
   ASSERT_OK(db->publish(kBoundaryTable, file, table, st));
 }
 
-std::vector<std::string> verify_problems(const std::string& db) {
+std::vector<std::string> verify_problems(const std::string& db, int threads = 1) {
   VerifyOptions o;
+  o.threads = threads;
   VerifyReport r;
   EXPECT_OK(verify_database(db, o, &r));
   return r.problems;
@@ -146,6 +147,7 @@ TEST(Boundary, VerifyNamesEveryRecordThatDiffersFromTheOctants) {
     return false;
   };
   EXPECT_EQ(problems.size(), 3u);
+  EXPECT_EQ(verify_problems(db, 3), problems);  // the boundary derived on three threads
   EXPECT_TRUE(names(dropped, "is not stored"));
   EXPECT_TRUE(names(flipped, "is stored as kind"));
   EXPECT_TRUE(names(extra, "is not a boundary"));

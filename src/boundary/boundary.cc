@@ -115,9 +115,10 @@ Status build_boundary(const std::string& db_dir, const BoundaryOptions& o, Bound
   const uint64_t out_pool = plan.take("boundary table pool", 1, 8, 8ull << 20);
   // A carved mesh's surface, read again (model/surface.h).
   const MemoryBudget surface = plan.take_budget("surface", 1, 4);
-  // The records the threads past the first hold until their turn.
+  // The records the threads past the first hold until their turn (twice
+  // their bytes: room for a vector's growth).
   uint64_t cap = threads > 1 ? plan.take("records held by the other threads", 1, 4) /
-                                   (sizeof(std::pair<uint64_t, uint8_t>) * (threads - 1))
+                                   (2 * sizeof(std::pair<uint64_t, uint8_t>) * (threads - 1))
                              : 0;
   if (o.held_records > 0) cap = std::min(cap, o.held_records);
   std::unique_ptr<Database> own;
@@ -143,8 +144,8 @@ Status build_boundary(const std::string& db_dir, const BoundaryOptions& o, Bound
   return Status::Ok();
 }
 
-Status check_boundary(BTree& octants, BTree& stored, MemoryBudget surface, size_t max_problems,
-                      std::vector<std::string>* problems) {
+Status check_boundary(const std::vector<BTree*>& octants, BTree& stored, MemoryBudget surface,
+                      uint64_t held, size_t max_problems, std::vector<std::string>* problems) {
   std::unique_ptr<Cursor> c;
   WEAVER_RETURN_IF_ERROR(stored.seek(0, &c));
   auto where = [](uint64_t key) {
@@ -174,7 +175,7 @@ Status check_boundary(BTree& octants, BTree& stored, MemoryBudget surface, size_
   BoundaryOptions o;
   o.known_least_dt = 1;  // the time step is not the table's: keys alone
   BoundaryResult r;
-  WEAVER_RETURN_IF_ERROR(derive_boundary({&octants}, compare, o, surface, 0, &r));
+  WEAVER_RETURN_IF_ERROR(derive_boundary(octants, compare, o, surface, held, &r));
   while (c->valid()) {
     add(where(c->key()) + " is stored, but is not a boundary");
     WEAVER_RETURN_IF_ERROR(c->next());

@@ -98,11 +98,13 @@ Status boundary_shard(const std::string& db_dir, const BoundaryOptions& options,
                       int ranks, const std::string& file, const RankAllGather& all_gather,
                       BoundaryResult* result, ShardEntry* entry);
 
-// `weaver verify`: the boundary records derived again from `octants`
-// against the `stored` table, record by record; each difference (up to
-// max_problems) named by element, face and part in *problems.  A carved
+// `weaver verify`: the boundary records derived again from the octant
+// table against the `stored` table, record by record; each difference (up
+// to max_problems) named by element, face and part in *problems.  One
+// thread a handle of the octant table in `octants` (as build_boundary's
+// threads, the later ones holding up to `held` records each).  A carved
 // mesh's surface is read within `surface`.
-Status check_boundary(BTree& octants, BTree& stored, MemoryBudget surface, size_t max_problems,
-                      std::vector<std::string>* problems);
+Status check_boundary(const std::vector<BTree*>& octants, BTree& stored, MemoryBudget surface,
+                      uint64_t held, size_t max_problems, std::vector<std::string>* problems);
 
 }  // namespace weaver
