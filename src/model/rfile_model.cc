@@ -53,7 +53,7 @@ AxisPlace place_on(double v, double origin, double h, int n) {
   return {i, (v - (i * h + origin)) / h};
 }
 
-// Columns a lattice's miss reads at once along j (they lie one after another).
+// Columns a miss reads at once along j (they lie one after another).
 constexpr int kRunColumns = 16;
 
 // The trilinear value in a cell as SW4 weighs it: p[di][dj] the column of
@@ -179,7 +179,7 @@ void RfileModel::fill_column(Cache& c, int b, int i, int j, double* out) const {
     std::memcpy(out + size_t(z) * nc, out + size_t(k0) * nc, sizeof(double) * size_t(nc));
 }
 
-const double* RfileModel::column(Cache& c, int b, int i, int j, int run_columns) const {
+const double* RfileModel::column(Cache& c, int b, int i, int j) const {
   const uint64_t tag = column_tag(b, i, j);
   const size_t s = column_slot(tag, slots_);
   if (c.tags[s] == tag) return c.values.data() + s * stride_;
@@ -187,7 +187,7 @@ const double* RfileModel::column(Cache& c, int b, int i, int j, int run_columns)
   // the run's buffer (a donor's lookup may take any slot meanwhile), then
   // keeps them all, the asked one last, so that its slot holds it.
   const RfileBlock& k = h_.blocks[b];
-  const int count = std::min(run_columns > 0 ? run_columns : run_columns_, k.nj - j);
+  const int count = std::min(kRunColumns, k.nj - j);
   const size_t per = size_t(k.nk) * k.nc;
   if (c.runs.size() < h_.blocks.size()) c.runs.resize(h_.blocks.size());
   std::vector<double>& run = c.runs[b];
@@ -295,7 +295,7 @@ void RfileModel::lattice_in_block(Cache& c, int b, const double* xs, int nx, con
   local.resize(size_t(ni) * nj * nk * nc);
   for (int i = 0; i < ni; ++i) {
     for (int j = 0; j < nj; ++j) {
-      const double* col = column(c, b, i_lo + i, j_lo + j, kRunColumns) + size_t(k_lo) * nc;
+      const double* col = column(c, b, i_lo + i, j_lo + j) + size_t(k_lo) * nc;
       std::memcpy(&local[(size_t(i) * nj + j) * nk * nc], col, sizeof(double) * nk * nc);
     }
   }

@@ -9,7 +9,6 @@ namespace weaver {
 
 Status plan_rfile(const std::string& path, MemoryBudget memory, RfilePlan* p, ModelInfo* info) {
   WEAVER_RETURN_IF_ERROR(RfileModel::open(path, memory, 1, &p->model));
-  p->model->read_runs(16);  // the import visits the file's columns in order
   const RfileModel& m = *p->model;
   const double extent[3] = {m.x_extent(), m.y_extent(), m.z_bottom() - m.z_top()};
   p->root_m = std::max({extent[0], extent[1], extent[2]});
