@@ -269,32 +269,6 @@ TEST(Surface, RangeIsExactOverAnyRectangle) {
   }
 }
 
-// elevations() (a grid of points at once: construct's lattices and solid
-// fractions) gives what elevation() gives at each point, to the bit, past
-// the grid's sides too.
-TEST(Surface, ElevationsOnAGridAreElevationsToTheBit) {
-  std::mt19937 rng(9);
-  for (int round = 0; round < 20; ++round) {
-    const int nx = 2 + rng() % 30, ny = 2 + rng() % 30;
-    std::vector<float> z(size_t(nx) * ny);
-    for (float& v : z) v = float(rng() % 3000) - 700 + float(rng() % 1000) / 997.0f;
-    auto s = Surface::from_grid(nx, ny, -40, 70, 12.5, 31, z);
-    std::uniform_real_distribution<double> ux(-100, -40 + nx * 12.5 + 60), uy(0, 70 + ny * 31 + 60);
-    const int gx = 1 + rng() % 64, gy = 1 + rng() % 64;
-    std::vector<double> xs(gx), ys(gy), got(size_t(gx) * gy);
-    for (double& x : xs) x = ux(rng);
-    for (double& y : ys) y = uy(rng);
-    s->elevations(xs.data(), gx, ys.data(), gy, got.data());
-    for (int j = 0; j < gy; ++j) {
-      for (int i = 0; i < gx; ++i) {
-        const double want = s->elevation(xs[i], ys[j]);
-        ASSERT_EQ(std::memcmp(&got[size_t(j) * gx + i], &want, sizeof want), 0)
-            << round << ": " << xs[i] << " " << ys[j];
-      }
-    }
-  }
-}
-
 TEST(Surface, AscRasterTakesKeywordsInAnyCaseAndRowsFromTheNorth) {
   testing::TempDir dir;
   // 4 columns (east) x 3 rows (north), cell centres at 50 + 100 c east and

@@ -18,15 +18,10 @@ double solid_fraction(const Ground& g, const double lo[3], const double hi[3]) {
   if (side == GroundSide::kSolid) return 1;
   const double top = g.top_elevation, height = hi[2] - lo[2];
   const double sx = (hi[0] - lo[0]) / kFractionPoints, sy = (hi[1] - lo[1]) / kFractionPoints;
-  double xs[kFractionPoints], ys[kFractionPoints], ground[kFractionPoints * kFractionPoints];
-  for (int i = 0; i < kFractionPoints; ++i) {
-    xs[i] = lo[0] + (i + 0.5) * sx, ys[i] = lo[1] + (i + 0.5) * sy;
-  }
-  g.grounds_at(xs, kFractionPoints, ys, kFractionPoints, ground);
   double sum = 0;
   for (int j = 0; j < kFractionPoints; ++j) {
     for (int i = 0; i < kFractionPoints; ++i) {
-      const double ground_z = top - ground[j * kFractionPoints + i];
+      const double ground_z = top - g.ground_at(lo[0] + (i + 0.5) * sx, lo[1] + (j + 0.5) * sy);
       sum += std::clamp((hi[2] - std::max(lo[2], ground_z)) / height, 0.0, 1.0);
     }
   }

@@ -80,12 +80,9 @@ Material GroundedModel::at(double x, double y, double z) const {
 template <class Fn>
 void for_lattice(const Ground& g, const double* xs, const double* ys, const double* zs, int n,
                  Fn fn) {
-  double grounds[64 * 64];
-  const bool grid = n <= 64;
-  if (grid) g.grounds_at(xs, n, ys, n, grounds);
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
-      const double ground = grid ? grounds[j * n + i] : g.ground_at(xs[i], ys[j]);
+      const double ground = g.ground_at(xs[i], ys[j]);
       for (int k = 0; k < n; ++k) {
         const double e = std::min(g.top_elevation - zs[k], ground);
         fn((k * n + j) * n + i, xs[i], ys[j], g.model_z == ModelZ::kElevation ? -e : ground - e);

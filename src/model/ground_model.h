@@ -9,7 +9,6 @@
 //                built-in models, etree, grid, layers and xyz
 #pragma once
 
-#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -32,12 +31,6 @@ struct Ground {
 
   double ground_at(double x, double y) const {
     return surface ? surface->elevation(x, y) : top_elevation;
-  }
-  // ground_at at the points (xs[i], ys[j]) of a grid into out[j * nx + i],
-  // to the bit, each axis's cells found once.  nx, ny at most 64.
-  void grounds_at(const double* xs, int nx, const double* ys, int ny, double* out) const {
-    if (surface) return surface->elevations(xs, nx, ys, ny, out);
-    std::fill(out, out + size_t(nx) * ny, top_elevation);
   }
   // The model's vertical coordinate of domain point (x, y, z), moved down
   // to the ground where it lies in the air.

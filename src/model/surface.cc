@@ -66,29 +66,6 @@ double Surface::elevation(double x, double y) const {
          wy * ((1 - wx) * at(i, j + 1) + wx * at(i + 1, j + 1));
 }
 
-void Surface::elevations(const double* xs, int nx, const double* ys, int ny, double* out) const {
-  int is[64], js[64];
-  double wxs[64], wys[64];
-  for (int a = 0; a < nx; ++a) {
-    const double u = std::clamp((xs[a] - x0_) / dx_, 0.0, double(nx_ - 1));
-    is[a] = std::min(int(u), nx_ - 2), wxs[a] = u - is[a];
-  }
-  for (int b = 0; b < ny; ++b) {
-    const double v = std::clamp((ys[b] - y0_) / dy_, 0.0, double(ny_ - 1));
-    js[b] = std::min(int(v), ny_ - 2), wys[b] = v - js[b];
-  }
-  for (int b = 0; b < ny; ++b) {
-    const int j = js[b];
-    const double wy = wys[b];
-    for (int a = 0; a < nx; ++a) {
-      const int i = is[a];
-      const double wx = wxs[a];
-      out[size_t(b) * nx + a] = (1 - wy) * ((1 - wx) * at(i, j) + wx * at(i + 1, j)) +
-                                wy * ((1 - wx) * at(i, j + 1) + wx * at(i + 1, j + 1));
-    }
-  }
-}
-
 // A bilinear function on a rectangle is extreme at its corners (inside,
 // its one critical point is a saddle; along an edge it is linear).
 void Surface::cell_range(int i, int j, double u0, double u1, double v0, double v1, double* lo,

@@ -45,10 +45,6 @@ class Surface {
   static uint64_t bytes_for(uint64_t nx, uint64_t ny) { return nx * ny * 12 + 4096; }
 
   double elevation(double x, double y) const;
-  // The elevations at the points (xs[i], ys[j]) of a grid into
-  // out[j * nx + i], each as elevation() finds it, to the bit: each axis's
-  // cell and weight found once, not once a point.  nx, ny at most 64.
-  void elevations(const double* xs, int nx, const double* ys, int ny, double* out) const;
   // The least and greatest ground over the closed rectangle [x0, x1] x [y0, y1].
   void range(double x0, double x1, double y0, double y1, double* lo, double* hi) const;
   // Bounds on them, *lo at most the least and *hi at least the greatest:
