@@ -173,6 +173,7 @@ int import(const ParsedArgs& args) {
   std::printf("read       %llu %s in %.2f s (%.3gM/s)\n", (unsigned long long)r.read,
               o.from.rfind("etree:", 0) == 0    ? "leaves"
               : o.from.rfind("layers:", 0) == 0 ? "layers"
+              : o.from.rfind("rfile:", 0) == 0  ? "cells sampled"  // not the file's points
                                                 : "grid points",
               s, r.read / s / 1e6);
   std::printf("stored     %llu octants (%.1f%% of those read), %.3g MB, levels",
