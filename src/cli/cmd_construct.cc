@@ -282,7 +282,7 @@ void print_construct_balance(const ConstructResult& r) {
       (unsigned long long)r.neighbours, 100.0 * r.neighbours / std::max<uint64_t>(1, r.descended));
   if (r.air > 0 || r.cut > 0) {
     std::printf(
-        "carved     %llu leaves of air cut away after the balance, %llu elements cut by "
+        "carved     %llu leaves of air cut away, %llu elements cut by "
         "the ground (solid fraction below 1)\n",
         (unsigned long long)r.air, (unsigned long long)r.cut);
   }

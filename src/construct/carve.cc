@@ -34,16 +34,48 @@ double solid_fraction(const Ground& g, const double lo[3], const double hi[3]) {
   return std::min(1.0, (hi[2] - (top - g_hi)) / height) / (kFractionPoints * kFractionPoints);
 }
 
+namespace {
+
+// The descent's side, where it is sure of it, is the box's own: only a cut
+// leaf's fraction is computed.
+double fraction_of(const ConstructPlan& p, const Octant& o, GroundSide side) {
+  if (side == GroundSide::kSolid) return 1;
+  if (side == GroundSide::kAir) return 0;
+  const double e = octant_edge(o) * p.tick_m;
+  const double lo[3] = {o.x * p.tick_m, o.y * p.tick_m, o.z * p.tick_m};
+  const double hi[3] = {lo[0] + e, lo[1] + e, lo[2] + e};
+  return solid_fraction(p.ground, lo, hi);
+}
+
+}  // namespace
+
+void drop_air(SubtreeLeaves* leaves, size_t bytes, uint64_t* air) {
+  size_t kept = 0;
+  for (size_t i = 0; i < leaves->keys.size(); ++i) {
+    if (leaves->sides[i] == GroundSide::kAir) {
+      ++*air;
+      continue;
+    }
+    if (kept != i) {
+      leaves->keys[kept] = leaves->keys[i];
+      leaves->sides[kept] = leaves->sides[i];
+      std::memcpy(leaves->payloads.data() + kept * bytes, leaves->payloads.data() + i * bytes,
+                  bytes);
+    }
+    ++kept;
+  }
+  leaves->keys.resize(kept);
+  leaves->sides.resize(kept);
+  leaves->payloads.resize(kept * bytes);
+}
+
 void carve_leaves(const ConstructPlan& p, size_t bytes, SubtreeLeaves* leaves, uint64_t* air,
                   uint64_t* cut) {
   size_t kept = 0;
   leaves->levels = {};
   for (size_t i = 0; i < leaves->keys.size(); ++i) {
     const Octant o = octant_from_key(leaves->keys[i]);
-    const double e = octant_edge(o) * p.tick_m;
-    const double lo[3] = {o.x * p.tick_m, o.y * p.tick_m, o.z * p.tick_m};
-    const double hi[3] = {lo[0] + e, lo[1] + e, lo[2] + e};
-    const double f = solid_fraction(p.ground, lo, hi);
+    const double f = fraction_of(p, o, leaves->sides[i]);
     if (f <= 0) {
       ++*air;
       continue;
@@ -60,6 +92,7 @@ void carve_leaves(const ConstructPlan& p, size_t bytes, SubtreeLeaves* leaves, u
     ++kept;
   }
   leaves->keys.resize(kept);
+  leaves->sides.clear();
   leaves->payloads.resize(kept * bytes);
   leaves->elements = kept;
   bool first = true;

@@ -68,13 +68,15 @@ class SubtreeVisitor {
   void visit(Slot* s) {
     descent_.visit_subtree(s->root, cap_, &s->leaves);
     if (s->leaves.overflow) return;
+    const bool carved = descent_.plan().carved;
     if (balanced_) {
       s->descended = s->leaves.keys.size();
+      if (carved) drop_air(&s->leaves, descent_.payload_bytes(), &s->air);
       balancer_.balance(s->root, &s->leaves);
     }
-    // Air goes after the balance: what remains of a balanced octree is
-    // balanced, and its dangling nodes' anchors stay anchored.
-    if (descent_.plan().carved) {
+    // The leaves the balance made of cut ones, and the cut ones, may still
+    // be air: the carve finds them.
+    if (carved) {
       carve_leaves(descent_.plan(), descent_.payload_bytes(), &s->leaves, &s->air, &s->cut);
     }
     least_time_step(s);

@@ -11,6 +11,7 @@ namespace weaver {
 void SubtreeLeaves::clear() {
   keys.clear();
   payloads.clear();
+  sides.clear();
   levels = {};
   elements = 0;
   smallest_edge_m = largest_edge_m = worst_ppw = 0;
@@ -95,6 +96,7 @@ Judgement Descent::judge(const Octant& o) const {
 Judgement Descent::judge_on(const Octant& o, GroundSide side) const {
   Judgement j;
   j.floor = o_.vs_min;
+  j.side = side;
   if (side == GroundSide::kAir) {
     apply_ground(o, side, &j);
     return j;
@@ -138,8 +140,9 @@ void Descent::apply_ground(const Octant& o, GroundSide side, Judgement* j) const
 // Children that their parent's floor keeps leaves cost nothing; the others
 // ask the model's bounds; those the bounds leave open are sampled, from the
 // parent's 5 x 5 x 5 lattice when at least kSharedLattice of them are.
-void Descent::judge_children(const Octant& o, double floor, const bool* want,
+void Descent::judge_children(const Octant& o, const Judgement& parent, const bool* want,
                              Judgement out[8]) const {
+  const double floor = parent.floor;
   constexpr int kSharedLattice = 4;
   bool open[8] = {};
   int opened = 0;
@@ -149,7 +152,7 @@ void Descent::judge_children(const Octant& o, double floor, const bool* want,
     Judgement& j = out[c];
     j = Judgement{false, floor, -1};
     if (p_.carved) {
-      const GroundSide side = ground_side(child);
+      const GroundSide side = parent.side == GroundSide::kCut ? ground_side(child) : parent.side;
       if (side != GroundSide::kSolid) {
         j = judge_on(child, side);
         continue;
@@ -214,7 +217,7 @@ void Descent::add_figures(SubtreeLeaves* out) const {
 bool Descent::visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const {
   if (j.split) {
     Judgement children[8];
-    judge_children(o, j.floor, nullptr, children);
+    judge_children(o, j, nullptr, children);
     bool leaves = true;
     for (const Judgement& c : children) leaves = leaves && !c.split;
     if (leaves) return emit_siblings(o, children, cap, out);
@@ -280,11 +283,14 @@ void Descent::emit(const Octant& o, const Judgement& j, const Material& m,
     least = std::min(least, vs_min_of(samples));
   }
   out->keys.push_back(octant_key(o));
+  if (p_.carved) out->sides.push_back(j.side);
   const size_t at = out->payloads.size();
   out->payloads.resize(at + payload_bytes());
   to_payload(m, out->payloads.data() + at);
   ++out->levels[o.level];
   ++out->elements;
+  // Air is no leaf of the balance (carve.h): its size asks nothing.
+  if (j.side == GroundSide::kAir) return;
   const uint32_t e = octant_edge(o), root_e = octant_edge(out->root);
   const uint32_t c[3] = {o.x, o.y, o.z}, r[3] = {out->root.x, out->root.y, out->root.z};
   for (int a = 0; a < 3; ++a) {

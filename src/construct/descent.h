@@ -32,6 +32,9 @@ namespace weaver {
 struct SubtreeLeaves {
   std::vector<uint64_t> keys;
   std::vector<std::byte> payloads;  // vp, vs, rho [, qp, qs] as f32 (material_schema)
+  // Carved: each leaf's side of the ground as the descent found it (kCut
+  // also for a leaf nobody judged, to be found by the carve).
+  std::vector<GroundSide> sides;
   LevelCounts levels{};
   uint64_t elements = 0;
   double smallest_edge_m = 0, largest_edge_m = 0, worst_ppw = 0;
@@ -53,11 +56,14 @@ struct SubtreeLeaves {
 // What the descent does with an octant: split it or keep it as a leaf.
 // floor bounds the Vs at every point of the octant's closed box from below
 // (so its descendants' too); vs, where it was sampled, is its least sample
-// (else a negative number).
+// (else a negative number).  side is the octant's side of the ground: an
+// octant wholly below (or above) it has its children there too, so only a
+// cut octant's children are asked.
 struct Judgement {
   bool split = false;
   double floor = 0;
   double vs = -1;
+  GroundSide side = GroundSide::kSolid;
 };
 
 class Descent {
@@ -72,8 +78,9 @@ class Descent {
   // The same, with a lower bound on the Vs of o's box.
   Judgement judge(const Octant& o) const;
   // The judgement of each of o's children c with want[c] (all, for null),
-  // given floor, a lower bound on the Vs of o's box.
-  void judge_children(const Octant& o, double floor, const bool* want, Judgement out[8]) const;
+  // given o's own (its floor bounds the Vs of o's box from below).
+  void judge_children(const Octant& o, const Judgement& parent, const bool* want,
+                      Judgement out[8]) const;
   // The leaves of o's subtree into *out; stops, with out->overflow, past cap.
   void visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const;
   // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as

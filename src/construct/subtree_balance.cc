@@ -86,6 +86,7 @@ bool SubtreeBalancer::wanted(const Octant& x, const Octant& root) const {
 // The input leaves under x that meet the grown box, outside root, into
 // collected_ in key order; j is the descent's judgement of x.
 void SubtreeBalancer::collect(const Octant& x, const Judgement& j, const Octant& root) {
+  if (j.side == GroundSide::kAir) return;  // no leaf of the balance (carve.h)
   if (!j.split) {
     collected_.push_back(octant_key(x));
     return;
@@ -93,7 +94,7 @@ void SubtreeBalancer::collect(const Octant& x, const Judgement& j, const Octant&
   bool want[8];
   for (int c = 0; c < 8; ++c) want[c] = wanted(octant_child(x, c), root);
   Judgement children[8];
-  descent_.judge_children(x, j.floor, want, children);
+  descent_.judge_children(x, j, want, children);
   for (int c = 0; c < 8; ++c) {
     if (want[c]) collect(octant_child(x, c), children[c], root);
   }
@@ -103,16 +104,20 @@ void SubtreeBalancer::collect(const Octant& x, const Judgement& j, const Octant&
 void SubtreeBalancer::refine(SubtreeLeaves* leaves) {
   out_.clear();
   const size_t bytes = descent_.payload_bytes();
+  const bool carved = descent_.plan().carved;
   resolve_leaves(
       leaves->keys.data(), leaves->keys.size(), created_,
       [&](size_t i) {
         const std::byte* payload = leaves->payloads.data() + i * bytes;
+        if (carved) out_.sides.push_back(leaves->sides[i]);
         out_.keys.push_back(leaves->keys[i]);
         out_.payloads.insert(out_.payloads.end(), payload, payload + bytes);
         ++out_.levels[octant_key_level(leaves->keys[i])];
         return Status::Ok();
       },
       [&](size_t i, uint64_t key, bool is_new) {
+        // A part of a leaf wholly on one side of the ground is on it too.
+        if (carved) out_.sides.push_back(leaves->sides[i]);
         return emit_leaf(key, is_new, leaves->payloads.data() + i * bytes);
       });
   out_.elements = out_.keys.size();
@@ -120,6 +125,7 @@ void SubtreeBalancer::refine(SubtreeLeaves* leaves) {
   while (out_.levels[coarsest] == 0) ++coarsest;
   leaves->keys.swap(out_.keys);
   leaves->payloads.swap(out_.payloads);
+  leaves->sides.swap(out_.sides);
   leaves->levels = out_.levels;
   leaves->elements = out_.elements;
   leaves->largest_edge_m = octant_edge(coarsest) * descent_.plan().tick_m;
