@@ -84,6 +84,22 @@ void expect_lattice_matches_sampling(const VelocityModel& m, double x, double y,
     ASSERT_EQ(std::memcmp(&materials[p], &one, sizeof one), 0) << x << " " << y << " " << z;
     *soft += fast[p] == 100;
   }
+  // Columns of their own depths, as a model under a ground asks: each
+  // column shifted, some above z = 0.
+  double zs[125];
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < n; ++k)
+        zs[(j * n + i) * n + k] = axes[2][k] + ((i * 7 + j * 13) % 11 - 3) * h / 3;
+  m.vs_on_columns(axes[0], axes[1], zs, n, fast);
+  m.materials_on_columns(axes[0], axes[1], zs, n, materials);
+  for (int p = 0; p < n * n * n; ++p) {
+    const int i = p % n, j = p / n % n, k = p / (n * n);
+    const Material one = m.at(axes[0][i], axes[1][j], zs[(j * n + i) * n + k]);
+    ASSERT_EQ(fast[p], one.vs) << x << " " << y << " " << z << " " << h << " n " << n;
+    ASSERT_EQ(std::memcmp(&materials[p], &one, sizeof one), 0) << x << " " << y << " " << z;
+    *soft += fast[p] == 100;
+  }
 }
 
 // Points of a 20 m lattice inside the basin's inclusions, in 64 cells of

@@ -29,15 +29,11 @@ class Basin final : public VelocityModel {
   // The bowl depth once per column, the rest per point as at().
   void materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                             Material* out) const override {
-    InclusionCell& cell = inclusion_cell();
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        const double depth = sediment_depth(xs[i], ys[j]);
-        for (int k = 0; k < n; ++k) {
-          out[(k * n + j) * n + i] = material_of(zs[k], depth, xs[i], ys[j], cell);
-        }
-      }
-    }
+    if (n > kLatticeMax) return VelocityModel::materials_on_lattice(xs, ys, zs, n, out);
+    double columns[kLatticeMax * kLatticeMax * kLatticeMax];
+    for (int c = 0; c < n * n; ++c)
+      for (int k = 0; k < n; ++k) columns[c * n + k] = zs[k];
+    materials_on_columns(xs, ys, columns, n, out);
   }
   // The bowl depth once per column of the lattice; Vs of sediment and of
   // rock, and the inclusion cell's index, once per depth; an inclusion
@@ -71,6 +67,47 @@ class Basin final : public VelocityModel {
             vs = static_cast<float>(kInclusionVs);
           }
           out[(k * n + j) * n + i] = vs;
+        }
+      }
+    }
+  }
+
+  // Columns of their own depths (a model under a ground): the bowl depth
+  // once per column, the rest per point as at().
+  void materials_on_columns(const double* xs, const double* ys, const double* zs, int n,
+                            Material* out) const override {
+    InclusionCell& cell = inclusion_cell();
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double depth = sediment_depth(xs[i], ys[j]);
+        const double* z = zs + (j * n + i) * n;
+        for (int k = 0; k < n; ++k) {
+          out[(k * n + j) * n + i] = material_of(z[k], depth, xs[i], ys[j], cell);
+        }
+      }
+    }
+  }
+  // The bowl depth once per column, Vs per point as at() rounds it; the
+  // inclusion cells' indices along x and y once per lattice.
+  void vs_on_columns(const double* xs, const double* ys, const double* zs, int n,
+                     float* out) const override {
+    if (n > kLatticeMax) return VelocityModel::vs_on_columns(xs, ys, zs, n, out);
+    uint64_t cell_x[kLatticeMax], cell_y[kLatticeMax];
+    for (int i = 0; i < n; ++i) {
+      cell_x[i] = InclusionCell::index(xs[i]), cell_y[i] = InclusionCell::index(ys[i]);
+    }
+    InclusionCell cell;
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double depth = sediment_depth(xs[i], ys[j]);
+        const bool may_hold = xs[i] >= 0 && ys[j] >= 0;
+        const double* z = zs + (j * n + i) * n;
+        for (int k = 0; k < n; ++k) {
+          const bool sediment = z[k] < depth;
+          const bool inclusion =
+              !sediment && may_hold && z[k] >= 0 && z[k] < kInclusionDepth &&
+              cell.holds_in(cell_x[i], cell_y[j], InclusionCell::index(z[k]), xs[i], ys[j], z[k]);
+          out[(k * n + j) * n + i] = static_cast<float>(vs_of(z[k], sediment, inclusion));
         }
       }
     }

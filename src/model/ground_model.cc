@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <vector>
 
 #include "model/geo_frame.h"
 #include "util/metadata_text.h"
@@ -76,31 +77,54 @@ Material GroundedModel::at(double x, double y, double z) const {
   return inner_.at(x, y, g_.model_z_of(x, y, z));
 }
 
-// fn(index, x, y, model z) at every lattice point, the ground once a column.
-template <class Fn>
-void for_lattice(const Ground& g, const double* xs, const double* ys, const double* zs, int n,
-                 Fn fn) {
+namespace {
+
+// The model's z at every lattice point, column by column (as
+// VelocityModel::vs_on_columns takes them), the ground once a column.
+void model_columns(const Ground& g, const double* xs, const double* ys, const double* zs, int n,
+                   double* mz) {
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < n; ++i) {
       const double ground = g.ground_at(xs[i], ys[j]);
+      double* column = mz + (j * n + i) * n;
       for (int k = 0; k < n; ++k) {
         const double e = std::min(g.top_elevation - zs[k], ground);
-        fn((k * n + j) * n + i, xs[i], ys[j], g.model_z == ModelZ::kElevation ? -e : ground - e);
+        column[k] = g.model_z == ModelZ::kElevation ? -e : ground - e;
       }
     }
   }
 }
 
+// A lattice's model z's: on the stack for construct's (n up to 5).
+class ColumnDepths {
+ public:
+  ColumnDepths(const Ground& g, const double* xs, const double* ys, const double* zs, int n) {
+    const size_t points = size_t(n) * n * n;
+    if (points > kOnStack) heap_.resize(points);
+    data_ = points > kOnStack ? heap_.data() : stack_;
+    model_columns(g, xs, ys, zs, n, data_);
+  }
+  const double* data() const { return data_; }
+
+ private:
+  static constexpr size_t kOnStack = 125;
+  double stack_[kOnStack];
+  std::vector<double> heap_;
+  double* data_;
+};
+
+}  // namespace
+
 void GroundedModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                                   float* out) const {
-  for_lattice(g_, xs, ys, zs, n,
-              [&](int at, double x, double y, double mz) { out[at] = inner_.vs_at(x, y, mz); });
+  const ColumnDepths mz(g_, xs, ys, zs, n);
+  inner_.vs_on_columns(xs, ys, mz.data(), n, out);
 }
 
 void GroundedModel::materials_on_lattice(const double* xs, const double* ys, const double* zs,
                                          int n, Material* out) const {
-  for_lattice(g_, xs, ys, zs, n,
-              [&](int at, double x, double y, double mz) { out[at] = inner_.at(x, y, mz); });
+  const ColumnDepths mz(g_, xs, ys, zs, n);
+  inner_.materials_on_columns(xs, ys, mz.data(), n, out);
 }
 
 // The model's z rises with the domain's z; with the ground it falls

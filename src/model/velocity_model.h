@@ -53,6 +53,25 @@ class VelocityModel {
       for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) out[(k * n + j) * n + i] = at(xs[i], ys[j], zs[k]);
   }
+  // The same for n x n columns whose points each have their own depth:
+  // column (i, j) at (xs[i], ys[j]), its n points at depths
+  // zs[(j * n + i) * n + k], into out[(k * n + j) * n + i].  A model under a
+  // ground (model/ground_model.h) asks so, each column shifted by the
+  // ground over it; models override it where a column shares work.
+  virtual void vs_on_columns(const double* xs, const double* ys, const double* zs, int n,
+                             float* out) const {
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < n; ++k)
+          out[(k * n + j) * n + i] = vs_at(xs[i], ys[j], zs[(j * n + i) * n + k]);
+  }
+  virtual void materials_on_columns(const double* xs, const double* ys, const double* zs, int n,
+                                    Material* out) const {
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < n; ++k)
+          out[(k * n + j) * n + i] = at(xs[i], ys[j], zs[(j * n + i) * n + k]);
+  }
   // Bounds on the Vs at() gives at every point of the closed box [lo, hi]
   // (metres), rounded as at() rounds it: *vs_lo <= at(p).vs <= *vs_hi.
   // Construct decides an octant from them where they settle it and samples
