@@ -38,8 +38,8 @@ Status derive_boundary(const std::vector<BTree*>& tables, const scan::BoundarySi
   const uint64_t n = octants.size();
   const auto cut = [&](int i) { return n * uint64_t(i) / uint64_t(t); };
   scan::Span span;
-  if (o.known_filled_box) {
-    span.lo = o.box_lo, span.hi = o.box_hi, span.filled = true;
+  if (o.known_box) {
+    span.lo = o.box_lo, span.hi = o.box_hi, span.filled = o.box_filled;
   } else {
     std::vector<scan::Share> shares(tables.size());
     WEAVER_RETURN_IF_ERROR(run_shares(t, [&](int i) {

@@ -14,7 +14,8 @@
 //     across it (mesh/face_neighbors.h): nothing, and the whole face is
 //     free surface; finer elements on some of its quarters only, and the
 //     others are.  A mesh built with a ground surface rules out the
-//     elements whose neighbourhood lies wholly below the ground (the
+//     elements whose neighbourhood lies wholly below the ground, and of
+//     the others the faces whose box across lies wholly below it (the
 //     surface read again, as the octant table's metadata names it).
 // The same pass finds the element of least edge / vp (an explicit solver's
 // time step is a Courant number times it), for 'weaver stat'.
@@ -53,10 +54,12 @@ struct BoundaryOptions {
   // here, from the leaves' vp.
   double known_least_dt = 0;
   uint64_t known_least_dt_element = 0;
-  // The box the leaves fill, in ticks, when the caller knows they fill it
-  // (weaver mesh of a construct that cut no air: its blocks): the first
-  // scan, which finds the box, is skipped.
-  bool known_filled_box = false;
+  // The box the leaves span, in ticks, and whether they fill it, when the
+  // caller knows (weaver mesh: construct's blocks where it cut no air, else
+  // the span of the leaves it wrote): the first scan, which finds them, is
+  // skipped.
+  bool known_box = false;
+  bool box_filled = true;
   std::array<uint32_t, 3> box_lo{}, box_hi{};
   // boundary_shard (weaver-mpi mesh): the octant table is these shards,
   // which the run's rank 0 has staged but not committed.

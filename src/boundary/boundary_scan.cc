@@ -38,10 +38,11 @@ class BoundaryWriter {
       return Status::Ok();
     }
     std::array<uint8_t, 6> missing{};  // per face: bit p set when part p lies open
-    if (!ground.buried(o)) {
+    const unsigned open = ground.buried(o) ? 0 : ground.open_faces(o);
+    if (open != 0) {
       ++r_->asked;
       neighbours_.clear();
-      WEAVER_RETURN_IF_ERROR(finder->find(o, &neighbours_));
+      WEAVER_RETURN_IF_ERROR(finder->find(o, &neighbours_, open));
       std::array<uint8_t, 6> covered{};  // bit q: quarter q (0-3) has an element
       std::array<bool, 6> whole{};
       for (const FaceNeighbor& n : neighbours_) {
@@ -56,7 +57,7 @@ class BoundaryWriter {
         covered[n.face] |= uint8_t(1u << (qu + 2 * qv));
       }
       for (int f = 0; f < 6; ++f) {
-        if (on_side[f] || whole[f]) continue;
+        if (on_side[f] || whole[f] || (open >> f & 1) == 0) continue;
         missing[f] = covered[f] == 0 ? 1 : uint8_t((~covered[f] & 15u) << 1);
       }
     }

@@ -16,35 +16,12 @@
 #include "db/octant_table.h"
 #include "model/ground_model.h"
 #include "storage/btree.h"
+#include "util/leaf_span.h"
 
 namespace weaver::boundary_scan {
 
 // The box the leaves span (ticks), and whether their volumes fill it.
-struct Span {
-  std::array<uint32_t, 3> lo{UINT32_MAX, UINT32_MAX, UINT32_MAX}, hi{};  // hi: the far side
-  unsigned __int128 volume = 0;
-  bool filled = true;
-
-  void add(const Octant& o) {
-    const uint32_t e = octant_edge(o), c[3] = {o.x, o.y, o.z};
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], c[a]);
-      hi[a] = std::max(hi[a], c[a] + e);
-    }
-    volume += static_cast<unsigned __int128>(uint64_t{e} * e) * e;
-  }
-  void add(const Span& s) {
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], s.lo[a]), hi[a] = std::max(hi[a], s.hi[a]);
-    volume += s.volume;
-  }
-  // Once every leaf is in: whether they fill the box.
-  void settle() {
-    if (volume == 0) return;
-    unsigned __int128 box = 1;
-    for (int a = 0; a < 3; ++a) box *= hi[a] - lo[a];
-    filled = volume == box;
-  }
-};
+using Span = LeafSpan;
 
 // The leaves with ids [first, stop) of the table: their span (not settled)
 // and, with vp, their least edge / vp and its element.
@@ -104,6 +81,23 @@ struct GroundCheck {
     const double lo[3] = {o.x * tick_m - e, o.y * tick_m - e, o.z * tick_m - e};
     const double hi[3] = {lo[0] + 3 * e, lo[1] + 3 * e, lo[2] + 3 * e};
     return side_of_ground(ground, lo, hi) == GroundSide::kSolid;
+  }
+  // The faces of o (bit f for face f) across which something may be open:
+  // those whose box of o's size across the face is not wholly below the
+  // ground (leaves that meet such a box in volume are never air).  Every
+  // face where there is no ground to go by.
+  unsigned open_faces(const Octant& o) const {
+    if (!ready) return 0x3F;
+    const double e = octant_edge(o) * tick_m;
+    const double at[3] = {o.x * tick_m, o.y * tick_m, o.z * tick_m};
+    unsigned open = 0;
+    for (int f = 0; f < 6; ++f) {
+      double lo[3] = {at[0], at[1], at[2]};
+      lo[f / 2] += (f & 1) ? e : -e;
+      const double hi[3] = {lo[0] + e, lo[1] + e, lo[2] + e};
+      if (side_of_ground(ground, lo, hi) != GroundSide::kSolid) open |= 1u << f;
+    }
+    return open;
   }
 };
 

@@ -227,11 +227,19 @@ int cmd_mesh(int argc, char** argv) {
     bo.known_least_dt = cr.least_dt;
     bo.known_least_dt_element = cr.least_dt_element;
   }
-  // Where construct cut no air its leaves fill its blocks: the box is known.
+  // Where construct cut no air its leaves fill its blocks; else it found
+  // the box they span as it wrote them (a balance after it splits leaves,
+  // which changes neither): the box is known.
   if (!plan.carved) {
     const uint32_t block = uint32_t{1} << (kMaxLevel - plan.block_level);
-    bo.known_filled_box = true;
+    bo.known_box = true;
     for (int a = 0; a < 3; ++a) bo.box_hi[a] = plan.blocks[a] * block;
+  } else if (cr.elements > 0) {
+    LeafSpan span = cr.span;
+    span.settle();
+    bo.known_box = true;
+    bo.box_filled = span.filled;
+    bo.box_lo = span.lo, bo.box_hi = span.hi;
   }
   ProgressLine boundary_line(style, "boundary", "elements");
   bo.progress = boundary_line.fn();

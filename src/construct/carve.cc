@@ -88,6 +88,7 @@ void carve_leaves(const ConstructPlan& p, size_t bytes, SubtreeLeaves* leaves, u
       std::memmove(dst, leaves->payloads.data() + i * bytes, bytes);
     }
     std::memcpy(dst + bytes - 4, &solid, 4);
+    leaves->span.add(o);
     ++leaves->levels[o.level];
     ++kept;
   }

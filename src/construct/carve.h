@@ -35,10 +35,10 @@ void drop_air(SubtreeLeaves* leaves, size_t payload_bytes, uint64_t* air);
 
 // Drops the air leaves of *leaves and writes the rest's solid fraction into
 // the last f32 of each payload (payload_bytes a leaf); recounts its levels,
-// elements and edges.  leaves->sides says which leaves the descent found
-// wholly below or above the ground (their fraction is 1 or 0: a box inside
-// one on a side of the ground is on that side); only the others are
-// computed.  *air and *cut count what it dropped and what it cut.
+// elements and edges, and adds the kept ones to its span.  leaves->sides says which leaves the
+// descent found wholly below or above the ground (their fraction is 1 or 0: a box inside one on a
+// side of the ground is on that side); only the others are computed.  *air and *cut count what it
+// dropped and what it cut.
 void carve_leaves(const ConstructPlan& p, size_t payload_bytes, SubtreeLeaves* leaves,
                   uint64_t* air, uint64_t* cut);
 

@@ -23,6 +23,7 @@
 #include "model/surface.h"
 #include "schema/octant.h"
 #include "schema/status.h"
+#include "util/leaf_span.h"
 #include "util/memory_budget.h"
 #include "util/progress.h"
 
@@ -140,6 +141,8 @@ struct ConstructResult {
   // Carved: the leaves dropped as wholly above the ground, and the kept
   // leaves the ground crosses (solid fraction below 1).
   uint64_t air = 0, cut = 0;
+  // Carved: the box the leaves span and whether they fill it (settled).
+  LeafSpan span;
   // The least edge / vp of any leaf (seconds) and its element id: an
   // explicit solver's time step is a Courant number times it.
   double least_dt = HUGE_VAL;

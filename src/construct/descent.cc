@@ -17,6 +17,7 @@ void SubtreeLeaves::clear() {
   smallest_edge_m = largest_edge_m = worst_ppw = 0;
   least_vs.fill(HUGE_VAL);
   border_lo = border_hi = {};
+  span = LeafSpan{};
   overflow = false;
 }
 
@@ -29,6 +30,7 @@ void SubtreeLeaves::add_to(ConstructResult* r) const {
   r->largest_edge_m = std::max(r->largest_edge_m, largest_edge_m);
   if (r->elements == 0 || worst_ppw < r->worst_ppw) r->worst_ppw = worst_ppw;
   r->elements += elements;
+  r->span.add(span);
 }
 
 // Point i of an n-point lattice axis (n = 3 or 5) over an octant starting

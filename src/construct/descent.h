@@ -46,6 +46,7 @@ struct SubtreeLeaves {
   // largest leaf touching it: how far its balance looks outside.
   Octant root;
   std::array<uint32_t, 3> border_lo{}, border_hi{};
+  LeafSpan span;          // carved: what the kept leaves span (carve.h)
   bool overflow = false;  // more leaves than the cap: visit the children instead
 
   void clear();

@@ -75,9 +75,10 @@ Status FaceFinder::visit(int face, const Octant& r, std::vector<FaceNeighbor>* o
   return Status::Ok();
 }
 
-Status FaceFinder::find(const Octant& o, std::vector<FaceNeighbor>* out) {
+Status FaceFinder::find(const Octant& o, std::vector<FaceNeighbor>* out, unsigned faces) {
   const uint32_t s = octant_edge(o);
   for (int face = 0; face < kFaces; ++face) {
+    if ((faces >> face & 1) == 0) continue;
     const int axis = face / 2;
     uint32_t c[3] = {o.x, o.y, o.z};
     if (face % 2 == 0) {

@@ -35,8 +35,9 @@ class FaceFinder {
   // Appends to *out the leaves across each face of leaf o, face by face,
   // each face's in key order: one leaf of o's size or larger, or all the
   // finer leaves that touch the face.  Nothing across the domain's boundary.
-  // Works on any octree, balanced or not.
-  Status find(const Octant& o, std::vector<FaceNeighbor>* out);
+  // Works on any octree, balanced or not.  Only the faces with their bit
+  // set in `faces` (bit f for face f) are looked at.
+  Status find(const Octant& o, std::vector<FaceNeighbor>* out, unsigned faces = 0x3F);
 
  private:
   struct Leaf {
