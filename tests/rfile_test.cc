@@ -9,8 +9,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
@@ -357,6 +359,58 @@ TEST(Rfile, ImportsAsAModelDatabaseOfItsBlocksCells) {
     // straddles the blocks' boundary (z = 100 m), whose values jump.
     if (std::abs(z - 100) > e) {
       EXPECT_LE(std::abs(h.values[1] - file->at(x, y, z).vs), 0.05 * e + 1e-3) << z;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace weaver
+
+namespace weaver {
+namespace {
+
+std::string model_table_bytes(const std::string& db) {
+  for (const auto& entry : std::filesystem::directory_iterator(db)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("model-", 0) == 0) {
+      std::ifstream in(entry.path(), std::ios::binary);
+      return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    }
+  }
+  return "";
+}
+
+// The import samples subtrees on threads, each merged on its own thread,
+// and passes them on in key order: the table is the serial one, byte for
+// byte, with tiny subtrees (so that merges cross them) and merging within
+// a tolerance or exactly.
+TEST(Rfile, ImportOnThreadsWritesTheSerialTable) {
+  testing::TempDir dir;
+  RfileWriter w;
+  const std::string path = dir.file("m.rfile");
+  write_file(path, w.bytes(linear_blocks()));
+  for (const double tolerance : {0.0, 0.02}) {
+    std::string serial;
+    for (const int threads : {1, 2, 3}) {
+      ModelImportOptions o;
+      o.from = "rfile:" + path;
+      o.tolerance = tolerance;
+      o.threads = threads;
+      o.rfile_task_cells = 7;
+      ModelImportResult r;
+      const std::string db =
+          dir.file("t" + std::to_string(threads) + "-" + std::to_string(tolerance));
+      ASSERT_OK(import_model(db, o, &r));
+      const std::string bytes = model_table_bytes(db);
+      ASSERT_FALSE(bytes.empty());
+      if (threads == 1) {
+        serial = bytes;
+        if (tolerance > 0) {
+          EXPECT_LT(r.octants, r.read / 2);  // merges happened
+        }
+      } else {
+        EXPECT_TRUE(bytes == serial) << threads << " threads, tolerance " << tolerance;
+      }
     }
   }
 }

@@ -15,7 +15,7 @@ constexpr char kUsage[] =
     "usage: weaver model import MODEL.db --from "
     "etree:FILE|grid:FILE|layers:FILE|xyz:FILE|rfile:FILE\n"
     "                           [--tolerance REL] [--root-edge METRES] [--memory BYTES]\n"
-    "                           [--plain]\n"
+    "                           [--threads N] [--plain]\n"
     "       weaver model material MODEL.db X Y Z | --points FILE [--outside clamp|error]\n"
     "                             [--memory BYTES]\n"
     "\n"
@@ -48,6 +48,9 @@ constexpr char kUsage[] =
     "  --root-edge M      etree: the edge of the etree's root in metres, when its\n"
     "                     metadata does not say\n"
     "  --memory BYTES     memory budget (default 256M): the table's cache\n"
+    "  --threads N        rfile: threads that sample the file, a subtree each,\n"
+    "                     written in key order (default: the number of cores);\n"
+    "                     the same table for every N\n"
     "  --plain            plain leaf pages (default: packed)\n"
     "\n"
     "material: the model's values at X Y Z (metres in the model's frame, z depth\n"
@@ -161,6 +164,7 @@ int import(const ParsedArgs& args) {
     st = parse_double(args.values.at("tolerance"), "--tolerance", &o.tolerance);
   if (st.ok() && args.values.count("root-edge"))
     st = parse_double(args.values.at("root-edge"), "--root-edge", &o.root_edge_m);
+  if (st.ok()) st = threads_option(args, default_threads(), &o.threads);
   if (st.ok()) st = check_target_kind(args.positional[1], false);
   if (!st.ok()) return usage_error("model", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
@@ -199,9 +203,9 @@ int import(const ParsedArgs& args) {
 
 int cmd_model(int argc, char** argv) {
   ParsedArgs args;
-  Status st =
-      parse_args(argc, argv, 2, {"from", "tolerance", "root-edge", "memory", "points", "outside"},
-                 {"plain"}, &args);
+  Status st = parse_args(
+      argc, argv, 2, {"from", "tolerance", "root-edge", "memory", "points", "outside", "threads"},
+      {"plain"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("model", st.message(), kUsage);
   const std::string sub = args.positional.empty() ? "" : args.positional[0];

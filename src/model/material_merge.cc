@@ -112,7 +112,7 @@ Status MaterialMerger::break_coarser(int level, const Octant& finer) {
 
 Status MaterialMerger::emit(const Entry& e) {
   ++emitted_;
-  return sink_(octant_key(e.octant), e.mean);
+  return entry_sink_ ? entry_sink_(e) : sink_(octant_key(e.octant), e.mean);
 }
 
 }  // namespace weaver

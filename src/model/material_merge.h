@@ -36,6 +36,12 @@ class MaterialMerger {
 
   MaterialMerger(double tolerance, int fields, Sink sink)
       : tolerance_(tolerance), fields_(fields), sink_(std::move(sink)) {}
+  // Emitting whole entries, bounds and all: a merger of one subtree, whose
+  // output another merger takes on (add(const Entry&)) as if it had merged
+  // the subtree itself.
+  using EntrySink = std::function<Status(const Entry&)>;
+  MaterialMerger(double tolerance, int fields, EntrySink sink)
+      : tolerance_(tolerance), fields_(fields), entry_sink_(std::move(sink)) {}
 
   // REQUIRES: octants in strictly increasing key order, none inside an
   // earlier one.
@@ -73,6 +79,7 @@ class MaterialMerger {
   double tolerance_;
   int fields_;
   Sink sink_;
+  EntrySink entry_sink_;
   std::array<Group, kMaxLevel + 1> groups_{};  // by the members' level
   // No group finer than this holds members or is broken.
   int deepest_ = 0;

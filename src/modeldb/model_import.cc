@@ -99,7 +99,7 @@ Status plan_source(const ModelImportOptions& o, SourcePlan* s, ModelInfo* info) 
   } else if (k == "rfile") {
     // Its column cache: a quarter of the budget, beside the table pool.
     WEAVER_RETURN_IF_ERROR(
-        plan_rfile(s->path, MemoryBudget(o.memory.bytes() / 4), &s->rfile, info));
+        plan_rfile(s->path, MemoryBudget(o.memory.bytes() / 4), o.threads, &s->rfile, info));
     s->has_q = info->has_q;
   } else if (k == "layers") {
     WEAVER_RETURN_IF_ERROR(plan_layers(s->path, &s->layers, info));
@@ -120,7 +120,20 @@ Status emit_source(SourcePlan& s, const ModelImportOptions& o, MemoryBudget bloc
   };
   if (s.kind == "etree") return import_etree(s.etree.get(), o, info, read, emit);
   if (s.kind == "layers") return import_layers(s.layers, read, emit);
-  if (s.kind == "rfile") return import_rfile(s.rfile, *info, read, emit);
+  if (s.kind == "rfile") {
+    // The subtrees in flight (two a thread), each held by a worker, share
+    // the grid's blocks' budget (twice their bytes: room for growth).
+    RfileImportRun run;
+    run.threads = std::max(1, o.threads);
+    run.tolerance = o.tolerance;
+    run.fields = s.has_q ? 5 : 3;
+    const uint64_t per_cell = sizeof(MaterialMerger::Entry);
+    run.task_cells =
+        o.rfile_task_cells > 0
+            ? o.rfile_task_cells
+            : std::clamp<uint64_t>(blocks.bytes() / (4 * run.threads * per_cell), 4096, 1 << 16);
+    return import_rfile(s.rfile, *info, run, read, &merger);
+  }
   if (s.kind == "grid") return import_grid(s.grid, s.path, blocks, read, merger);
   const std::string grid = db_dir + "/xyz-import.grid.tmp";
   WEAVER_RETURN_IF_ERROR(write_xyz_as_grid(s.path, s.xyz, grid));

@@ -30,11 +30,15 @@
 namespace weaver {
 
 struct ModelImportOptions {
-  std::string from;        // "etree:FILE", "grid:FILE", "layers:FILE" or "xyz:FILE"
+  std::string from;        // "etree:FILE", "grid:FILE", "layers:FILE", "xyz:FILE" or "rfile:FILE"
   double tolerance = 0;    // relative; 0 merges exactly equal siblings only
   double root_edge_m = 0;  // etree: the root's edge when its metadata does not say
   MemoryBudget memory;
   bool packed = true;
+  // rfile: threads that sample the file (the table the same for any count),
+  // and the most cells a subtree of the work holds (0: from the budget).
+  int threads = 1;
+  uint64_t rfile_task_cells = 0;
 };
 
 struct ModelImportResult {

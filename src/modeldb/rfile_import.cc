@@ -4,11 +4,13 @@
 #include <cmath>
 
 #include "model/geo_frame.h"
+#include "util/ordered_run.h"
 
 namespace weaver {
 
-Status plan_rfile(const std::string& path, MemoryBudget memory, RfilePlan* p, ModelInfo* info) {
-  WEAVER_RETURN_IF_ERROR(RfileModel::open(path, memory, 1, &p->model));
+Status plan_rfile(const std::string& path, MemoryBudget memory, int threads, RfilePlan* p,
+                  ModelInfo* info) {
+  WEAVER_RETURN_IF_ERROR(RfileModel::open(path, memory, std::max(1, threads), &p->model));
   const RfileModel& m = *p->model;
   const double extent[3] = {m.x_extent(), m.y_extent(), m.z_bottom() - m.z_top()};
   p->root_m = std::max({extent[0], extent[1], extent[2]});
@@ -25,17 +27,23 @@ Status plan_rfile(const std::string& path, MemoryBudget memory, RfilePlan* p, Mo
 
 namespace {
 
+// The level of each material block's cells: its smaller spacing rounded
+// down to a power of two of the tick.
+std::vector<int> block_levels(const RfileModel& m, double tick_m) {
+  std::vector<int> levels;
+  for (size_t b = 1; b < m.header().blocks.size(); ++b) {
+    const RfileBlock& k = m.header().blocks[b];
+    int level = 0;
+    while (level < kMaxLevel && octant_edge(level) * tick_m > std::min(k.hh, k.hv)) ++level;
+    levels.push_back(level);
+  }
+  return levels;
+}
+
 class RfileDescent {
  public:
-  RfileDescent(const RfilePlan& p, const ModelInfo& info, uint64_t* read, const ModelEmit& emit)
-      : m_(*p.model), info_(info), read_(read), emit_(emit) {
-    for (size_t b = 1; b < m_.header().blocks.size(); ++b) {
-      const RfileBlock& k = m_.header().blocks[b];
-      int level = 0;
-      while (level < kMaxLevel && octant_edge(level) * info.tick_m > std::min(k.hh, k.hv)) ++level;
-      levels_.push_back(level);
-    }
-  }
+  RfileDescent(const RfilePlan& p, const ModelInfo& info, uint64_t* read, MaterialMerger* out)
+      : m_(*p.model), info_(info), read_(read), out_(out), levels_(block_levels(m_, info.tick_m)) {}
 
   Status visit(const Octant& o) {
     const double t = info_.tick_m, e = octant_edge(o) * t;
@@ -114,7 +122,7 @@ class RfileDescent {
       return bad_model_value(where, values, bad);
     }
     ++*read_;
-    return emit_(o, values);
+    return out_->add(o, values);
   }
 
   // The finest and the coarsest level of the blocks the depths [z0, z1) meet.
@@ -134,17 +142,110 @@ class RfileDescent {
   const RfileModel& m_;
   const ModelInfo& info_;
   uint64_t* read_;
-  const ModelEmit& emit_;
+  MaterialMerger* out_;
   std::vector<int> levels_;       // of each material block's cells
   std::vector<Material> values_;  // a lattice's
 };
 
+// The subtrees the import is cut into, in key order: an octant is split
+// while its cells (counted from the blocks' cell sizes over the part of it
+// inside the box) are more than the cap and its children are no finer
+// than the finest cells it holds.
+class RfileTasks {
+ public:
+  RfileTasks(const RfileModel& m, const ModelInfo& info, uint64_t cap)
+      : m_(m), info_(info), cap_(cap), levels_(block_levels(m, info.tick_m)) {
+    stack_.push_back(Octant{0, 0, 0, 0});
+  }
+  bool next(Octant* out) {
+    while (!stack_.empty()) {
+      const Octant o = stack_.back();
+      stack_.pop_back();
+      int finest = 0;
+      const double cells = count(o, &finest);
+      if (cells == 0) continue;  // wholly past the box
+      if (cells <= double(cap_) || o.level >= finest) {
+        *out = o;
+        return true;
+      }
+      for (int c = 7; c >= 0; --c) stack_.push_back(octant_child(o, c));
+    }
+    return false;
+  }
+
+ private:
+  // The cells of o inside the box, and the level of the finest of them.
+  double count(const Octant& o, int* finest) const {
+    const double t = info_.tick_m, e = octant_edge(o) * t;
+    const double lo[3] = {o.x * t, o.y * t, o.z * t + info_.origin_m[2]};
+    const double hi[3] = {std::min(lo[0] + e, m_.x_extent()), std::min(lo[1] + e, m_.y_extent()),
+                          std::min(lo[2] + e, m_.z_bottom())};
+    if (hi[0] <= lo[0] || hi[1] <= lo[1] || hi[2] <= lo[2]) return 0;
+    const auto& blocks = m_.header().blocks;
+    double cells = 0;
+    for (size_t b = 1; b < blocks.size(); ++b) {
+      const double top = b == 1 ? -HUGE_VAL : blocks[b].z0;
+      const double bottom = b + 1 < blocks.size() ? blocks[b + 1].z0 : HUGE_VAL;
+      const double z = std::min(hi[2], bottom) - std::max(lo[2], top);
+      if (z <= 0) continue;
+      const double c = octant_edge(levels_[b - 1]) * t;
+      cells += std::ceil((hi[0] - lo[0]) / c) * std::ceil((hi[1] - lo[1]) / c) * std::ceil(z / c);
+      *finest = std::max(*finest, levels_[b - 1]);
+    }
+    return cells;
+  }
+
+  const RfileModel& m_;
+  const ModelInfo& info_;
+  uint64_t cap_;
+  std::vector<int> levels_;
+  std::vector<Octant> stack_;  // the next on top
+};
+
+// One subtree's cells, sampled and merged by a worker, passed on in turn.
+struct RfileTask {
+  Octant root;
+  std::vector<MaterialMerger::Entry> merged;
+  uint64_t read = 0;
+  Status status;
+};
+
 }  // namespace
 
-Status import_rfile(const RfilePlan& p, const ModelInfo& info, uint64_t* read,
-                    const ModelEmit& emit) {
-  RfileDescent d(p, info, read, emit);
-  return d.visit(Octant{0, 0, 0, 0});
+Status import_rfile(const RfilePlan& p, const ModelInfo& info, const RfileImportRun& run,
+                    uint64_t* read, MaterialMerger* out) {
+  const int threads = std::max(1, run.threads);
+  if (threads == 1) {
+    RfileDescent d(p, info, read, out);
+    return d.visit(Octant{0, 0, 0, 0});
+  }
+  RfileTasks tasks(*p.model, info, std::max<uint64_t>(1, run.task_cells));
+  Status st;
+  const auto make = [&](RfileTask* t) {
+    t->merged.clear(), t->read = 0, t->status = Status::Ok();
+    return tasks.next(&t->root);
+  };
+  // A subtree's records merge alone as they would in the whole stream (its
+  // records are a run of it); the merger after takes its entries on.
+  const auto work = [&](int, RfileTask* t) {
+    MaterialMerger local(run.tolerance, run.fields, [t](const MaterialMerger::Entry& e) {
+      t->merged.push_back(e);
+      return Status::Ok();
+    });
+    RfileDescent d(p, info, &t->read, &local);
+    t->status = d.visit(t->root);
+    if (t->status.ok()) t->status = local.finish();
+  };
+  const auto write = [&](RfileTask* t) {
+    st = t->status;
+    for (size_t i = 0; st.ok() && i < t->merged.size(); ++i) st = out->add(t->merged[i]);
+    *read += t->read;
+    return st.ok();
+  };
+  // Two subtrees a thread: one sampled while the other waits its turn.
+  OrderedRun<RfileTask> ordered(size_t(2 * threads), make, work, write);
+  ordered.go(threads);
+  return st;
 }
 
 }  // namespace weaver

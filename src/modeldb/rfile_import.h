@@ -26,10 +26,25 @@ struct RfilePlan {
   double root_m = 0;
 };
 
-// Opens and checks the file; sets the model's placement in *info.
-Status plan_rfile(const std::string& path, MemoryBudget memory, RfilePlan* p, ModelInfo* info);
-// The leaves in key order into emit; *read counts them.
-Status import_rfile(const RfilePlan& p, const ModelInfo& info, uint64_t* read,
-                    const ModelEmit& emit);
+// Opens and checks the file (its column caches for up to `threads`
+// threads within `memory`); sets the model's placement in *info.
+Status plan_rfile(const std::string& path, MemoryBudget memory, int threads, RfilePlan* p,
+                  ModelInfo* info);
+
+// How the import runs: the octree is cut into subtrees of about
+// task_cells cells at most (where the blocks' spacings allow), sampled on
+// `threads` threads and emitted in key order, so that the table is the
+// same for any count.
+// Each subtree's cells are merged on its thread by a merger like `out`
+// (tolerance, fields), whose entries `out` takes on.
+struct RfileImportRun {
+  int threads = 1;
+  uint64_t task_cells = 1 << 18;
+  double tolerance = 0;
+  int fields = 3;
+};
+// The cells in key order into *out; *read counts them.
+Status import_rfile(const RfilePlan& p, const ModelInfo& info, const RfileImportRun& run,
+                    uint64_t* read, MaterialMerger* out);
 
 }  // namespace weaver
