@@ -184,6 +184,49 @@ TEST(Rfile, LatticeGivesWhatAtGivesToTheBit) {
   }
 }
 
+// Construct's lattices (vs_on_lattice) and a grounded model's columns of
+// their own depths (vs_on_columns) give vs_at's Vs to the bit: over holes,
+// past the box, across blocks within a column, and with caches so small
+// that a cell's four columns evict one another.
+TEST(Rfile, ColumnsGiveWhatVsAtGivesToTheBit) {
+  testing::TempDir dir;
+  const std::vector<Block> b = blocks_with_holes([](int i, int j, int k) {
+    return (i == 2 && j == 3 && k < 4) || (i == 5 && j == 5) || (i == 9 && k < 7);
+  });
+  for (int precision : {4, 8}) {
+    RfileWriter w;
+    w.precision = precision;
+    const std::string path = dir.file("columns.rfile");
+    write_file(path, w.bytes(b));
+    for (const uint64_t cache : {uint64_t{2} << 10, uint64_t{64} << 10}) {
+      std::unique_ptr<RfileModel> m;
+      ASSERT_OK(RfileModel::open(path, MemoryBudget(cache), 1, &m));
+      std::mt19937 rng(precision + int(cache));
+      std::uniform_real_distribution<double> ux(-20, 320), uy(-20, 200), uz(-260, 1600);
+      for (int t = 0; t < 400; ++t) {
+        const int n = t % 2 == 0 ? 3 : 5;
+        double xs[5], ys[5], zs[5], columns[125];
+        for (int i = 0; i < n; ++i) xs[i] = ux(rng), ys[i] = uy(rng), zs[i] = uz(rng);
+        std::sort(zs, zs + n);
+        for (double& z : columns) z = uz(rng);
+        float lattice[125], own[125];
+        m->vs_on_lattice(xs, ys, zs, n, lattice);
+        m->vs_on_columns(xs, ys, columns, n, own);
+        for (int k = 0; k < n; ++k)
+          for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+              const int p = (k * n + j) * n + i;
+              ASSERT_EQ(lattice[p], m->vs_at(xs[i], ys[j], zs[k])) << xs[i] << " " << ys[j];
+              ASSERT_EQ(lattice[p], m->at(xs[i], ys[j], zs[k]).vs);
+              ASSERT_EQ(own[p], m->vs_at(xs[i], ys[j], columns[(j * n + i) * n + k]))
+                  << xs[i] << " " << ys[j] << " " << columns[(j * n + i) * n + k];
+            }
+      }
+      ASSERT_OK(m->error());
+    }
+  }
+}
+
 TEST(Rfile, RefusesDamagedTruncatedAndLyingFiles) {
   testing::TempDir dir;
   RfileWriter w;

@@ -229,21 +229,104 @@ RfileModel::Cell RfileModel::cell_of(double x, double y, double z) const {
   return c;
 }
 
+namespace {
+
+// Vs at one point of a cell from its corners' values v[di][dj][dk], SW4's
+// trilinear weights.
+float vs_in_cell(const double (&v)[2][2][2], double wx, double wy, double wz) {
+  const auto lerp_x = [&](int dj, int dk) { return (1 - wx) * v[0][dj][dk] + wx * v[1][dj][dk]; };
+  return float((1 - wz) * ((1 - wy) * lerp_x(0, 0) + wy * lerp_x(1, 0)) +
+               wz * ((1 - wy) * lerp_x(0, 1) + wy * lerp_x(1, 1)));
+}
+
+// A cell's corner Vs (component 2) at levels k0 and k0 + 1 of its corner
+// columns of nc components.
+void corner_vs(const double* const (&cols)[2][2], int nc, int k0, double (&v)[2][2][2]) {
+  for (int di = 0; di < 2; ++di) {
+    for (int dj = 0; dj < 2; ++dj) {
+      const double* col = cols[di][dj] + size_t(k0) * nc;
+      v[di][dj][0] = col[2], v[di][dj][1] = col[nc + 2];
+    }
+  }
+}
+
+}  // namespace
+
 float RfileModel::vs_at(double x, double y, double z) const {
   const Cell cell = cell_of(x, y, z);
   const int nc = h_.blocks[cell.block].nc;
-  double v[2][2][2];
   Cache& c = cache();
+  double v[2][2][2];
   for (int di = 0; di < 2; ++di) {
     for (int dj = 0; dj < 2; ++dj) {
+      // Taken before the next lookup can evict the column.
       const double* col = column(c, cell.block, cell.i0 + di, cell.j0 + dj) + size_t(cell.k0) * nc;
       v[di][dj][0] = col[2], v[di][dj][1] = col[nc + 2];
     }
   }
-  const double wx = cell.wx, wy = cell.wy, wz = cell.wz;
-  const auto lerp_x = [&](int dj, int dk) { return (1 - wx) * v[0][dj][dk] + wx * v[1][dj][dk]; };
-  return float((1 - wz) * ((1 - wy) * lerp_x(0, 0) + wy * lerp_x(1, 0)) +
-               wz * ((1 - wy) * lerp_x(0, 1) + wy * lerp_x(1, 1)));
+  return vs_in_cell(v, cell.wx, cell.wy, cell.wz);
+}
+
+// The four corner columns of the cell from (i0, j0) of block b, all still
+// in the cache once looked up (a miss may take a slot one of the others
+// held): false then, and the caller samples point by point.
+bool RfileModel::corner_columns(Cache& c, int b, int i0, int j0,
+                                const double* (&cols)[2][2]) const {
+  for (int di = 0; di < 2; ++di)
+    for (int dj = 0; dj < 2; ++dj) cols[di][dj] = column(c, b, i0 + di, j0 + dj);
+  for (int di = 0; di < 2; ++di) {
+    for (int dj = 0; dj < 2; ++dj) {
+      const uint64_t tag = column_tag(b, i0 + di, j0 + dj);
+      const size_t s = column_slot(tag, slots_);
+      if (c.tags[s] != tag || cols[di][dj] != c.values.data() + s * stride_) return false;
+    }
+  }
+  return true;
+}
+
+// A column's points share their place across and, while in one block, the
+// four corner columns: vs_at's arithmetic, to the bit, placed once.
+void RfileModel::vs_on_columns(const double* xs, const double* ys, const double* zs, int n,
+                               float* out) const {
+  Cache& c = cache();
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double x = std::clamp(xs[i], 0.0, x_extent()), y = std::clamp(ys[j], 0.0, y_extent());
+      const double* column_z = zs + (j * n + i) * n;
+      int block = -1, nc = 0;
+      bool shared = false;
+      AxisPlace px{}, py{};
+      const double* cols[2][2] = {};
+      for (int k = 0; k < n; ++k) {
+        const double z = std::clamp(column_z[k], z_top(), z_bottom());
+        const int b = block_of(z);
+        const RfileBlock& blk = h_.blocks[b];
+        if (b != block) {
+          block = b, nc = blk.nc;
+          px = place_on(x, 0, blk.hh, blk.ni), py = place_on(y, 0, blk.hh, blk.nj);
+          shared = corner_columns(c, b, px.i, py.i, cols);
+        }
+        float& v = out[(k * n + j) * n + i];
+        if (!shared) {
+          v = vs_at(x, y, z);
+          continue;
+        }
+        const AxisPlace pz = place_on(z, blk.z0, blk.hv, blk.nk);
+        double corners[2][2][2];
+        corner_vs(cols, nc, pz.i, corners);
+        v = vs_in_cell(corners, px.w, py.w, pz.w);
+      }
+    }
+  }
+}
+
+void RfileModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                               float* out) const {
+  if (n > kLatticeMost) return VelocityModel::vs_on_lattice(xs, ys, zs, n, out);
+  double columns[kLatticeMost * kLatticeMost * kLatticeMost];
+  for (int c = 0; c < n * n; ++c)
+    for (int k = 0; k < n; ++k) columns[c * n + k] = zs[k];
+  vs_on_columns(xs, ys, columns, n, out);
 }
 
 Material RfileModel::at(double x, double y, double z) const {
