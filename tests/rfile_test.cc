@@ -143,16 +143,22 @@ TEST(Rfile, NoDataTakesTheFirstValidValueBelowAsSw4Fills) {
 // lattice_at (model import's path) against at(), point by point, to the
 // bit: lattices across both blocks, past the box, over filled -999 columns,
 // with a cache small enough to lose columns between lookups.
-TEST(Rfile, LatticeGivesWhatAtGivesToTheBit) {
-  testing::TempDir dir;
+// linear_blocks with holes in some columns, written at `precision`.
+std::string holed_rfile(const testing::TempDir& dir, int precision) {
   const std::vector<Block> b = blocks_with_holes([](int i, int j, int k) {
     return (i == 2 && j == 3 && k < 4) || (i == 5 && j == 5) || (i == 9 && k < 7);
   });
+  RfileWriter w;
+  w.precision = precision;
+  const std::string path = dir.file("holed-" + std::to_string(precision) + ".rfile");
+  write_file(path, w.bytes(b));
+  return path;
+}
+
+TEST(Rfile, LatticeGivesWhatAtGivesToTheBit) {
+  testing::TempDir dir;
   for (int precision : {4, 8}) {
-    RfileWriter w;
-    w.precision = precision;
-    const std::string path = dir.file("lattice.rfile");
-    write_file(path, w.bytes(b));
+    const std::string path = holed_rfile(dir, precision);
     std::unique_ptr<RfileModel> m;
     ASSERT_OK(RfileModel::open(path, MemoryBudget(64 << 10), 1, &m));
     std::mt19937 rng(precision);
@@ -190,14 +196,8 @@ TEST(Rfile, LatticeGivesWhatAtGivesToTheBit) {
 // that a cell's four columns evict one another.
 TEST(Rfile, ColumnsGiveWhatVsAtGivesToTheBit) {
   testing::TempDir dir;
-  const std::vector<Block> b = blocks_with_holes([](int i, int j, int k) {
-    return (i == 2 && j == 3 && k < 4) || (i == 5 && j == 5) || (i == 9 && k < 7);
-  });
   for (int precision : {4, 8}) {
-    RfileWriter w;
-    w.precision = precision;
-    const std::string path = dir.file("columns.rfile");
-    write_file(path, w.bytes(b));
+    const std::string path = holed_rfile(dir, precision);
     for (const uint64_t cache : {uint64_t{2} << 10, uint64_t{64} << 10}) {
       std::unique_ptr<RfileModel> m;
       ASSERT_OK(RfileModel::open(path, MemoryBudget(cache), 1, &m));
