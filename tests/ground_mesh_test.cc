@@ -34,6 +34,7 @@
 #include "reference/boundary_reference.h"
 #include "reference/reference_mesh.h"
 #include "rfile_writer.h"
+#include "test_mesh.h"
 #include "test_util.h"
 #include "verify/verify.h"
 
@@ -399,6 +400,21 @@ TEST(GroundMesh, AnRfileBringsItsOwnGroundAndItsBlocksBeneath) {
            a * ((1 - bb) * g(i + 1, j) + bb * g(i + 1, j + 1));
   };
   ASSERT_NO_FATAL_FAILURE(check_ground_case(c, dir));
+  // The file's Vs bounds (RfileVsTiles) change nothing but the samples taken.
+  {
+    std::string tables[2];
+    for (int bounds = 0; bounds < 2; ++bounds) {
+      ConstructOptions o = c.o;
+      o.model_bounds = bounds == 1;
+      ConstructPlan p;
+      ConstructResult r;
+      const std::string db = dir.file("bounds" + std::to_string(bounds));
+      ASSERT_OK(construct_octree(db, o, &p, &r));
+      tables[bounds] = testing::table_bytes(db);
+    }
+    EXPECT_FALSE(tables[0].empty());
+    EXPECT_TRUE(tables[1] == tables[0]);
+  }
   // The plan: the rfile's ground, its z read as depth below sea level, the
   // top at the highest ground rounded up to a tick.
   ConstructPlan plan;

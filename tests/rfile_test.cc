@@ -227,6 +227,45 @@ TEST(Rfile, ColumnsGiveWhatVsAtGivesToTheBit) {
   }
 }
 
+// vs_bounds (RfileVsTiles) holds every Vs at() gives in the box: boxes
+// across both blocks, past the file's box, over filled holes, of one cell
+// and of many; and a small box's bounds are narrower than the file's range.
+TEST(Rfile, VsBoundsHoldEverySampleOfTheBox) {
+  testing::TempDir dir;
+  for (int precision : {4, 8}) {
+    std::unique_ptr<RfileModel> m;
+    ASSERT_OK(RfileModel::open(holed_rfile(dir, precision), MemoryBudget(8 << 10), 1, &m));
+    std::mt19937 rng(precision);
+    std::uniform_real_distribution<double> ux(-40, 320), uy(-40, 200), uz(-300, 1600), u(0, 1);
+    std::uniform_real_distribution<double> edge(1, 400);
+    int narrow = 0, said = 0;
+    float all_lo = HUGE_VALF, all_hi = -HUGE_VALF;
+    const double everything[2][3] = {{-1e6, -1e6, -1e6}, {1e6, 1e6, 1e6}};
+    ASSERT_TRUE(m->vs_bounds(everything[0], everything[1], &all_lo, &all_hi));
+    for (int t = 0; t < 400; ++t) {
+      const double e = edge(rng);
+      const double lo[3] = {ux(rng), uy(rng), uz(rng)};
+      const double hi[3] = {lo[0] + e, lo[1] + e, lo[2] + e};
+      float vs_lo, vs_hi;
+      if (!m->vs_bounds(lo, hi, &vs_lo, &vs_hi)) continue;
+      ++said;
+      narrow += vs_hi - vs_lo < all_hi - all_lo;
+      for (int n = 0; n < 300; ++n) {
+        // The corners, then points inside.
+        const double x = n < 8 ? (n & 1 ? hi[0] : lo[0]) : lo[0] + u(rng) * e;
+        const double y = n < 8 ? (n & 2 ? hi[1] : lo[1]) : lo[1] + u(rng) * e;
+        const double z = n < 8 ? (n & 4 ? hi[2] : lo[2]) : lo[2] + u(rng) * e;
+        const float vs = m->vs_at(x, y, z);
+        ASSERT_GE(vs, vs_lo) << x << " " << y << " " << z;
+        ASSERT_LE(vs, vs_hi) << x << " " << y << " " << z;
+      }
+    }
+    EXPECT_GT(said, 300);
+    EXPECT_GT(narrow, 100);
+    ASSERT_OK(m->error());
+  }
+}
+
 TEST(Rfile, RefusesDamagedTruncatedAndLyingFiles) {
   testing::TempDir dir;
   RfileWriter w;

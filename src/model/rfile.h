@@ -25,6 +25,7 @@
 // Errors name the file and what is wrong, in one line.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -44,6 +45,24 @@ struct RfileBlock {
   double bottom() const { return z0 + (nk - 1) * hv; }
   uint64_t values() const { return uint64_t(nc) * ni * nj * nk; }
 };
+
+// A coordinate's cell along one axis of a block (points origin + i h, n of
+// them) as SW4 finds it: its first point i (trunc(1 + v) on 1-based
+// indices, then at least the first point and at most the last but one)
+// and the weight w of the next.
+struct RfilePlace {
+  int i;
+  double w;
+};
+inline int rfile_cell(double v, int last) {
+  const double t = std::trunc(v);
+  if (!(t > 0)) return 0;
+  return t >= last - 1 ? last - 1 : static_cast<int>(t);
+}
+inline RfilePlace rfile_place(double v, double origin, double h, int n) {
+  const int i = rfile_cell((v - origin) / h, n - 1);
+  return {i, (v - (i * h + origin)) / h};
+}
 
 struct RfileHeader {
   bool swap = false;  // written in the other byte order

@@ -34,25 +34,6 @@ size_t column_slot(uint64_t tag, size_t slots) {
   return static_cast<size_t>((tag * 0x9E3779B97F4A7C15ull) >> 20) & (slots - 1);
 }
 
-int clamp_index(double v, int last) {
-  // SW4: trunc(1 + v) on 1-based indices, then at least the first point and
-  // at most the last but one (the cell's far point is the last).
-  const double t = std::trunc(v);
-  if (!(t > 0)) return 0;
-  return t >= last - 1 ? last - 1 : static_cast<int>(t);
-}
-
-// A coordinate's cell along one axis of a block (points origin + i h, n of
-// them): its first point and the weight of the next.
-struct AxisPlace {
-  int i;
-  double w;
-};
-AxisPlace place_on(double v, double origin, double h, int n) {
-  const int i = clamp_index((v - origin) / h, n - 1);
-  return {i, (v - (i * h + origin)) / h};
-}
-
 // Columns a miss reads at once along j (they lie one after another).
 constexpr int kRunColumns = 16;
 
@@ -222,8 +203,8 @@ RfileModel::Cell RfileModel::cell_of(double x, double y, double z) const {
   Cell c;
   c.block = block_of(z);
   const RfileBlock& k = h_.blocks[c.block];
-  const AxisPlace px = place_on(x, 0, k.hh, k.ni), py = place_on(y, 0, k.hh, k.nj);
-  const AxisPlace pz = place_on(z, k.z0, k.hv, k.nk);
+  const RfilePlace px = rfile_place(x, 0, k.hh, k.ni), py = rfile_place(y, 0, k.hh, k.nj);
+  const RfilePlace pz = rfile_place(z, k.z0, k.hv, k.nk);
   c.i0 = px.i, c.j0 = py.i, c.k0 = pz.i;
   c.wx = px.w, c.wy = py.w, c.wz = pz.w;
   return c;
@@ -295,7 +276,7 @@ void RfileModel::vs_on_columns(const double* xs, const double* ys, const double*
       const double* column_z = zs + (j * n + i) * n;
       int block = -1, nc = 0;
       bool shared = false;
-      AxisPlace px{}, py{};
+      RfilePlace px{}, py{};
       const double* cols[2][2] = {};
       for (int k = 0; k < n; ++k) {
         const double z = std::clamp(column_z[k], z_top(), z_bottom());
@@ -303,7 +284,7 @@ void RfileModel::vs_on_columns(const double* xs, const double* ys, const double*
         const RfileBlock& blk = h_.blocks[b];
         if (b != block) {
           block = b, nc = blk.nc;
-          px = place_on(x, 0, blk.hh, blk.ni), py = place_on(y, 0, blk.hh, blk.nj);
+          px = rfile_place(x, 0, blk.hh, blk.ni), py = rfile_place(y, 0, blk.hh, blk.nj);
           shared = corner_columns(c, b, px.i, py.i, cols);
         }
         float& v = out[(k * n + j) * n + i];
@@ -311,7 +292,7 @@ void RfileModel::vs_on_columns(const double* xs, const double* ys, const double*
           v = vs_at(x, y, z);
           continue;
         }
-        const AxisPlace pz = place_on(z, blk.z0, blk.hv, blk.nk);
+        const RfilePlace pz = rfile_place(z, blk.z0, blk.hv, blk.nk);
         double corners[2][2][2];
         corner_vs(cols, nc, pz.i, corners);
         v = vs_in_cell(corners, px.w, py.w, pz.w);
@@ -327,6 +308,16 @@ void RfileModel::vs_on_lattice(const double* xs, const double* ys, const double*
   for (int c = 0; c < n * n; ++c)
     for (int k = 0; k < n; ++k) columns[c * n + k] = zs[k];
   vs_on_columns(xs, ys, columns, n, out);
+}
+
+bool RfileModel::vs_bounds(const double lo[3], const double hi[3], float* vs_lo,
+                           float* vs_hi) const {
+  std::call_once(tiles_once_, [&] {
+    Cache& c = cache();
+    tiles_.build(h_, [&](int b, int i, int j) { return column(c, b, i, j); });
+  });
+  if (failed_) return false;  // the error is reported where sampling meets it
+  return tiles_.bounds(h_, lo, hi, vs_lo, vs_hi);
 }
 
 Material RfileModel::at(double x, double y, double z) const {
@@ -364,11 +355,13 @@ void RfileModel::lattice_in_block(Cache& c, int b, const double* xs, int nx, con
                                   int ny, const double* zs, int nz, Material* out) const {
   const RfileBlock& k = h_.blocks[b];
   const int nc = k.nc;
-  std::vector<AxisPlace> px(nx), py(ny), pz(nz);
-  for (int a = 0; a < nx; ++a) px[a] = place_on(std::clamp(xs[a], 0.0, x_extent()), 0, k.hh, k.ni);
-  for (int a = 0; a < ny; ++a) py[a] = place_on(std::clamp(ys[a], 0.0, y_extent()), 0, k.hh, k.nj);
+  std::vector<RfilePlace> px(nx), py(ny), pz(nz);
+  for (int a = 0; a < nx; ++a)
+    px[a] = rfile_place(std::clamp(xs[a], 0.0, x_extent()), 0, k.hh, k.ni);
+  for (int a = 0; a < ny; ++a)
+    py[a] = rfile_place(std::clamp(ys[a], 0.0, y_extent()), 0, k.hh, k.nj);
   for (int a = 0; a < nz; ++a) {
-    pz[a] = place_on(std::clamp(zs[a], z_top(), z_bottom()), k.z0, k.hv, k.nk);
+    pz[a] = rfile_place(std::clamp(zs[a], z_top(), z_bottom()), k.z0, k.hv, k.nk);
   }
   // Ascending points: the first and last cells bound the columns and levels.
   const int i_lo = px[0].i, ni = px[nx - 1].i + 2 - i_lo;

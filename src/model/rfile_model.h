@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "model/rfile.h"
+#include "model/rfile_vs_tiles.h"
 #include "model/velocity_model.h"
 #include "util/memory_budget.h"
 
@@ -69,6 +70,9 @@ class RfileModel final : public VelocityModel {
                      float* out) const override;
   void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                      float* out) const override;
+  // From the least and greatest Vs of tiles of the grid (rfile_vs_tiles.h),
+  // built on the first call (a pass over the file).
+  bool vs_bounds(const double lo[3], const double hi[3], float* vs_lo, float* vs_hi) const override;
   bool has_q() const override { return h_.has_q(); }
   // Sides of [0, domain_m] (x, y; z counted down from sea level) past the
   // file's box.
@@ -114,6 +118,8 @@ class RfileModel final : public VelocityModel {
   mutable std::mutex mu_;
   mutable std::unordered_map<std::thread::id, std::unique_ptr<Cache>> caches_;
   mutable std::atomic<bool> failed_{false};
+  mutable std::once_flag tiles_once_;
+  mutable RfileVsTiles tiles_;
   mutable Status error_;
 };
 
