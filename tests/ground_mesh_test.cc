@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "balance/balance.h"
 #include "boundary/boundary.h"
 #include "cli_run.h"
 #include "construct/construct.h"
@@ -103,7 +104,6 @@ struct GroundCase {
   ConstructOptions o;
   std::function<double(double, double)> ground;  // the test's own, metres
   bool plane = false;                            // analytic fractions
-  bool exact_balance = false;                    // the balance against the reference's
 };
 
 void check_ground_case(const GroundCase& c, const testing::TempDir& dir) {
@@ -121,32 +121,47 @@ void check_ground_case(const GroundCase& c, const testing::TempDir& dir) {
   for (const auto& l : leaves) octants.push_back(l.first);
   // Balanced among what remains.
   EXPECT_TRUE(reference::balance(octants) == octants);
-  // And no more: air takes no part in the balance (the reference is slow:
-  // some cases).  With the ground's
-  // leaves made fine (so that the balance grades the solid below them and
-  // would split the coarse air beside them), the unbalanced descent's
-  // elements, balanced by the reference, less the air its splits make of
-  // cut leaves, are the balanced construct's elements exactly.
-  if (c.exact_balance) {
+  // Each subtree's balance looks out as far as its elements need (air's
+  // own refinement is cut away): the table is the same whatever the
+  // subtrees, most visited again as their children.  The ground's leaves
+  // made fine, so that the balance grades the solid below them and splits
+  // the air beside them.
+  {
     ConstructOptions fine = c.o;
-    fine.surface_edge_m = 100;
-    std::vector<Octant> got, descended, kept;
-    ConstructPlan fp;
-    ConstructResult fr;
-    ASSERT_OK(construct_octree(dir.file(c.name + "-fine"), fine, &fp, &fr));
-    for (const auto& l : leaves_with_solid(dir.file(c.name + "-fine"))) got.push_back(l.first);
-    fine.balanced = false;
-    ASSERT_OK(construct_octree(dir.file(c.name + "-unbalanced"), fine, &fp, &fr));
-    for (const auto& l : leaves_with_solid(dir.file(c.name + "-unbalanced")))
-      descended.push_back(l.first);
-    for (const Octant& o : reference::balance(descended)) {
-      const double e = octant_edge(o) * fp.tick_m;
-      const double lo[3] = {o.x * fp.tick_m, o.y * fp.tick_m, o.z * fp.tick_m};
-      const double hi[3] = {lo[0] + e, lo[1] + e, lo[2] + e};
-      if (side_of_ground(fp.ground, lo, hi) != GroundSide::kAir) kept.push_back(o);
+    fine.surface_edge_m = 70;
+    std::string tables[2];
+    for (int small = 0; small < 2; ++small) {
+      fine.subtree_leaves = small ? 64 : 0;
+      ConstructPlan fp;
+      ConstructResult fr;
+      const std::string fine_db = dir.file(c.name + "-fine" + std::to_string(small));
+      ASSERT_OK(construct_octree(fine_db, fine, &fp, &fr));
+      EXPECT_GT(fr.elements + fr.air, fr.descended);  // the balance split leaves
+      if (small) {
+        EXPECT_GT(fr.subtrees_over, 0u);
+      }
+      tables[small] = testing::table_bytes(fine_db);
     }
-    EXPECT_GT(kept.size(), descended.size());
-    EXPECT_TRUE(kept == got) << kept.size() << " elements, construct made " << got.size();
+    EXPECT_TRUE(tables[1] == tables[0]);
+    // weaver balance of the unbalanced carved table carves what it splits:
+    // no new leaf of air, each new leaf's fraction its own.
+    fine.subtree_leaves = 0;
+    fine.balanced = false;
+    ConstructPlan up;
+    ConstructResult ur;
+    const std::string unbalanced = dir.file(c.name + "-unbalanced");
+    ASSERT_OK(construct_octree(unbalanced, fine, &up, &ur));
+    BalanceResult br;
+    ASSERT_OK(balance_octree(unbalanced, BalanceOptions{}, &br));
+    const auto balanced = leaves_with_solid(unbalanced);
+    EXPECT_GT(balanced.size(), ur.elements);
+    for (const auto& [o, f] : balanced) {
+      const double e = octant_edge(o) * up.tick_m;
+      const double lo[3] = {o.x * up.tick_m, o.y * up.tick_m, o.z * up.tick_m};
+      const double hi[3] = {lo[0] + e, lo[1] + e, lo[2] + e};
+      ASSERT_EQ(f, static_cast<float>(solid_fraction(up.ground, lo, hi)))
+          << o.x << " " << o.y << " " << o.z << " level " << int(o.level);
+    }
   }
   const double t = plan.tick_m, top = plan.ground.top_elevation;
   // No element wholly above the ground: some point of its footprint (a
@@ -331,13 +346,12 @@ TEST(GroundMesh, CarvedOctreesAreBalancedCompleteAndExtractAsTheReference) {
   ground_dem_case("hill", 41, [](double x, double y) {
     return 1500 *
            std::exp(-((x - 3000) * (x - 3000) + (y - 5000) * (y - 5000)) / (2 * 1200.0 * 1200));
-  })->exact_balance = true;
+  });
   // A cliff of 400 m across one 50 m cell, narrower than the 125 m leaves
   // --surface-edge 150 asks for along the ground.
   GroundCase* cliff =
       ground_dem_case("cliff", 161, [](double, double y) { return y < 4000 ? 600.0 : 200.0; });
   cliff->o.surface_edge_m = 150;
-  cliff->exact_balance = true;
   // Holes of NODATA, each among valid neighbours that all hold the hole's
   // own value: whichever of them the fill takes, the ground is the one the
   // test computes with the holes filled.

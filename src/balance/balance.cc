@@ -11,6 +11,7 @@
 #include "balance/refinement.h"
 #include "balance/window_balance.h"
 #include "db/database.h"
+#include "model/ground_model.h"
 #include "model/velocity_model.h"
 #include "modeldb/model_identity.h"
 #include "modeldb/open_model.h"
@@ -42,34 +43,68 @@ Status model_of(const std::string& metadata, const std::vector<std::string>& mod
   return Status::Ok();
 }
 
-FillPayload fill_from(const VelocityModel* model, const TableOptions& table) {
+// New leaves of a table built under a ground (its metadata names the
+// surface): its solid fraction, and none where it lies wholly above the
+// ground, as construct carves; the material (where a model opens) through
+// the ground, as construct samples it.
+struct Carving {
+  std::unique_ptr<Surface> surface;
+  Ground ground;
+  const Field* solid = nullptr;
+};
+
+FillPayload fill_from(const VelocityModel* model, const TableOptions& table,
+                      std::shared_ptr<const Carving> carving) {
   const Field* vp = table.schema.find("vp");
   const Field* vs = table.schema.find("vs");
   const Field* rho = table.schema.find("rho");
-  if (model == nullptr || vp == nullptr || vs == nullptr || rho == nullptr) return nullptr;
+  const bool material = model != nullptr && vp != nullptr && vs != nullptr && rho != nullptr;
+  if (!material && carving == nullptr) return nullptr;
   Units u;
   units_from_metadata(table.metadata, &u);
   const double tick_m = u.tick_m;
   const Field* qp = table.schema.find("qp");
   const Field* qs = table.schema.find("qs");
-  return [model, tick_m, vp, vs, rho, qp, qs](const Octant& o, std::byte* payload) {
-    const double h = octant_edge(o) * tick_m / 2;
-    const Material m = model->at(o.x * tick_m + h, o.y * tick_m + h, o.z * tick_m + h);
-    RecordSchema::set_double(payload, *vp, m.vp);
-    RecordSchema::set_double(payload, *vs, m.vs);
-    RecordSchema::set_double(payload, *rho, m.rho);
-    if (qp != nullptr) RecordSchema::set_double(payload, *qp, m.qp);
-    if (qs != nullptr) RecordSchema::set_double(payload, *qs, m.qs);
-  };
+  return
+      [model, material, carving, tick_m, vp, vs, rho, qp, qs](const Octant& o, std::byte* payload) {
+        const double e = octant_edge(o) * tick_m, h = e / 2;
+        if (carving != nullptr) {
+          const double lo[3] = {o.x * tick_m, o.y * tick_m, o.z * tick_m};
+          const double hi[3] = {lo[0] + e, lo[1] + e, lo[2] + e};
+          const double f = solid_fraction(carving->ground, lo, hi);
+          if (f <= 0) return false;
+          RecordSchema::set_double(payload, *carving->solid, static_cast<float>(f));
+        }
+        if (!material) return true;
+        const Material m = model->at(o.x * tick_m + h, o.y * tick_m + h, o.z * tick_m + h);
+        RecordSchema::set_double(payload, *vp, m.vp);
+        RecordSchema::set_double(payload, *vs, m.vs);
+        RecordSchema::set_double(payload, *rho, m.rho);
+        if (qp != nullptr) RecordSchema::set_double(payload, *qp, m.qp);
+        if (qs != nullptr) RecordSchema::set_double(payload, *qs, m.qs);
+        return true;
+      };
 }
 
 }  // namespace
 
 Status model_material_fill(const TableOptions& table, const std::vector<std::string>& model_dirs,
-                           MemoryBudget memory, int threads, std::unique_ptr<VelocityModel>* model,
-                           FillPayload* fill) {
+                           MemoryBudget memory, MemoryBudget surface, int threads,
+                           std::unique_ptr<VelocityModel>* model, FillPayload* fill) {
   WEAVER_RETURN_IF_ERROR(model_of(table.metadata, model_dirs, memory, std::max(1, threads), model));
-  *fill = fill_from(model->get(), table);
+  auto carving = std::make_shared<Carving>();
+  carving->solid = table.schema.find("solid");
+  const Status ground =
+      ground_of_metadata(table.metadata, surface.bytes(), &carving->surface, &carving->ground);
+  if (!ground.ok() && ground.code() != Status::Code::kNotFound) return ground;
+  if (!ground.ok() || carving->solid == nullptr) {
+    carving.reset();
+  } else if (*model != nullptr) {
+    // The model as construct asked it: through the ground (the surface
+    // stays the carving's, which the fill holds).
+    *model = std::make_unique<GroundedModel>(std::move(*model), carving->ground);
+  }
+  *fill = fill_from(model->get(), table, carving);
   return Status::Ok();
 }
 
@@ -95,7 +130,9 @@ BalanceMemory::BalanceMemory(MemoryBudget budget) : plan(budget) {
   // It reads its stretch of the leaves in order: a few pages at a time.
   second_reader = plan.take("second reader's pool", 1, 64, 1ull << 20);
   // A model database's readers, for the material of new leaves.
-  model = plan.take_budget("model readers", 1, 32);
+  model = plan.take_budget("model readers", 1, 64);
+  // A carved mesh's surface, for the solid fraction of new leaves.
+  surface = plan.take_budget("surface", 1, 64);
   // Windows run instead of the closure, never beside it: they take its
   // chunk, sorter, spools and map.
   windows = parent_chunk + candidate_sort + spools + domain_map;
@@ -158,8 +195,8 @@ Status balance_octree(const std::string& db_dir, const BalanceOptions& o, Balanc
   FillPayload fill;
   std::vector<std::string> model_dirs = o.model_dirs;
   model_dirs.push_back(db_dir);
-  WEAVER_RETURN_IF_ERROR(
-      model_material_fill(topt, model_dirs, memory.model, o.threads, &model, &fill));
+  WEAVER_RETURN_IF_ERROR(model_material_fill(topt, model_dirs, memory.model, memory.surface,
+                                             o.threads, &model, &fill));
   const bool windows = o.algorithm != BalanceOptions::Algorithm::kClosure;
   if (windows && o.keep_from == 0 && o.keep_to == UINT64_MAX) {
     // Auto: one window of all the leaves where the memory holds it (it

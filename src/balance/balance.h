@@ -79,6 +79,7 @@ struct BalanceMemory {
   uint64_t second_reader = 0;   // the pool of the first scan's second reader (threads > 1)
   uint64_t windows = 0;  // the windows in flight (the closure's chunk, sorter, spools and map)
   MemoryBudget model;    // a model database's readers (modeldb/db_model.h)
+  MemoryBudget surface;  // a carved mesh's ground, read again (model/surface.h)
 };
 
 struct BalanceResult {

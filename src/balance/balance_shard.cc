@@ -235,8 +235,8 @@ Status shard_by_windows(Database& db, BTree& t, const Cut& cut, const BalanceOpt
   FillPayload fill;
   std::vector<std::string> model_dirs = o.model_dirs;
   model_dirs.push_back(db.dir());
-  WEAVER_RETURN_IF_ERROR(
-      model_material_fill(t.options(), model_dirs, memory.model, o.threads, &model, &fill));
+  WEAVER_RETURN_IF_ERROR(model_material_fill(t.options(), model_dirs, memory.model, memory.surface,
+                                             o.threads, &model, &fill));
   std::unique_ptr<BTree> out;
   WEAVER_RETURN_IF_ERROR(create_shard_table(db.dir(), file, t.options(), memory.output_pool, &out));
   Status st = balance_in_windows(wo, fill, *out, &r->balance, fitted);

@@ -46,8 +46,17 @@ class Completion {
   // is_new: o is a child made by a split, not a leaf of the input.
   Status emit(uint64_t key, bool is_new, const std::byte* parent_payload, BalanceResult* r) {
     add_entry(key, octant_key_level(key), parent_payload, r);
-    if (is_new && fill_) fill_(octant_from_key(key), &*(batch_.payloads.end() - payload_));
+    if (is_new && fill_ && !fill_(octant_from_key(key), &*(batch_.payloads.end() - payload_))) {
+      drop_last(r);
+      return Status::Ok();
+    }
     return flush_if_full();
+  }
+  void drop_last(BalanceResult* r) {
+    --r->levels[octant_key_level(batch_.keys.back())];
+    --r->output_leaves;
+    batch_.keys.pop_back();
+    batch_.payloads.resize(batch_.payloads.size() - payload_);
   }
 
   // Adds a leaf to the batch with a copy of `payload`.

@@ -21,8 +21,9 @@ namespace weaver {
 class VelocityModel;
 
 // Fills the payload of new leaf o (holding a copy of its parent's) with o's
-// own values, e.g. the material of a velocity model at its centre.
-using FillPayload = std::function<void(const Octant& o, std::byte* payload)>;
+// own values, e.g. the material of a velocity model at its centre.  False:
+// o is no leaf of the output (air over a carved mesh's ground).
+using FillPayload = std::function<bool(const Octant& o, std::byte* payload)>;
 
 // The material of new leaves of a table built from a model (the one its
 // metadata names, opened into *model within `memory` for `threads`
@@ -30,10 +31,13 @@ using FillPayload = std::function<void(const Octant& o, std::byte* payload)>;
 // where the schema has those fields; empty for other tables, whose new
 // leaves keep their parent's values.  A model database named by its
 // identity (modeldb/model_identity.h) is looked for in model_dirs; not
-// finding it is an error naming it.
+// finding it is an error naming it.  A table built under a ground (its
+// metadata names the surface, read within `surface`) has its new leaves
+// carved as construct carves: their solid fraction set, the model asked
+// through the ground, and those wholly above it no leaves at all.
 Status model_material_fill(const TableOptions& table, const std::vector<std::string>& model_dirs,
-                           MemoryBudget memory, int threads, std::unique_ptr<VelocityModel>* model,
-                           FillPayload* fill);
+                           MemoryBudget memory, MemoryBudget surface, int threads,
+                           std::unique_ptr<VelocityModel>* model, FillPayload* fill);
 
 // Writes the refinement of `leaves` by `required` (key order, as from
 // Closure::required) into `out`, which has the payload size of `leaves`.

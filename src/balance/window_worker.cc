@@ -255,8 +255,8 @@ Status WindowWorker::refine(const uint64_t* keys, const std::byte* payloads, siz
       [&](size_t i, uint64_t key, bool is_new) {
         if (i != last_split) last_split = i, ++split;
         add(key, i);
-        if (is_new && fill_ && payload_ > 0) {
-          fill_(octant_from_key(key), row());
+        if (is_new && fill_ && payload_ > 0 && !fill_(octant_from_key(key), row())) {
+          w->keys.pop_back();  // air over the ground: no leaf
         }
         return over ? Status::Internal("the window outgrew its memory") : Status::Ok();
       });

@@ -24,15 +24,6 @@ namespace weaver {
 
 struct SubtreeLeaves;
 
-// In (0, 1] for a box that is not air; 0 for air.
-double solid_fraction(const Ground& g, const double lo[3], const double hi[3]);
-
-// Drops the leaves the descent found wholly above the ground before the
-// subtree's balance, counting them in *air: air is no leaf of the balance,
-// so the octree is balanced among the elements that remain, no element
-// refined for the sake of air (a split of air only makes air).
-void drop_air(SubtreeLeaves* leaves, size_t payload_bytes, uint64_t* air);
-
 // Drops the air leaves of *leaves and writes the rest's solid fraction into
 // the last f32 of each payload (payload_bytes a leaf); recounts its levels,
 // elements and edges, and adds the kept ones to its span.  leaves->sides says which leaves the

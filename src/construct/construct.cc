@@ -71,11 +71,12 @@ class SubtreeVisitor {
     const bool carved = descent_.plan().carved;
     if (balanced_) {
       s->descended = s->leaves.keys.size();
-      if (carved) drop_air(&s->leaves, descent_.payload_bytes(), &s->air);
       balancer_.balance(s->root, &s->leaves);
     }
-    // The leaves the balance made of cut ones, and the cut ones, may still
-    // be air: the carve finds them.
+    // Air goes after the balance: what remains of a balanced octree is
+    // balanced, and its dangling nodes' anchors stay anchored (balanced
+    // among the remaining elements alone, a dangling node's anchor may
+    // dangle too where air fills the space between).
     if (carved) {
       carve_leaves(descent_.plan(), descent_.payload_bytes(), &s->leaves, &s->air, &s->cut);
     }
@@ -146,8 +147,11 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
                       ConstructResult* r) {
   const int threads = std::max(1, o.threads);
   const size_t window = kSubtreesPerThread * threads;
-  const size_t cap = std::clamp<uint64_t>(
-      memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64, uint64_t{1} << 19);
+  const size_t cap =
+      o.subtree_leaves > 0
+          ? o.subtree_leaves
+          : std::clamp<uint64_t>(memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64,
+                                 uint64_t{1} << 19);
   WorkQueue<Slot> queue;
   std::vector<std::thread> workers;
   std::vector<std::unique_ptr<SubtreeVisitor>> visitors;

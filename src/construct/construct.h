@@ -60,6 +60,10 @@ struct ConstructOptions {
   MemoryBudget memory;
   // Worker threads visiting subtrees (descent.h); the table is the same for any count.
   int threads = 1;
+  // The most leaves a subtree's visit holds before it is visited again as
+  // its 8 children (0: as the budget allows); the table is the same for
+  // any (the tests make it small).
+  uint64_t subtree_leaves = 0;
   // Packed leaf pages (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
   // Write the minimal face+edge 2:1 balanced refinement of the octree

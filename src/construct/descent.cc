@@ -291,7 +291,10 @@ void Descent::emit(const Octant& o, const Judgement& j, const Material& m,
   to_payload(m, out->payloads.data() + at);
   ++out->levels[o.level];
   ++out->elements;
-  // Air is no leaf of the balance (carve.h): its size asks nothing.
+  // How far the subtree's balance looks out (subtree_balance.h) follows the
+  // elements alone: a chain of splits that ends in one starts within its
+  // own edge of it, whatever air it crosses, and air's own refinement is
+  // cut away with it.
   if (j.side == GroundSide::kAir) return;
   const uint32_t e = octant_edge(o), root_e = octant_edge(out->root);
   const uint32_t c[3] = {o.x, o.y, o.z}, r[3] = {out->root.x, out->root.y, out->root.z};

@@ -86,7 +86,6 @@ bool SubtreeBalancer::wanted(const Octant& x, const Octant& root) const {
 // The input leaves under x that meet the grown box, outside root, into
 // collected_ in key order; j is the descent's judgement of x.
 void SubtreeBalancer::collect(const Octant& x, const Judgement& j, const Octant& root) {
-  if (j.side == GroundSide::kAir) return;  // no leaf of the balance (carve.h)
   if (!j.split) {
     collected_.push_back(octant_key(x));
     return;

@@ -52,6 +52,34 @@ GroundSide side_of_ground(const Ground& g, const double lo[3], const double hi[3
   return side(g_lo, g_hi);
 }
 
+namespace {
+
+constexpr int kFractionPoints = 8;
+
+}  // namespace
+
+double solid_fraction(const Ground& g, const double lo[3], const double hi[3]) {
+  const GroundSide side = side_of_ground(g, lo, hi);
+  if (side == GroundSide::kAir) return 0;
+  if (side == GroundSide::kSolid) return 1;
+  const double top = g.top_elevation, height = hi[2] - lo[2];
+  const double sx = (hi[0] - lo[0]) / kFractionPoints, sy = (hi[1] - lo[1]) / kFractionPoints;
+  double sum = 0;
+  for (int j = 0; j < kFractionPoints; ++j) {
+    for (int i = 0; i < kFractionPoints; ++i) {
+      const double ground_z = top - g.ground_at(lo[0] + (i + 0.5) * sx, lo[1] + (j + 0.5) * sy);
+      sum += std::clamp((hi[2] - std::max(lo[2], ground_z)) / height, 0.0, 1.0);
+    }
+  }
+  const double f = sum / (kFractionPoints * kFractionPoints);
+  if (f > 0) return f;
+  // The ground reaches into the leaf between the points: the most it can
+  // hold there, shared by one point's part.
+  double g_lo, g_hi;
+  g.surface->range(lo[0], hi[0], lo[1], hi[1], &g_lo, &g_hi);
+  return std::min(1.0, (hi[2] - (top - g_hi)) / height) / (kFractionPoints * kFractionPoints);
+}
+
 Status ground_of_metadata(const std::string& metadata, uint64_t max_bytes,
                           std::unique_ptr<Surface>* surface, Ground* ground) {
   const std::string source = metadata_item(metadata, "surface");

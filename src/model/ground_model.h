@@ -44,6 +44,13 @@ struct Ground {
 enum class GroundSide { kAir, kCut, kSolid };
 GroundSide side_of_ground(const Ground& g, const double lo[3], const double hi[3]);
 
+// The share of the box [lo, hi] below the ground: in (0, 1] for a box that
+// is not air, 0 for air.  A cut box's is the mean, over 8 x 8 points at the
+// centres of equal parts of its footprint, of the share of its height below
+// the ground there (construct/carve.h says its error); a cut box the points
+// all miss keeps at most 1/64, never 0.
+double solid_fraction(const Ground& g, const double lo[3], const double hi[3]);
+
 // The ground a mesh was built under, read again as its octant table's
 // metadata names it (surface=, top_elevation_m=, surface_crs=, geo=).
 // NotFound for a flat mesh; the surface's own error when it cannot be read.
