@@ -31,8 +31,7 @@ class Basin final : public VelocityModel {
                             Material* out) const override {
     if (n > kLatticeMax) return VelocityModel::materials_on_lattice(xs, ys, zs, n, out);
     double columns[kLatticeMax * kLatticeMax * kLatticeMax];
-    for (int c = 0; c < n * n; ++c)
-      for (int k = 0; k < n; ++k) columns[c * n + k] = zs[k];
+    lattice_as_columns(zs, n, columns);
     materials_on_columns(xs, ys, columns, n, out);
   }
   // The bowl depth once per column of the lattice; Vs of sediment and of

@@ -64,6 +64,12 @@ inline RfilePlace rfile_place(double v, double origin, double h, int n) {
   return {i, (v - (i * h + origin)) / h};
 }
 
+struct RfileHeader;
+// The depths (z down from sea level) whose samples material block b holds,
+// as SW4 picks a depth's block: from its top (the first block: from above
+// everything) to the next block's top (the last: to below everything).
+inline void rfile_block_depths(const RfileHeader& h, size_t b, double* from, double* to);
+
 struct RfileHeader {
   bool swap = false;  // written in the other byte order
   int precision = 4;  // bytes a value
@@ -75,6 +81,11 @@ struct RfileHeader {
   bool has_q() const { return blocks.size() > 1 && blocks[1].nc == 5; }
   uint64_t grid_points() const;  // over the material blocks
 };
+
+inline void rfile_block_depths(const RfileHeader& h, size_t b, double* from, double* to) {
+  *from = b == 1 ? -HUGE_VAL : h.blocks[b].z0;
+  *to = b + 1 < h.blocks.size() ? h.blocks[b + 1].z0 : HUGE_VAL;
+}
 
 // Parses the header held in bytes [0, n) of a file of file_size bytes.
 // `what` names the file in errors.  Corruption for anything wrong; a header

@@ -305,8 +305,7 @@ void RfileModel::vs_on_lattice(const double* xs, const double* ys, const double*
                                float* out) const {
   if (n > kLatticeMost) return VelocityModel::vs_on_lattice(xs, ys, zs, n, out);
   double columns[kLatticeMost * kLatticeMost * kLatticeMost];
-  for (int c = 0; c < n * n; ++c)
-    for (int k = 0; k < n; ++k) columns[c * n + k] = zs[k];
+  lattice_as_columns(zs, n, columns);
   vs_on_columns(xs, ys, columns, n, out);
 }
 

@@ -77,8 +77,8 @@ bool RfileVsTiles::bounds(const RfileHeader& h, const double lo[3], const double
     // A depth is in block b from its top (the first block: from anywhere)
     // to the next one's top, as RfileModel finds its block.
     const RfileBlock& k = h.blocks[b];
-    const double from = b == 1 ? -HUGE_VAL : k.z0;
-    const double to = b + 1 < h.blocks.size() ? h.blocks[b + 1].z0 : HUGE_VAL;
+    double from, to;
+    rfile_block_depths(h, b, &from, &to);
     if (z1 < from || z0 >= to) continue;
     const Block& t = blocks_[b - 1];
     const int first[3] = {rfile_place(x0, 0, k.hh, k.ni).i / kTile,

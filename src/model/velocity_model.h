@@ -108,6 +108,13 @@ class VelocityModel {
   virtual std::string describe() const = 0;
 };
 
+// A lattice's depths zs (n of them) as vs_on_columns takes them: each of
+// its n x n columns the same, columns[(j * n + i) * n + k] = zs[k].
+inline void lattice_as_columns(const double* zs, int n, double* columns) {
+  for (int c = 0; c < n * n; ++c)
+    for (int k = 0; k < n; ++k) columns[c * n + k] = zs[k];
+}
+
 // "halfspace", "loh1", "basin", or "grid" (with grid_file).  InvalidArgument
 // for an unknown name; grid file errors name the file.
 Status make_model(const std::string& name, const std::string& grid_file,

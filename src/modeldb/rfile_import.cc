@@ -130,8 +130,8 @@ class RfileDescent {
     const auto& blocks = m_.header().blocks;
     *finest = 0, *coarsest = kMaxLevel;
     for (size_t b = 1; b < blocks.size(); ++b) {
-      const double top = b == 1 ? -HUGE_VAL : blocks[b].z0;
-      const double bottom = b + 1 < blocks.size() ? blocks[b + 1].z0 : HUGE_VAL;
+      double top, bottom;
+      rfile_block_depths(m_.header(), b, &top, &bottom);
       if (z1 > top && z0 < bottom) {
         *finest = std::max(*finest, levels_[b - 1]);
         *coarsest = std::min(*coarsest, levels_[b - 1]);
@@ -184,8 +184,8 @@ class RfileTasks {
     const auto& blocks = m_.header().blocks;
     double cells = 0;
     for (size_t b = 1; b < blocks.size(); ++b) {
-      const double top = b == 1 ? -HUGE_VAL : blocks[b].z0;
-      const double bottom = b + 1 < blocks.size() ? blocks[b + 1].z0 : HUGE_VAL;
+      double top, bottom;
+      rfile_block_depths(m_.header(), b, &top, &bottom);
       const double z = std::min(hi[2], bottom) - std::max(lo[2], top);
       if (z <= 0) continue;
       const double c = octant_edge(levels_[b - 1]) * t;
