@@ -390,13 +390,29 @@ TEST(ModelSources, QueriesOnAMeshWithQGiveQpAndQs) {
   EXPECT_NE(text.find("vp 6300 m/s, vs 3640 m/s, rho 2670 kg/m^3, qp 700, qs 350"),
             std::string::npos)
       << text;
-  const std::string points = write_text("q_points.txt", "100 200 6000\n5 5 40000\n");
+  // The third point lies past the domain: its row is empty after its
+  // status, as many fields as the header names (qp and qs included).
+  const std::string points = write_text("q_points.txt", "100 200 6000\n5 5 40000\n5 5 90000\n");
   const std::string csv = bench::run_program({WEAVER_BINARY, "query", db, "material", "--points",
                                               points, "--units", "m", "--format", "csv"},
                                              &rss);
   EXPECT_NE(csv.find("x,y,z,status,element,vp,vs,rho,qp,qs\n"), std::string::npos) << csv;
   EXPECT_NE(csv.find(",6300,3640,2670,700,350\n"), std::string::npos) << csv;
   EXPECT_NE(csv.find(",7800,4500,3000,900,450\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("5,5,90000,outside,,,,,,\n"), std::string::npos) << csv;
+  for (const char* mode : {"json", "text"}) {
+    const std::string rows = bench::run_program({WEAVER_BINARY, "query", db, "locate", "--points",
+                                                 points, "--units", "m", "--format", mode},
+                                                &rss);
+    const std::string outside =
+        std::string(mode) == "json"
+            ? "\"status\": \"outside\", \"element\": null, \"level\": null, "
+              "\"edge\": null, \"corner_x\": null, \"corner_y\": null, "
+              "\"corner_z\": null, \"vp\": null, \"vs\": null, \"rho\": "
+              "null, \"qp\": null, \"qs\": null}"
+            : "5 5 90000 outside - - - - - - - - - - -\n";
+    EXPECT_NE(rows.find(outside), std::string::npos) << rows;
+  }
   const std::string element =
       bench::run_program({WEAVER_BINARY, "query", db, "element", "0", "--format", "csv"}, &rss);
   EXPECT_NE(element.find(",vp,vs,rho,qp,qs\n"), std::string::npos) << element;

@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include "cli/row_writer.h"
 #include "util/huge_pages.h"
 #include "util/interrupt.h"
 #include "util/printable.h"
@@ -17,125 +18,6 @@ namespace {
 
 // A coordinate that lies outside every mesh: the answer is "outside".
 constexpr uint32_t kFar = UINT32_MAX;
-
-// Writes the rows of one mode into a buffer flushed to the output in large
-// writes: a million rows a second is too many for a printf each, and too
-// many for a std::string append per field.
-class RowWriter {
- public:
-  // one: the answer to one point, which JSON prints as an object rather
-  // than as an array of one.
-  RowWriter(OutputMode mode, bool one) : mode_(mode), one_(one) {
-    sep_ = mode == OutputMode::kCsv ? ',' : mode == OutputMode::kTsv ? '\t' : ' ';
-    reserve(kCapacity);
-  }
-  RowWriter(RowWriter&&) = default;
-  void header(const std::vector<const char*>& columns) {
-    columns_.assign(columns.begin(), columns.end());
-    if (mode_ == OutputMode::kJson && !one_) raw("[");
-    if (json()) return;
-    begin();
-    if (mode_ == OutputMode::kText || mode_ == OutputMode::kTable) raw("# ");
-    for (const char* c : columns) put(c, false);
-    end();
-  }
-  // A row starts: room for the longest row is made here, once.
-  void begin() {
-    field_ = 0;
-    if (len_ + kMaxRow > cap_) reserve(std::max(cap_ * 2, len_ + kMaxRow));
-    if (mode_ == OutputMode::kJson && rows_ > 0) raw(",\n");
-  }
-  template <typename T>
-  void number(T v) {
-    separate(false);
-    len_ = size_t(std::to_chars(&buf_[len_], &buf_[len_] + 40, v).ptr - buf_.get());
-    close(false);
-  }
-  void text(std::string_view s) { put(s, true); }
-  void null() { put(json() ? "null" : mode_ == OutputMode::kText ? "-" : "", false); }
-  void end() {
-    raw(mode_ == OutputMode::kJson ? "}" : json() ? "}\n" : "\n");
-    ++rows_;
-  }
-  // After the last row: closes the JSON document.
-  void close_document() {
-    if (len_ + 4 > cap_) reserve(len_ + 4);
-    if (mode_ == OutputMode::kJson) raw(one_ && rows_ == 1 ? "\n" : "]\n");
-  }
-  size_t size() const { return len_; }
-  // A writer of the same columns for rows that follow `rows` rows of this
-  // document, into a buffer of its own: a slice formatted on another
-  // thread, written after those.
-  RowWriter continuation(uint64_t rows) const {
-    RowWriter w(mode_, one_);
-    w.columns_ = columns_;
-    w.rows_ = rows;
-    return w;
-  }
-  uint64_t rows() const { return rows_; }
-  // Forgets the rows held (they were written) and goes on after `rows` rows.
-  void resume(uint64_t rows) { rows_ = rows, len_ = 0; }
-  // Rows written by continuations count as this writer's.
-  void count_rows(uint64_t n) { rows_ += n; }
-  // Writes the rows held to out and forgets them.
-  Status flush(std::FILE* out) {
-    if (len_ > 0 && std::fwrite(buf_.get(), 1, len_, out) != len_) {
-      return Status::IOError(std::string("writing the answers: ") + std::strerror(errno));
-    }
-    len_ = 0;
-    return Status::Ok();
-  }
-
- private:
-  // Where the buffer starts: it doubles as rows need (a batch's slice of
-  // rows fills about a megabyte), while one point's answer, asked a thousand
-  // times a second through `weaver serve`, never zeroes a megabyte.
-  static constexpr size_t kCapacity = 16 << 10;
-  static constexpr size_t kMaxRow = 2048;  // 13 fields with their JSON names, and margin
-
-  // Room for n bytes, the bytes held kept; new room is not zeroed (a batch's
-  // rows fill megabytes, written over at once).
-  void reserve(size_t n) {
-    std::unique_ptr<char[]> bigger(new char[n]);
-    if (len_ > 0) std::memcpy(bigger.get(), buf_.get(), len_);
-    buf_ = std::move(bigger);
-    cap_ = n;
-  }
-  void raw(std::string_view v) {
-    std::memcpy(&buf_[len_], v.data(), v.size());
-    len_ += v.size();
-  }
-  // What goes before a field: a separator, or in JSON its name.
-  void separate(bool quoted) {
-    if (json()) {
-      raw(field_ == 0 ? "{\"" : ", \"");
-      raw(columns_[field_]);
-      raw(quoted ? "\": \"" : "\": ");
-    } else if (field_ > 0) {
-      buf_[len_++] = sep_;
-    }
-  }
-  void close(bool quoted) {
-    if (quoted && json()) buf_[len_++] = '"';
-    ++field_;
-  }
-  void put(std::string_view v, bool quoted) {
-    separate(quoted);
-    raw(v);
-    close(quoted);
-  }
-
-  bool json() const { return mode_ == OutputMode::kJson || mode_ == OutputMode::kJsonl; }
-
-  OutputMode mode_;
-  bool one_;
-  uint64_t rows_ = 0;
-  char sep_;
-  std::vector<std::string_view> columns_;  // lengths found once, not a strlen a field
-  size_t field_ = 0;
-  std::unique_ptr<char[]> buf_;
-  size_t cap_ = 0, len_ = 0;
-};
 
 // Lines of a stream, read 64 KiB at a time (getline's per-line cost shows
 // at a million lines a second; a larger buffer gains nothing, and one point
@@ -218,6 +100,7 @@ class BatchRunner {
     }
     if (o_.query != PointQuery::kNodeAt && ex_.mesh().has_q()) c.insert(c.end(), {"qp", "qs"});
     w_.header(c);
+    answer_columns_ = int(c.size()) - 4;  // what follows x, y, z and the status
   }
 
   // Parses one line: false when it is malformed (*why says how).
@@ -366,62 +249,56 @@ class BatchRunner {
   }
 
   void format_rows(RowWriter& w, size_t lo, size_t hi, uint64_t* missed_out) const {
+    const bool node = o_.query == PointQuery::kNodeAt;
     uint64_t missed = 0;
     for (size_t i = lo; i < hi; ++i) {
-      w.begin();
+      RowCursor c(w.row(), w.style());
+      const bool bad = bad_[i];
       for (int a = 0; a < 3; ++a) {
-        if (bad_[i]) {
-          w.null();
+        if (bad) {
+          c.null();
         } else if (o_.metres) {
-          w.number(values_[i][a]);
+          c.number(values_[i][a]);
         } else {
-          const uint32_t c[3] = {points_[i].x, points_[i].y, points_[i].z};
-          w.number(uint64_t(c[a]));
+          c.number(uint64_t(a == 0 ? points_[i].x : a == 1 ? points_[i].y : points_[i].z));
         }
       }
-      const bool found = o_.query == PointQuery::kNodeAt ? nodes_[i].found : hits_[i].inside;
-      w.text(bad_[i]  ? "bad"
-             : !found ? (o_.query == PointQuery::kNodeAt ? "none"
-                         : ex_.in_air(points_[i])        ? "air"
-                                                         : "outside")
-                      : (o_.query == PointQuery::kNodeAt ? "node" : "inside"));
-      missed += !bad_[i] && !found;
-      write_answer(w, i, found);
-      w.end();
+      const bool found = !bad && (node ? nodes_[i].found : hits_[i].inside);
+      c.text(bad                      ? "bad"
+             : found                  ? (node ? "node" : "inside")
+             : node                   ? "none"
+             : ex_.in_air(points_[i]) ? "air"
+                                      : "outside");
+      missed += !bad && !found;
+      if (!found) {
+        for (int k = 0; k < answer_columns_; ++k) c.null();
+      } else if (node) {
+        c.number(nodes_[i].id);
+        c.text(node_kind_name(nodes_[i].kind));
+      } else {
+        write_hit(c, hits_[i]);
+      }
+      w.done(c.end());
     }
     *missed_out += missed;
   }
 
-  void write_answer(RowWriter& w_, size_t i, bool found) const {
-    const int nulls = o_.query == PointQuery::kNodeAt     ? 2
-                      : o_.query == PointQuery::kMaterial ? 4
-                      : ex_.mesh().has_material()         ? 9
-                                                          : 6;
-    if (!found) {
-      for (int k = 0; k < nulls; ++k) w_.null();
-      return;
-    }
-    if (o_.query == PointQuery::kNodeAt) {
-      w_.number(nodes_[i].id);
-      w_.text(node_kind_name(nodes_[i].kind));
-      return;
-    }
-    const PointHit& h = hits_[i];
-    w_.number(h.id);
+  void write_hit(RowCursor& c, const PointHit& h) const {
+    c.number(h.id);
     if (o_.query == PointQuery::kLocate) {
-      w_.number(uint64_t(h.leaf.level));
-      const uint32_t c[3] = {h.leaf.x, h.leaf.y, h.leaf.z};
+      c.number(uint64_t(h.leaf.level));
+      const uint32_t corner[3] = {h.leaf.x, h.leaf.y, h.leaf.z};
       if (o_.metres) {
-        w_.number(length(octant_edge(h.leaf)));
-        for (int a = 0; a < 3; ++a) w_.number(position(c[a], a));
+        c.number(length(octant_edge(h.leaf)));
+        for (int a = 0; a < 3; ++a) c.number(position(corner[a], a));
       } else {
-        w_.number(uint64_t(octant_edge(h.leaf)));
-        for (int a = 0; a < 3; ++a) w_.number(uint64_t(c[a]));
+        c.number(uint64_t(octant_edge(h.leaf)));
+        for (int a = 0; a < 3; ++a) c.number(uint64_t(corner[a]));
       }
       if (!ex_.mesh().has_material()) return;
     }
-    w_.number(h.vp), w_.number(h.vs), w_.number(h.rho);
-    if (ex_.mesh().has_q()) w_.number(h.qp), w_.number(h.qs);
+    c.number(h.vp), c.number(h.vs), c.number(h.rho);
+    if (ex_.mesh().has_q()) c.number(h.qp), c.number(h.qs);
   }
 
   Explorer& ex_;
@@ -434,6 +311,7 @@ class BatchRunner {
   std::vector<RowWriter> writers_;  // a thread's rows, for a batch shared among threads
   std::vector<PointHit> hits_;
   std::vector<NodeHit> nodes_;
+  int answer_columns_ = 0;  // a row's fields after its status: empty when nothing was found
 };
 
 }  // namespace
