@@ -72,8 +72,11 @@ class BTree final : public Store {
   // floor() and the rank of the key it finds in one descent (a point query
   // that wants the element's id and material: half the descents of the two).
   // rank may be null: then nothing is counted, and this is floor().
+  // recycle_leaf: the leaf read is offered to the pool as its next victim
+  // (a sparse walk over a large table, that would otherwise fill every frame
+  // with pages it will not ask again, each frame fresh memory to fault in).
   Status floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
-                    bool* found);
+                    bool* found, bool recycle_leaf = false);
 
   // The leaf where key is or would be: all its keys, decoded, and the rank of
   // its first record.  For callers that rank many nearby keys at once
@@ -207,6 +210,8 @@ class BTree final : public Store {
   // For floor, when every key of the leaf `key` is routed to is > key (a
   // separator went stale when its key was erased): the leaf before it, or
   // *first_leaf.  dir_leaf as locate gave it.
+  Status floor_rank_at(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
+                       bool* found, PageRef* lf);
   Status preceding_leaf(uint64_t key, uint32_t dir_leaf, PageRef* leaf, bool* first_leaf);
   // REQUIRES: height_ > 0.  With rank_before, also counts the records in the
   // subtrees left of the path.

@@ -161,7 +161,16 @@ Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, boo
 }
 
 Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
-                         bool* found) {
+                         bool* found, bool recycle_leaf) {
+  PageRef lf;
+  const Status st = floor_rank_at(key, key_out, payload_out, rank, found, &lf);
+  if (recycle_leaf) lf.recycle();
+  return st;
+}
+
+Status BTree::floor_rank_at(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
+                            bool* found, PageRef* leaf_ref) {
+  PageRef& lf = *leaf_ref;
   if (shards_) {  // each shard ranks its own keys: the set adds them up
     WEAVER_RETURN_IF_ERROR(shards_->floor(key, key_out, payload_out, found));
     return *found ? shards_->rank_exact(*key_out, rank, found) : Status::Ok();
@@ -181,7 +190,6 @@ Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out
       return Status::Ok();
     }
   }
-  PageRef lf;
   uint64_t below = 0, before = 0;  // the key at ub - 1; the records before the leaf
   // The records before the leaf are counted on the way down only when asked.
   WEAVER_RETURN_IF_ERROR(locate(key, false, &lf, &dir_leaf, rank != nullptr ? &before : nullptr));

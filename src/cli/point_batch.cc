@@ -11,6 +11,7 @@
 #include "cli/row_writer.h"
 #include "util/huge_pages.h"
 #include "util/interrupt.h"
+#include "util/parallel.h"
 #include "util/printable.h"
 
 namespace weaver::cli {
@@ -148,8 +149,14 @@ class BatchRunner {
     bad_.push_back(true);
   }
   size_t size() const { return points_.size(); }
-  // Points answered at a time.
-  size_t limit() const { return o_.batch_points > 0 ? o_.batch_points : ex_.batch_points(); }
+  // Points answered at a time.  The batch holds every buffer (the Explorers only walk its runs), so
+  // the shares all of them set aside for a batch are its.
+  size_t limit() const {
+    if (o_.batch_points > 0) return o_.batch_points;
+    uint64_t bytes = ex_.batch_bytes();
+    for (const Explorer* e : o_.helpers) bytes += e->batch_bytes();
+    return size_t(std::clamp<uint64_t>(bytes / kBatchPointBytes, 4096, 1 << 22));
+  }
 
   // Answers the points held and writes their rows.
   Status answer(PointBatchResult* r) {
@@ -172,29 +179,22 @@ class BatchRunner {
   static constexpr size_t kParallelPoints = 16384;
   static constexpr size_t kSlice = 32768;  // rows formatted, then written
 
-  // Runs job(0 .. parts - 1), each part but the first on a thread of its own.
-  template <typename Job>
-  static void in_parallel(size_t parts, const Job& job) {
-    std::vector<std::thread> threads;
-    for (size_t i = 1; i < parts; ++i) threads.emplace_back(job, i);
-    job(0);
-    for (auto& t : threads) t.join();
-  }
-
-  // Each of `parts` Explorers (ex_, then the helpers) answers a run of the
-  // points in input order; each sorts its own run.
+  // The points are sorted once; each of `parts` Explorers (ex_, then the
+  // helpers) walks a run of the sorted order, so that a leaf page is read by
+  // one of them only (split by input order, each would read most pages of a
+  // large mesh for random points).
   Status look_up(size_t n, size_t parts) {
     const bool nodes = o_.query == PointQuery::kNodeAt;
-    (nodes ? nodes_.resize(n) : hits_.resize(n));
-    std::vector<Status> st(parts);
-    in_parallel(parts, [&](size_t i) {
-      Explorer& e = i == 0 ? ex_ : *o_.helpers[i - 1];
-      const size_t lo = n * i / parts, hi = n * (i + 1) / parts;
-      st[i] = nodes ? e.node_at_batch(points_.data() + lo, hi - lo, nodes_.data() + lo)
-                    : e.locate_batch(points_.data() + lo, hi - lo, hits_.data() + lo);
+    (nodes ? nodes_.assign(n, NodeHit{}) : hits_.assign(n, PointHit{}));
+    Explorer::sort_batch(points_.data(), n, nodes, &order_, &scratch_);
+    const size_t m = order_.size();
+    return run_shares(int(parts), [&](int i) {
+      Explorer& e = i == 0 ? ex_ : *o_.helpers[size_t(i) - 1];
+      const KeyedPoint* run = order_.data() + m * size_t(i) / parts;
+      const size_t count = m * size_t(i + 1) / parts - m * size_t(i) / parts;
+      return nodes ? e.node_at_sorted(run, count, nodes_.data())
+                   : e.locate_sorted(run, count, hits_.data());
     });
-    for (const Status& s : st) WEAVER_RETURN_IF_ERROR(s);
-    return Status::Ok();
   }
 
   // The rows in slices: `parts` slices formatted at once, a thread each,
@@ -213,10 +213,11 @@ class BatchRunner {
     while (writers.size() < parts) writers.push_back(w_.continuation(0));
     std::vector<uint64_t> missed_by(parts, 0);
     for (size_t lo = 0; lo < n; lo += parts * kSlice) {
-      in_parallel(parts, [&](size_t i) {
-        const size_t a = std::min(n, lo + i * kSlice), b = std::min(n, a + kSlice);
-        writers[i].resume(w_.rows() + a);
-        if (a < b) format_rows(writers[i], a, b, &missed_by[i]);
+      (void)run_shares(int(parts), [&](int i) {
+        const size_t a = std::min(n, lo + size_t(i) * kSlice), b = std::min(n, a + kSlice);
+        writers[size_t(i)].resume(w_.rows() + a);
+        if (a < b) format_rows(writers[size_t(i)], a, b, &missed_by[size_t(i)]);
+        return Status::Ok();
       });
       for (RowWriter& w : writers) WEAVER_RETURN_IF_ERROR(w.flush(out_));
     }
@@ -311,6 +312,7 @@ class BatchRunner {
   std::vector<RowWriter> writers_;  // a thread's rows, for a batch shared among threads
   std::vector<PointHit> hits_;
   std::vector<NodeHit> nodes_;
+  std::vector<KeyedPoint> order_, scratch_;  // the batch in key order, and the sort's scratch
   int answer_columns_ = 0;  // a row's fields after its status: empty when nothing was found
 };
 

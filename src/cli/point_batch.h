@@ -27,13 +27,14 @@ struct PointBatchOptions {
   // More Explorers on the same committed state as the one asked: a large
   // batch splits its lookups and its rows among them, a thread each.
   std::vector<Explorer*> helpers;
-  // Points answered at a time (0: the Explorer's batch_points()): more for
-  // a caller that sets memory aside for the batch (kBatchPointBytes each).
+  // Points answered at a time (0: what the Explorers' shares for a batch
+  // hold, kBatchPointBytes each): more for a caller that sets memory aside.
   size_t batch_points = 0;
 };
 
-// What a point of a batch holds while it is answered: its coordinate, its
-// metres, its answer and its sort pairs (about 124 bytes), with margin.
+// What a point of a batch holds while it is answered: its coordinate (12
+// bytes), its metres (24), its answer (40) and its sort pair and the sort's
+// scratch (32), with margin.
 inline constexpr size_t kBatchPointBytes = 128;
 
 struct PointBatchResult {

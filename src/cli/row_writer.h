@@ -16,10 +16,12 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include "cli/query_output.h"
 #include "schema/status.h"
+#include "util/short_decimal.h"
 
 namespace weaver::cli {
 
@@ -50,7 +52,11 @@ class RowCursor {
   template <typename T>
   void number(T v) {
     lead(false);
-    p_ = std::to_chars(p_, p_ + 40, v).ptr;
+    if constexpr (std::is_floating_point_v<T>) {
+      p_ = write_short_decimal(p_, v);
+    } else {
+      p_ = std::to_chars(p_, p_ + 40, v).ptr;
+    }
     ++field_;
   }
   void text(std::string_view v) {

@@ -106,26 +106,43 @@ Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
   // A point costs its coordinate (12 bytes), its sort pair (16) and its
   // answer (40): about 80 bytes with the caller's own buffers.
   e->batch_points_ = size_t(std::clamp<uint64_t>(shares.batch / 80, 4096, 1 << 22));
+  e->batch_bytes_ = shares.batch;
   *out = std::move(e);
   return Status::Ok();
 }
 
 Status Explorer::locate(Coord p, PointHit* out) { return locate_batch(&p, 1, out); }
 
+template <typename Valid, typename KeyOf>
+void Explorer::sort_keys(const Coord* p, size_t n, Valid valid, KeyOf key_of,
+                         std::vector<KeyedPoint>* order, std::vector<KeyedPoint>* scratch) {
+  order->clear();
+  reserve_huge(*order, n);
+  reserve_huge(*scratch, n);
+  for (size_t i = 0; i < n; ++i) {
+    if (valid(p[i])) order->push_back({key_of(p[i]), i});
+  }
+  radix_sort_by(*order, *scratch, [](const KeyedPoint& k) { return k.first; });
+}
+
 template <typename Hit, typename Valid, typename KeyOf>
 void Explorer::sort_points(const Coord* p, size_t n, Hit* out, Valid valid, KeyOf key_of) {
-  order_.clear();
-  reserve_huge(order_, n);
-  reserve_huge(scratch_, n);
-  for (size_t i = 0; i < n; ++i) {
-    out[i] = Hit{};
-    if (valid(p[i])) order_.push_back({key_of(p[i]), i});
-  }
-  radix_sort_by(order_, scratch_, [](const std::pair<uint64_t, uint64_t>& p) { return p.first; });
+  std::fill(out, out + n, Hit{});
+  sort_keys(p, n, valid, key_of, &order_, &scratch_);
+}
+
+void Explorer::sort_batch(const Coord* p, size_t n, bool nodes, std::vector<KeyedPoint>* order,
+                          std::vector<KeyedPoint>* scratch) {
+  if (nodes) return sort_keys(p, n, node_is_valid, node_key, order, scratch);
+  sort_keys(p, n, pixel_is_valid, pixel_key, order, scratch);
 }
 
 Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
   sort_points(p, n, out, pixel_is_valid, pixel_key);
+  return locate_sorted(order_.data(), order_.size(), out);
+}
+
+Status Explorer::locate_sorted(const KeyedPoint* order, size_t n, PointHit* out) {
   DensityWatch density(*octant_window_, n);
   LeafWindow::Floor f;
   MeshElement m;
@@ -133,9 +150,9 @@ Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {
   // order, would cost a cache miss each.  The answers are written in input
   // order, a cache miss each: asked for a few points ahead, they overlap.
   constexpr size_t kAhead = 16;
-  for (size_t k = 0; k < order_.size(); ++k) {
-    const auto [key, i] = order_[k];
-    if (k + kAhead < order_.size()) __builtin_prefetch(&out[order_[k + kAhead].second], 1);
+  for (size_t k = 0; k < n; ++k) {
+    const auto [key, i] = order[k];
+    if (k + kAhead < n) __builtin_prefetch(&out[order[k + kAhead].second], 1);
     density.at(k);
     WEAVER_RETURN_IF_ERROR(octant_window_->floor(key, &f));
     // The floor leaf holds the pixel if the pixel's key is in its subtree;
@@ -219,9 +236,15 @@ Status Explorer::require_nodes() const {
 Status Explorer::node_at_batch(const Coord* p, size_t n, NodeHit* out) {
   WEAVER_RETURN_IF_ERROR(require_nodes());
   sort_points(p, n, out, node_is_valid, node_key);
+  return node_at_sorted(order_.data(), order_.size(), out);
+}
+
+Status Explorer::node_at_sorted(const KeyedPoint* order, size_t n, NodeHit* out) {
+  WEAVER_RETURN_IF_ERROR(require_nodes());
   node_window_->set_sparse(n < kDenseBatch);
   LeafWindow::Floor f;
-  for (const auto& [key, i] : order_) {
+  for (size_t k = 0; k < n; ++k) {
+    const auto [key, i] = order[k];
     WEAVER_RETURN_IF_ERROR(node_window_->floor(key, &f));
     if (!f.found || f.key != key) continue;
     const uint8_t kind = static_cast<uint8_t>(f.payload[0]);

@@ -38,6 +38,10 @@ struct ExplorerMemory {
   uint64_t octant_pool = 0, octant_directory = 0, node_pool = 0, node_directory = 0, batch = 0;
 };
 
+// A point of a batch as the tables are walked: its key and its index in the
+// batch.
+using KeyedPoint = std::pair<uint64_t, uint64_t>;
+
 // The leaf that holds a point, with its material (zeros without one).
 struct PointHit {
   bool inside = false;  // false: outside the domain (no leaf holds the point)
@@ -85,6 +89,9 @@ class Explorer {
   Status require_nodes() const;
   // How many points a batch should hold to stay within the memory budget.
   size_t batch_points() const { return batch_points_; }
+  // The budget's share for a batch, for a caller that holds the batch's
+  // buffers itself (cli/point_batch.h).
+  uint64_t batch_bytes() const { return batch_bytes_; }
 
   // The leaf holding tick point p; any p (past the root is outside).
   Status locate(Coord p, PointHit* out);
@@ -112,6 +119,17 @@ class Explorer {
   // The nodes at n points (any coordinates; past the far side is no node).
   Status node_at_batch(const Coord* p, size_t n, NodeHit* out);
 
+  // A batch shared among Explorers (threads) is sorted once and walked in
+  // runs of the sorted order, so that each leaf page is read by one of them
+  // only.  sort_batch: (key, i) of the points p[0..n) that can lie in the
+  // mesh (node keys with `nodes`, else locate's), in key order.
+  static void sort_batch(const Coord* p, size_t n, bool nodes, std::vector<KeyedPoint>* order,
+                         std::vector<KeyedPoint>* scratch);
+  // The walks of a run of a sorted batch: out[i] answers the point of each
+  // (key, i) of order[0..n); the other entries of out are left as they are.
+  Status locate_sorted(const KeyedPoint* order, size_t n, PointHit* out);
+  Status node_at_sorted(const KeyedPoint* order, size_t n, NodeHit* out);
+
   // Element `id` with its material and (with the mesh) its corners' node ids.
   // InvalidArgument past the last element.
   Status element(uint64_t id, MeshElement* out);
@@ -133,8 +151,11 @@ class Explorer {
 
  private:
   Explorer() = default;
-  // Clears out[0..n) and fills order_ with (key, i) of the valid points,
-  // sorted by key.
+  // Fills *order with (key, i) of the valid points, sorted by key.
+  template <typename Valid, typename KeyOf>
+  static void sort_keys(const Coord* p, size_t n, Valid valid, KeyOf key_of,
+                        std::vector<KeyedPoint>* order, std::vector<KeyedPoint>* scratch);
+  // Clears out[0..n) and sorts the points into order_.
   template <typename Hit, typename Valid, typename KeyOf>
   void sort_points(const Coord* p, size_t n, Hit* out, Valid valid, KeyOf key_of);
   // node_elements() for a node already read.
@@ -156,8 +177,9 @@ class Explorer {
   AggregateLayout aggregate_layout_{false, false};
   int aggregate_finest_ = -1;
   size_t batch_points_ = 1 << 20;
-  // Sorting scratch for the batches: (key, input index).
-  std::vector<std::pair<uint64_t, uint64_t>> order_, scratch_;
+  uint64_t batch_bytes_ = 0;
+  // Sorting scratch for the batches.
+  std::vector<KeyedPoint> order_, scratch_;
 };
 
 // "-x", "+y", "-x+z", "+x-y-z": the name of a direction in answers.
