@@ -4,15 +4,15 @@
 //
 // The shortest round-trip form is what to_chars writes; finding it takes it
 // 25 to 60 ns a value, which at a million rows a second of 7 lengths each is
-// most of the time a row takes.  Here, for d = 0, 1, 2, 3 in turn: the decimal
-// of d places nearest v, m / 10^d, is checked to read back as v.  The first
-// that does is the shortest form (one of fewer places would have read back at
-// a smaller d; below the magnitudes allowed, a unit in the last place of v is
-// under 10^-3, so it is the only decimal of d places that does).  It is
-// written fixed: to_chars writes the scientific form only when it is shorter,
-// which with decimal places it never is, nor for a whole number below 10^5.  Anything else (more
-// decimals, huge, tiny, zero, not finite) goes to to_chars too: tests/short_decimal_test.cc
-// compares the two on millions of values.
+// most of the time a row takes.  Here the decimal of 3 places nearest v is
+// checked to read back as v; below the magnitudes allowed, a unit in the last
+// place of v is under 10^-3, so no other decimal of 3 places or fewer does,
+// and that one without its trailing zeros is the shortest form.  It is
+// written fixed: to_chars writes the scientific form only when it is
+// shorter, which with decimal places it never is, nor for a whole number
+// below 10^5.  Anything else (more decimals, huge, tiny, zero, not finite)
+// goes to to_chars: tests/short_decimal_test.cc compares the two on millions
+// of values.
 #pragma once
 
 #include <bit>
@@ -59,22 +59,24 @@ char* write(char* p, T v) {
     up = double(std::bit_cast<float>(bits + 1)) - x;
     down = x - double(std::bit_cast<float>(bits - 1));
   }
-  constexpr double kScale[4] = {1, 10, 100, 1000};
-  for (int d = 0; d <= 3; ++d) {
-    const double scaled = x * kScale[d];  // exact for a float, not for a double
-    const uint64_t m = uint64_t(scaled + 0.5);
-    const double md = double(m);
-    // m / 10^d reads back as a: for a double, the division is rounded as
-    // reading the decimal is; for a float, m / 10^d lies strictly within half
-    // a gap of a (exact arithmetic: 24 bits times 10^3 fit in a double).
-    const bool reads_back =
-        kFloat ? md - scaled < up * kScale[d] / 2 && scaled - md < down * kScale[d] / 2
-               : md / kScale[d] == x;
-    if (!reads_back) continue;
+  // The decimal of 3 places nearest a, m / 1000: it reads back as a when,
+  // for a double, the division is rounded as reading the decimal is; for a
+  // float, when m / 1000 lies strictly within half a gap of a (exact
+  // arithmetic: 24 bits times 10^3 fit in a double).
+  const double scaled = x * 1000;  // exact for a float, not for a double
+  uint64_t m = uint64_t(scaled + 0.5);
+  const double md = double(m);
+  const bool reads_back =
+      kFloat ? md - scaled < up * 500 && scaled - md < down * 500 : md / 1000 == x;
+  if (reads_back) {
+    // It is the only decimal of 3 places or fewer that does (they are 10^-3
+    // apart; the values that read back as a, less than that): without its
+    // trailing zeros, the shortest form.
+    int d = 3;
+    while (d > 0 && m % 10 == 0) m /= 10, --d;
     // With places the fixed form is never the longer; a whole number from
     // 100000 up may be shorter as 1e+05: to_chars decides.
-    if (d == 0 && m >= 100000) break;
-    return write_fixed(p, v < 0, m, d);
+    if (d > 0 || m < 100000) return write_fixed(p, v < 0, m, d);
   }
   return std::to_chars(p, p + 40, v).ptr;
 }
