@@ -3,6 +3,7 @@
 #include "construct/construct.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <array>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <iterator>
 #include <random>
 
+#include "construct/descent.h"
 #include "db/database.h"
 #include "model/grid_model.h"
 #include "model/velocity_model.h"
@@ -404,6 +406,70 @@ TEST(Construct, ModelBoundsChangeNothingButTheSamplesTaken) {
       EXPECT_EQ(results[1].largest_edge_m, results[0].largest_edge_m);
     }
   }
+}
+
+// The subtrees come block by block in Z-order, each split where the descent
+// splits it down to the task level: the same list as every block of the
+// domain, sorted by key and split so (the reference), for block counts that
+// are no power of two; and a domain of 999 x 999 x 374 blocks of 100 m
+// (373M of them, 6 GB as a list) gives its first subtrees at once, in little
+// memory (the list was once built whole before the first).
+TEST(Construct, SubtreesComeInZOrderWithoutListingEveryBlock) {
+  std::unique_ptr<VelocityModel> model;
+  ASSERT_OK(make_model("basin", "", &model));
+  for (const std::array<double, 3> domain :
+       {std::array<double, 3>{100000, 80000, 37500}, {70000, 50000, 30000}, {5000, 3000, 1000}}) {
+    ConstructOptions o;
+    o.domain_m = domain;
+    o.freq = 0.2;
+    ConstructPlan p;
+    ASSERT_OK(plan_construct(o, &p));
+    const Descent descent(o, p, *model);
+    const int task_level = p.block_level + 2;
+    std::vector<Octant> want, stack;
+    const uint32_t e = octant_edge(p.block_level);
+    for (uint32_t k = 0; k < p.blocks[2]; ++k)
+      for (uint32_t j = 0; j < p.blocks[1]; ++j)
+        for (uint32_t i = 0; i < p.blocks[0]; ++i)
+          stack.push_back({i * e, j * e, k * e, uint8_t(p.block_level)});
+    std::sort(stack.begin(), stack.end(),
+              [](const Octant& a, const Octant& b) { return octant_key(a) > octant_key(b); });
+    while (!stack.empty()) {
+      const Octant top = stack.back();
+      stack.pop_back();
+      if (top.level >= task_level || !descent.splits(top)) {
+        want.push_back(top);
+        continue;
+      }
+      for (int c = 7; c >= 0; --c) stack.push_back(octant_child(top, c));
+    }
+    SubtreeList list(descent, p, task_level);
+    std::vector<Octant> got;
+    for (Octant r; list.next(&r);) got.push_back(r);
+    ASSERT_EQ(got.size(), want.size()) << domain[0] << " x " << domain[1];
+    for (size_t i = 0; i < got.size(); ++i) ASSERT_EQ(octant_key(got[i]), octant_key(want[i])) << i;
+  }
+  ConstructOptions o;
+  o.domain_m = {99900, 99900, 37400};
+  o.freq = 0.25;
+  ConstructPlan p;
+  ASSERT_OK(plan_construct(o, &p));
+  ASSERT_EQ(p.blocks, (std::array<uint32_t, 3>{999, 999, 374}));
+  const Descent descent(o, p, *model);
+  SubtreeList list(descent, p, p.block_level);
+  Octant previous{};
+  for (int i = 0; i < 1000; ++i) {
+    Octant r;
+    ASSERT_TRUE(list.next(&r));
+    if (i > 0) {
+      EXPECT_LT(octant_key(previous), octant_key(r));
+    }
+    previous = r;
+  }
+  // The 373M blocks as a list were 6 GB; this test's process stays far below.
+  rusage usage{};
+  ASSERT_EQ(getrusage(RUSAGE_SELF, &usage), 0);
+  EXPECT_LT(usage.ru_maxrss, 2L << 20) << "KB at peak";
 }
 
 TEST(Construct, ResolvesDomainsIntoBlocksAndRejectsBadOptions) {

@@ -305,27 +305,26 @@ void Descent::emit(const Octant& o, const Judgement& j, const Material& m,
 }
 
 SubtreeList::SubtreeList(const Descent& d, const ConstructPlan& p, int task_level)
-    : descent_(d), task_level_(task_level) {
+    : descent_(d), block_level_(p.block_level), task_level_(task_level) {
   const uint32_t e = octant_edge(p.block_level);
-  for (uint32_t k = 0; k < p.blocks[2]; ++k)
-    for (uint32_t j = 0; j < p.blocks[1]; ++j)
-      for (uint32_t i = 0; i < p.blocks[0]; ++i) {
-        stack_.push_back({i * e, j * e, k * e, uint8_t(p.block_level)});
-      }
-  // Z-order, the first on top.
-  std::sort(stack_.begin(), stack_.end(),
-            [](const Octant& a, const Octant& b) { return octant_key(a) > octant_key(b); });
+  for (int a = 0; a < 3; ++a) domain_ticks_[a] = p.blocks[a] * e;
+  stack_.push_back({0, 0, 0, 0});
+}
+
+bool SubtreeList::meets_domain(const Octant& o) const {
+  return o.x < domain_ticks_[0] && o.y < domain_ticks_[1] && o.z < domain_ticks_[2];
 }
 
 bool SubtreeList::next(Octant* o) {
   while (!stack_.empty()) {
     const Octant top = stack_.back();
     stack_.pop_back();
-    if (top.level >= task_level_ || !descent_.splits(top)) {
+    if (top.level <= block_level_ && !meets_domain(top)) continue;
+    if (top.level >= block_level_ && (top.level >= task_level_ || !descent_.splits(top))) {
       *o = top;
       return true;
     }
-    for (int c = 7; c >= 0; --c) stack_.push_back(octant_child(top, c));
+    for (int c = 7; c >= 0; --c) stack_.push_back(octant_child(top, c));  // child 0 on top
   }
   return false;
 }

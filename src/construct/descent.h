@@ -123,7 +123,9 @@ class Descent {
 };
 
 // The domain's subtrees in Z-order: the blocks, split down to task_level
-// wherever the descent splits them.
+// wherever the descent splits them.  The blocks are found by a walk down from
+// the root, never all held at once (a domain of 999 x 999 x 374 blocks of
+// 100 m has 373M of them).
 class SubtreeList {
  public:
   SubtreeList(const Descent& d, const ConstructPlan& p, int task_level);
@@ -131,9 +133,13 @@ class SubtreeList {
   bool next(Octant* o);
 
  private:
+  // Whether o, at the blocks' level or above, holds a block of the domain.
+  bool meets_domain(const Octant& o) const;
+
   const Descent& descent_;
-  int task_level_;
-  std::vector<Octant> stack_;  // the next on top
+  int block_level_, task_level_;
+  std::array<uint32_t, 3> domain_ticks_;  // the blocks' far sides
+  std::vector<Octant> stack_;             // the next on top
 };
 
 }  // namespace weaver
