@@ -44,9 +44,8 @@ Status LeafWindow::page_for(uint64_t key, Page** page, uint64_t* leaf_rank) {
 
 Status LeafWindow::sparse_floor(uint64_t key, Floor* out) {
   single_.resize(table_.payload_size() + 1);
-  // A sparse walk asks each leaf for a point or two: its leaves are not kept.
   WEAVER_RETURN_IF_ERROR(table_.floor_rank(key, &out->key, payloads_ ? single_.data() : nullptr,
-                                           &out->rank, &out->found, true));
+                                           &out->rank, &out->found, recycle_));
   out->payload = out->found && payloads_ ? single_.data() : nullptr;
   return Status::Ok();
 }

@@ -39,7 +39,14 @@ class LeafWindow {
   // Sparse: answer each floor (and get) by its own descent, without
   // decoding whole leaves.  For a few keys (one question) that is cheaper;
   // for a batch that lands many keys in each leaf, the decoded leaf is.
-  void set_sparse(bool sparse) { sparse_ = sparse; }
+  // recycle_leaves: a large batch proven sparse, whose leaves are read once
+  // each, offers them to the pool as its next victims (it would otherwise
+  // fill every frame with pages it will not ask again); a few questions keep
+  // theirs, for the next few (a server's requests) to find.
+  void set_sparse(bool sparse, bool recycle_leaves = false) {
+    sparse_ = sparse;
+    recycle_ = sparse && recycle_leaves;
+  }
   bool sparse() const { return sparse_; }
   // Leaf pages decoded so far: with the keys asked, how dense a batch is.
   uint64_t decodes() const { return decodes_; }
@@ -65,6 +72,7 @@ class LeafWindow {
   BTree& table_;
   bool payloads_;
   bool sparse_ = false;
+  bool recycle_ = false;
   std::array<Page, kPages> pages_;
   uint64_t clock_ = 0;
   size_t last_ = 0;  // the page used last: tried first

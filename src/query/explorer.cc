@@ -39,7 +39,7 @@ class DensityWatch {
     const size_t from = k < first_ ? 0 : first_;
     if ((k - from) % window != window - 1 || w_.sparse()) return;
     const uint64_t decodes = w_.decodes();
-    if (decodes - before_ > window / 8) w_.set_sparse(true);
+    if (decodes - before_ > window / 8) w_.set_sparse(true, true);
     before_ = decodes;
   }
 
