@@ -103,9 +103,6 @@ Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
     e->aggregate_window_ = std::make_unique<LeafWindow>(t, true);
     e->aggregate_finest_ = weaver::aggregate_finest(t);
   }
-  // A point costs its coordinate (12 bytes), its sort pair (16) and its
-  // answer (40): about 80 bytes with the caller's own buffers.
-  e->batch_points_ = size_t(std::clamp<uint64_t>(shares.batch / 80, 4096, 1 << 22));
   e->batch_bytes_ = shares.batch;
   *out = std::move(e);
   return Status::Ok();
@@ -234,7 +231,6 @@ Status Explorer::require_nodes() const {
 }
 
 Status Explorer::node_at_batch(const Coord* p, size_t n, NodeHit* out) {
-  WEAVER_RETURN_IF_ERROR(require_nodes());
   sort_points(p, n, out, node_is_valid, node_key);
   return node_at_sorted(order_.data(), order_.size(), out);
 }

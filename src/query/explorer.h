@@ -6,6 +6,7 @@
 // extracted mesh.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -87,8 +88,12 @@ class Explorer {
   // NotFound "no mesh yet" unless the node table exists: what every node
   // question below returns without one.
   Status require_nodes() const;
-  // How many points a batch should hold to stay within the memory budget.
-  size_t batch_points() const { return batch_points_; }
+  // How many points a batch should hold to stay within the memory budget:
+  // a point costs its coordinate (12 bytes), its sort pair (16) and its
+  // answer: about 80 bytes with the caller's own buffers.
+  size_t batch_points() const {
+    return size_t(std::clamp<uint64_t>(batch_bytes_ / 80, 4096, 1 << 22));
+  }
   // The budget's share for a batch, for a caller that holds the batch's
   // buffers itself (cli/point_batch.h).
   uint64_t batch_bytes() const { return batch_bytes_; }
@@ -176,7 +181,6 @@ class Explorer {
   std::unique_ptr<LeafWindow> octant_window_, node_window_, aggregate_window_;
   AggregateLayout aggregate_layout_{false, false};
   int aggregate_finest_ = -1;
-  size_t batch_points_ = 1 << 20;
   uint64_t batch_bytes_ = 0;
   // Sorting scratch for the batches.
   std::vector<KeyedPoint> order_, scratch_;
