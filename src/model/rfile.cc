@@ -216,35 +216,67 @@ Status read_rfile_column(int fd, const RfileHeader& h, int b, int i, int j, doub
   return read_rfile_columns(fd, h, b, i, j, 1, out);
 }
 
+namespace {
+
+// Bytes [0, n) of the file at `offset`, one pread; IOError if short.
+Status read_rfile_bytes(int fd, uint64_t offset, size_t n, unsigned char* out) {
+  if (::pread(fd, out, n, off_t(offset)) != ssize_t(n)) {
+    return Status::IOError("cannot read the rfile's values");
+  }
+  return Status::Ok();
+}
+
+void to_machine_order(const RfileHeader& h, unsigned char* raw, size_t count) {
+  if (!h.swap) return;
+  for (size_t v = 0; v < count; ++v) {
+    unsigned char* p = raw + v * h.precision;
+    for (int a = 0; a < h.precision / 2; ++a) std::swap(p[a], p[h.precision - 1 - a]);
+  }
+}
+
+// The first value of `count` columns from (i, j) of block b, in values.
+uint64_t column_value(const RfileHeader& h, int b, int i, int j) {
+  const RfileBlock& k = h.blocks[b];
+  return (uint64_t(i) * k.nj + j) * (size_t(k.nk) * k.nc);
+}
+
+}  // namespace
+
+void rfile_decode(int precision, const unsigned char* raw, size_t count, double* out) {
+  if (precision == 8) {
+    std::memcpy(out, raw, count * 8);
+    return;
+  }
+  for (size_t v = 0; v < count; ++v) {
+    float f;
+    std::memcpy(&f, raw + v * 4, 4);
+    out[v] = f;
+  }
+}
+
+Status read_rfile_raw(int fd, const RfileHeader& h, int b, int i, int j, int count,
+                      std::vector<unsigned char>* raw) {
+  const RfileBlock& k = h.blocks[b];
+  const size_t values = size_t(k.nk) * k.nc * size_t(count);
+  raw->resize(values * h.precision);
+  WEAVER_RETURN_IF_ERROR(read_rfile_bytes(
+      fd, k.offset + column_value(h, b, i, j) * uint64_t(h.precision), raw->size(), raw->data()));
+  to_machine_order(h, raw->data(), values);
+  return Status::Ok();
+}
+
 Status read_rfile_columns(int fd, const RfileHeader& h, int b, int i, int j, int columns,
                           double* out) {
   const RfileBlock& k = h.blocks[b];
-  const size_t per_column = size_t(k.nk) * k.nc;
-  const size_t count = per_column * size_t(columns);
-  const uint64_t first = (uint64_t(i) * k.nj + j) * per_column;
-  unsigned char raw[8 * 4096];
-  size_t done = 0;
-  while (done < count) {
+  const size_t count = size_t(k.nk) * k.nc * size_t(columns);
+  const uint64_t first = column_value(h, b, i, j);
+  unsigned char raw[8 * 4096];  // a chunk at a time: no allocation for one column
+  for (size_t done = 0; done < count;) {
     const size_t take = std::min(count - done, sizeof raw / size_t(h.precision));
-    const size_t bytes = take * h.precision;
-    const ssize_t got =
-        ::pread(fd, raw, bytes, off_t(k.offset + (first + done) * uint64_t(h.precision)));
-    if (got != ssize_t(bytes)) return Status::IOError("cannot read the rfile's values");
-    if (h.swap) {
-      for (size_t v = 0; v < take; ++v) {
-        unsigned char* p = raw + v * h.precision;
-        for (int a = 0; a < h.precision / 2; ++a) std::swap(p[a], p[h.precision - 1 - a]);
-      }
-    }
-    if (h.precision == 4) {
-      for (size_t v = 0; v < take; ++v) {
-        float f;
-        std::memcpy(&f, raw + v * 4, 4);
-        out[done + v] = f;
-      }
-    } else {
-      std::memcpy(&out[done], raw, take * 8);
-    }
+    WEAVER_RETURN_IF_ERROR(read_rfile_bytes(fd, k.offset + (first + done) * uint64_t(h.precision),
+                                            take * h.precision, raw));
+    to_machine_order(h, raw, take);
+    rfile_decode(h.precision, raw, take, out + done);
     done += take;
   }
   return Status::Ok();

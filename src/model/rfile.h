@@ -102,6 +102,12 @@ Status read_rfile_column(int fd, const RfileHeader& h, int b, int i, int j, doub
 // (they lie so in the file: one read).  REQUIRES: j + count <= the block's nj.
 Status read_rfile_columns(int fd, const RfileHeader& h, int b, int i, int j, int count,
                           double* out);
+// The same columns' bytes as they lie in the file, each value put in the
+// machine's byte order: decode them with rfile_decode.
+Status read_rfile_raw(int fd, const RfileHeader& h, int b, int i, int j, int count,
+                      std::vector<unsigned char>* raw);
+// `count` values of `precision` bytes, in the machine's order, as doubles.
+void rfile_decode(int precision, const unsigned char* raw, size_t count, double* out);
 
 // The file's value for "no data".
 constexpr double kRfileNoData = -999;

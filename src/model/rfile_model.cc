@@ -16,9 +16,9 @@ struct RfileModel::Cache {
   std::vector<uint64_t> tags;  // block, i, j of each slot, plus one; 0: empty
   std::vector<double> values;  // slots x stride
   std::vector<double> scratch;
-  // A run of columns as read, a buffer a block: filling one may look up the
-  // block below's (whose own run then goes to its own buffer).
-  std::vector<std::vector<double>> runs;
+  // A run of columns' bytes as read, a buffer a block: filling one may look
+  // up the block below's (whose own run then goes to its own buffer).
+  std::vector<std::vector<unsigned char>> runs;
   std::vector<double> lattice;  // lattice_in_block's columns
 };
 
@@ -149,12 +149,15 @@ void RfileModel::fill_column(Cache& c, int b, int i, int j, double* out) const {
   while (out[size_t(k0) * nc + 2] == kRfileNoData && k0 < k.nk - 1) ++k0;
   if (out[size_t(k0) * nc + 2] == kRfileNoData) {
     // Only the bottom block could lack a donor, and open() refused that.
+    // The donor's lookup may take out's slot: its values are taken first,
+    // and out is all written after (k0 is its last level here).
     const int d = b + 1;
     const RfileBlock& dk = h_.blocks[d];
     const int id = std::min(dk.ni - 1, static_cast<int>(std::trunc(i * k.hh / dk.hh)));
     const int jd = std::min(dk.nj - 1, static_cast<int>(std::trunc(j * k.hh / dk.hh)));
-    const double* donor = column(c, d, id, jd);
-    std::memcpy(out + size_t(k0) * nc, donor, sizeof(double) * size_t(nc));
+    double top[5];
+    std::memcpy(top, column(c, d, id, jd), sizeof(double) * size_t(nc));
+    std::memcpy(out + size_t(k0) * nc, top, sizeof(double) * size_t(nc));
   }
   for (int z = 0; z < k0; ++z)
     std::memcpy(out + size_t(z) * nc, out + size_t(k0) * nc, sizeof(double) * size_t(nc));
@@ -164,27 +167,27 @@ const double* RfileModel::column(Cache& c, int b, int i, int j) const {
   const uint64_t tag = column_tag(b, i, j);
   const size_t s = column_slot(tag, slots_);
   if (c.tags[s] == tag) return c.values.data() + s * stride_;
-  // A miss reads its run of columns from j on in one read, fills each in
-  // the run's buffer (a donor's lookup may take any slot meanwhile), then
-  // keeps them all, the asked one last, so that its slot holds it.
+  // A miss reads its run of columns from j on in one read and decodes each
+  // into its slot, where it is filled; the asked one last, so that its slot
+  // holds it (a donor's lookup, or a later column of the run, may take any
+  // slot meanwhile).
   const RfileBlock& k = h_.blocks[b];
   const int count = std::min(kRunColumns, k.nj - j);
   const size_t per = size_t(k.nk) * k.nc;
   if (c.runs.size() < h_.blocks.size()) c.runs.resize(h_.blocks.size());
-  std::vector<double>& run = c.runs[b];
-  run.resize(per * size_t(count));
-  const Status st = read_rfile_columns(fd_, h_, b, i, j, count, run.data());
+  std::vector<unsigned char>& run = c.runs[b];
+  const Status st = read_rfile_raw(fd_, h_, b, i, j, count, &run);
   if (!st.ok()) {
     fail(st);
     std::fill(c.scratch.begin(), c.scratch.end(), 0.0);
     return c.scratch.data();
   }
   for (int q = count - 1; q >= 0; --q) {
-    double* col = run.data() + per * size_t(q);
-    fill_column(c, b, i, j + q, col);
     const uint64_t tag_q = column_tag(b, i, j + q);
     const size_t s_q = column_slot(tag_q, slots_);
-    std::memcpy(c.values.data() + s_q * stride_, col, per * sizeof(double));
+    double* col = c.values.data() + s_q * stride_;
+    rfile_decode(h_.precision, run.data() + per * size_t(q) * h_.precision, per, col);
+    fill_column(c, b, i, j + q, col);
     c.tags[s_q] = tag_q;
   }
   return c.values.data() + s * stride_;

@@ -94,7 +94,9 @@ class RfileModel final : public VelocityModel {
   // 1.09 GB test rfile, construct 10.5 s against 11.1-11.9 s one by one).
   const double* column(Cache& c, int b, int i, int j) const;
   bool corner_columns(Cache& c, int b, int i0, int j0, const double* (&cols)[2][2]) const;
-  // Fills the no-data levels of column (i, j) of block b, as read, in place.
+  // Fills the no-data levels of column (i, j) of block b, as decoded, in
+  // place: a donor's lookup may take col's slot, and col is all written
+  // after it.
   void fill_column(Cache& c, int b, int i, int j, double* col) const;
   // The lattice points of one block (zs all in it): lattice_at's work.
   void lattice_in_block(Cache& c, int b, const double* xs, int nx, const double* ys, int ny,

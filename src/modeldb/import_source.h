@@ -3,6 +3,7 @@
 // And the simplest source, a 1-D layer table (model/layer_table.h).
 #pragma once
 
+#include <cfloat>
 #include <functional>
 #include <string>
 #include <vector>
@@ -21,6 +22,14 @@ using ModelEmit = std::function<Status(const Octant&, const ModelValues&)>;
 // density positive, Q not negative, all finite), or -1.  Cheap: it runs on
 // every record.
 int bad_model_field(const ModelValues& v, int fields);
+// Whether bad_model_field finds nothing, without a branch a field: the
+// check of every sampled cell (NaN fails the compares).
+inline bool model_fields_ok(const ModelValues& v, int fields) {
+  bool ok = true;
+  for (int f = 0; f < 3; ++f) ok &= (v[f] > 0) & (v[f] <= FLT_MAX);
+  for (int f = 3; f < fields; ++f) ok &= (v[f] >= 0) & (v[f] <= FLT_MAX);
+  return ok;
+}
 // The error for a record whose field f is out of range; `what` names it.
 Status bad_model_value(const std::string& what, const ModelValues& v, int f);
 

@@ -27,7 +27,8 @@ struct RfilePlan {
 };
 
 // Opens and checks the file (its column caches for up to `threads`
-// threads within `memory`); sets the model's placement in *info.
+// threads within `memory`, at most 8 MB a thread); sets the model's
+// placement in *info.
 Status plan_rfile(const std::string& path, MemoryBudget memory, int threads, RfilePlan* p,
                   ModelInfo* info);
 
