@@ -13,6 +13,7 @@
 #include <random>
 
 #include "construct/descent.h"
+#include "construct/estimate.h"
 #include "db/database.h"
 #include "model/grid_model.h"
 #include "model/velocity_model.h"
@@ -511,5 +512,51 @@ TEST(Construct, ResolvesDomainsIntoBlocksAndRejectsBadOptions) {
   EXPECT_TRUE(plan_construct(o, &p).is_invalid_argument());
 }
 
+// The disk check refuses a run that cannot fit even where the materials pack
+// best, names that figure and the free space, and lets one through that
+// fits at the best packing though not at the worst (the plan says so); the
+// element cap holds before it.  The file system's own free space is the
+// measure: the sizes are set far past any disk and far under it.
+TEST(Construct, TheDiskCheckRefusesOnlyWhatCannotFitAtTheBestPacking) {
+  testing::TempDir dir;
+  const double free = free_disk_bytes(dir.file("db"));
+  ASSERT_GT(free, 1e6) << "the test needs a file system it can measure";
+  ConstructOptions o;
+  ConstructEstimate e;
+  e.elements = 1000;
+  e.least_disk_bytes = free * 1e3, e.disk_bytes = free * 1e4;
+  Status st = check_construct_fits(o, e, dir.file("db"));
+  ASSERT_TRUE(st.is_invalid_argument()) << st.to_string();
+  EXPECT_NE(st.message().find("needing at least"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("free"), std::string::npos) << st.message();
+  e.least_disk_bytes = 1e3;  // the worst still far past the disk
+  EXPECT_TRUE(check_construct_fits(o, e, dir.file("db")).ok());
+  o.max_elements = 999;
+  EXPECT_TRUE(check_construct_fits(o, e, dir.file("db")).is_invalid_argument());
+}
+
+// The least disk grows with the elements and lies under the worst, for
+// `construct` and for `mesh` (which adds the node table), packed or not.
+TEST(Construct, TheDiskEstimateBracketsTheTables) {
+  double last_least = 0;
+  for (double freq : {0.25, 0.5}) {
+    for (bool mesh : {false, true}) {
+      ConstructOptions o;
+      o.model = "basin";
+      o.freq = freq;
+      o.whole_pipeline = mesh;
+      ConstructPlan p;
+      ASSERT_OK(plan_construct(o, &p));
+      const ConstructEstimate e = planned_estimate(p);
+      EXPECT_GT(e.elements, 1e5);
+      EXPECT_GT(e.least_disk_bytes, 0.9 * e.elements) << freq << " " << mesh;
+      EXPECT_LT(e.least_disk_bytes, e.disk_bytes / 3) << freq << " " << mesh;
+      if (mesh) {
+        EXPECT_GT(e.least_disk_bytes, last_least) << "mesh adds the node table";
+      }
+      last_least = e.least_disk_bytes;
+    }
+  }
+}
 }  // namespace
 }  // namespace weaver

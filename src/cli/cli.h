@@ -57,7 +57,10 @@ int parse_construct_command(int argc, char** argv, std::string* db, weaver::Cons
                             bool* quiet);
 // The construct options and plan printout shared by `construct` and `mesh`.
 Status parse_construct_options(const ParsedArgs& args, weaver::ConstructOptions* o);
-void print_construct_plan(const weaver::ConstructOptions& o, const weaver::ConstructPlan& p);
+// The plan's lines; db names the database to be written (its file
+// system's free space is set against the estimate's disk).
+void print_construct_plan(const weaver::ConstructOptions& o, const weaver::ConstructPlan& p,
+                          const std::string& db);
 // `export`'s options (weaver export's, and weaver-mpi's), DB aside.
 Status parse_export_options(const ParsedArgs& args, weaver::ExportOptions* o);
 // The "constructed ..." line of a finished construct that took secs.

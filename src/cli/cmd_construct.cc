@@ -7,6 +7,7 @@
 
 #include "cli/cli.h"
 #include "construct/construct.h"
+#include "construct/estimate.h"
 #include "model/geo_frame.h"
 #include "modeldb/open_model.h"
 #include "util/progress.h"
@@ -182,7 +183,8 @@ Status import_model_option(const std::string& db, ConstructOptions* o) {
   return Status::Ok();
 }
 
-void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
+void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p,
+                          const std::string& db) {
   std::printf("model      %s\n", p.model.c_str());
   std::printf("rule       edge <= Vs_min / (%g Hz x %g ppw)%s\n", o.freq, o.ppw,
               o.vs_min > 0 ? (", Vs floor " + std::to_string(int(o.vs_min)) + " m/s").c_str() : "");
@@ -208,8 +210,17 @@ void print_construct_plan(const ConstructOptions& o, const ConstructPlan& p) {
                 model_z_name(p.ground.model_z));
   }
   if (!p.surface_outside.empty()) std::printf("surface    %s\n", p.surface_outside.c_str());
-  std::printf("estimate   about %.3g elements, %.3g GB of disk (a coarse sampling of the model)\n",
-              p.estimated_elements, p.estimated_disk_bytes / 1e9);
+  std::printf(
+      "estimate   about %.3g elements, %.3g to %.3g GB of disk (a coarse sampling of the model; "
+      "the less where neighbouring leaves share their materials)\n",
+      p.estimated_elements, p.estimated_least_disk_bytes / 1e9, p.estimated_disk_bytes / 1e9);
+  const double free = free_disk_bytes(db);
+  if (free >= 0 && free < p.estimated_disk_bytes) {
+    std::printf(
+        "disk       %.3g GB free: enough only if the materials pack well; a run that fills "
+        "the disk fails and leaves no partial table\n",
+        free / 1e9);
+  }
 }
 
 int parse_construct_command(int argc, char** argv, std::string* db, ConstructOptions* o,
@@ -244,7 +255,7 @@ int cmd_construct(int argc, char** argv) {
   st = plan_construct(o, &plan);
   if (st.is_invalid_argument()) return usage_error("construct", st.message(), kUsage);
   if (!st.ok()) return report("construct", st);
-  print_construct_plan(o, plan);
+  print_construct_plan(o, plan, db);
   std::fflush(stdout);
   const auto t0 = std::chrono::steady_clock::now();
   ProgressLine line(ProgressLine::style_for_stderr(quiet), "construct", "leaves");

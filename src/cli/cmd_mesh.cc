@@ -149,16 +149,14 @@ int cmd_mesh(int argc, char** argv) {
   st = plan_construct(co, &plan);
   if (st.is_invalid_argument()) return usage_error("mesh", st.message(), kUsage);
   if (!st.ok()) return report("mesh", st);
-  print_construct_plan(co, plan);
+  print_construct_plan(co, plan, db);
   // One pass commits once: construct stages the octant table in this
   // writer, and extract's commit makes it live with the node table, so a
   // re-mesh leaves the old mesh or the new one (Database::stage).
   std::unique_ptr<Database> writer;
   if (co.balanced) {
-    ConstructEstimate e;  // refuse a runaway size before the writer creates DB
-    e.elements = plan.estimated_elements;
-    e.disk_bytes = plan.estimated_disk_bytes;
-    st = check_construct_fits(co, e, db);
+    // Refuse a runaway size before the writer creates DB.
+    st = check_construct_fits(co, planned_estimate(plan), db);
     if (st.ok()) st = Database::open(db, Database::Mode::kWrite, true, &writer);
     if (!st.ok()) return report("mesh", st);
     co.writer = eo.writer = writer.get();

@@ -366,6 +366,7 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
   const ConstructEstimate e = estimate_construct(o, *p, *model);
   p->estimated_elements = e.elements;
   p->estimated_disk_bytes = e.disk_bytes;
+  p->estimated_least_disk_bytes = e.least_disk_bytes;
   return Status::Ok();
 }
 
@@ -461,10 +462,7 @@ Status construct_octree(const std::string& db_dir, const ConstructOptions& o, Co
   const ConstructMemory memory(o.memory);
   std::unique_ptr<VelocityModel> model;
   WEAVER_RETURN_IF_ERROR(plan_and_open(o, memory, p, &model));
-  ConstructEstimate e;
-  e.elements = p->estimated_elements;
-  e.disk_bytes = p->estimated_disk_bytes;
-  WEAVER_RETURN_IF_ERROR(check_construct_fits(o, e, db_dir));
+  WEAVER_RETURN_IF_ERROR(check_construct_fits(o, planned_estimate(*p), db_dir));
   std::unique_ptr<Database> own;
   Database* db = o.writer;
   if (db == nullptr) {

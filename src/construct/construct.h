@@ -127,8 +127,9 @@ struct ConstructPlan {
   SurfaceCrs surface_crs = SurfaceCrs::kFrame;
   Ground ground;
   bool carved = false;
-  double estimated_elements = 0;  // from a coarse sampling (construct/estimate.h)
-  double estimated_disk_bytes = 0;
+  double estimated_elements = 0;          // from a coarse sampling (construct/estimate.h)
+  double estimated_disk_bytes = 0;        // at the worst packing of materials
+  double estimated_least_disk_bytes = 0;  // at the best
 };
 
 struct ConstructResult {

@@ -15,18 +15,21 @@ namespace {
 // Sampling cells per domain: enough to see a basin's bowls, cheap (one model
 // sample each, a few milliseconds).
 constexpr double kSampleCells = 32768;
-// Bytes per leaf of an octant table with materials (measured: packed 5.6,
-// plain 20.2 on the 0.5 Hz basin), rounded up.
-constexpr double kPackedLeafBytes = 6, kPlainLeafBytes = 21;
-// A whole `mesh` run needs, besides the octant table: balance's output (up
-// to ~1.1x the input) and scratch spools, and the node table (~0.7 bytes a
-// node, ~1.1 nodes per leaf): about 3 octant tables' worth.
-constexpr double kPipelineTables = 3;
+// Bytes per leaf of an octant table with materials, packed: from 0.9 where
+// neighbours share their materials (measured: the 2 Hz basin 1.06, the 1 Hz
+// test rfile 0.95) to 6 where every leaf has its own (the 2 Hz basin under
+// a DEM, its materials read by depth below the ground: 5.2); plain: 20.2.
+constexpr double kPackedLeafBytesLeast = 0.9, kPackedLeafBytes = 6, kPlainLeafBytes = 21;
+// `mesh` adds the node table (about 0.7 bytes a leaf: the 2 Hz basin's is
+// 0.69) and the boundary table (a few hundredths), and its scratch keeps
+// the peak within 5% of the final database (measured by ground_bench.py).
+constexpr double kMeshBytesPerLeaf = 0.8, kScratch = 1.05;
 // Room kept free for everything else on the disk.
 constexpr double kHeadroom = 1.1;
 
-// Free bytes on the file system of dir (or of its nearest existing parent).
-double free_bytes(const std::string& dir) {
+}  // namespace
+
+double free_disk_bytes(const std::string& dir) {
   std::filesystem::path p = std::filesystem::absolute(dir);
   std::error_code ec;
   while (!p.empty() && !std::filesystem::exists(p, ec) && p != p.parent_path()) p = p.parent_path();
@@ -35,7 +38,13 @@ double free_bytes(const std::string& dir) {
   return double(s.f_bavail) * double(s.f_frsize);
 }
 
-}  // namespace
+ConstructEstimate planned_estimate(const ConstructPlan& p) {
+  ConstructEstimate e;
+  e.elements = p.estimated_elements;
+  e.disk_bytes = p.estimated_disk_bytes;
+  e.least_disk_bytes = p.estimated_least_disk_bytes;
+  return e;
+}
 
 void ZOrderShare::add(uint64_t cell_key, double leaves) { cells_.push_back({cell_key, leaves}); }
 
@@ -90,8 +99,11 @@ ConstructEstimate estimate_construct(const ConstructOptions& o, const ConstructP
         }
       }
   if (share != nullptr) share->finish();
+  const double mesh = o.whole_pipeline ? kMeshBytesPerLeaf : 0;
   e.table_bytes = e.elements * (o.packed ? kPackedLeafBytes : kPlainLeafBytes);
-  e.disk_bytes = e.table_bytes * (o.whole_pipeline ? kPipelineTables : 1) * kHeadroom;
+  e.disk_bytes = (e.table_bytes + e.elements * mesh) * kScratch * kHeadroom;
+  e.least_disk_bytes =
+      e.elements * ((o.packed ? kPackedLeafBytesLeast : kPlainLeafBytes) + mesh) * kScratch;
   return e;
 }
 
@@ -103,11 +115,12 @@ Status check_construct_fits(const ConstructOptions& o, const ConstructEstimate& 
                                    si_text(double(o.max_elements)) +
                                    " (lower --freq or --domain, or raise --max-elements)");
   }
-  const double avail = free_bytes(db_dir);
-  if (avail >= 0 && e.disk_bytes > avail) {
-    return Status::InvalidArgument(
-        "the octree would have about " + si_text(e.elements) + " elements needing about " +
-        si_text(e.disk_bytes) + "B of disk, but " + db_dir + " has " + si_text(avail) + "B free");
+  const double avail = free_disk_bytes(db_dir);
+  if (avail >= 0 && e.least_disk_bytes > avail) {
+    return Status::InvalidArgument("the octree would have about " + si_text(e.elements) +
+                                   " elements needing at least " + si_text(e.least_disk_bytes) +
+                                   "B of disk, but " + db_dir + " has " + si_text(avail) +
+                                   "B free");
   }
   return Status::Ok();
 }

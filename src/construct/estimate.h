@@ -15,12 +15,25 @@
 
 namespace weaver {
 
+// Disk: what the run needs free (its tables, and for `mesh` the node and
+// boundary tables and the scratch beside them), at the worst packing of
+// materials (every leaf's its own) and at the best (neighbours share them),
+// which the estimate cannot tell apart: a run that cannot fit even at the
+// best is refused; one that fits at the best only is said to risk it.
 struct ConstructEstimate {
-  double elements = 0;     // leaves of the constructed octree
-  double table_bytes = 0;  // its octant table
-  double disk_bytes = 0;   // what the run needs free (all stages for `mesh`)
-  int sample_level = 0;    // the level of the sampling cells
+  double elements = 0;          // leaves of the constructed octree
+  double table_bytes = 0;       // its octant table, at the worst packing
+  double disk_bytes = 0;        // at the worst packing
+  double least_disk_bytes = 0;  // at the best
+  int sample_level = 0;         // the level of the sampling cells
 };
+
+// The estimate a plan carries (plan_construct made it).
+ConstructEstimate planned_estimate(const ConstructPlan& p);
+
+// Free bytes on the file system of dir (or of its nearest existing parent);
+// -1 if it cannot be told.
+double free_disk_bytes(const std::string& dir);
 
 // The estimate spread along the Z-order: how much of the octree lies before
 // a key.  Construct's progress reports fraction_before(last leaf written):
@@ -45,7 +58,8 @@ ConstructEstimate estimate_construct(const ConstructOptions& o, const ConstructP
                                      const VelocityModel& model, ZOrderShare* share = nullptr);
 
 // InvalidArgument naming the numbers when the estimate exceeds
-// o.max_elements or the free space of the file system holding db_dir.
+// o.max_elements, or when even its least disk exceeds the free space of the
+// file system holding db_dir.
 Status check_construct_fits(const ConstructOptions& o, const ConstructEstimate& e,
                             const std::string& db_dir);
 

@@ -94,11 +94,8 @@ std::string prepare(const std::string& dir, ConstructOptions* o, ConstructPlan* 
   Status st = cli::import_model_option(dir, o);
   if (st.ok()) st = plan_construct(*o, plan);
   if (!st.ok()) return cli::error_text(st);
-  cli::print_construct_plan(*o, *plan);
-  ConstructEstimate e;
-  e.elements = plan->estimated_elements;
-  e.disk_bytes = plan->estimated_disk_bytes;
-  st = check_construct_fits(*o, e, dir);
+  cli::print_construct_plan(*o, *plan, dir);
+  st = check_construct_fits(*o, planned_estimate(*plan), dir);
   if (st.ok()) st = Database::open(dir, Database::Mode::kWrite, true, db);
   if (!st.ok()) return cli::error_text(st);
   *number = (*db)->reserve_file_number();
