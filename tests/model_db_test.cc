@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include "construct/construct.h"
@@ -17,6 +18,7 @@
 #include "modeldb/grid_import.h"
 #include "modeldb/model_import.h"
 #include "storage/btree.h"
+#include "test_mesh.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -292,6 +294,111 @@ TEST(ModelDb, ConstructSamplesTheModelDatabaseOnOneAndTwoThreads) {
       fine += vs_min < 1000;
     }
     EXPECT_GT(fine, 0);  // the slow inclusion was found and refined
+  }
+}
+
+// A grid of 80 x 80 x 56 points at 100 m (more than a region's raster holds,
+// so its cells are shared by smaller octants), merged at 2%: slow inclusions in a
+// gradient, uniform patches, and noise that keeps some points alone.
+std::string import_bounds_model(const std::string& name) {
+  GridSpec g;
+  g.nx = g.ny = 80, g.nz = 56;
+  g.dx = g.dy = g.dz = 100;
+  std::vector<Material> values;
+  uint64_t noise = 12345;
+  for (int k = 0; k < g.nz; ++k)
+    for (int j = 0; j < g.ny; ++j)
+      for (int i = 0; i < g.nx; ++i) {
+        noise = noise * 6364136223846793005ull + 1442695040888963407ull;
+        float vs = k < 20 && (i / 9 + j / 7) % 3 == 0 ? 400 : 1000 + 30 * k;
+        if ((i * 7 + j * 3 + k) % 97 == 0) vs += float(noise >> 54);  // lone points
+        values.push_back({2 * vs, vs, 2000});
+      }
+  const std::string grid = ::testing::TempDir() + name + ".grid";
+  EXPECT_TRUE(write_grid_model(grid, g, values).ok());
+  const std::string model = fresh(name);
+  ModelImportOptions io;
+  io.from = "grid:" + grid;
+  io.tolerance = 0.02;
+  ModelImportResult ir;
+  EXPECT_TRUE(import_model(model, io, &ir).ok());
+  return model;
+}
+
+// The bounds of a box hold the Vs at() gives at every point of it, corners
+// and faces included (the reference: a 7 x 7 x 7 lattice over the closed
+// box and 200 random points in it, each looked up alone), for boxes of every
+// size, aligned or not, inside the focused region; and they are tight where
+// the model is uniform.  Outside the region there are none.
+TEST(ModelDb, VsBoundsHoldEveryPointOfTheBox) {
+  const std::string model = import_bounds_model("bounds");
+  std::unique_ptr<DbModel> m;
+  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &m).ok());
+  const double focus_lo[3] = {300, 0, 100}, focus_hi[3] = {7900, 7000, 5500};
+  m->focus(focus_lo, focus_hi);
+  std::mt19937_64 rng(7);
+  const auto uniform = [&](double a, double b) {
+    return std::uniform_real_distribution<double>(a, b)(rng);
+  };
+  int tight = 0, boxes = 0;
+  for (int n = 0; n < 400; ++n) {
+    double lo[3], hi[3];
+    const double side = n < 4 ? 6000 : std::pow(2.0, uniform(3, 12));
+    for (int a = 0; a < 3; ++a) {
+      const double room = focus_hi[a] - focus_lo[a];
+      const double s = std::min(side, room);
+      lo[a] = n % 2 ? focus_lo[a] + std::floor(uniform(0, room - s) / 100) * 100
+                    : uniform(focus_lo[a], focus_hi[a] - s);
+      hi[a] = lo[a] + s;
+    }
+    float vs_lo = 0, vs_hi = 0;
+    ASSERT_TRUE(m->vs_bounds(lo, hi, &vs_lo, &vs_hi));
+    ++boxes;
+    tight += vs_lo == vs_hi;
+    const auto check = [&](double x, double y, double z) {
+      const float vs = m->at(x, y, z).vs;
+      ASSERT_LE(vs_lo, vs) << x << " " << y << " " << z << " in box " << n;
+      ASSERT_GE(vs_hi, vs) << x << " " << y << " " << z << " in box " << n;
+    };
+    for (int k = 0; k < 7; ++k)
+      for (int j = 0; j < 7; ++j)
+        for (int i = 0; i < 7; ++i) {
+          check(lo[0] + (hi[0] - lo[0]) * i / 6, lo[1] + (hi[1] - lo[1]) * j / 6,
+                lo[2] + (hi[2] - lo[2]) * k / 6);
+        }
+    for (int r = 0; r < 200; ++r) {
+      check(uniform(lo[0], hi[0]), uniform(lo[1], hi[1]), uniform(lo[2], hi[2]));
+    }
+  }
+  EXPECT_GT(tight, boxes / 20) << "uniform patches should give equal bounds";
+  const double out_lo[3] = {0, 0, 0}, out_hi[3] = {7900, 7900, 5500};
+  float a = 0, b = 0;
+  EXPECT_FALSE(m->vs_bounds(out_lo, out_hi, &a, &b)) << "the box reaches past the region";
+}
+
+// Construct from a model database decides the octants its bounds settle as
+// the samples would: the tables, balanced and not, are those of a construct
+// that samples every octant, over a domain past the model's box (clamped).
+TEST(ModelDb, VsBoundsChangeNoConstructedTable) {
+  const std::string model = import_bounds_model("bounds_construct");
+  for (bool balanced : {true, false}) {
+    std::string tables[2];
+    for (int bounds = 0; bounds < 2; ++bounds) {
+      ConstructOptions o;
+      o.model = "db:" + model;
+      o.freq = 1.5;
+      o.domain_m = {8800, 8000, 6000};
+      o.balanced = balanced;
+      o.model_bounds = bounds == 1;
+      o.threads = 2;
+      ConstructPlan p;
+      ConstructResult r;
+      const std::string db = fresh("bounds_construct_" + std::to_string(bounds));
+      ASSERT_TRUE(construct_octree(db, o, &p, &r).ok());
+      EXPECT_GT(r.elements, 10000u);
+      tables[bounds] = testing::table_bytes(db);
+    }
+    ASSERT_EQ(tables[1], tables[0]) << (balanced ? "balanced" : "unbalanced");
   }
 }
 

@@ -267,6 +267,16 @@ void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs
       }
 }
 
+// at() of a point of the box finds its pixel in [pixel(lo), pixel(hi)]
+// (pixel_on is monotone), so the region's bounds over those pixels hold.
+bool DbModel::vs_bounds(const double lo[3], const double hi[3], float* vs_lo, float* vs_hi) const {
+  Reader& r = reader();
+  if (!r.opened.ok()) return false;
+  bool clamped = false;
+  return r.region.vs_bounds(pixel_of(lo[0], lo[1], lo[2], &clamped),
+                            pixel_of(hi[0], hi[1], hi[2], &clamped), vs_lo, vs_hi);
+}
+
 std::string DbModel::describe() const {
   return "model database " + dir_ + " (" + info_.source + ", " + std::to_string(octants_) +
          " octants)";

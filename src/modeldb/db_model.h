@@ -59,6 +59,9 @@ class DbModel final : public VelocityModel {
   void focus(const double lo[3], const double hi[3]) const override;
   void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                      float* out) const override;
+  // From the focused region's Vs pyramid (model_region.h), where it holds
+  // the box; false elsewhere.
+  bool vs_bounds(const double lo[3], const double hi[3], float* vs_lo, float* vs_hi) const override;
   std::string describe() const override;
   std::string geo() const override { return info_.geo; }
   bool has_q() const override { return info_.has_q; }

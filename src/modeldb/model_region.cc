@@ -1,6 +1,7 @@
 #include "modeldb/model_region.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "db/octant_table.h"
@@ -52,6 +53,7 @@ Status ModelRegion::load(BTree& table, Coord lo, Coord hi, size_t record_bytes,
     }
   }
   build_raster();
+  build_bounds();
   loaded_ = true;
   return Status::Ok();
 }
@@ -130,6 +132,96 @@ void ModelRegion::build_raster() {
           raster_[(size_t{z} * dims_[1] + y) * dims_[0] + x] = v;
         }
   }
+}
+
+void ModelRegion::build_bounds() {
+  const size_t cells = raster_.size();
+  pyramid_.resize(1);
+  Level& base = pyramid_[0];
+  std::copy(dims_, dims_ + 3, base.dims);
+  base.ranges.resize(cells);
+  // Mixed cells: the least and greatest Vs of the octants inside, and how
+  // much of the cell's part in the box they fill (less: a hole, Vs 0).
+  std::vector<uint64_t> filled;
+  for (size_t c = 0; c < cells; ++c) {
+    const int32_t v = raster_[c];
+    const float vs = v >= 0 ? values_[v][1] : 0.0f;
+    base.ranges[c] = v == kMixed ? VsRange{HUGE_VALF, -HUGE_VALF} : VsRange{vs, vs};
+  }
+  const uint32_t box_lo[3] = {lo_.x, lo_.y, lo_.z}, box_hi[3] = {hi_.x, hi_.y, hi_.z};
+  // The pixels of [from, from + edge) on each axis inside the box.
+  const auto in_box = [&](const uint32_t from[3], uint32_t edge) {
+    uint64_t n = 1;
+    for (int a = 0; a < 3; ++a) {
+      const uint64_t f = std::max(from[a], box_lo[a]);
+      const uint64_t t = std::min<uint64_t>(uint64_t{from[a]} + edge - 1, box_hi[a]);
+      n *= t >= f ? t - f + 1 : 0;
+    }
+    return n;
+  };
+  for (size_t i = 0; i < keys_.size(); ++i) {
+    const Octant o = octant_from_key(keys_[i]);
+    if (o.level <= kMaxLevel - shift_) continue;  // whole cells: ranged above
+    const uint32_t cx = (o.x >> shift_) - base_[0], cy = (o.y >> shift_) - base_[1],
+                   cz = (o.z >> shift_) - base_[2];
+    if (cx >= dims_[0] || cy >= dims_[1] || cz >= dims_[2]) continue;  // outside the box
+    const size_t c = (size_t{cz} * dims_[1] + cy) * dims_[0] + cx;
+    if (filled.empty()) filled.assign(cells, 0);
+    const uint32_t corner[3] = {o.x, o.y, o.z};
+    filled[c] += in_box(corner, octant_edge(o));
+    VsRange& r = base.ranges[c];
+    r.lo = std::min(r.lo, values_[i][1]);
+    r.hi = std::max(r.hi, values_[i][1]);
+  }
+  for (size_t c = 0; c < cells; ++c) {
+    if (raster_[c] != kMixed) continue;
+    const uint32_t cx = uint32_t(c % dims_[0]), cy = uint32_t(c / dims_[0] % dims_[1]),
+                   cz = uint32_t(c / dims_[0] / dims_[1]);
+    const uint32_t corner[3] = {(cx + base_[0]) << shift_, (cy + base_[1]) << shift_,
+                                (cz + base_[2]) << shift_};
+    if (filled.empty() || filled[c] < in_box(corner, uint32_t{1} << shift_)) {
+      base.ranges[c].lo = std::min(base.ranges[c].lo, 0.0f);
+      base.ranges[c].hi = std::max(base.ranges[c].hi, 0.0f);
+    }
+  }
+  while (pyramid_.back().dims[0] > 1 || pyramid_.back().dims[1] > 1 ||
+         pyramid_.back().dims[2] > 1) {
+    const Level& fine = pyramid_.back();
+    Level up;
+    for (int a = 0; a < 3; ++a) up.dims[a] = (fine.dims[a] + 1) / 2;
+    up.ranges.assign(size_t{up.dims[0]} * up.dims[1] * up.dims[2], VsRange{HUGE_VALF, -HUGE_VALF});
+    for (uint32_t z = 0; z < fine.dims[2]; ++z)
+      for (uint32_t y = 0; y < fine.dims[1]; ++y)
+        for (uint32_t x = 0; x < fine.dims[0]; ++x) {
+          const VsRange& f = fine.ranges[(size_t{z} * fine.dims[1] + y) * fine.dims[0] + x];
+          VsRange& u = up.ranges[(size_t{z / 2} * up.dims[1] + y / 2) * up.dims[0] + x / 2];
+          u.lo = std::min(u.lo, f.lo);
+          u.hi = std::max(u.hi, f.hi);
+        }
+    pyramid_.push_back(std::move(up));
+  }
+}
+
+bool ModelRegion::vs_bounds(Coord lo, Coord hi, float* vs_lo, float* vs_hi) const {
+  if (!covers(lo) || !covers(hi)) return false;
+  const uint32_t from[3] = {cell_x(lo.x), cell_y(lo.y), cell_z(lo.z)};
+  const uint32_t to[3] = {cell_x(hi.x), cell_y(hi.y), cell_z(hi.z)};
+  int p = 0;
+  while (p + 1 < int(pyramid_.size()) &&
+         ((to[0] >> p) - (from[0] >> p) > 1 || (to[1] >> p) - (from[1] >> p) > 1 ||
+          (to[2] >> p) - (from[2] >> p) > 1)) {
+    ++p;
+  }
+  float l = HUGE_VALF, h = -HUGE_VALF;
+  for (uint32_t z = from[2] >> p; z <= to[2] >> p; ++z)
+    for (uint32_t y = from[1] >> p; y <= to[1] >> p; ++y)
+      for (uint32_t x = from[0] >> p; x <= to[0] >> p; ++x) {
+        const VsRange& r = range(p, x, y, z);
+        l = std::min(l, r.lo);
+        h = std::max(h, r.hi);
+      }
+  *vs_lo = l, *vs_hi = h;
+  return true;
 }
 
 int32_t ModelRegion::search(Coord p) const {

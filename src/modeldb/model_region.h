@@ -16,6 +16,12 @@
 // most kMaxCells.  A cell holds the index of the one octant covering it, or
 // kHole (no octant meets it), or kMixed (smaller octants share it: a binary
 // search of the sorted keys answers).
+//
+// Vs bounds: each cell's least and greatest Vs (of the octants meeting it,
+// 0 where a hole is, as DbModel answers a hole), then a pyramid of 2 x 2 x 2
+// reductions above, so that the bounds over any box come from at most 8
+// entries (the level where the box spans at most 2 a side): wider than the
+// box's own by up to its size, never narrower.
 #pragma once
 
 #include <cstdint>
@@ -61,6 +67,10 @@ class ModelRegion {
   }
   int32_t find(Coord p) const { return find(p, cell_x(p.x), cell_y(p.y), cell_z(p.z)); }
 
+  // Bounds on the Vs at every pixel of the box [lo, hi] (bounds included;
+  // a hole counts as 0): false when the box is not all loaded.
+  bool vs_bounds(Coord lo, Coord hi, float* vs_lo, float* vs_hi) const;
+
   const ModelValues& values(int32_t i) const { return values_[i]; }
   Octant octant(int32_t i) const { return octant_from_key(keys_[i]); }
   size_t octants() const { return keys_.size(); }
@@ -72,6 +82,16 @@ class ModelRegion {
                    bool* full);
   void add(uint64_t key, const std::byte* record, size_t record_bytes);
   void build_raster();
+  // The cells' Vs bounds (pyramid level 0) and the levels above them.
+  void build_bounds();
+  // The Vs bounds of cell (x, y, z) of pyramid level p.
+  struct VsRange {
+    float lo, hi;
+  };
+  const VsRange& range(int p, uint32_t x, uint32_t y, uint32_t z) const {
+    const Level& l = pyramid_[p];
+    return l.ranges[(size_t{z} * l.dims[1] + y) * l.dims[0] + x];
+  }
 
   bool loaded_ = false;
   Coord lo_{0, 0, 0}, hi_{0, 0, 0};
@@ -81,6 +101,11 @@ class ModelRegion {
   uint32_t base_[3] = {0, 0, 0};  // lo >> shift_
   uint32_t dims_[3] = {0, 0, 0};
   std::vector<int32_t> raster_;
+  struct Level {
+    uint32_t dims[3];
+    std::vector<VsRange> ranges;
+  };
+  std::vector<Level> pyramid_;  // [0]: the raster's cells; each next halves every side
 };
 
 }  // namespace weaver
