@@ -50,6 +50,22 @@ class BTreeCursor final : public Cursor {
     *last = keys_[i_ - 1];
     return true;
   }
+  // Moves, either way within the leaf it holds, to the first record with
+  // key >= k when the leaf's keys reach from k or below to k or above;
+  // false (and no move) otherwise, or when not valid().
+  bool seek_in_leaf(uint64_t k) {
+    if (!valid_ || k < keys_[0] || keys_[n_ - 1] < k) return false;
+    i_ = static_cast<uint32_t>(std::lower_bound(keys_, keys_ + n_, k) - keys_);
+    return true;
+  }
+  // The record before the current one in the leaf it holds: false at the
+  // leaf's first record, or when not valid().
+  bool before_in_leaf(uint64_t* key, const std::byte** payload) const {
+    if (!valid_ || i_ == 0) return false;
+    *key = keys_[i_ - 1];
+    *payload = vals_ + size_t{payload_} * (i_ - 1);
+    return true;
+  }
 
  private:
   friend class BTree;

@@ -136,6 +136,48 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
     ASSERT_EQ(it, model_.end());
   }
 
+  // From cursors set at random keys, a seek within the leaf to a key up to
+  // 64 records either way lands where a seek from the tree lands, or
+  // declines (the key lies past the leaf's keys) and stays; the record
+  // before it in the leaf is the floor of a key not in the tree.
+  void check_leaf_seeks() {
+    if (model_.empty()) return;
+    std::mt19937_64 rng(model_.size() + 1);
+    const uint64_t top = std::prev(model_.end())->first + 2;
+    for (int n = 0; n < 300; ++n) {
+      BTreeCursor c;
+      ASSERT_OK(tree_->seek_cursor(rng() % top, &c));
+      if (!c.valid()) continue;
+      const uint64_t at = c.key();
+      auto from = model_.find(at);
+      for (int64_t step = int64_t(rng() % 129) - 64; step != 0 && from != model_.end();) {
+        if (step > 0 && std::next(from) != model_.end())
+          ++from, --step;
+        else if (step < 0 && from != model_.begin())
+          --from, ++step;
+        else
+          break;
+      }
+      const uint64_t k = from->first + rng() % 2;
+      if (!c.seek_in_leaf(k)) {
+        ASSERT_EQ(c.key(), at) << "a declined seek stays";
+        continue;
+      }
+      const auto it = model_.lower_bound(k);
+      ASSERT_NE(it, model_.end());
+      ASSERT_EQ(c.key(), it->first);
+      ASSERT_TRUE(std::equal(it->second.begin(), it->second.end(), c.payload()));
+      uint64_t before = 0;
+      const std::byte* payload = nullptr;
+      if (c.before_in_leaf(&before, &payload)) {
+        ASSERT_NE(it, model_.begin());
+        ASSERT_EQ(before, std::prev(it)->first);
+        ASSERT_TRUE(
+            std::equal(std::prev(it)->second.begin(), std::prev(it)->second.end(), payload));
+      }
+    }
+  }
+
   void check_lookups(uint64_t k);
 
   void check_everything() {
@@ -143,6 +185,7 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
     ASSERT_EQ(tree_->size(), model_.size());
     check_scan(0, static_cast<int>(model_.size()) + 1);
     check_skips();
+    check_leaf_seeks();
   }
 
   testing::TempDir dir_;

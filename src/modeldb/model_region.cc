@@ -45,6 +45,14 @@ Status ModelRegion::load(BTree& table, Coord lo, Coord hi, size_t record_bytes,
   lo_ = lo;
   hi_ = hi;
   bool full = false;
+  // One cursor for all the cells and loads: a cell whose records lie in the
+  // leaf it holds is found there (a seek from the tree decodes a whole
+  // packed leaf again: 60% of a construct from a model database whose
+  // subtrees are small).
+  if (scan_.table != &table) {
+    scan_ = Scan();
+    scan_.table = &table;
+  }
   for (const Octant& cell : covering_cells(lo, hi)) {
     WEAVER_RETURN_IF_ERROR(scan_cell(table, cell, record_bytes, max_octants, &full));
     if (full) {
@@ -65,7 +73,13 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
   std::byte record[sizeof(ModelValues)] = {};
   uint64_t floor_key = 0;
   bool found = false;
-  WEAVER_RETURN_IF_ERROR(floor_holding(table, cell, &floor_key, record, &found));
+  WEAVER_RETURN_IF_ERROR(scan_.seek(table, octant_key(cell)));
+  WEAVER_RETURN_IF_ERROR(
+      scan_.floor(table, octant_key(cell), &floor_key, record, record_bytes, &found));
+  if (found) {
+    const Octant holder = octant_from_key(floor_key);
+    found = holder == cell || octant_is_ancestor(holder, cell);
+  }
   if (found) {
     // Cells inside one octant come one after another in Z-order.
     if (keys_.empty() || keys_.back() != floor_key) add(floor_key, record, record_bytes);
@@ -75,8 +89,7 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
   // A cell reaches past the box by up to its own size: its octants there
   // are skipped, not kept (about half of what the scans read).
   const bool inside = octant_in_box(cell, lo_, hi_);
-  BTreeCursor c;
-  WEAVER_RETURN_IF_ERROR(table.seek_cursor(octant_key(cell), &c));
+  BTreeCursor& c = scan_.cursor;
   while (c.valid() && c.key() < end) {
     if (keys_.size() == max_octants) {
       *full = true;
@@ -87,6 +100,36 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
     }
     WEAVER_RETURN_IF_ERROR(c.next());
   }
+  return Status::Ok();
+}
+
+// When the cursor stands on the first record at or after k0 <= k and that
+// record is at k or later (or there is none), it is the first at or after k
+// too; when k lies within the leaf it holds, the leaf's decoded keys find
+// it; else the tree does.
+Status ModelRegion::Scan::seek(BTree& t, uint64_t k) {
+  const bool stays = known && k0 <= k && (!cursor.valid() || cursor.key() >= k);
+  if (!stays && !cursor.seek_in_leaf(k)) {
+    known = false;
+    WEAVER_RETURN_IF_ERROR(t.seek_cursor(k, &cursor));
+  }
+  known = true, k0 = k;
+  return Status::Ok();
+}
+
+// The cursor stands on the first record at or after k: that record if it
+// is k's, else the one before it in its leaf; the tree answers when that
+// is in another leaf.
+Status ModelRegion::Scan::floor(BTree& t, uint64_t k, uint64_t* key, std::byte* record,
+                                size_t record_bytes, bool* found) {
+  const std::byte* payload = nullptr;
+  if (cursor.valid() && cursor.key() == k) {
+    *key = k, payload = cursor.payload();
+  } else if (!cursor.before_in_leaf(key, &payload)) {
+    return t.floor(k, key, record, found);
+  }
+  std::memcpy(record, payload, std::min(record_bytes, sizeof(ModelValues)));
+  *found = true;
   return Status::Ok();
 }
 

@@ -30,6 +30,7 @@
 #include "model/material_merge.h"
 #include "schema/octant.h"
 #include "schema/status.h"
+#include "storage/btree_cursor.h"
 
 namespace weaver {
 
@@ -78,6 +79,20 @@ class ModelRegion {
 
  private:
   int32_t search(Coord p) const;
+  // The cursor over the table, kept from load to load (the table is read
+  // only while regions load from it): a cell whose records lie in the leaf
+  // it holds is found there.
+  struct Scan {
+    const BTree* table = nullptr;
+    BTreeCursor cursor;
+    bool known = false;  // the cursor stands on the first record at or after k0
+    uint64_t k0 = 0;
+    // Positions the cursor on the first record at or after k.
+    Status seek(BTree& t, uint64_t k);
+    // The record with the greatest key at or below k, after seek(k).
+    Status floor(BTree& t, uint64_t k, uint64_t* key, std::byte* record, size_t record_bytes,
+                 bool* found);
+  };
   Status scan_cell(BTree& table, const Octant& cell, size_t record_bytes, size_t max_octants,
                    bool* full);
   void add(uint64_t key, const std::byte* record, size_t record_bytes);
@@ -101,6 +116,7 @@ class ModelRegion {
   uint32_t base_[3] = {0, 0, 0};  // lo >> shift_
   uint32_t dims_[3] = {0, 0, 0};
   std::vector<int32_t> raster_;
+  Scan scan_;
   struct Level {
     uint32_t dims[3];
     std::vector<VsRange> ranges;
