@@ -14,8 +14,8 @@ namespace {
 // The import's column cache a thread, at most: its subtrees come in key
 // order and read each column about once, so a cache the size of the core's
 // own does (measured on the 1.09 GB test rfile, --memory 1G, 2 threads:
-// 2.63 s at 8 MB a thread against 2.97 s at 512 MB, whose slots are
-// written cold; 4.4 against 5.1 s of CPU).
+// 2.63 s at 8 MB a thread against 2.97 s at the 128 MB --memory gave it,
+// whose slots are written cold; 4.4 against 5.1 s of CPU).
 constexpr uint64_t kImportCacheBytes = 8ull << 20;
 
 }  // namespace
