@@ -14,7 +14,10 @@ constexpr char kUsage[] =
     "For every table of database DB: record count, leaves per level (octant\n"
     "tables), bytes on disk, bytes per record, size against the raw 8-byte key\n"
     "plus payload (below 100% for packed leaf pages), leaf page format and tree\n"
-    "depth.\n";
+    "depth; for the octant table, its frame (tick_m: metres a tick; origin_m:\n"
+    "where tick 0 lies; geo: lon, lat and azimuth of the origin, when known),\n"
+    "model and ground; for the boundary table, its face counts and the least\n"
+    "edge / vp.\n";
 
 }  // namespace
 

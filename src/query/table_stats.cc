@@ -40,7 +40,8 @@ Status table_stats(const std::string& name, BTree& table, TableStats* out) {
     kind = nullptr;
   }
   if (name == kOctantTable) {
-    for (const char* key : {"model", "surface", "top_elevation_m", "model_z", "proj"}) {
+    for (const char* key :
+         {"tick_m", "origin_m", "geo", "model", "surface", "top_elevation_m", "model_z", "proj"}) {
       const std::string v = metadata_item(meta, key);
       if (!v.empty()) s.notes.push_back({key, v});
     }

@@ -99,7 +99,16 @@ if stat.get("database") != db:
     fail(f"stat --json: database {stat.get('database')!r}, given {db!r}")
 if {t["table"] for t in stat["tables"]} < {"octants", "nodes"}:
     fail(f"stat --json: tables {[t['table'] for t in stat['tables']]}")
-octants = next(t for t in stat["tables"] if t["table"] == "octants")["records"]
+octant_stat = next(t for t in stat["tables"] if t["table"] == "octants")
+octants = octant_stat["records"]
+# The frame: metres a tick and the origin, as the octant table's metadata says.
+try:
+    tick = float(octant_stat["tick_m"])
+    origin = [float(v) for v in octant_stat["origin_m"].split(",")]
+except (KeyError, ValueError) as e:
+    fail(f"stat --json: no frame in the octant table's entry ({e}): {octant_stat!r}"[:400])
+if not tick > 0 or len(origin) != 3:
+    fail(f"stat --json: tick_m {tick}, origin_m {origin}")
 extract = strict(run("extract", db, "--json", "--quiet").stdout, "extract --json")
 if extract["elements"] != octants:
     fail(f"extract --json: {extract['elements']} elements, stat says {octants}")
