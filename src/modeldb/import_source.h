@@ -25,10 +25,10 @@ int bad_model_field(const ModelValues& v, int fields);
 // Whether bad_model_field finds nothing, without a branch a field: the
 // check of every sampled cell (NaN fails the compares).
 inline bool model_fields_ok(const ModelValues& v, int fields) {
-  bool ok = true;
-  for (int f = 0; f < 3; ++f) ok &= (v[f] > 0) & (v[f] <= FLT_MAX);
-  for (int f = 3; f < fields; ++f) ok &= (v[f] >= 0) & (v[f] <= FLT_MAX);
-  return ok;
+  int ok = 1;
+  for (int f = 0; f < 3; ++f) ok &= int(v[f] > 0) & int(v[f] <= FLT_MAX);
+  for (int f = 3; f < fields; ++f) ok &= int(v[f] >= 0) & int(v[f] <= FLT_MAX);
+  return ok != 0;
 }
 // The error for a record whose field f is out of range; `what` names it.
 Status bad_model_value(const std::string& what, const ModelValues& v, int f);
