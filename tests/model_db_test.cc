@@ -376,6 +376,40 @@ TEST(ModelDb, VsBoundsHoldEveryPointOfTheBox) {
   EXPECT_FALSE(m->vs_bounds(out_lo, out_hi, &a, &b)) << "the box reaches past the region";
 }
 
+// A reader's regions load one after another over any boxes, overlapping,
+// nested, before and after each other in key order (a construct thread's
+// subtrees and balances): each answers every point as the table does (the
+// reference: a model never focused), and at its own model octant.
+TEST(ModelDb, RegionsLoadedInAnyOrderAnswerAsTheTable) {
+  const std::string model = import_bounds_model("regions");
+  std::unique_ptr<DbModel> m, ref;
+  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &m).ok());
+  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &ref).ok());
+  std::mt19937_64 rng(11);
+  const auto uniform = [&](double a, double b) {
+    return std::uniform_real_distribution<double>(a, b)(rng);
+  };
+  const double extent[3] = {8000, 8000, 5600};
+  for (int n = 0; n < 300; ++n) {
+    double lo[3], hi[3];
+    const double side = std::pow(2.0, uniform(7, 13));
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = uniform(0, std::max(1.0, extent[a] - side));
+      hi[a] = std::min(extent[a], lo[a] + side);
+    }
+    m->focus(lo, hi);
+    for (int r = 0; r < 100; ++r) {
+      const double p[3] = {uniform(lo[0], hi[0]), uniform(lo[1], hi[1]), uniform(lo[2], hi[2])};
+      ModelHit got, want;
+      ASSERT_TRUE(m->lookup(p[0], p[1], p[2], &got).ok()) << "box " << n;
+      ASSERT_TRUE(ref->lookup(p[0], p[1], p[2], &want).ok());
+      ASSERT_EQ(got.octant, want.octant)
+          << "box " << n << " at " << p[0] << " " << p[1] << " " << p[2];
+      ASSERT_EQ(got.values, want.values) << "box " << n;
+    }
+  }
+}
+
 // Construct from a model database decides the octants its bounds settle as
 // the samples would: the tables, balanced and not, are those of a construct
 // that samples every octant, over a domain past the model's box (clamped).

@@ -90,6 +90,9 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
   // are skipped, not kept (about half of what the scans read).
   const bool inside = octant_in_box(cell, lo_, hi_);
   BTreeCursor& c = scan_.cursor;
+  // The cursor moves past k0: it will stand on the first record at or
+  // after the cell's end (a later load may ask for a key before that).
+  scan_.known = false;
   while (c.valid() && c.key() < end) {
     if (keys_.size() == max_octants) {
       *full = true;
@@ -100,6 +103,7 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
     }
     WEAVER_RETURN_IF_ERROR(c.next());
   }
+  scan_.known = true, scan_.k0 = end;
   return Status::Ok();
 }
 
