@@ -1,7 +1,8 @@
 // Point queries as users ask them, on the basin model's 0.5 Hz mesh (0.2 Hz
 // with --small, or any database with --db): a million random points in the
 // domain's bounding box answered with material
-//   - through the C++ API (Explorer::locate_batch), points per second;
+//   - through the library API (MeshDatabase::locate, the million at once) on
+//     1 and 2 threads, points per second;
 //   - end to end by `weaver query DB locate --points FILE --format csv` in a
 //     fresh process (reading text, answering, writing text);
 //   - and by `weaver shell` one query at a time (warm), against one
@@ -20,6 +21,7 @@
 #include "basin_stages.h"
 #include "bench_util.h"
 #include "query/explorer.h"
+#include "weaver/weaver.h"
 
 namespace weaver::bench {
 namespace {
@@ -148,46 +150,54 @@ int main(int argc, char** argv) {
     table.push_back(r);
   };
 
-  // The C++ API: the batches a caller would make, timed inside one process.
-  std::vector<double> rates, cold;
-  double rss = 0;
-  for (int r = 0; r < repeat; ++r) {
-    const std::string line = run_in_child([&](Json* j) {
-      std::unique_ptr<Explorer> ex;
-      if (!Explorer::open(db, MemoryBudget(memory), &ex).ok()) return false;
-      std::vector<PointHit> hits(pts.size());
-      // The first pass reads the table into the pool; a program that keeps
-      // the database open asks at the rate of the next ones (their median).
-      double first = 0;
-      std::vector<double> warm;
-      for (int pass = 0; pass < 4; ++pass) {
-        const double t0 = now_seconds();
-        for (size_t at = 0; at < pts.size(); at += ex->batch_points()) {
-          const size_t n = std::min(ex->batch_points(), pts.size() - at);
-          if (!ex->locate_batch(pts.data() + at, n, hits.data() + at).ok()) return false;
+  // The library API (weaver/weaver.h), as a program calls it: the whole
+  // million in one locate, on 1 thread and on 2 (open's `threads`), timed
+  // inside one process.  The first pass reads the table into the pools; a
+  // program that keeps the database open asks at the rate of the next ones
+  // (their median).
+  std::vector<api::Point> api_points(pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) api_points[i] = {pts[i].x, pts[i].y, pts[i].z};
+  for (const int threads : {1, 2}) {
+    std::vector<double> rates, cold;
+    double rss = 0;
+    for (int r = 0; r < repeat; ++r) {
+      const std::string line = run_in_child([&](Json* j) {
+        std::string error;
+        auto api_db = api::MeshDatabase::open(db, &error, memory, threads);
+        if (!api_db) return false;
+        std::vector<api::PointHit> hits(pts.size());
+        double first = 0;
+        std::vector<double> warm;
+        for (int pass = 0; pass < 4; ++pass) {
+          const double t0 = now_seconds();
+          if (!api_db->locate(api_points.data(), api_points.size(), hits.data())) return false;
+          (pass == 0 ? first : warm.emplace_back()) = now_seconds() - t0;
         }
-        (pass == 0 ? first : warm.emplace_back()) = now_seconds() - t0;
-      }
-      const double s = median(warm);
-      uint64_t inside = 0;
-      for (const PointHit& h : hits) inside += h.inside;
-      *j = row(mesh, "locate api");
-      j->add("points", uint64_t(pts.size())).add("inside", inside).add("seconds", s);
-      j->add("points_per_s", pts.size() / s).add("first_pass_points_per_s", pts.size() / first);
-      return true;
-    });
-    if (line.empty()) return 1;
-    std::printf("%s\n", line.c_str());
-    const auto f = parse_flat_json(line);
-    rates.push_back(std::stod(f.at("points_per_s")));
-    cold.push_back(std::stod(f.at("first_pass_points_per_s")));
-    rss = std::stod(f.at("peak_rss_bytes"));
+        const double s = median(warm);
+        uint64_t inside = 0;
+        for (const api::PointHit& h : hits) inside += h.inside;
+        *j = row(mesh, "locate api");
+        j->add("threads", uint64_t(threads)).add("points", uint64_t(pts.size()));
+        j->add("inside", inside).add("seconds", s).add("points_per_s", pts.size() / s);
+        j->add("first_pass_points_per_s", pts.size() / first);
+        return true;
+      });
+      if (line.empty()) return 1;
+      std::printf("%s\n", line.c_str());
+      const auto f = parse_flat_json(line);
+      rates.push_back(std::stod(f.at("points_per_s")));
+      cold.push_back(std::stod(f.at("first_pass_points_per_s")));
+      rss = std::stod(f.at("peak_rss_bytes"));
+    }
+    const std::string name =
+        "locate, C++ API, " + std::to_string(threads) + " thread" + (threads > 1 ? "s" : "");
+    report(name, "points/s", rates, rss);
+    report(name + ", first pass", "points/s", cold, rss);
   }
-  report("locate, C++ API", "points/s", rates, rss);
-  report("locate, C++ API, first pass", "points/s", cold, rss);
 
+  std::vector<double> rates;
+  double rss = 0;
   // End to end: text in, text out, one process.
-  rates.clear();
   for (int r = 0; r < repeat; ++r) {
     uint64_t peak = 0;
     const double t0 = now_seconds();

@@ -9,6 +9,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <random>
 #include <string>
 
 #include "test_mesh.h"
@@ -42,22 +43,37 @@ std::string rows_of(Explorer& ex, const std::vector<Explorer*>& helpers, const s
 
 TEST(PointBatchThreads, HelpersAndLanesWriteWhatOneThreadWrites) {
   testing::TempDir dir;
-  const std::string db =
-      testing::build_mesh(testing::random_balanced(3, 2, 1, 1, 2, 4000, 10), dir);
+  const std::vector<Octant> leaves = testing::random_balanced(3, 2, 1, 1, 2, 4000, 10);
+  const std::string db = testing::build_mesh(leaves, dir);
   std::unique_ptr<Explorer> ex, helper;
   // A small budget: the Explorer's own batch is a few thousand points.
   ASSERT_OK(Explorer::open(db, MemoryBudget(2 << 20), &ex));
   ASSERT_OK(Explorer::open(db, MemoryBudget(2 << 20), &helper));
-  std::string points;  // past the size a batch is shared at, with bad lines among them
+  // Past the size a batch is shared at: a point in a leaf picked at random
+  // (so that every share of the sorted batch has points to answer), with bad
+  // lines and points past the domain's far corner among them.
+  std::string points;
+  std::mt19937_64 rng(11);
   for (int i = 0; i < 60000; ++i) {
-    points += i % 997 == 0
-                  ? "not a point\n"
-                  : std::to_string(i * 7919 % 1048576) + " " + std::to_string(i * 3571 % 1048576) +
-                        " " + std::to_string(i * 997 % 262144) + "\n";
+    const Octant& o = leaves[rng() % leaves.size()];
+    const uint32_t e = octant_edge(o);
+    points += i % 997 == 0 ? "not a point\n"
+              : i % 101 == 0
+                  ? "1048575 1048575 1048575\n"
+                  : std::to_string(o.x + rng() % e) + " " + std::to_string(o.y + rng() % e) + " " +
+                        std::to_string(o.z + rng() % e) + "\n";
   }
   for (const cli::OutputMode mode : {cli::OutputMode::kJson, cli::OutputMode::kCsv}) {
     const std::string alone = rows_of(*ex, {}, points, mode, 0);
     ASSERT_GT(alone.size(), points.size());
+    // Inside but for the far corner's (a share left unanswered would show).
+    const auto count = [&](const std::string& word) {
+      size_t n = 0;
+      for (size_t at = 0; (at = alone.find(word, at)) != std::string::npos; at += word.size()) ++n;
+      return n;
+    };
+    EXPECT_GT(count("inside"), 58000u);
+    EXPECT_GT(count("outside"), 500u);
     EXPECT_TRUE(rows_of(*ex, {helper.get()}, points, mode, 0) == alone);
     EXPECT_TRUE(rows_of(*ex, {helper.get()}, points, mode, 50000) == alone);
     EXPECT_TRUE(rows_of(*ex, {}, points, mode, 20000) == alone);

@@ -1,10 +1,16 @@
 // The C++ library API (include/weaver/weaver.h) over the Explorer.
 #include <weaver/weaver.h>
 
+#include <algorithm>
+#include <thread>
+
 #include "query/explorer.h"
+#include "query/shared_batch.h"
 
 namespace weaver::api {
 namespace {
+
+constexpr int kMaxThreads = 256;
 
 Point point_of(const Octant& o) { return {o.x, o.y, o.z}; }
 
@@ -73,11 +79,38 @@ bool NodeCursor::ok() const { return ok_; }
 
 std::unique_ptr<MeshDatabase> MeshDatabase::open(const std::string& path, std::string* error,
                                                  uint64_t memory_bytes) {
+  return open(path, error, memory_bytes, 1);
+}
+
+std::unique_ptr<MeshDatabase> MeshDatabase::open(const std::string& path, std::string* error,
+                                                 uint64_t memory_bytes, int threads) {
+  if (threads < 0 || threads > kMaxThreads) {
+    *error = "threads must be 0 (one a core) to " + std::to_string(kMaxThreads) + ", not " +
+             std::to_string(threads);
+    return nullptr;
+  }
+  if (threads == 0) threads = int(std::max(1u, std::thread::hardware_concurrency()));
   std::unique_ptr<MeshDatabase> db(new MeshDatabase());
-  if (memory_bytes < MemoryBudget::kMinBytes) memory_bytes = MemoryBudget::kMinBytes;
-  if (!check(Explorer::open(path, MemoryBudget(memory_bytes), &db->ex_), error)) return nullptr;
+  if (!db->open_explorers(path, memory_bytes, threads, error)) return nullptr;
   return db;
 }
+
+// `threads` Explorers, the memory shared among them (as `weaver query`
+// shares --memory among its threads).
+bool MeshDatabase::open_explorers(const std::string& path, uint64_t memory_bytes, int threads,
+                                  std::string* error) {
+  const MemoryBudget each(std::max(memory_bytes / uint64_t(threads), MemoryBudget::kMinBytes));
+  std::vector<Explorer*> shared;
+  for (int i = 0; i < threads; ++i) {
+    std::unique_ptr<Explorer>& e = i == 0 ? ex_ : helpers_.emplace_back();
+    if (!check(Explorer::open(path, each, &e), error)) return false;
+    shared.push_back(e.get());
+  }
+  batch_ = std::make_unique<SharedBatch>(std::move(shared));
+  return true;
+}
+
+int MeshDatabase::threads() const { return 1 + int(helpers_.size()); }
 
 MeshDatabase::~MeshDatabase() = default;
 
@@ -95,7 +128,7 @@ bool MeshDatabase::locate(const Point* p, size_t n, PointHit* out) {
   std::vector<Coord> c(n);
   for (size_t i = 0; i < n; ++i) c[i] = {p[i].x, p[i].y, p[i].z};
   std::vector<weaver::PointHit> h(n);
-  if (!check(ex_->locate_batch(c.data(), n, h.data()), &error_)) return false;
+  if (!check(batch_->locate(c.data(), n, h.data()), &error_)) return false;
   for (size_t i = 0; i < n; ++i) {
     out[i] = PointHit{};
     if (!h[i].inside) continue;

@@ -42,9 +42,14 @@ void to_c(const Node& n, weaver_node* out) {
 extern "C" {
 
 weaver_db* weaver_open(const char* path, uint64_t memory_bytes, char* error, size_t error_size) {
+  return weaver_open_threads(path, memory_bytes, 1, error, error_size);
+}
+
+weaver_db* weaver_open_threads(const char* path, uint64_t memory_bytes, int threads, char* error,
+                               size_t error_size) {
   std::string why;
   auto db = MeshDatabase::open(path != nullptr ? path : "", &why,
-                               memory_bytes != 0 ? memory_bytes : uint64_t{256} << 20);
+                               memory_bytes != 0 ? memory_bytes : uint64_t{256} << 20, threads);
   if (!db) {
     if (error != nullptr && error_size > 0) {
       std::strncpy(error, why.c_str(), error_size - 1);

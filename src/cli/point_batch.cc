@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli/row_writer.h"
+#include "query/shared_batch.h"
 #include "util/huge_pages.h"
 #include "util/interrupt.h"
 #include "util/parallel.h"
@@ -84,10 +85,17 @@ class LineReader {
   bool eof_ = false;
 };
 
+// The Explorer asked, then its helpers.
+std::vector<Explorer*> explorers(Explorer& ex, const PointBatchOptions& o) {
+  std::vector<Explorer*> all = {&ex};
+  all.insert(all.end(), o.helpers.begin(), o.helpers.end());
+  return all;
+}
+
 class BatchRunner {
  public:
   BatchRunner(Explorer& ex, const PointBatchOptions& o, std::FILE* out)
-      : ex_(ex), o_(o), out_(out), w_(o.mode, o.one) {}
+      : ex_(ex), o_(o), out_(out), w_(o.mode, o.one), shared_(explorers(ex, o)) {}
 
   void header() {
     std::vector<const char*> c = {"x", "y", "z", "status"};
@@ -161,8 +169,8 @@ class BatchRunner {
   // Answers the points held and writes their rows.
   Status answer(PointBatchResult* r) {
     const size_t n = points_.size();
-    const size_t parts = n >= kParallelPoints ? 1 + o_.helpers.size() : 1;
-    WEAVER_RETURN_IF_ERROR(look_up(n, parts));
+    const size_t parts = shared_.parts(n);
+    WEAVER_RETURN_IF_ERROR(look_up(n));
     WEAVER_RETURN_IF_ERROR(write_rows(n, parts, &r->missed));
     r->points += n;
     points_.clear(), values_.clear(), bad_.clear();
@@ -175,26 +183,17 @@ class BatchRunner {
   }
 
  private:
-  // Below this many points a batch is answered on the calling thread alone.
-  static constexpr size_t kParallelPoints = 16384;
   static constexpr size_t kSlice = 32768;  // rows formatted, then written
 
-  // The points are sorted once; each of `parts` Explorers (ex_, then the
-  // helpers) walks a run of the sorted order, so that a leaf page is read by
-  // one of them only (split by input order, each would read most pages of a
-  // large mesh for random points).
-  Status look_up(size_t n, size_t parts) {
-    const bool nodes = o_.query == PointQuery::kNodeAt;
-    (nodes ? nodes_.assign(n, NodeHit{}) : hits_.assign(n, PointHit{}));
-    Explorer::sort_batch(points_.data(), n, nodes, &order_, &scratch_);
-    const size_t m = order_.size();
-    return run_shares(int(parts), [&](int i) {
-      Explorer& e = i == 0 ? ex_ : *o_.helpers[size_t(i) - 1];
-      const KeyedPoint* run = order_.data() + m * size_t(i) / parts;
-      const size_t count = m * size_t(i + 1) / parts - m * size_t(i) / parts;
-      return nodes ? e.node_at_sorted(run, count, nodes_.data())
-                   : e.locate_sorted(run, count, hits_.data());
-    });
+  // The batch's answers, shared among the Explorers (query/shared_batch.h).
+  // The answer arrays only grow: their entries are all written each time.
+  Status look_up(size_t n) {
+    if (o_.query == PointQuery::kNodeAt) {
+      if (nodes_.size() < n) nodes_.resize(n);
+      return shared_.node_at(points_.data(), n, nodes_.data());
+    }
+    if (hits_.size() < n) hits_.resize(n);
+    return shared_.locate(points_.data(), n, hits_.data());
   }
 
   // The rows in slices: `parts` slices formatted at once, a thread each,
@@ -312,7 +311,7 @@ class BatchRunner {
   std::vector<RowWriter> writers_;  // a thread's rows, for a batch shared among threads
   std::vector<PointHit> hits_;
   std::vector<NodeHit> nodes_;
-  std::vector<KeyedPoint> order_, scratch_;  // the batch in key order, and the sort's scratch
+  SharedBatch shared_;
   int answer_columns_ = 0;  // a row's fields after its status: empty when nothing was found
 };
 

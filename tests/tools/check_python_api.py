@@ -112,6 +112,23 @@ with weaver.Database(db_path) as db:
     except weaver.WeaverError as e:
         if "does not exist" not in str(e):
             fail("unexpected error text: " + str(e))
+# A batch large enough to be shared among threads (16384 points or more)
+# answers as one thread does, point for point.
+rng = random.Random(7)
+many = array.array("I", [rng.randrange(0, int(h * 1.1) + 1) for _ in range(50000) for h in hi])
+with weaver.Database(db_path) as one, weaver.Database(db_path, threads=2) as two:
+    a, b = one.locate_buffer(many), two.locate_buffer(many)
+    if [(h.inside, h.element, h.level, h.vs) for h in a] != \
+            [(h.inside, h.element, h.level, h.vs) for h in b]:
+        fail("locate on 2 threads differs from 1")
+    if sum(h.inside for h in b) in (0, len(b)):
+        fail("the threads' points should be partly outside")
+try:
+    weaver.Database(db_path, threads=-1)
+    fail("threads=-1 opened")
+except weaver.WeaverError as e:
+    if "threads" not in str(e):
+        fail("unexpected error text: " + str(e))
 try:
     weaver.Database(work + "/no-such.db")
     fail("a missing database opened")

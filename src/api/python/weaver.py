@@ -96,7 +96,7 @@ def _load():
     lib = ctypes.CDLL(_find_library())
     p, u64, i32, sz = ctypes.c_void_p, ctypes.c_uint64, ctypes.c_int, ctypes.c_size_t
     sigs = {
-        "weaver_open": (p, [ctypes.c_char_p, u64, ctypes.c_char_p, sz]),
+        "weaver_open_threads": (p, [ctypes.c_char_p, u64, i32, ctypes.c_char_p, sz]),
         "weaver_close": (None, [p]),
         "weaver_last_error": (ctypes.c_char_p, [p]),
         "weaver_element_count": (u64, [p]),
@@ -144,10 +144,14 @@ def _node(n):
 class Database:
     """A weaver database, open read-only (the snapshot of its last commit)."""
 
-    def __init__(self, path, memory=0):
+    def __init__(self, path, memory=0, threads=1):
+        """memory: bytes of caches (0: 256 MiB); threads: how many answer a
+        locate of 16384 points or more (1: the calling thread; 0: one a
+        core), memory shared among them."""
         lib = _library()
         error = ctypes.create_string_buffer(512)
-        self._db = lib.weaver_open(os.fsencode(path), memory, error, len(error))
+        self._db = lib.weaver_open_threads(os.fsencode(path), memory, threads, error,
+                                           len(error))
         if not self._db:
             raise WeaverError(error.value.decode(errors="replace"))
         self._lib = lib

@@ -27,6 +27,7 @@
 
 namespace weaver {
 class Explorer;
+class SharedBatch;
 class ElementScan;
 class NodeScan;
 }  // namespace weaver
@@ -124,6 +125,15 @@ class MeshDatabase {
   bool has_material() const;
   Units units() const;
 
+  // The same, answering a large batch of points (16384 or more) on
+  // `threads` threads, as `weaver query --points --threads N` does: 1 (what
+  // the call above does) answers on the calling thread alone, 0 takes one a
+  // core.  memory_bytes is shared among them.  A program with threads of its
+  // own, a MeshDatabase each, keeps 1.
+  static std::unique_ptr<MeshDatabase> open(const std::string& path, std::string* error,
+                                            uint64_t memory_bytes, int threads);
+  int threads() const;  // what open() was given (0 made the cores' count)
+
   // Every call returns false on an error (see last_error()); an id past the
   // last one is an error, a point outside the domain is not.
   bool locate(Point p, PointHit* out);
@@ -148,8 +158,13 @@ class MeshDatabase {
 
  private:
   MeshDatabase() = default;
+  bool open_explorers(const std::string& path, uint64_t memory_bytes, int threads,
+                      std::string* error);
+
   std::unique_ptr<weaver::Explorer> ex_;
   std::string error_;
+  std::vector<std::unique_ptr<weaver::Explorer>> helpers_;  // set_threads' others
+  std::unique_ptr<weaver::SharedBatch> batch_;              // ex_ and the helpers
 };
 
 }  // namespace weaver::api

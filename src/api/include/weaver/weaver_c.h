@@ -55,6 +55,12 @@ typedef struct {
 /* Opens a database read-only within memory_bytes (0: 256 MiB); NULL on
  * failure, with the reason in error (error_size bytes, may be 0). */
 weaver_db* weaver_open(const char* path, uint64_t memory_bytes, char* error, size_t error_size);
+/* The same, answering a weaver_locate of 16384 points or more on `threads`
+ * threads (1: the calling thread alone, as weaver_open; 0: one a core),
+ * memory_bytes shared among them.  A program with threads of its own, a
+ * weaver_db each, keeps 1. */
+weaver_db* weaver_open_threads(const char* path, uint64_t memory_bytes, int threads, char* error,
+                               size_t error_size);
 void weaver_close(weaver_db* db);
 const char* weaver_last_error(const weaver_db* db);
 

@@ -1,0 +1,41 @@
+// A batch of points answered by several Explorers of one database, a thread
+// each: the batch is sorted once and each Explorer walks one run of the
+// sorted order, so that a leaf page is read by one of them only (split by
+// input order, each would read most pages of a large mesh for random
+// points).  Used by `weaver query --points`, `weaver serve` and the library
+// API.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "query/explorer.h"
+
+namespace weaver {
+
+class SharedBatch {
+ public:
+  // Below this many points a batch is answered by the first Explorer alone:
+  // a thread's start costs more than it saves.
+  static constexpr size_t kParallelPoints = 16384;
+
+  // explorers[0] answers alone, or with the others for a large batch; all of
+  // them open on the same committed state.
+  explicit SharedBatch(std::vector<Explorer*> explorers) : explorers_(std::move(explorers)) {}
+
+  // out[i] answers p[i]; every entry of out is written.
+  Status locate(const Coord* p, size_t n, PointHit* out);
+  Status node_at(const Coord* p, size_t n, NodeHit* out);
+
+  // How many Explorers a batch of n points is shared among.
+  size_t parts(size_t n) const { return n >= kParallelPoints ? explorers_.size() : 1; }
+
+ private:
+  template <typename Hit, typename Walk>
+  Status run(const Coord* p, size_t n, bool nodes, Hit* out, Walk walk);
+
+  std::vector<Explorer*> explorers_;
+  std::vector<KeyedPoint> order_, scratch_;  // kept from batch to batch
+};
+
+}  // namespace weaver
