@@ -9,6 +9,7 @@
 #include "import/import.h"
 #include "import/octant_text.h"
 #include "query/explorer.h"
+#include "query/shared_batch.h"
 #include "reference/reference_mesh.h"
 #include "test_mesh.h"
 #include "test_octrees.h"
@@ -224,6 +225,50 @@ TEST(Explore, BatchesAnswerEveryPointInInputOrder) {
         ASSERT_EQ(nodes[i].id, uint64_t(node));
         ASSERT_EQ(nodes[i].kind, ref.nodes[node].kind);
       }
+    }
+  }
+}
+
+// A batch shared among Explorers (cut by key range into runs, each sorted
+// and walked by one) answers every point as one Explorer's batch does
+// (checked against brute force above): points spread over the root, points
+// crowded at a few nodes (runs of uneven bins), and one point many times
+// (every key in one bin: the other runs empty).
+TEST(Explore, SharedBatchesAnswerAsOneExplorer) {
+  const auto trees = octrees(true, testing::scaled(3000, 800));
+  for (size_t t = 0; t < trees.size(); t += 2) {
+    testing::TempDir dir;
+    const std::string db = testing::build_mesh(trees[t], dir);
+    std::vector<std::unique_ptr<Explorer>> all(3);
+    for (auto& e : all) e = open(db);
+    SharedBatch shared({all[0].get(), all[1].get(), all[2].get()});
+    const reference::Mesh ref = reference::extract(trees[t]);
+    std::mt19937_64 rng(t + 3);
+    std::vector<Coord> spread, crowded, same(SharedBatch::kParallelPoints + 5, ref.nodes[0].c);
+    for (size_t i = 0; i < 2 * SharedBatch::kParallelPoints; ++i) {
+      spread.push_back({uint32_t(rng() % (kRootEdge + 9)), uint32_t(rng() % kRootEdge),
+                        uint32_t(rng() % kRootEdge)});
+      Coord c = ref.nodes[rng() % 5].c;
+      c.y += uint32_t(rng() % 2);
+      crowded.push_back(c);
+    }
+    for (const auto* points : {&spread, &crowded, &same}) {
+      const size_t n = points->size();
+      std::vector<PointHit> want(n), got(n);
+      std::vector<NodeHit> want_nodes(n), got_nodes(n);
+      ASSERT_OK(all[0]->locate_batch(points->data(), n, want.data()));
+      ASSERT_OK(all[0]->node_at_batch(points->data(), n, want_nodes.data()));
+      ASSERT_OK(shared.locate(points->data(), n, got.data()));
+      ASSERT_OK(shared.node_at(points->data(), n, got_nodes.data()));
+      size_t inside = 0;
+      for (size_t i = 0; i < n; ++i) {
+        ASSERT_EQ(got[i].inside, want[i].inside) << i;
+        ASSERT_EQ(got[i].id, want[i].id) << i;
+        ASSERT_EQ(got_nodes[i].found, want_nodes[i].found) << i;
+        ASSERT_EQ(got_nodes[i].id, want_nodes[i].id) << i;
+        inside += got[i].inside;
+      }
+      EXPECT_GT(inside, n / 50);  // the batch is not all outside
     }
   }
 }

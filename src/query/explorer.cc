@@ -111,27 +111,26 @@ Status Explorer::open(const std::string& db_dir, MemoryBudget memory,
 Status Explorer::locate(Coord p, PointHit* out) { return locate_batch(&p, 1, out); }
 
 template <typename Valid, typename KeyOf>
-void Explorer::sort_keys(const Coord* p, size_t n, Valid valid, KeyOf key_of,
-                         std::vector<KeyedPoint>* order, std::vector<KeyedPoint>* scratch) {
+void Explorer::key_points(const Coord* p, size_t n, Valid valid, KeyOf key_of,
+                          std::vector<KeyedPoint>* order) {
   order->clear();
   reserve_huge(*order, n);
-  reserve_huge(*scratch, n);
   for (size_t i = 0; i < n; ++i) {
     if (valid(p[i])) order->push_back({key_of(p[i]), i});
   }
-  radix_sort_by(*order, *scratch, [](const KeyedPoint& k) { return k.first; });
 }
 
 template <typename Hit, typename Valid, typename KeyOf>
 void Explorer::sort_points(const Coord* p, size_t n, Hit* out, Valid valid, KeyOf key_of) {
   std::fill(out, out + n, Hit{});
-  sort_keys(p, n, valid, key_of, &order_, &scratch_);
+  key_points(p, n, valid, key_of, &order_);
+  reserve_huge(scratch_, n);
+  radix_sort_by(order_, scratch_, [](const KeyedPoint& k) { return k.first; });
 }
 
-void Explorer::sort_batch(const Coord* p, size_t n, bool nodes, std::vector<KeyedPoint>* order,
-                          std::vector<KeyedPoint>* scratch) {
-  if (nodes) return sort_keys(p, n, node_is_valid, node_key, order, scratch);
-  sort_keys(p, n, pixel_is_valid, pixel_key, order, scratch);
+void Explorer::key_batch(const Coord* p, size_t n, bool nodes, std::vector<KeyedPoint>* order) {
+  if (nodes) return key_points(p, n, node_is_valid, node_key, order);
+  key_points(p, n, pixel_is_valid, pixel_key, order);
 }
 
 Status Explorer::locate_batch(const Coord* p, size_t n, PointHit* out) {

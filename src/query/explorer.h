@@ -124,12 +124,12 @@ class Explorer {
   // The nodes at n points (any coordinates; past the far side is no node).
   Status node_at_batch(const Coord* p, size_t n, NodeHit* out);
 
-  // A batch shared among Explorers (threads) is sorted once and walked in
-  // runs of the sorted order, so that each leaf page is read by one of them
-  // only.  sort_batch: (key, i) of the points p[0..n) that can lie in the
-  // mesh (node keys with `nodes`, else locate's), in key order.
-  static void sort_batch(const Coord* p, size_t n, bool nodes, std::vector<KeyedPoint>* order,
-                         std::vector<KeyedPoint>* scratch);
+  // A batch shared among Explorers (threads) is keyed once, cut by key into
+  // runs, and each run sorted and walked by one of them, so that each leaf
+  // page is read by one only (query/shared_batch.h).  key_batch: (key, i)
+  // of the points p[0..n) that can lie in the mesh (node keys with `nodes`,
+  // else locate's), in input order.
+  static void key_batch(const Coord* p, size_t n, bool nodes, std::vector<KeyedPoint>* order);
   // The walks of a run of a sorted batch: out[i] answers the point of each
   // (key, i) of order[0..n); the other entries of out are left as they are.
   Status locate_sorted(const KeyedPoint* order, size_t n, PointHit* out);
@@ -156,10 +156,10 @@ class Explorer {
 
  private:
   Explorer() = default;
-  // Fills *order with (key, i) of the valid points, sorted by key.
+  // Fills *order with (key, i) of the valid points, in input order.
   template <typename Valid, typename KeyOf>
-  static void sort_keys(const Coord* p, size_t n, Valid valid, KeyOf key_of,
-                        std::vector<KeyedPoint>* order, std::vector<KeyedPoint>* scratch);
+  static void key_points(const Coord* p, size_t n, Valid valid, KeyOf key_of,
+                         std::vector<KeyedPoint>* order);
   // Clears out[0..n) and sorts the points into order_.
   template <typename Hit, typename Valid, typename KeyOf>
   void sort_points(const Coord* p, size_t n, Hit* out, Valid valid, KeyOf key_of);

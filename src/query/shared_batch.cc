@@ -1,19 +1,71 @@
 #include "query/shared_batch.h"
 
 #include <algorithm>
+#include <bit>
 
+#include "util/huge_pages.h"
 #include "util/parallel.h"
+#include "util/radix_sort.h"
 
 namespace weaver {
+namespace {
+
+uint64_t key_of(const KeyedPoint& k) { return k.first; }
+
+// The histogram's bins: the keys' range in at most this many.
+constexpr int kBinBits = 16;
+
+}  // namespace
+
+void SharedBatch::cut_runs(size_t parts, std::vector<size_t>* starts) {
+  const size_t m = keyed_.size();
+  uint64_t lo = UINT64_MAX, hi = 0;
+  for (const KeyedPoint& k : keyed_) lo = std::min(lo, k.first), hi = std::max(hi, k.first);
+  const int shift = std::max(0, int(std::bit_width(hi - lo)) - kBinBits);
+  bins_.assign((size_t{1} << kBinBits) + 1, 0);
+  for (const KeyedPoint& k : keyed_) ++bins_[(k.first - lo) >> shift];
+  // Run i takes the bins from the first whose keys begin past i/parts of
+  // the batch (a bin is never split: its keys share their high bits).
+  std::vector<uint64_t> first_bin(parts + 1, bins_.size());
+  first_bin[0] = 0;
+  size_t before = 0, run = 1;
+  for (size_t b = 0; b < bins_.size() && run < parts; ++b) {
+    while (run < parts && before >= m * run / parts) first_bin[run++] = b;
+    before += bins_[b];
+  }
+  auto run_of = [&](uint64_t key) {
+    const uint64_t b = (key - lo) >> shift;
+    size_t r = 0;
+    while (r + 1 < parts && b >= first_bin[r + 1]) ++r;
+    return r;
+  };
+  starts->assign(parts + 1, 0);
+  for (const KeyedPoint& k : keyed_) ++(*starts)[run_of(k.first) + 1];
+  for (size_t r = 0; r < parts; ++r) (*starts)[r + 1] += (*starts)[r];
+  std::vector<size_t> at(starts->begin(), starts->end() - 1);
+  reserve_huge(scratch_, m);
+  scratch_.resize(m);
+  for (const KeyedPoint& k : keyed_) scratch_[at[run_of(k.first)]++] = k;
+}
 
 template <typename Hit, typename Walk>
 Status SharedBatch::run(const Coord* p, size_t n, bool nodes, Hit* out, Walk walk) {
   std::fill(out, out + n, Hit{});
-  Explorer::sort_batch(p, n, nodes, &order_, &scratch_);
-  const size_t m = order_.size(), parts = this->parts(n);
+  Explorer::key_batch(p, n, nodes, &keyed_);
+  const size_t parts = this->parts(n);
+  if (parts == 1) {
+    reserve_huge(scratch_, keyed_.size());
+    radix_sort_by(keyed_, scratch_, key_of);
+    return walk(*explorers_[0], keyed_.data(), keyed_.size());
+  }
+  std::vector<size_t> starts;
+  cut_runs(parts, &starts);
+  // Each run sorted where it lies, keyed_ its other buffer.
   return run_shares(int(parts), [&](int i) {
-    const size_t from = m * size_t(i) / parts, to = m * size_t(i + 1) / parts;
-    return walk(*explorers_[size_t(i)], order_.data() + from, to - from);
+    const size_t from = starts[size_t(i)], count = starts[size_t(i) + 1] - from;
+    const KeyedPoint* sorted =
+        radix_sort_buffers(scratch_.data() + from, keyed_.data() + from, count, key_of);
+    return walk(*explorers_[size_t(i)], sorted, count);
   });
 }
 

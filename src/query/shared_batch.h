@@ -1,9 +1,10 @@
 // A batch of points answered by several Explorers of one database, a thread
-// each: the batch is sorted once and each Explorer walks one run of the
-// sorted order, so that a leaf page is read by one of them only (split by
-// input order, each would read most pages of a large mesh for random
-// points).  Used by `weaver query --points`, `weaver serve` and the library
-// API.
+// each: the batch's keys are cut into as many runs of about equal counts
+// as there are Explorers, by key range, and each Explorer sorts and walks
+// one run, so that a leaf page is read by one of them only (split by input
+// order, each would read most pages of a large mesh for random points),
+// and the sorts run at once rather than one before the walks.  Used by
+// `weaver query --points`, `weaver serve` and the library API.
 #pragma once
 
 #include <cstddef>
@@ -33,9 +34,15 @@ class SharedBatch {
  private:
   template <typename Hit, typename Walk>
   Status run(const Coord* p, size_t n, bool nodes, Hit* out, Walk walk);
+  // Moves keyed_ into scratch_ as `parts` runs of keys, each run's keys all
+  // below the next run's; starts[i] is where run i begins (starts[parts]:
+  // the end).
+  void cut_runs(size_t parts, std::vector<size_t>* starts);
 
   std::vector<Explorer*> explorers_;
-  std::vector<KeyedPoint> order_, scratch_;  // kept from batch to batch
+  // Kept from batch to batch: the keyed points and the sort's other buffer.
+  std::vector<KeyedPoint> keyed_, scratch_;
+  std::vector<uint32_t> bins_;  // cut_runs' histogram
 };
 
 }  // namespace weaver

@@ -40,34 +40,45 @@ inline void radix_sort(std::vector<uint64_t>& values, int first, int bits,
 // are the same in every key are not passed over (octant keys of one level
 // share their low bits, and keys of one region their high ones).  For pairs
 // of a key and a position (corner lookups, point batches) and the sorter's
-// runs.
+// runs.  Sorts items[0..n) with scratch[0..n) as the other buffer and
+// returns the one that holds the result (either).
 template <class T, class KeyOf>
-inline void radix_sort_by(std::vector<T>& items, std::vector<T>& scratch, KeyOf key) {
-  if (items.size() < 256) {  // a pass's counts cost more than sorting a few
-    std::stable_sort(items.begin(), items.end(),
-                     [&](const T& a, const T& b) { return key(a) < key(b); });
-    return;
+inline T* radix_sort_buffers(T* items, T* scratch, size_t n, KeyOf key) {
+  if (n < 256) {  // a pass's counts cost more than sorting a few
+    std::stable_sort(items, items + n, [&](const T& a, const T& b) { return key(a) < key(b); });
+    return items;
   }
   constexpr int kDigit = 11;
   constexpr size_t kBuckets = size_t{1} << kDigit;
-  scratch.resize(items.size());
   uint64_t any = 0, every = ~uint64_t{0};
-  for (const T& t : items) {
-    any |= key(t);
-    every &= key(t);
+  for (size_t i = 0; i < n; ++i) {
+    any |= key(items[i]);
+    every &= key(items[i]);
   }
   const uint64_t varying = any & ~every;
   for (int shift = 0; shift < 64 && (varying >> shift) != 0; shift += kDigit) {
     if (((varying >> shift) & (kBuckets - 1)) == 0) continue;
     std::array<size_t, kBuckets> count{};
-    for (const T& t : items) ++count[(key(t) >> shift) & (kBuckets - 1)];
+    for (size_t i = 0; i < n; ++i) ++count[(key(items[i]) >> shift) & (kBuckets - 1)];
     size_t sum = 0;
     for (size_t& c : count) {
-      const size_t n = c;
+      const size_t k = c;
       c = sum;
-      sum += n;
+      sum += k;
     }
-    for (const T& t : items) scratch[count[(key(t) >> shift) & (kBuckets - 1)]++] = t;
+    for (size_t i = 0; i < n; ++i) {
+      scratch[count[(key(items[i]) >> shift) & (kBuckets - 1)]++] = items[i];
+    }
+    std::swap(items, scratch);
+  }
+  return items;
+}
+
+// The same on a vector, the result left in items.
+template <class T, class KeyOf>
+inline void radix_sort_by(std::vector<T>& items, std::vector<T>& scratch, KeyOf key) {
+  scratch.resize(items.size());
+  if (radix_sort_buffers(items.data(), scratch.data(), items.size(), key) != items.data()) {
     items.swap(scratch);
   }
 }
