@@ -77,10 +77,10 @@ const uint64_t* NodeClassifier::local_floor(uint64_t pm, uint64_t pk) const {
 // a rank's part, else the octant table.  Works on Morton codes: a
 // leaf holds p iff p's code is in its subtree's code range.
 // The leaf is handed out where it is kept, not copied.
-Status NodeClassifier::leaf_at(uint64_t pm, int direction, const Octant** leaf, bool* found) {
-  for (const RecentLeaf& r : recent_) {
+Status NodeClassifier::leaf_at(uint64_t pm, int direction, const LeafCode** leaf, bool* found) {
+  for (const LeafCode& r : recent_) {
     if (((r.morton ^ pm) >> r.span_bits) == 0) {
-      *leaf = &r.leaf;
+      *leaf = &r;
       *found = true;
       return Status::Ok();
     }
@@ -105,11 +105,9 @@ Status NodeClassifier::leaf_at(uint64_t pm, int direction, const Octant** leaf, 
     WEAVER_RETURN_IF_ERROR(octants_.floor(pk, &key, nullptr, &hit));
     if (!hit || !holds_p(key)) return Status::Ok();
   }
-  RecentLeaf& r = recent_[direction];
-  r.morton = octant_key_morton(key);
-  r.span_bits = 3 * (kMaxLevel - octant_key_level(key));
-  octant_decode_into(key, &r.leaf);
-  *leaf = &r.leaf;
+  LeafCode& r = recent_[direction];
+  r = {octant_key_morton(key), 3 * (kMaxLevel - octant_key_level(key)), key};
+  *leaf = &r;
   *found = true;
   return Status::Ok();
 }
@@ -117,12 +115,11 @@ Status NodeClassifier::leaf_at(uint64_t pm, int direction, const Octant** leaf, 
 Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
   *kind = NodeKind::kAnchored;
   if (mask == 0xFF) return Status::Ok();
-  const Coord n = morton_decode(key);
   uint8_t settled = mask;
   for (int d = 0; d < 8; ++d) {
     if ((settled >> d) & 1) continue;
     uint64_t p = 0;
-    const Octant* leaf = nullptr;
+    const LeafCode* leaf = nullptr;
     bool found = false;
     if (direction_pixel(key, d, &p)) WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
     if (!found) {  // outside the root or the domain
@@ -131,56 +128,67 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
     }
     NodeKind here = NodeKind::kAnchored;
     uint8_t covered = 0;
-    WEAVER_RETURN_IF_ERROR(kind_on(n, *leaf, mask, &here, &covered));
-    if (*kind != NodeKind::kAnchored && here != *kind) return unbalanced(n, *leaf, mask);
+    WEAVER_RETURN_IF_ERROR(kind_on(key, *leaf, mask, &here, &covered));
+    if (*kind != NodeKind::kAnchored && here != *kind) return unbalanced(key, leaf->key, mask);
     *kind = here;
     settled |= covered;
   }
   return Status::Ok();
 }
 
-// Node n lies on the closure of `leaf`: its kind, and the cells around n the
-// leaf covers (on an axis where n is strictly inside the leaf, both sides;
-// elsewhere the side the leaf is on).  Every leaf that has n as a corner set
-// its bit in the mask, so finding one here means octants overlap.
-Status NodeClassifier::kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind,
+// Node m lies on the closure of `leaf`: its kind, and the cells around m the
+// leaf covers (on an axis where m is strictly inside the leaf, both sides;
+// elsewhere the side the leaf is on).  Every leaf that has m as a corner set
+// its bit in the mask, so finding one here means octants overlap.  Read
+// from the codes axis by axis (the leaf's code is zero below span_bits):
+// the node is on the leaf's near face where their bits of the axis agree,
+// strictly inside where they agree above span_bits only, else on the far
+// face.
+Status NodeClassifier::kind_on(uint64_t m, const LeafCode& leaf, uint8_t mask, NodeKind* kind,
                                uint8_t* covered) {
-  const uint32_t e = octant_edge(leaf), half = e / 2;
-  const uint32_t c[3] = {n.x, n.y, n.z}, lo[3] = {leaf.x, leaf.y, leaf.z};
+  const uint64_t low = (uint64_t{1} << leaf.span_bits) - 1;
   int inside = 0;
   uint8_t cells = 0xFF;
   for (int a = 0; a < 3; ++a) {
     const uint8_t plus_side = a == 0 ? 0xAA : a == 1 ? 0xCC : 0xF0;  // cells with bit a set
-    if (c[a] > lo[a] && c[a] < lo[a] + e) {
-      if (c[a] - lo[a] != half) return unbalanced(n, leaf, mask);
+    const uint64_t axis = 0x1249249249249249ULL << a;
+    const uint64_t mine = m & axis, theirs = leaf.morton & axis;
+    if (mine == theirs) {
+      cells &= plus_side;
+    } else if (((mine ^ theirs) & ~low) == 0) {
+      // Strictly inside on this axis: at the midpoint, or unbalanced.
+      if (mine != (theirs | uint64_t{1} << (leaf.span_bits - 3 + a))) {
+        return unbalanced(m, leaf.key, mask);
+      }
       ++inside;
     } else {
-      cells &= c[a] == lo[a] ? plus_side : static_cast<uint8_t>(~plus_side);
+      cells &= static_cast<uint8_t>(~plus_side);
     }
   }
   if (inside == 0 || inside == 3) {
+    const Coord n = morton_decode(m);
     return Status::Corruption("node (" + std::to_string(n.x) + " " + std::to_string(n.y) + " " +
                               std::to_string(n.z) + ") is inconsistent with leaf " +
-                              describe_octant(leaf) + ": overlapping octants?");
+                              describe_octant(octant_from_key(leaf.key)) +
+                              ": overlapping octants?");
   }
   *kind = inside == 1 ? NodeKind::kEdge : NodeKind::kFace;
   *covered = cells;
   return Status::Ok();
 }
 
-// Names the coarse leaf and a finer element that has n as a corner.
-// (coarse may be kept in recent_, which leaf_at overwrites: named first.)
-Status NodeClassifier::unbalanced(Coord n, const Octant& coarse, uint8_t mask) {
-  const std::string coarse_name = describe_octant(coarse);
+// Names the coarse leaf and a finer element that has node m as a corner.
+Status NodeClassifier::unbalanced(uint64_t m, uint64_t coarse_key, uint8_t mask) {
+  const std::string coarse_name = describe_octant(octant_from_key(coarse_key));
   std::string fine = "?";
   for (int d = 0; d < 8; ++d) {
     uint64_t p = 0;
-    const Octant* leaf = nullptr;
+    const LeafCode* leaf = nullptr;
     bool found = false;
-    if (!((mask >> d) & 1) || !direction_pixel(morton_encode(n), d, &p)) continue;
+    if (!((mask >> d) & 1) || !direction_pixel(m, d, &p)) continue;
     WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
     if (found) {
-      fine = describe_octant(*leaf);
+      fine = describe_octant(octant_from_key(leaf->key));
       break;
     }
   }

@@ -50,13 +50,23 @@ class NodeClassifier {
   }
 
  private:
+  // A leaf as the classifier keeps it: its Morton code and the bits below
+  // its level (it holds the pixels and nodes that share its code above
+  // them), never decoded on the way (a node's kind is read from the codes).
+  struct LeafCode {
+    uint64_t morton = UINT64_MAX;  // an empty entry's is past every pixel's
+    int span_bits = 0;
+    uint64_t key = 0;  // its octant key, for messages
+  };
+
   // pm is the Morton code of the pixel in `direction` (0..7) of a node.
   // *leaf points into recent_: valid until the next call.
-  Status leaf_at(uint64_t pm, int direction, const Octant** leaf, bool* found);
+  Status leaf_at(uint64_t pm, int direction, const LeafCode** leaf, bool* found);
   // The last local leaf key <= pk, pm's pixel key, or null.
   const uint64_t* local_floor(uint64_t pm, uint64_t pk) const;
-  Status kind_on(Coord n, const Octant& leaf, uint8_t mask, NodeKind* kind, uint8_t* covered);
-  Status unbalanced(Coord n, const Octant& coarse, uint8_t mask);
+  // Node m (its Morton code) on the closure of `leaf`.
+  Status kind_on(uint64_t m, const LeafCode& leaf, uint8_t mask, NodeKind* kind, uint8_t* covered);
+  Status unbalanced(uint64_t m, uint64_t coarse_key, uint8_t mask);
 
   BTree& octants_;
   const std::vector<uint64_t>* ghosts_ = nullptr;
@@ -71,14 +81,8 @@ class NodeClassifier {
   std::vector<uint32_t> slot_first_;
   int slot_shift_ = 0;
   // The leaf leaf_at found last in each direction (the octree does not
-  // change, so they stay valid across buckets).  An empty entry's code is
-  // past every pixel's.
-  struct RecentLeaf {
-    uint64_t morton = UINT64_MAX;
-    int span_bits = 0;  // the leaf holds the pixels that share its code above these bits
-    Octant leaf{};
-  };
-  RecentLeaf recent_[8];
+  // change, so they stay valid across buckets).
+  LeafCode recent_[8];
 };
 
 inline void count_kind(NodeKind k, ExtractResult* r) {
