@@ -10,10 +10,7 @@ namespace weaver {
 Status floor_holding(BTree& table, const Octant& o, uint64_t* key, std::byte* payload,
                      bool* found) {
   WEAVER_RETURN_IF_ERROR(table.floor(octant_key(o), key, payload, found));
-  if (*found) {
-    const Octant leaf = octant_from_key(*key);
-    *found = leaf == o || octant_is_ancestor(leaf, o);
-  }
+  *found = *found && key_holds(*key, o);
   return Status::Ok();
 }
 

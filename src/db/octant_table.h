@@ -19,6 +19,12 @@ class BTree;
 
 inline constexpr char kOctantTable[] = "octants";
 
+// Whether the octant with key `holder` is o or an ancestor of o.
+inline bool key_holds(uint64_t holder, const Octant& o) {
+  const Octant h = octant_from_key(holder);
+  return h == o || octant_is_ancestor(h, o);
+}
+
 // The leaf of an octant table that is `o` or holds it: the floor of o's
 // key, when that leaf is o or an ancestor of o; *found false otherwise (o
 // is cut into smaller leaves, or lies in a hole).  payload may be null.

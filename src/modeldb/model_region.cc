@@ -76,10 +76,7 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
   WEAVER_RETURN_IF_ERROR(scan_.seek(table, octant_key(cell)));
   WEAVER_RETURN_IF_ERROR(
       scan_.floor(table, octant_key(cell), &floor_key, record, record_bytes, &found));
-  if (found) {
-    const Octant holder = octant_from_key(floor_key);
-    found = holder == cell || octant_is_ancestor(holder, cell);
-  }
+  found = found && key_holds(floor_key, cell);
   if (found) {
     // Cells inside one octant come one after another in Z-order.
     if (keys_.empty() || keys_.back() != floor_key) add(floor_key, record, record_bytes);

@@ -48,16 +48,12 @@ void SharedBatch::cut_runs(size_t parts, std::vector<size_t>* starts) {
   for (const KeyedPoint& k : keyed_) scratch_[at[run_of(k.first)]++] = k;
 }
 
-template <typename Hit, typename Walk>
-Status SharedBatch::run(const Coord* p, size_t n, bool nodes, Hit* out, Walk walk) {
+template <typename Hit, typename Alone, typename Walk>
+Status SharedBatch::run(const Coord* p, size_t n, bool nodes, Hit* out, Alone alone, Walk walk) {
+  const size_t parts = this->parts(n);
+  if (parts == 1) return alone(*explorers_[0]);
   std::fill(out, out + n, Hit{});
   Explorer::key_batch(p, n, nodes, &keyed_);
-  const size_t parts = this->parts(n);
-  if (parts == 1) {
-    reserve_huge(scratch_, keyed_.size());
-    radix_sort_by(keyed_, scratch_, key_of);
-    return walk(*explorers_[0], keyed_.data(), keyed_.size());
-  }
   std::vector<size_t> starts;
   cut_runs(parts, &starts);
   // Each run sorted where it lies, keyed_ its other buffer.
@@ -70,15 +66,19 @@ Status SharedBatch::run(const Coord* p, size_t n, bool nodes, Hit* out, Walk wal
 }
 
 Status SharedBatch::locate(const Coord* p, size_t n, PointHit* out) {
-  return run(p, n, false, out, [out](Explorer& e, const KeyedPoint* run, size_t count) {
-    return e.locate_sorted(run, count, out);
-  });
+  return run(
+      p, n, false, out, [&](Explorer& e) { return e.locate_batch(p, n, out); },
+      [out](Explorer& e, const KeyedPoint* run, size_t count) {
+        return e.locate_sorted(run, count, out);
+      });
 }
 
 Status SharedBatch::node_at(const Coord* p, size_t n, NodeHit* out) {
-  return run(p, n, true, out, [out](Explorer& e, const KeyedPoint* run, size_t count) {
-    return e.node_at_sorted(run, count, out);
-  });
+  return run(
+      p, n, true, out, [&](Explorer& e) { return e.node_at_batch(p, n, out); },
+      [out](Explorer& e, const KeyedPoint* run, size_t count) {
+        return e.node_at_sorted(run, count, out);
+      });
 }
 
 }  // namespace weaver

@@ -32,8 +32,10 @@ class SharedBatch {
   size_t parts(size_t n) const { return n >= kParallelPoints ? explorers_.size() : 1; }
 
  private:
-  template <typename Hit, typename Walk>
-  Status run(const Coord* p, size_t n, bool nodes, Hit* out, Walk walk);
+  // A small batch goes to the first Explorer's own batch call (`alone`);
+  // a large one is cut into runs, each sorted and walked (`walk`) by one.
+  template <typename Hit, typename Alone, typename Walk>
+  Status run(const Coord* p, size_t n, bool nodes, Hit* out, Alone alone, Walk walk);
   // Moves keyed_ into scratch_ as `parts` runs of keys, each run's keys all
   // below the next run's; starts[i] is where run i begins (starts[parts]:
   // the end).
