@@ -1,7 +1,8 @@
 // cli/point_batch: a batch shared among threads (its lookups and its rows
 // split among helper Explorers, a thread each) writes exactly the rows one
 // thread writes, in every output mode; and a batch whose lane lets it
-// answer more points at a time writes them too.  Runs under
+// answer more points at a time writes them too; a write that fails fails
+// the batch.  Runs under
 // ThreadSanitizer too (the "tsan" preset takes *Thread* tests).
 #include "cli/point_batch.h"
 
@@ -77,6 +78,26 @@ TEST(PointBatchThreads, HelpersAndLanesWriteWhatOneThreadWrites) {
     EXPECT_TRUE(rows_of(*ex, {helper.get()}, points, mode, 0) == alone);
     EXPECT_TRUE(rows_of(*ex, {helper.get()}, points, mode, 50000) == alone);
     EXPECT_TRUE(rows_of(*ex, {}, points, mode, 20000) == alone);
+  }
+  // A full disk: the batch fails with the write's error, on one thread and
+  // shared (where one thread writes while the others format).
+  for (const std::vector<Explorer*>& helpers :
+       {std::vector<Explorer*>{}, std::vector<Explorer*>{helper.get()}}) {
+    std::FILE* full = std::fopen("/dev/full", "w");
+    ASSERT_NE(full, nullptr);
+    std::FILE* in = fmemopen(const_cast<char*>(points.data()), points.size(), "r");
+    std::FILE* err = std::fopen("/dev/null", "w");
+    cli::PointBatchOptions opt;
+    opt.mode = cli::OutputMode::kCsv;
+    opt.helpers = helpers;
+    opt.batch_points = 100000;  // one batch, shared
+    cli::PointBatchResult r;
+    const Status st = cli::run_point_batch(*ex, in, "points", opt, full, err, &r);
+    EXPECT_FALSE(st.ok()) << helpers.size() << " helpers";
+    EXPECT_NE(st.message().find("writing the answers"), std::string::npos) << st.message();
+    std::fclose(in);
+    std::fclose(err);
+    std::fclose(full);
   }
 }
 

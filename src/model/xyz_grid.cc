@@ -9,6 +9,8 @@
 #include <string_view>
 #include <vector>
 
+#include "util/read_decimal.h"
+
 namespace weaver {
 namespace {
 
@@ -83,7 +85,7 @@ Status parse_point(std::string_view line, const std::string& path, uint64_t n, d
     while (p < end && (*p == ' ' || *p == '\t' || *p == '\r' || *p == ',')) ++p;
     if (p == end) break;
     if (count == 6) return bad_line(path, n, "more than 6 numbers (x y z vp vs rho)");
-    const auto r = std::from_chars(p, end, v[count]);
+    const auto r = read_decimal(p, end, v[count]);
     if (r.ec != std::errc() ||
         (r.ptr < end && *r.ptr != ' ' && *r.ptr != '\t' && *r.ptr != '\r' && *r.ptr != ',')) {
       const char* w = p;
