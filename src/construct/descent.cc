@@ -141,11 +141,15 @@ void Descent::apply_ground(const Octant& o, GroundSide side, Judgement* j) const
 
 // Children that their parent's floor keeps leaves cost nothing; the others
 // ask the model's bounds; those the bounds leave open are sampled, from the
-// parent's 5 x 5 x 5 lattice when at least kSharedLattice of them are.
+// parent's 5 x 5 x 5 lattice when at least kSharedLattice of them are.  Not
+// for some children only (a subtree's balance, judging the octants around
+// the subtree): the parent's lattice reaches into the children not asked,
+// further from the model's focus, where a model database answers each point
+// by a search of its table (0.95x the time of a construct from one).
 void Descent::judge_children(const Octant& o, const Judgement& parent, const bool* want,
                              Judgement out[8]) const {
   const double floor = parent.floor;
-  constexpr int kSharedLattice = 4;
+  const int kSharedLattice = want == nullptr ? 4 : 9;
   bool open[8] = {};
   int opened = 0;
   for (int c = 0; c < 8; ++c) {
