@@ -410,6 +410,53 @@ TEST(ModelDb, RegionsLoadedInAnyOrderAnswerAsTheTable) {
   }
 }
 
+// Points outside any region (each answered by the table, or by an octant
+// the reader found there before) get the table's own octant: one that holds
+// the point and is a record of the table with those values, checked against
+// the table directly.  Points come in clusters, several to a model cell,
+// and clusters again where earlier ones were, as the lattices around a
+// subtree ask them.
+TEST(ModelDb, PointsOutsideTheRegionAnswerAsTheTable) {
+  const std::string model = import_bounds_model("outside_region");
+  std::unique_ptr<DbModel> m;
+  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &m).ok());
+  std::unique_ptr<Database> db;
+  ASSERT_TRUE(Database::open(model, Database::Mode::kRead, false, &db).ok());
+  std::unique_ptr<BTree> table;
+  ASSERT_TRUE(db->open_table(kModelTable, 1 << 20, &table).ok());
+  const ModelInfo& info = m->info();
+  std::mt19937_64 rng(5);
+  const auto uniform = [&](double a, double b) {
+    return std::uniform_real_distribution<double>(a, b)(rng);
+  };
+  std::vector<std::array<double, 3>> centres;
+  for (int n = 0; n < 20000; ++n) {
+    if (centres.empty() || rng() % 4 != 0) {
+      centres.push_back({uniform(0, 7999), uniform(0, 7999), uniform(0, 5599)});
+    }
+    const std::array<double, 3>& c = centres[rng() % centres.size()];
+    double p[3];
+    for (int a = 0; a < 3; ++a) {  // within the model's box: no clamping
+      p[a] = std::clamp(c[a] + uniform(-150, 150), info.origin_m[a],
+                        info.origin_m[a] + info.extent_m[a] - 1);
+    }
+    ModelHit h;
+    ASSERT_TRUE(m->lookup(p[0], p[1], p[2], &h).ok()) << n;
+    ASSERT_FALSE(h.clamped) << n;
+    const uint32_t corner[3] = {h.octant.x, h.octant.y, h.octant.z};
+    for (int a = 0; a < 3; ++a) {
+      const double lo = info.origin_m[a] + corner[a] * info.tick_m;
+      ASSERT_GE(p[a], lo) << n << " axis " << a;
+      ASSERT_LT(p[a], lo + octant_edge(h.octant) * info.tick_m) << n << " axis " << a;
+    }
+    std::byte record[sizeof(ModelValues)] = {};
+    bool found = false;
+    ASSERT_TRUE(table->get(octant_key(h.octant), record, &found).ok());
+    ASSERT_TRUE(found) << n << ": no such octant in the table";
+    ASSERT_EQ(std::memcmp(record, h.values.data(), table->options().schema.record_size()), 0) << n;
+  }
+}
+
 // Construct from a model database decides the octants its bounds settle as
 // the samples would: the tables, balanced and not, are those of a construct
 // that samples every octant, over a domain past the model's box (clamped).

@@ -19,10 +19,32 @@ struct DbModel::Reader {
   std::unique_ptr<BTree> table;
   Status opened;
   ModelRegion region;
-  // The last octant found: [lo, lo + edge) ticks, and its values.
-  Coord lo{0, 0, 0};
-  uint32_t edge = 0;
-  ModelHit last;
+  // An octant the table gave: [lo, lo + edge) ticks on each axis.
+  struct Found {
+    Coord lo{0, 0, 0};
+    uint32_t edge = 0;  // 0: none
+    ModelValues values{};
+    Octant octant;
+    bool holds(Coord t) const {
+      return t.x - lo.x < edge && t.y - lo.y < edge && t.z - lo.z < edge;
+    }
+  };
+  Found last;
+  // Octants the table gave, by a hash of the point's cell of 1024 ticks
+  // (about a model cell at 100 m): points outside the region (the lattices
+  // of the octants around a subtree, judged by its balance) come again and
+  // again, shared by a parent's lattice and its children's and by
+  // neighbours' faces, and a search of the table for each cost more than
+  // the rest of their judgement.  About 220 KiB, made at the first search.
+  static constexpr size_t kSeen = 4096;
+  std::vector<Found> seen;
+  Found& seen_slot(Coord t) {
+    if (seen.empty()) seen.resize(kSeen);
+    const uint64_t h = (uint64_t{t.x >> 10} * 0x9E3779B97F4A7C15ull) ^
+                       (uint64_t{t.y >> 10} * 0xC2B2AE3D27D4EB4Full) ^
+                       (uint64_t{t.z >> 10} * 0x165667B19E3779F9ull);
+    return seen[(h >> 40) % kSeen];
+  }
 };
 
 DbModel::~DbModel() = default;
@@ -39,8 +61,10 @@ Status DbModel::open(const std::string& dir, MemoryBudget memory, int threads,
   const uint64_t per_reader = memory.bytes() / std::max(1, threads);
   m->pool_bytes_ = std::max<uint64_t>(per_reader / 2, 1ull << 20);
   // A region octant takes its key and values twice over at most (vectors
-  // grow by doubling); the raster is a fixed 1 MiB.
-  const uint64_t region_bytes = per_reader / 2 > (2ull << 20) ? per_reader / 2 - (1ull << 20) : 0;
+  // grow by doubling); the raster is a fixed 1 MiB, the octants seen
+  // outside it about 220 KiB.
+  const uint64_t fixed = (1ull << 20) + Reader::kSeen * sizeof(Reader::Found);
+  const uint64_t region_bytes = per_reader / 2 > fixed + (1ull << 20) ? per_reader / 2 - fixed : 0;
   m->region_octants_ = std::max<size_t>(region_bytes / (2 * (8 + sizeof(ModelValues))), 4096);
   std::unique_ptr<BTree> t;
   WEAVER_RETURN_IF_ERROR(m->db_->open_table(kModelTable, m->pool_bytes_, &t));
@@ -182,17 +206,21 @@ Status DbModel::find_pixel(Reader& r, Coord t, bool clamped, double x, double y,
     hit->octant = r.region.octant(i);
     return Status::Ok();
   }
-  if (t.x - r.lo.x >= r.edge || t.y - r.lo.y >= r.edge || t.z - r.lo.z >= r.edge) {
-    uint64_t key = 0;
-    bool found = false;
-    std::byte payload[sizeof(ModelValues)] = {};
-    WEAVER_RETURN_IF_ERROR(r.table->floor(pixel_key(t), &key, payload, &found));
-    const Octant o = found ? octant_from_key(key) : Octant{};
-    if (!found || !octant_contains_point(o, t)) return hole_at(x, y, z);
-    std::memcpy(r.last.values.data(), payload, r.table->options().schema.record_size());
-    r.last.octant = o;
-    r.lo = octant_corner(o);
-    r.edge = octant_edge(o);
+  if (!r.last.holds(t)) {
+    Reader::Found& f = r.seen_slot(t);
+    if (!f.holds(t)) {
+      uint64_t key = 0;
+      bool found = false;
+      std::byte payload[sizeof(ModelValues)] = {};
+      WEAVER_RETURN_IF_ERROR(r.table->floor(pixel_key(t), &key, payload, &found));
+      const Octant o = found ? octant_from_key(key) : Octant{};
+      if (!found || !octant_contains_point(o, t)) return hole_at(x, y, z);
+      std::memcpy(f.values.data(), payload, r.table->options().schema.record_size());
+      f.octant = o;
+      f.lo = octant_corner(o);
+      f.edge = octant_edge(o);
+    }
+    r.last = f;
   }
   hit->values = r.last.values;
   hit->octant = r.last.octant;
