@@ -457,6 +457,49 @@ TEST(ModelDb, PointsOutsideTheRegionAnswerAsTheTable) {
   }
 }
 
+// A lattice of samples (construct's 3 x 3 x 3 and 5 x 5 x 5) inside the
+// focused region, across its side or wholly outside it gives at each point
+// the Vs a model never focused looks up there.
+TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
+  const std::string model = import_bounds_model("lattices");
+  std::unique_ptr<DbModel> m, ref;
+  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &m).ok());
+  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &ref).ok());
+  std::mt19937_64 rng(17);
+  const auto uniform = [&](double a, double b) {
+    return std::uniform_real_distribution<double>(a, b)(rng);
+  };
+  const double focus_lo[3] = {2000, 2000, 1000}, focus_hi[3] = {5000, 5000, 3000};
+  m->focus(focus_lo, focus_hi);
+  int across = 0;
+  for (int t = 0; t < 3000; ++t) {
+    const int n = t % 2 == 0 ? 3 : 5;
+    const double side = std::pow(2.0, uniform(5, 11));
+    double axes[3][5];
+    bool in = true, out = true;
+    for (int a = 0; a < 3; ++a) {
+      const double from = uniform(focus_lo[a] - 1500, focus_hi[a] + 500);
+      for (int i = 0; i < n; ++i) {
+        axes[a][i] = std::clamp(from + side * i / (n - 1), 0.0, a == 2 ? 5599.0 : 7999.0);
+        in = in && axes[a][i] >= focus_lo[a] && axes[a][i] <= focus_hi[a];
+        out = out && (axes[a][i] < focus_lo[a] || axes[a][i] > focus_hi[a]);
+      }
+    }
+    across += !in && !out;
+    float got[125];
+    m->vs_on_lattice(axes[0], axes[1], axes[2], n, got);
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          ModelHit want;
+          ASSERT_TRUE(ref->lookup(axes[0][i], axes[1][j], axes[2][k], &want).ok());
+          ASSERT_EQ(got[(k * n + j) * n + i], want.values[1])
+              << "lattice " << t << " at " << axes[0][i] << " " << axes[1][j] << " " << axes[2][k];
+        }
+  }
+  EXPECT_GT(across, 300) << "lattices across the region's side";
+}
+
 // Construct from a model database decides the octants its bounds settle as
 // the samples would: the tables, balanced and not, are those of a construct
 // that samples every octant, over a domain past the model's box (clamped).

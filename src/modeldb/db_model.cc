@@ -265,33 +265,45 @@ Material DbModel::at(double x, double y, double z) const {
 
 // From the focused region where it holds the lattice (construct's case):
 // the pixels and raster cells of each axis once, then a load or two a point.
+// A lattice reaching outside the region (the octants around a subtree,
+// judged by its balance) takes the points outside it from the table.
 void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                             float* out) const {
   Reader& r = reader();
-  const ModelRegion& g = r.region;
-  bool clamped = false, covered = g.loaded();
-  uint32_t px[5], py[5], pz[5], cx[5], cy[5], cz[5];
-  for (int i = 0; i < n && covered && n <= 5; ++i) {
-    px[i] = pixel_on(0, xs[i], &clamped);
-    py[i] = pixel_on(1, ys[i], &clamped);
-    pz[i] = pixel_on(2, zs[i], &clamped);
-    covered = g.covers({px[i], py[i], pz[i]});
-    if (covered) cx[i] = g.cell_x(px[i]), cy[i] = g.cell_y(py[i]), cz[i] = g.cell_z(pz[i]);
-  }
-  if (covered && n <= 5) {
+  if (n > 5) {
+    ModelHit h;
     for (int k = 0; k < n; ++k)
       for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
-          const int32_t o = g.find({px[i], py[j], pz[k]}, cx[i], cy[j], cz[k]);
-          out[(k * n + j) * n + i] = o == ModelRegion::kHole ? 0.0f : g.values(o)[1];
+          out[(k * n + j) * n + i] = find(r, xs[i], ys[j], zs[k], &h).ok() ? h.values[1] : 0.0f;
         }
     return;
+  }
+  const ModelRegion& g = r.region;
+  uint32_t px[5], py[5], pz[5], cx[5], cy[5], cz[5];
+  bool clamped_x[5], clamped_y[5], clamped_z[5];
+  bool covered = g.loaded();
+  for (int i = 0; i < n; ++i) {
+    clamped_x[i] = clamped_y[i] = clamped_z[i] = false;
+    px[i] = pixel_on(0, xs[i], &clamped_x[i]);
+    py[i] = pixel_on(1, ys[i], &clamped_y[i]);
+    pz[i] = pixel_on(2, zs[i], &clamped_z[i]);
+    covered = covered && g.covers({px[i], py[i], pz[i]});
+    if (g.loaded()) cx[i] = g.cell_x(px[i]), cy[i] = g.cell_y(py[i]), cz[i] = g.cell_z(pz[i]);
   }
   ModelHit h;
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
-        out[(k * n + j) * n + i] = find(r, xs[i], ys[j], zs[k], &h).ok() ? h.values[1] : 0.0f;
+        const Coord p{px[i], py[j], pz[k]};
+        float& v = out[(k * n + j) * n + i];
+        if (covered || g.covers(p)) {
+          const int32_t o = g.find(p, cx[i], cy[j], cz[k]);
+          v = o == ModelRegion::kHole ? 0.0f : g.values(o)[1];
+        } else {
+          const bool clamped = clamped_x[i] || clamped_y[j] || clamped_z[k];
+          v = find_pixel(r, p, clamped, xs[i], ys[j], zs[k], &h).ok() ? h.values[1] : 0.0f;
+        }
       }
 }
 
