@@ -242,13 +242,13 @@ try:
     def raw(data, read_all=True):
         with socket.create_connection(("127.0.0.1", port), timeout=20) as so:
             so.sendall(data)
-            got = b""
+            got = bytearray()  # not bytes: += would copy all of it each time
             while read_all:
                 chunk = so.recv(65536)
                 if not chunk:
                     break
                 got += chunk
-            return got
+            return bytes(got)
 
     # An idle connection holds up no other client: /api/stat is answered
     # while the idle one is still open (a server that gave it a thread would
@@ -353,7 +353,7 @@ try:
                 for k in range(0, len(request), 7):
                     so.sendall(request[k:k + 7])
                     time.sleep(0.02)
-                got = b""
+                got = bytearray()
                 while chunk := so.recv(65536):
                     got += chunk
             if b" 200 " not in got.split(b"\r\n")[0] or f'"element": {i},'.encode() not in got:
