@@ -30,9 +30,14 @@ constexpr uint64_t kBytesPerLeaf = 8 + 27 + 16 + NodeClassifier::kIndexBytesPerL
 // No bucket holds more than 8^kMaxBucketDepth finest leaves (kLevel) or
 // kMaxBucketLeaves leaves (kLeaves) whatever the budget: its hash table then
 // stays in the CPU caches.  Larger buckets only save spills, which cost far
-// less than cache misses on every corner.
+// less than cache misses on every corner.  8192 leaves (a table of 256-512
+// KiB, each task's buffers under malloc's mmap threshold, so reused rather
+// than faulted in afresh): against 32768, 0.81x the time of a 1M-leaf random
+// octree's extract, 0.73x a 1M sphere's, 0.97x 10M random, 0.96x the 2 Hz
+// basin's; 4096 was faster still on the small octrees but 1.10x the 1 Hz
+// basin's (more spills).
 constexpr int kMaxBucketDepth = 6;
-constexpr uint64_t kMaxBucketLeaves = uint64_t{1} << 15;
+constexpr uint64_t kMaxBucketLeaves = uint64_t{1} << 13;
 
 // The finest level: from the counts the table's writer kept, else one pass.
 Status finest_level_of(BTree& octants, int* max_level) {
