@@ -176,7 +176,7 @@ int main(int argc, char** argv) {
     j.add("leaves_balanced", std::stod(w["elements"])).add("agree", agree ? "yes" : "NO");
     j.add("weaver_balance_s", median(wb)).add("p8est_balance_s", median(pb));
     j.add("weaver_extract_s", median(we)).add("p8est_nodes_s", median(pn));
-    j.add("p8est_lnodes_s", median(pl));
+    j.add("p8est_lnodes_s", median(pl)).add("lnodes_over_weaver", median(pl) / median(we));
     j.add("weaver_balance_rss", w_rss_b).add("weaver_extract_rss", w_rss_e);
     j.add("p8est_rss", p_rss);
     std::printf("%s\n", j.str().c_str());
@@ -191,6 +191,7 @@ int main(int argc, char** argv) {
                      {"extract w / nodes / lnodes s",
                       fmt(median(we)) + " / " + fmt(median(pn)) + " / " + fmt(median(pl))},
                      {"nodes p/w", fmt(median(pn) / median(we))},
+                     {"lnodes p/w", fmt(median(pl) / median(we))},
                      {"rss w bal/ext MB", fmt(w_rss_b / 1e6) + " / " + fmt(w_rss_e / 1e6)},
                      {"rss p8est MB", fmt(p_rss / 1e6)}});
     std::filesystem::remove_all(db);
@@ -198,8 +199,8 @@ int main(int argc, char** argv) {
   std::printf(
       "\nmedians of %d runs; weaver at its default --memory (256M), p8est in memory, 1 rank\n",
       repeat);
-  print_table(table,
-              {"case", "leaves", "agree", "balance w/p s", "balance p/w",
-               "extract w / nodes / lnodes s", "nodes p/w", "rss w bal/ext MB", "rss p8est MB"});
+  print_table(table, {"case", "leaves", "agree", "balance w/p s", "balance p/w",
+                      "extract w / nodes / lnodes s", "nodes p/w", "lnodes p/w", "rss w bal/ext MB",
+                      "rss p8est MB"});
   return all_agree ? 0 : 1;
 }
