@@ -198,6 +198,15 @@ void Descent::visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) con
   out->root = o;
   double lo[3], hi[3];
   box(o, lo, hi);
+  // The balance around the subtree (subtree_balance.h) asks for its box
+  // grown by its largest leaf at each side.  Asked here for an eighth of the
+  // edge more, a model database's region holds the balance's box wherever
+  // those leaves are no larger, and is not loaded again (construct from the
+  // 100 m model database: 0.89x the time at 0.5 Hz on one thread, 0.85x at
+  // 1 Hz on two; a sixteenth was 0.85x and 0.92x).  Analytic models ignore
+  // the focus.
+  const double margin = (hi[0] - lo[0]) / 8;
+  for (int a = 0; a < 3; ++a) lo[a] -= margin, hi[a] += margin;
   model_.focus(lo, hi);
   out->overflow = !visit(o, judge(o), cap, out);
   if (!out->overflow) add_figures(out);

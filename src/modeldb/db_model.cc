@@ -175,6 +175,11 @@ void DbModel::focus(const double lo[3], const double hi[3]) const {
   bool clamped = false;
   const Coord a = pixel_of(lo[0], lo[1], lo[2], &clamped);
   const Coord b = pixel_of(hi[0], hi[1], hi[2], &clamped);
+  // A box inside the region loaded keeps it: its answers are the table's
+  // wherever it holds the point, so a larger one changes none of them.
+  // (Construct's balance asks a box inside the one its descent asked: see
+  // Descent::visit_subtree.)
+  if (r.region.covers(a) && r.region.covers(b)) return;
   // On a read error the region stays empty and the table answers (and
   // reports the error) point by point.
   if (!r.region.load(*r.table, a, b, r.table->options().schema.record_size(), region_octants_)
