@@ -151,7 +151,7 @@ void ModelRegion::build_raster() {
       base_[a] = lo[a] >> shift_;
       dims_[a] = (hi[a] >> shift_) - base_[a] + 1;
     }
-    if (uint64_t{dims_[0]} * dims_[1] * dims_[2] <= kMaxCells) break;
+    if (uint64_t{dims_[0]} * dims_[1] * dims_[2] <= max_cells_) break;
   }
   raster_.assign(size_t{dims_[0]} * dims_[1] * dims_[2], kHole);
   for (size_t i = 0; i < keys_.size(); ++i) {

@@ -13,7 +13,7 @@
 //
 // The raster: cells of 2^shift pixels, aligned, over the box; shift is the
 // finest model octant's edge in the box, coarsened until the raster has at
-// most kMaxCells.  A cell holds the index of the one octant covering it, or
+// most max_cells_.  A cell holds the index of the one octant covering it, or
 // kHole (no octant meets it), or kMixed (smaller octants share it: a binary
 // search of the sorted keys answers).
 //
@@ -40,8 +40,14 @@ class ModelRegion {
  public:
   static constexpr int32_t kHole = -1;
   static constexpr int32_t kMixed = -2;
-  // 256K cells (1 MiB): a raster per construct worker stays in L2/L3.
+  // The raster's most cells: 256K unless set_max_cells says more.  A cell
+  // costs about kBytesPerCell: its raster entry (4), its Vs range (8) and
+  // the pyramid's share above it (8/7).
   static constexpr uint64_t kMaxCells = uint64_t{1} << 18;
+  static constexpr uint64_t kBytesPerCell = 14;
+  // A finer raster answers more points without searching a mixed cell's
+  // octants, but costs more to build at every load.
+  void set_max_cells(uint64_t cells) { max_cells_ = cells; }
 
   // Loads the octants of `table` (model records of record_bytes) that meet
   // the pixel box [lo, hi] (bounds included).  Gives up (loaded() false,
@@ -113,6 +119,7 @@ class ModelRegion {
   std::vector<uint64_t> keys_;  // sorted, disjoint octants
   std::vector<ModelValues> values_;
   int shift_ = 0;
+  uint64_t max_cells_ = kMaxCells;
   uint32_t base_[3] = {0, 0, 0};  // lo >> shift_
   uint32_t dims_[3] = {0, 0, 0};
   std::vector<int32_t> raster_;
