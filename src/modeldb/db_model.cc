@@ -64,8 +64,8 @@ Status DbModel::open(const std::string& dir, MemoryBudget memory, int threads,
   // them (construct from the 100 m model database: 0.82x the time of 256K
   // cells at 0.5 Hz on one thread, 0.98x at 1 Hz on two; coarser cells sent
   // more points to search a mixed cell's octants), never fewer than 256K.
-  m->region_cells_ = ModelRegion::kMaxCells;
-  while (m->region_cells_ < (1u << 20) &&
+  m->region_cells_ = ModelRegion::kMinCells;
+  while (m->region_cells_ < ModelRegion::kMaxCells &&
          2 * m->region_cells_ * ModelRegion::kBytesPerCell <= per_reader / 4) {
     m->region_cells_ *= 2;
   }

@@ -40,10 +40,12 @@ class ModelRegion {
  public:
   static constexpr int32_t kHole = -1;
   static constexpr int32_t kMixed = -2;
-  // The raster's most cells: 256K unless set_max_cells says more.  A cell
-  // costs about kBytesPerCell: its raster entry (4), its Vs range (8) and
-  // the pyramid's share above it (8/7).
-  static constexpr uint64_t kMaxCells = uint64_t{1} << 18;
+  // The raster's most cells: kMinCells unless set_max_cells says more (up
+  // to kMaxCells, as DbModel's budget allows).  A cell costs about
+  // kBytesPerCell: its raster entry (4), its Vs range (8) and the pyramid's
+  // share above it (8/7).
+  static constexpr uint64_t kMinCells = uint64_t{1} << 18;
+  static constexpr uint64_t kMaxCells = uint64_t{1} << 20;
   static constexpr uint64_t kBytesPerCell = 14;
   // A finer raster answers more points without searching a mixed cell's
   // octants, but costs more to build at every load.
@@ -119,7 +121,7 @@ class ModelRegion {
   std::vector<uint64_t> keys_;  // sorted, disjoint octants
   std::vector<ModelValues> values_;
   int shift_ = 0;
-  uint64_t max_cells_ = kMaxCells;
+  uint64_t max_cells_ = kMinCells;
   uint32_t base_[3] = {0, 0, 0};  // lo >> shift_
   uint32_t dims_[3] = {0, 0, 0};
   std::vector<int32_t> raster_;

@@ -19,7 +19,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from picture import pixel, read_png, viridis  # noqa: E402
-from serve_client import exchange, start_server, stop_server  # noqa: E402
+from serve_client import exchange, raw, read_to_end, start_server, stop_server  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "src",
                                 "api", "python"))
@@ -239,17 +239,6 @@ try:
 
     # The raw protocol: keep-alive, pipelining, limits, malformed heads, and
     # a client that sends nothing never holds up the others.
-    def raw(data, read_all=True):
-        with socket.create_connection(("127.0.0.1", port), timeout=20) as so:
-            so.sendall(data)
-            got = bytearray()  # not bytes: += would copy all of it each time
-            while read_all:
-                chunk = so.recv(65536)
-                if not chunk:
-                    break
-                got += chunk
-            return bytes(got)
-
     # An idle connection holds up no other client: /api/stat is answered
     # while the idle one is still open (a server that gave it a thread would
     # answer only once its idle timeout closed it).
@@ -262,7 +251,7 @@ try:
     except BlockingIOError:
         pass  # open, nothing to read: as it should be
     host = f"Host: 127.0.0.1:{port}\r\n".encode()
-    two = raw(b"GET /api/element/1 HTTP/1.1\r\n" + host + b"\r\n"
+    two = raw(port, b"GET /api/element/1 HTTP/1.1\r\n" + host + b"\r\n"
               b"GET /api/element/2 HTTP/1.1\r\n" + host + b"Connection: close\r\n\r\n")
     if two.count(b"HTTP/1.1 200 OK") != 2 or b"Connection: keep-alive" not in two:
         fail(f"two pipelined requests: {two[:300]!r}")
@@ -278,7 +267,7 @@ try:
                         b" 400 "),
                        (b"POST /api/points HTTP/1.1\r\n" + host +
                         b"Transfer-Encoding: chunked\r\n\r\n", b" 400 ")):
-        got = raw(data)
+        got = raw(port, data)
         if want not in got.split(b"\r\n")[0] or b'{"error": ' not in got:
             fail(f"{data[:40]!r}: {got[:200]!r}")
     idle.close()
@@ -353,9 +342,7 @@ try:
                 for k in range(0, len(request), 7):
                     so.sendall(request[k:k + 7])
                     time.sleep(0.02)
-                got = bytearray()
-                while chunk := so.recv(65536):
-                    got += chunk
+                got = read_to_end(so)
             if b" 200 " not in got.split(b"\r\n")[0] or f'"element": {i},'.encode() not in got:
                 slow_errors.append(got[:200])
         except OSError as e:
@@ -363,7 +350,7 @@ try:
 
     def malformed_client():
         for _ in range(20):
-            if b" 400 " not in raw(b"NOT HTTP AT ALL\r\n\r\n").split(b"\r\n")[0]:
+            if b" 400 " not in raw(port, b"NOT HTTP AT ALL\r\n\r\n").split(b"\r\n")[0]:
                 slow_errors.append("malformed request not answered 400")
 
     descriptors = len(os.listdir(f"/proc/{server.pid}/fd"))

@@ -20,7 +20,7 @@ import time
 import urllib.parse
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from serve_client import exchange  # noqa: E402
+from serve_client import exchange, raw  # noqa: E402
 
 weaver_bin, work = sys.argv[1:3]
 shutil.rmtree(work, ignore_errors=True)
@@ -50,15 +50,6 @@ def request(port, method, path, body=None, headers=None):
     if time.monotonic() > DEADLINE:
         fail("out of time")
     return exchange(port, method, path, body, headers)
-
-
-def raw(port, data):
-    with socket.create_connection(("127.0.0.1", port), timeout=20) as so:
-        so.sendall(data)
-        got = bytearray()  # bytes += bytes copies it all each time: minutes for 100 MB
-        while chunk := so.recv(65536):
-            got += chunk
-        return bytes(got)
 
 
 def opened(fifo):

@@ -1,6 +1,7 @@
 """One request to a weaver serve on 127.0.0.1, on a connection of its own,
 for the serve checks (check_serve.py, check_serve_hostile.py)."""
 import http.client
+import socket
 
 
 def exchange(port, method, path, body=None, headers=None, timeout=60):
@@ -11,6 +12,22 @@ def exchange(port, method, path, body=None, headers=None, timeout=60):
     data = r.read()
     c.close()
     return r.status, dict(r.getheaders()), data
+
+
+def read_to_end(so):
+    """Everything the server sends on socket so until it closes."""
+    got = bytearray()  # not bytes: bytes += bytes copies it all each time (minutes for 100 MB)
+    while chunk := so.recv(65536):
+        got += chunk
+    return bytes(got)
+
+
+def raw(port, data, timeout=20):
+    """Sends the bytes data as they are on a connection of its own: the
+    server's answer up to its close."""
+    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as so:
+        so.sendall(data)
+        return read_to_end(so)
 
 
 def start_server(weaver, db, log_path, *options):
