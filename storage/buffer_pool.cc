@@ -36,25 +36,39 @@ BufferPool::BufferPool(File* file, uint32_t page_size, uint64_t budget_bytes)
       page_size + sizeof(Frame) + 4 * sizeof(uint64_t) + kDirectPagesPerFrame * sizeof(uint32_t);
   const uint64_t n = std::max<uint64_t>(
       kMinFrames, budget_bytes > staging ? (budget_bytes - staging) / per_frame : 0);
-  // 2 MiB alignment lets the kernel back the arena with huge pages: a large
-  // pool then takes far fewer TLB misses and page faults.
-  constexpr size_t kHugePage = size_t{2} << 20;
-  const size_t arena_bytes = n * page_size;
-  arena_ = AlignedBytes(new (std::align_val_t{kHugePage}) std::byte[arena_bytes],
-                        AlignedArrayDelete{kHugePage});
-#ifdef MADV_HUGEPAGE
-  if (arena_bytes >= kHugePage) ::madvise(arena_.get(), arena_bytes, MADV_HUGEPAGE);
-#endif
+  // The frames' memory comes in chunks of about 2 MiB, each allocated when
+  // the clock first reaches one of its frames (it hands out the empty
+  // frames in order): a pool sized for a large budget over a small table
+  // allocates what the table fills.  (Allocating the whole budget at once
+  // cost little in a plain build, where untouched pages are never faulted
+  // in, but the sanitizers pay for every byte allocated and freed.)
+  chunk_shift_ = 0;
+  while ((uint64_t{page_size} << (chunk_shift_ + 1)) <= kChunkBytes) ++chunk_shift_;
+  chunks_.resize(((n - 1) >> chunk_shift_) + 1);
   staging_ = AlignedBytes(new (std::align_val_t{64}) std::byte[size_t{kMaxWriteRun} * page_size],
                           AlignedArrayDelete{64});
   frames_.resize(n);
-  for (uint64_t i = 0; i < n; ++i) frames_[i].data = arena_.get() + i * page_size;
   table_.assign(next_pow2(2 * n), 0);
   table_mask_ = table_.size() - 1;
   direct_.assign(kDirectPagesPerFrame * n, 0);
 }
 
 BufferPool::~BufferPool() = default;
+
+void BufferPool::allocate_chunk(size_t chunk) {
+  const size_t first = chunk << chunk_shift_;
+  const size_t frames = std::min(frames_.size() - first, size_t{1} << chunk_shift_);
+  const size_t bytes = frames * page_size_;
+  // 2 MiB alignment lets the kernel back a chunk with a huge page: a large
+  // pool then takes far fewer TLB misses and page faults.
+  chunks_[chunk] = AlignedBytes(new (std::align_val_t{kChunkBytes}) std::byte[bytes],
+                                AlignedArrayDelete{kChunkBytes});
+#ifdef MADV_HUGEPAGE
+  if (bytes >= kChunkBytes) ::madvise(chunks_[chunk].get(), bytes, MADV_HUGEPAGE);
+#endif
+  for (size_t i = 0; i < frames; ++i)
+    frames_[first + i].data = chunks_[chunk].get() + i * page_size_;
+}
 
 uint64_t BufferPool::memory_bytes() const {
   return frames_.size() * (page_size_ + sizeof(Frame)) + table_.size() * sizeof(uint64_t) +
@@ -164,6 +178,7 @@ Status BufferPool::find_victim(Frame** out) {
     if (f.dirty) WEAVER_RETURN_IF_ERROR(write_run_from(&f));
     if (f.page_no != 0) table_erase(f.page_no);
     f.page_no = 0;
+    if (f.data == nullptr) allocate_chunk(size_t(&f - frames_.data()) >> chunk_shift_);
     *out = &f;
     return Status::Ok();
   }

@@ -79,11 +79,12 @@ class BufferPool {
   // Writes every dirty page back (does not sync the file).
   Status flush();
 
-  // A frame's page bytes, computed from its place in the arena: unlike
-  // f->data, reading it needs no load from the frame (a cache miss on a
-  // random lookup in a large pool).
+  // A frame's page bytes, computed from its index (the chunk table is a few
+  // words, always in cache): unlike f->data, reading it needs no load from
+  // the frame (a cache miss on a random lookup in a large pool).
   std::byte* data_of(const Frame* f) const {
-    return arena_.get() + size_t(f - frames_.data()) * page_size_;
+    const size_t i = size_t(f - frames_.data());
+    return chunks_[i >> chunk_shift_].get() + (i & ((size_t{1} << chunk_shift_) - 1)) * page_size_;
   }
 
   uint32_t page_size() const { return page_size_; }
@@ -94,6 +95,8 @@ class BufferPool {
 
  private:
   Status find_victim(Frame** out);
+  // Allocates the frames' memory of chunk `chunk` (frames chunk << chunk_shift_ on).
+  void allocate_chunk(size_t chunk);
   Status write_run_from(Frame* first);
   Status read_page(uint32_t page_no, Frame* f);
   // A pool hit on f: counts it, marks it referenced, prefetches its page.
@@ -107,7 +110,9 @@ class BufferPool {
 
   File* file_;
   uint32_t page_size_;
-  AlignedBytes arena_{nullptr, AlignedArrayDelete{64}};
+  static constexpr size_t kChunkBytes = size_t{2} << 20;
+  std::vector<AlignedBytes> chunks_;  // the frames' pages, 2^chunk_shift_ frames a chunk
+  int chunk_shift_ = 0;
   AlignedBytes staging_{nullptr, AlignedArrayDelete{64}};  // kMaxWriteRun pages, coalesced writes
   std::vector<Frame> frames_;
   std::vector<uint32_t> recycle_;  // frame indices offered by unpin_recycle

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
 #include <vector>
 
@@ -74,6 +75,32 @@ TEST(BufferPoolTest, EvictedDirtyPagesAreWrittenBackAndReadAgain) {
   BufferPool fresh(file.get(), kPoolPage, 0);  // nothing cached: all from disk
   expect_stamps(fresh, pages, 1);
   EXPECT_EQ(fresh.stats().pages_read, pages);
+}
+
+// A pool of several chunks of frames (allocated as the clock first reaches
+// them; the last one part full): every frame's page is where data_of says,
+// no two frames share bytes, and pages evicted from any chunk come back.
+TEST(BufferPoolTest, FramesInEveryChunkHoldTheirOwnPages) {
+  testing::TempDir dir;
+  auto file = new_file(dir);
+  BufferPool pool(file.get(), kPoolPage, 5ull << 20);
+  ASSERT_GT(pool.frame_count(), 2 * (2ull << 20) / kPoolPage);  // three chunks or more
+  const uint32_t pages = 3 * static_cast<uint32_t>(pool.frame_count());
+  fill(pool, pages, 2);
+  std::vector<std::byte*> seen;
+  for (uint32_t p = pages - static_cast<uint32_t>(pool.frame_count()) + 1; p <= pages; ++p) {
+    Frame* f = nullptr;
+    ASSERT_OK(pool.fetch(p, &f));
+    ASSERT_EQ(pool.data_of(f), f->data) << "page " << p;
+    seen.push_back(f->data);
+    pool.unpin(f);
+  }
+  std::sort(seen.begin(), seen.end());
+  for (size_t i = 1; i < seen.size(); ++i) ASSERT_GE(seen[i] - seen[i - 1], kPoolPage);
+  expect_stamps(pool, pages, 2);
+  ASSERT_OK(pool.flush());
+  BufferPool fresh(file.get(), kPoolPage, 5ull << 20);
+  expect_stamps(fresh, pages, 2);
 }
 
 // Cached pages are found by a direct map for low page numbers and by a hash

@@ -71,6 +71,30 @@ TEST(ExternalSorter, MergesInPassesWhenRunsOutnumberTheFanIn) {
   }
 }
 
+// A buffer that starts small (a caller's bound on the items, here far too
+// low) grows to its half of the budget before it spills: the same runs as
+// a sorter that reserved it all at once, and the same items out.
+TEST(ExternalSorter, ABufferStartedSmallGrowsToTheBudgetBeforeSpilling) {
+  for (uint64_t budget : {uint64_t{64} << 10, uint64_t{1} << 20, uint64_t{16} << 20}) {
+    for (uint64_t expected : {uint64_t{0}, uint64_t{1}, uint64_t{100}}) {
+      testing::TempDir dir;
+      auto items = random_items(testing::scaled(200000, 50000), 20000, budget + expected);
+      ExternalSorter whole(dir.file("whole"), budget);
+      ExternalSorter grown(dir.file("grown"), budget, ExternalSorter::Repeats::kKeep, expected);
+      for (const auto& i : items) {
+        ASSERT_OK(whole.add(i));
+        ASSERT_OK(grown.add(i));
+      }
+      ASSERT_OK(whole.finish());
+      ASSERT_OK(grown.finish());
+      EXPECT_EQ(grown.runs_spilled(), whole.runs_spilled()) << budget << " " << expected;
+      EXPECT_EQ(grown.runs_spilled() == 0, budget == (uint64_t{16} << 20)) << budget;
+      std::sort(items.begin(), items.end());
+      EXPECT_TRUE(same(drain(grown), items)) << budget << " " << expected;
+    }
+  }
+}
+
 TEST(ExternalSorter, SortsKeyTagsLikeStdSortOverNarrowAndWideKeys) {
   std::mt19937_64 rng(7);
   std::vector<KeyTag> scratch;

@@ -202,10 +202,13 @@ Status Closure::emit_candidates(int l, KeyTagSource& parents, uint64_t parent_co
   while (2 * fits * kEntry + KeySet::slots_for(2 * fits) * 8 <= memory_.parent_chunk) fits *= 2;
   // A parent, with the leaf a required octant's entry named (or 0), and the
   // children that are leaves (all 8 for a parent wholly in the domain).
+  // (Room for the level's entries when they are fewer: a chunk the size of
+  // the budget, allocated for a few parents, was most of the sanitizers'
+  // time in the balance tests.)
   std::vector<KeyTag> chunk;
   std::vector<uint8_t> children;
-  chunk.reserve(fits);
-  children.reserve(fits);
+  chunk.reserve(std::min<uint64_t>(fits, parent_count));
+  children.reserve(std::min<uint64_t>(fits, parent_count));
   KeySet chunk_keys;
   std::vector<uint64_t> share_added(sorters.size());
   // Candidates of chunk[begin, end) into `into`.
@@ -281,9 +284,11 @@ Status Closure::expand_level(int l, KeyTagSource& parents, uint64_t parent_count
   Sorters sorters;
   std::vector<KeyTagSource*> sources;
   for (int i = 0; i < shares; ++i) {
+    // A parent has a candidate in each face and edge direction at most.
     sorters.push_back(std::make_unique<ExternalSorter>(
         scratch_ + "/c" + std::to_string(l) + "-" + std::to_string(i),
-        memory_.candidate_sort / shares, ExternalSorter::Repeats::kFirstOnly));
+        memory_.candidate_sort / shares, ExternalSorter::Repeats::kFirstOnly,
+        parent_count * std::size(kFaceAndEdgeDirections)));
     sources.push_back(sorters.back().get());
   }
   uint64_t added = 0, probed = 0;

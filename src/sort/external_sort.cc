@@ -26,12 +26,13 @@ void sort_key_tags(std::vector<KeyTag>& items, std::vector<KeyTag>& scratch) {
   }
 }
 
-ExternalSorter::ExternalSorter(std::string scratch_dir, uint64_t memory_bytes, Repeats repeats)
+ExternalSorter::ExternalSorter(std::string scratch_dir, uint64_t memory_bytes, Repeats repeats,
+                               uint64_t expected_items)
     : scratch_dir_(std::move(scratch_dir)), memory_bytes_(memory_bytes), repeats_(repeats) {
   // Half of the budget buffers input; the other half feeds the merge.
   capacity_ = std::max<size_t>(kMinReadItems, memory_bytes / 2 / sizeof(KeyTag));
   max_fan_in_ = std::max<size_t>(2, memory_bytes / 2 / sizeof(KeyTag) / kMinReadItems);
-  buffer_.reserve(capacity_);
+  buffer_.reserve(std::min<uint64_t>(capacity_, std::max<uint64_t>(expected_items, 1)));
 }
 
 ExternalSorter::~ExternalSorter() {
@@ -41,7 +42,15 @@ ExternalSorter::~ExternalSorter() {
 }
 
 Status ExternalSorter::add(const KeyTag& item) {
-  if (buffer_.size() == capacity_) WEAVER_RETURN_IF_ERROR(spill());
+  if (buffer_.size() == buffer_.capacity()) {
+    // The old buffer and the new one together take at most 1.5 times the
+    // buffer's half of the budget: within it (the merge half is idle).
+    if (buffer_.size() >= capacity_) {
+      WEAVER_RETURN_IF_ERROR(spill());
+    } else {
+      buffer_.reserve(std::min(capacity_, 2 * buffer_.size() + 1024));
+    }
+  }
   buffer_.push_back(item);
   return Status::Ok();
 }

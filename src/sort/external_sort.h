@@ -31,7 +31,11 @@ class ExternalSorter : public KeyTagSource {
   // Scratch files go to scratch_dir (created on the first spill, removed by
   // the destructor).  memory_bytes bounds the buffer and the merge buffers;
   // the sort of a run borrows the merge half, which is idle until finish().
-  ExternalSorter(std::string scratch_dir, uint64_t memory_bytes, Repeats repeats = Repeats::kKeep);
+  // The buffer starts at room for expected_items (a caller's bound, if it
+  // has one) and grows by doubling up to its half of the budget: a sorter
+  // of a few items then allocates what they need, not the budget's half.
+  ExternalSorter(std::string scratch_dir, uint64_t memory_bytes, Repeats repeats = Repeats::kKeep,
+                 uint64_t expected_items = UINT64_MAX);
   ~ExternalSorter();
 
   Status add(const KeyTag& item);
