@@ -212,6 +212,23 @@ TEST_F(Robustness, OutOfMemoryIsOneLineAndExitOne) {
   EXPECT_NE(r.err.find("out of memory"), std::string::npos) << r.err;
   expect_verifies(db);
 }
+
+// A thread the system will not start (here: each thread's stack would be
+// the 4 GB the stack limit says, in 3 GB of address space) is one line and
+// exit status 1, not an abort; one thread still works, and a writer so
+// stopped leaves a database that verifies.
+TEST_F(Robustness, AThreadThatCannotStartIsOneLineAndExitOne) {
+  const std::string db = mesh_db();
+  const std::string limit = "ulimit -s 4000000; ulimit -v 3000000; ";
+  for (const std::string& cmd : {"verify " + db, "extract " + db}) {
+    const CommandRun r = run(cmd + " --threads 2", limit);
+    EXPECT_EQ(r.code, 1) << cmd << ": " << r.err;
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("cannot start a thread"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(run("verify " + db + " --threads 1", limit).code, 0);
+  expect_verifies(db);
+}
 #endif
 
 TEST_F(Robustness, RunawaySizesAreRefusedBeforeWriting) {

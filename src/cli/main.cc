@@ -5,6 +5,7 @@
 #include <exception>
 #include <new>
 #include <string>
+#include <system_error>
 
 #include "cli/cli.h"
 
@@ -55,6 +56,16 @@ const char* g_command = "";  // for the out-of-memory line
       std::rethrow_exception(e);
     } catch (const std::bad_alloc&) {
       out_of_memory();
+    } catch (const std::system_error& x) {
+      // A thread the system would not start (no memory for its stack, or
+      // too many threads): as plain as running out of memory.
+      if (x.code() == std::errc::resource_unavailable_try_again) {
+        std::fprintf(stderr, "weaver %s: cannot start a thread: %s (try fewer --threads)\n",
+                     g_command, x.what());
+        std::fflush(stderr);
+        std::_Exit(1);
+      }
+      std::fprintf(stderr, "weaver %s: internal error: %s\n", g_command, x.what());
     } catch (const std::exception& x) {
       std::fprintf(stderr, "weaver %s: internal error: %s\n", g_command, x.what());
     } catch (...) {
