@@ -79,9 +79,10 @@ class BufferPool {
   // Writes every dirty page back (does not sync the file).
   Status flush();
 
-  // A frame's page bytes, computed from its index (the chunk table is a few
-  // words, always in cache): unlike f->data, reading it needs no load from
-  // the frame (a cache miss on a random lookup in a large pool).
+  // A frame's page bytes, computed from its index and the chunk table (a
+  // word per 2 MiB of pool: 4 KiB for 1 GiB, and hot): unlike f->data,
+  // reading it needs no load from the frame (a cache miss on a random
+  // lookup in a large pool).
   std::byte* data_of(const Frame* f) const {
     const size_t i = size_t(f - frames_.data());
     return chunks_[i >> chunk_shift_].get() + (i & ((size_t{1} << chunk_shift_) - 1)) * page_size_;
