@@ -46,6 +46,24 @@ TEST(ShortDecimal, FewDecimalsAsAnswersHaveThem) {
   }
 }
 
+// Leaf corners and edges in metres: j x (domain edge) / 2^level, binary
+// fractions of up to 20 places, and binary fractions of any length.
+TEST(ShortDecimal, BinaryFractionsAsCornersAre) {
+  std::mt19937_64 rng(49);
+  const double edges[] = {100000, 37500, 12500, 1, 3, 250000};
+  for (int i = 0; i < 2000000; ++i) {
+    const int level = int(rng() % 24);
+    const double edge = edges[rng() % 6] / double(uint64_t{1} << level);
+    const double v = double(rng() % (uint64_t{1} << (level + 2))) * edge;
+    check(v);
+    check(-v);
+    const int places = int(rng() % 60);
+    const double fraction =
+        double(rng() >> (rng() % 64)) / std::ldexp(1.0, places) * (rng() % 2 ? 1 : -1);
+    check(fraction);
+  }
+}
+
 TEST(ShortDecimal, AnyBitsAtAll) {
   std::mt19937_64 rng(7);
   for (int i = 0; i < 2000000; ++i) {

@@ -10,9 +10,11 @@
 // and that one without its trailing zeros is the shortest form.  It is
 // written fixed: to_chars writes the scientific form only when it is
 // shorter, which with decimal places it never is, nor for a whole number
-// below 10^5.  Anything else (more decimals, huge, tiny, zero, not finite)
-// goes to to_chars: tests/short_decimal_test.cc compares the two on millions
-// of values.
+// below 10^5.  A double that is a short binary fraction (a leaf's corner in
+// metres, 24316.40625) is written as its exact decimal (write_dyadic).
+// Anything else (more decimals, huge, tiny, zero, not finite) goes to
+// to_chars: tests/short_decimal_test.cc compares the two on millions of
+// values.
 #pragma once
 
 #include <bit>
@@ -41,6 +43,56 @@ inline char* write_fixed(char* p, bool negative, uint64_t m, int d) {
     p += d;
   }
   return p;
+}
+
+// A double that is a binary fraction M / 2^k (M odd, k > 0: a leaf's corner
+// or edge in metres, 12.20703125) is the decimal M 5^k / 10^k exactly, of k
+// places.  When that has at most 15 significant digits it is the shortest
+// form that reads back as x: two decimals of 15 digits or fewer never read
+// as one double (DBL_DIG), so no shorter one does.  Written fixed, as
+// to_chars does for x >= 0.001 (at most two zeros after the point: the
+// scientific form is never shorter).  Null when x is not such a fraction.
+// REQUIRES: 0.001 <= x < 2^42.
+inline char* write_dyadic(char* p, bool negative, double x) {
+  static constexpr uint64_t kPow5[] = {1,
+                                       5,
+                                       25,
+                                       125,
+                                       625,
+                                       3125,
+                                       15625,
+                                       78125,
+                                       390625,
+                                       1953125,
+                                       9765625,
+                                       48828125,
+                                       244140625,
+                                       1220703125,
+                                       6103515625,
+                                       30517578125,
+                                       152587890625,
+                                       762939453125,
+                                       3814697265625,
+                                       19073486328125,
+                                       95367431640625,
+                                       476837158203125};
+  constexpr uint64_t kDigits15 = 1000000000000000;  // 10^15
+  const uint64_t bits = std::bit_cast<uint64_t>(x);
+  uint64_t m = (bits & ((uint64_t{1} << 52) - 1)) | uint64_t{1} << 52;
+  int e = int(bits >> 52) - 1075;  // x = m 2^e (normal: x >= 0.001)
+  const int zeros = std::countr_zero(m);
+  m >>= zeros, e += zeros;
+  const int k = -e;
+  if (k <= 0 || k >= 22 || m >= kDigits15 / kPow5[k]) return nullptr;
+  const uint64_t n = m * kPow5[k];  // x = n / 10^k, n < 10^15
+  uint64_t scale = 1;
+  for (int i = 0; i < k; ++i) scale *= 10;
+  if (negative) *p++ = '-';
+  p = std::to_chars(p, p + 24, n / scale).ptr;
+  *p++ = '.';
+  uint64_t frac = n % scale;
+  for (int i = k - 1; i >= 0; --i) p[i] = char('0' + frac % 10), frac /= 10;
+  return p + k;
 }
 
 template <typename T>
@@ -77,6 +129,9 @@ char* write(char* p, T v) {
     // With places the fixed form is never the longer; a whole number from
     // 100000 up may be shorter as 1e+05: to_chars decides.
     if (d > 0 || m < 100000) return write_fixed(p, v < 0, m, d);
+  }
+  if constexpr (!kFloat) {
+    if (char* end = write_dyadic(p, v < 0, x)) return end;
   }
   return std::to_chars(p, p + 40, v).ptr;
 }
