@@ -116,10 +116,12 @@ class BucketWorker {
   Status run(BucketTask& task);
 
  private:
-  void add_sibling_lattice(uint64_t child0, uint64_t end);
+  // The corners of the complete block of 8^j leaves from `first` on.
+  void add_block_lattice(uint64_t first, int j, uint64_t end);
 
   NodeClassifier classifier_;
   NodeHash hash_;
+  std::vector<uint64_t> inside_;            // nodes strictly inside complete blocks
   std::vector<SpillRecord> sorted_;         // the bucket's nodes in key order
   std::vector<uint64_t> packed_, scratch_;  // (offset, mask) words being sorted
 };
