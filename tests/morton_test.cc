@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <random>
 
 #include "reference/octant_reference.h"
@@ -30,6 +31,40 @@ TEST(Morton, MatchesReferenceOnRandomCoordinates) {
     ASSERT_EQ(code, reference::morton_encode(x, y, z));
     const uint64_t any = rng() >> 1;  // any 63-bit code
     ASSERT_EQ(morton_decode(any), reference::morton_decode(any));
+  }
+}
+
+// Both ways of interleaving (the shifts, and BMI2's PDEP and PEXT where the
+// processor has them, whether or not this process chose them) against the
+// reference.
+TEST(Morton, ShiftsAndBitDepositBothMatchTheReference) {
+  std::mt19937_64 rng(3);
+  const bool deposit = morton_detail::has_bit_deposit();
+  std::printf("BMI2 %s; this process interleaves with %s\n", deposit ? "present" : "absent",
+              morton_detail::kFastBitDeposit ? "PDEP and PEXT" : "shifts");
+  const uint64_t n = testing::scaled(1'000'000, 100'000);
+  for (uint64_t i = 0; i < n; ++i) {
+    const uint32_t c[3] = {uint32_t(rng() & kMortonAxisMask), uint32_t(rng() & kMortonAxisMask),
+                           uint32_t(rng() & kMortonAxisMask)};
+    const uint64_t code = reference::morton_encode(c[0], c[1], c[2]);
+    const uint64_t any = rng() >> 1;
+    const Coord back = reference::morton_decode(any);
+    const uint32_t back_axis[3] = {back.x, back.y, back.z};
+    uint64_t shifted = 0;
+    for (int a = 0; a < 3; ++a) {
+      shifted |= morton_detail::spread3(c[a]) << a;
+      ASSERT_EQ(morton_detail::compact3(any >> a), back_axis[a]);
+    }
+    ASSERT_EQ(shifted, code);
+#ifdef WEAVER_BIT_DEPOSIT
+    if (!deposit) continue;
+    uint64_t deposited = 0;
+    for (int a = 0; a < 3; ++a) {
+      deposited |= morton_detail::deposit_bits(c[a], morton_detail::kAxisBits << a);
+      ASSERT_EQ(morton_detail::extract_bits(any, morton_detail::kAxisBits << a), back_axis[a]);
+    }
+    ASSERT_EQ(deposited, code);
+#endif
   }
 }
 
