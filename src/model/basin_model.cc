@@ -188,9 +188,13 @@ class Basin final : public VelocityModel {
       double near2 = 0, far2 = 0;
       axis_distance(b.cx, lo[0], hi[0], &near2, &far2);
       axis_distance(b.cy, lo[1], hi[1], &near2, &far2);
-      const double r2 = b.radius * b.radius;
+      // A product by 1 / r2, not a quotient (no division a bowl and side):
+      // these are bounds, not at()'s values, and their rounding lies far
+      // inside kDepthMargin.
+      const double r2 = b.radius * b.radius, inv_r2 = 1 / r2;
       auto dish = [&](double d2) {
-        return d2 >= r2 ? 0.0 : b.depth * (1 - d2 / r2) * (1 - d2 / r2);
+        const double q = 1 - d2 * inv_r2;
+        return d2 >= r2 ? 0.0 : b.depth * q * q;
       };
       least = std::max(least, dish(far2));
       most = std::max(most, dish(near2));
