@@ -39,6 +39,19 @@ class BTreeCursor final : public Cursor {
     if (++i_ < n_) return Status::Ok();
     return next_leaf();
   }
+  // The keys from the current record to the end of the leaf it holds (at
+  // least one), valid until the cursor leaves that leaf.  REQUIRES: valid().
+  const uint64_t* keys_in_leaf(uint32_t* count) const {
+    *count = n_ - i_;
+    return keys_ + i_;
+  }
+  // Moves on by k records, k at most what keys_in_leaf counts: to the next
+  // leaf when k reaches the end of this one.  REQUIRES: valid().
+  Status skip(uint32_t k) {
+    i_ += k;
+    if (i_ < n_) return Status::Ok();
+    return next_leaf();
+  }
   // Moves on, within the leaf it holds, to the first record with key > k,
   // if the leaf has one, setting *last to the record before it; false (and
   // no move) if the leaf ends at or before k.  A search in keys decoded

@@ -1,5 +1,7 @@
 #include "db/leaf_reader.h"
 
+#include <algorithm>
+
 #include "schema/octant.h"
 
 namespace weaver {
@@ -18,15 +20,44 @@ Status LeafReader::check_current() {
   return Status::Ok();
 }
 
+Status LeafReader::overlap(uint64_t prev, uint64_t key) const {
+  return Status::InvalidArgument("octants " + describe_octant(octant_from_key(prev)) + " and " +
+                                 describe_octant(octant_from_key(key)) + " overlap");
+}
+
 Status LeafReader::next() {
   const uint64_t prev = cursor_.key();
   WEAVER_RETURN_IF_ERROR(cursor_.next());
   if (!cursor_.valid()) return Status::Ok();
   WEAVER_RETURN_IF_ERROR(check_current());
   // A later key inside prev's subtree key range is a descendant of prev.
-  if (cursor_.key() < octant_key_subtree_end(prev)) {
-    return Status::InvalidArgument("octants " + describe_octant(octant_from_key(prev)) + " and " +
-                                   describe_octant(octant_from_key(cursor_.key())) + " overlap");
+  if (cursor_.key() < octant_key_subtree_end(prev)) return overlap(prev, cursor_.key());
+  return Status::Ok();
+}
+
+Status LeafReader::take(size_t most, uint64_t stop, std::vector<uint64_t>* out) {
+  size_t taken = 0;
+  while (taken < most && cursor_.valid()) {
+    uint32_t n = 0;
+    const uint64_t* keys = cursor_.keys_in_leaf(&n);
+    // The current key was checked when the reader reached it; the rest of
+    // the leaf's are checked here, each against the one before.
+    uint32_t k = 0;
+    const uint32_t room = uint32_t(std::min<size_t>(n, most - taken));
+    for (; k < room && octant_key_morton(keys[k]) < stop; ++k) {
+      if (k == 0) continue;
+      if (!octant_key_is_valid(keys[k])) {
+        return Status::Corruption(file_ + ": invalid octant key " + std::to_string(keys[k]));
+      }
+      if (keys[k] < octant_key_subtree_end(keys[k - 1])) return overlap(keys[k - 1], keys[k]);
+    }
+    if (k == 0) return Status::Ok();
+    out->insert(out->end(), keys, keys + k);
+    taken += k;
+    // The last taken is the reader's key before moving on: next() checks
+    // the one it lands on against it.
+    if (k > 1) WEAVER_RETURN_IF_ERROR(cursor_.skip(k - 1));
+    WEAVER_RETURN_IF_ERROR(next());
   }
   return Status::Ok();
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "schema/octant.h"
 #include "schema/status.h"
@@ -21,9 +22,15 @@ class LeafReader {
   // REQUIRES: valid(), opened with payloads.
   const std::byte* payload() const { return cursor_.payload(); }
   Status next();  // REQUIRES: valid()
+  // Appends the keys of the leaves from the current one on to *out, each
+  // checked as next() checks it, while fewer than `most` are appended and
+  // their Morton codes are below `stop`; leaves the reader at the first not
+  // taken.  A leaf page's keys at a time, not a call a key.
+  Status take(size_t most, uint64_t stop, std::vector<uint64_t>* out);
 
  private:
   Status check_current();
+  Status overlap(uint64_t prev, uint64_t key) const;
 
   BTreeCursor cursor_;
   std::string file_;

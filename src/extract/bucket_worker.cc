@@ -80,9 +80,8 @@ Status BucketReader::gather_counted(BucketTask* task) {
   leaves.swap(carry_);
   const size_t want = std::max<uint64_t>(policy_.leaves, 1);
   const size_t window = want + std::max<size_t>(want / 4, 1);
-  while (leaves.size() < window && at_leaf()) {
-    leaves.push_back(cursor_.key());
-    WEAVER_RETURN_IF_ERROR(cursor_.next());
+  if (leaves.size() < window) {
+    WEAVER_RETURN_IF_ERROR(cursor_.take(window - leaves.size(), policy_.stop, &leaves));
   }
   if (leaves.size() < window) {
     task->end = end_after(leaves);  // the part's (or the table's) last leaves
