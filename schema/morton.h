@@ -26,6 +26,8 @@ struct Coord {
 };
 
 namespace morton_detail {
+// Where one axis's bits lie in a code: bits 0, 3, 6, ... (x; y and z above).
+inline constexpr uint64_t kAxisBits = 0x1249249249249249ULL;
 // Spreads the low 21 bits of v so that bit i lands on bit 3i.
 constexpr uint64_t spread3(uint64_t v) {
   v &= kMortonAxisMask;
@@ -33,7 +35,7 @@ constexpr uint64_t spread3(uint64_t v) {
   v = (v | (v << 16)) & 0x001f0000ff0000ffULL;
   v = (v | (v << 8)) & 0x100f00f00f00f00fULL;
   v = (v | (v << 4)) & 0x10c30c30c30c30c3ULL;
-  v = (v | (v << 2)) & 0x1249249249249249ULL;
+  v = (v | (v << 2)) & kAxisBits;
   return v;
 }
 
@@ -82,11 +84,9 @@ inline uint64_t extract_bits(uint64_t v, uint64_t mask) {
 #define WEAVER_BIT_DEPOSIT 1
 #endif
 
-inline constexpr uint64_t kAxisBits = 0x1249249249249249ULL;  // bits 0, 3, 6, ...
-
 // Inverse of spread3: gathers bits 0, 3, 6, ... into the low 21 bits.
 constexpr uint32_t compact3(uint64_t v) {
-  v &= 0x1249249249249249ULL;
+  v &= kAxisBits;
   v = (v | (v >> 2)) & 0x10c30c30c30c30c3ULL;
   v = (v | (v >> 4)) & 0x100f00f00f00f00fULL;
   v = (v | (v >> 8)) & 0x001f0000ff0000ffULL;
@@ -115,7 +115,7 @@ constexpr uint64_t morton_encode(Coord c) { return morton_encode(c.x, c.y, c.z);
 // dilated integer (the other axes' bits set to 1 carry the sum across them).
 // REQUIRES: the moved coordinate stays below 2^21.
 constexpr uint64_t morton_step(uint64_t code, int axis, int bit) {
-  const uint64_t axis_bits = 0x1249249249249249ULL << axis;
+  const uint64_t axis_bits = morton_detail::kAxisBits << axis;
   const uint64_t moved = ((code | ~axis_bits) + (uint64_t{1} << (3 * bit + axis))) & axis_bits;
   return moved | (code & ~axis_bits);
 }
@@ -124,7 +124,7 @@ constexpr uint64_t morton_step(uint64_t code, int axis, int bit) {
 // one dilated unit, the borrow running across the zeros.
 // REQUIRES: the moved coordinate is at least 2^bit.
 constexpr uint64_t morton_step_back(uint64_t code, int axis, int bit) {
-  const uint64_t axis_bits = 0x1249249249249249ULL << axis;
+  const uint64_t axis_bits = morton_detail::kAxisBits << axis;
   const uint64_t moved = ((code & axis_bits) - (uint64_t{1} << (3 * bit + axis))) & axis_bits;
   return moved | (code & ~axis_bits);
 }

@@ -13,9 +13,11 @@ Status LeafReader::open(BTree& octants, uint64_t from, bool payloads) {
   return cursor_.valid() ? check_current() : Status::Ok();
 }
 
-Status LeafReader::check_current() {
-  if (!octant_key_is_valid(cursor_.key())) {
-    return Status::Corruption(file_ + ": invalid octant key " + std::to_string(cursor_.key()));
+Status LeafReader::check_current() { return check_key(cursor_.key()); }
+
+Status LeafReader::check_key(uint64_t key) const {
+  if (!octant_key_is_valid(key)) {
+    return Status::Corruption(file_ + ": invalid octant key " + std::to_string(key));
   }
   return Status::Ok();
 }
@@ -40,18 +42,15 @@ Status LeafReader::take(size_t most, uint64_t stop, std::vector<uint64_t>* out) 
   while (taken < most && cursor_.valid()) {
     uint32_t n = 0;
     const uint64_t* keys = cursor_.keys_in_leaf(&n);
+    if (octant_key_morton(keys[0]) >= stop) return Status::Ok();
     // The current key was checked when the reader reached it; the rest of
     // the leaf's are checked here, each against the one before.
-    uint32_t k = 0;
     const uint32_t room = uint32_t(std::min<size_t>(n, most - taken));
+    uint32_t k = 1;
     for (; k < room && octant_key_morton(keys[k]) < stop; ++k) {
-      if (k == 0) continue;
-      if (!octant_key_is_valid(keys[k])) {
-        return Status::Corruption(file_ + ": invalid octant key " + std::to_string(keys[k]));
-      }
+      WEAVER_RETURN_IF_ERROR(check_key(keys[k]));
       if (keys[k] < octant_key_subtree_end(keys[k - 1])) return overlap(keys[k - 1], keys[k]);
     }
-    if (k == 0) return Status::Ok();
     out->insert(out->end(), keys, keys + k);
     taken += k;
     // The last taken is the reader's key before moving on: next() checks

@@ -30,6 +30,7 @@ class LeafReader {
 
  private:
   Status check_current();
+  Status check_key(uint64_t key) const;
   Status overlap(uint64_t prev, uint64_t key) const;
 
   BTreeCursor cursor_;

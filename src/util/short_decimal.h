@@ -26,15 +26,8 @@
 namespace weaver {
 namespace short_decimal_detail {
 
-// Writes m / 10^d fixed, with its sign.
-inline char* write_fixed(char* p, bool negative, uint64_t m, int d) {
-  uint64_t whole = m, frac = 0;
-  switch (d) {  // constant divisors: a multiply each, not a division
-    case 1: whole = m / 10, frac = m % 10; break;
-    case 2: whole = m / 100, frac = m % 100; break;
-    case 3: whole = m / 1000, frac = m % 1000; break;
-    default: break;
-  }
+// Writes whole.frac fixed, with its sign, frac as d digits (none: no point).
+inline char* write_parts(char* p, bool negative, uint64_t whole, uint64_t frac, int d) {
   if (negative) *p++ = '-';
   p = std::to_chars(p, p + 24, whole).ptr;
   if (d > 0) {
@@ -43,6 +36,18 @@ inline char* write_fixed(char* p, bool negative, uint64_t m, int d) {
     p += d;
   }
   return p;
+}
+
+// Writes m / 10^d fixed, with its sign.  REQUIRES: d <= 3.
+inline char* write_fixed(char* p, bool negative, uint64_t m, int d) {
+  uint64_t whole = m, frac = 0;
+  switch (d) {  // constant divisors: a multiply each, not a division
+    case 1: whole = m / 10, frac = m % 10; break;
+    case 2: whole = m / 100, frac = m % 100; break;
+    case 3: whole = m / 1000, frac = m % 1000; break;
+    default: break;
+  }
+  return write_parts(p, negative, whole, frac, d);
 }
 
 // A double that is a binary fraction M / 2^k (M odd, k > 0: a leaf's corner
@@ -83,16 +88,11 @@ inline char* write_dyadic(char* p, bool negative, double x) {
   const int zeros = std::countr_zero(m);
   m >>= zeros, e += zeros;
   const int k = -e;
-  if (k <= 0 || k >= 22 || m >= kDigits15 / kPow5[k]) return nullptr;
-  const uint64_t n = m * kPow5[k];  // x = n / 10^k, n < 10^15
-  uint64_t scale = 1;
-  for (int i = 0; i < k; ++i) scale *= 10;
-  if (negative) *p++ = '-';
-  p = std::to_chars(p, p + 24, n / scale).ptr;
-  *p++ = '.';
-  uint64_t frac = n % scale;
-  for (int i = k - 1; i >= 0; --i) p[i] = char('0' + frac % 10), frac /= 10;
-  return p + k;
+  if (k <= 0 || k >= 22 || m >= kDigits15 / kPow5[k]) return nullptr;  // m 5^k < 10^15
+  // x = m / 2^k = (m 5^k) / 10^k: the whole part is m's bits above k, and
+  // the k decimals are its bits below k times 5^k (under 10^15: checked).
+  const uint64_t frac = (m & ((uint64_t{1} << k) - 1)) * kPow5[k];
+  return write_parts(p, negative, m >> k, frac, k);
 }
 
 template <typename T>
