@@ -72,7 +72,7 @@ TEST(Models, BasinInclusionsSitInShallowRockOnly) {
 // construct asks for.
 void expect_lattice_matches_sampling(const VelocityModel& m, double x, double y, double z, double h,
                                      int n, int* soft) {
-  double axes[3][5];
+  double axes[3][5] = {};
   for (int i = 0; i < n; ++i)
     axes[0][i] = x + i * h, axes[1][i] = y + i * h, axes[2][i] = z + i * h;
   float fast[125], plain[125];

@@ -52,6 +52,14 @@ struct Slot {
   double least_dt = HUGE_VAL;  // the least edge / vp of its leaves (s), and where
   size_t least_dt_at = 0;
   bool done = false;  // set by the worker (WorkQueue)
+
+  // As new, but for the leaves' capacity (visit_subtree clears them).
+  void reset() {
+    descended = air = cut = 0;
+    least_dt = HUGE_VAL;
+    least_dt_at = 0;
+    done = false;
+  }
 };
 
 // New leaves take the model's material at their centre where weaver balance
@@ -171,8 +179,18 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
   SubtreeList subtrees(descent, p, subtree_level(o, p));
   auto ours = [&](const Octant& root) { return rank_of_subtree(o, share, root) == o.shard; };
   std::deque<std::unique_ptr<Slot>> in_flight;  // Z-order
+  // Written slots, taken again: their vectors keep their capacity, so a
+  // subtree's leaves are not grown afresh (reallocated, copied) each time.
+  std::vector<std::unique_ptr<Slot>> spare;
   auto add = [&](const Octant& root, bool front) {
-    auto slot = std::make_unique<Slot>();
+    std::unique_ptr<Slot> slot;
+    if (spare.empty()) {
+      slot = std::make_unique<Slot>();
+    } else {
+      slot = std::move(spare.back());
+      spare.pop_back();
+      slot->reset();
+    }
     slot->root = root;
     if (threads > 1) queue.push(slot.get(), front);
     if (front) {
@@ -198,6 +216,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     if (head->leaves.overflow) {
       ++r->subtrees_over;
       const Octant big = head->root;
+      spare.push_back(std::move(in_flight.front()));
       in_flight.pop_front();
       for (int c = 7; c >= 0; --c) add(octant_child(big, c), true);  // child 0 first
       continue;
@@ -215,6 +234,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     if (o.progress && !leaves.keys.empty()) {
       o.progress(r->elements, share.fraction_before(leaves.keys.back()));
     }
+    spare.push_back(std::move(in_flight.front()));
     in_flight.pop_front();
   }
   // Let running visits finish before their slots go away.

@@ -72,7 +72,12 @@ class Descent {
   static constexpr size_t kMaxPayloadBytes = 24;
 
   Descent(const ConstructOptions& o, const ConstructPlan& p, const VelocityModel& m)
-      : o_(o), p_(p), model_(m), inv_rate_(1.0 / (o.freq * o.ppw)) {}
+      : o_(o),
+        p_(p),
+        model_(m),
+        inv_rate_(1.0 / (o.freq * o.ppw)),
+        has_q_(m.has_q()),
+        payload_bytes_((has_q_ ? 20 : 12) + (p.carved ? 4 : 0)) {}
 
   // Whether the descent splits o (rather than writing it as a leaf).
   bool splits(const Octant& o) const { return judge(o).split; }
@@ -88,7 +93,7 @@ class Descent {
   // f32), payload_bytes() of them into out.
   void material(const Octant& o, std::byte* out) const;
   // material_schema's record, and the solid fraction where the ground is carved.
-  size_t payload_bytes() const { return (model_.has_q() ? 20 : 12) + (p_.carved ? 4 : 0); }
+  size_t payload_bytes() const { return payload_bytes_; }
   const ConstructPlan& plan() const { return p_; }
   const VelocityModel& model() const { return model_; }
 
@@ -120,6 +125,8 @@ class Descent {
   const ConstructPlan& p_;
   const VelocityModel& model_;
   double inv_rate_;
+  bool has_q_;  // the model's, asked once (a virtual call a leaf was not free)
+  size_t payload_bytes_;
 };
 
 // The domain's subtrees in Z-order: the blocks, split down to task_level
