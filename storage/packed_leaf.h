@@ -60,6 +60,7 @@ struct PackedShape {
   KeyKind key_kind = KeyKind::kNode;
   std::vector<uint32_t> field_sizes;  // bytes of each payload field, in record order
   uint32_t payload = 0;               // sum of field_sizes
+  uint32_t uniform_field = 0;         // the size every field has (0: they differ)
 
   static PackedShape of(uint32_t page_size, KeyKind kind, const RecordSchema& schema);
   // Bytes from a packed page's start through its block table, for a page of
@@ -115,6 +116,9 @@ class PackedLeafBuilder {
 
   // Adds all `count` entries if they fit together, else none.
   bool add_group(const uint64_t* keys, const std::byte* vals, uint32_t count);
+  // Fields of one size, up to this many, take widen_columns' fast path.
+  static constexpr size_t kMaxUniformFields = 8;
+  void widen_columns(const std::byte* vals, uint32_t count);
   static void extend(OpenBlock& b, uint64_t key, KeyKind kind);
   static BlockCode choose(const OpenBlock& b, KeyKind kind);
   uint64_t bytes_for(size_t n, uint64_t key_bytes_closed, const OpenBlock& open,

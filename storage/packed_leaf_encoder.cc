@@ -22,6 +22,10 @@ PackedShape PackedShape::of(uint32_t page_size, KeyKind kind, const RecordSchema
   s.key_kind = kind;
   for (const Field& f : schema.fields()) s.field_sizes.push_back(field_type_size(f.type));
   s.payload = schema.record_size();
+  s.uniform_field = s.field_sizes.empty() ? 0 : s.field_sizes[0];
+  for (uint32_t size : s.field_sizes) {
+    if (size != s.uniform_field) s.uniform_field = 0;
+  }
   return s;
 }
 
@@ -114,13 +118,8 @@ bool PackedLeafBuilder::add_group(const uint64_t* keys, const std::byte* vals, u
       open = OpenBlock{};
     }
     extend(open, keys[i], shape_.key_kind);
-    const std::byte* field = vals + size_t{i} * shape_.payload;
-    for (size_t f = 0; f < cols_.size(); ++f) {
-      const uint64_t v = load_field(field, shape_.field_sizes[f]);
-      scratch_cols_[f] = {std::min(scratch_cols_[f].min, v), std::max(scratch_cols_[f].max, v)};
-      field += shape_.field_sizes[f];
-    }
   }
+  widen_columns(vals, count);
   // Past the dictionary's room the page is column-wise from here on: it
   // stops counting rows (and a dictionary can never come back).  A group
   // that does not fit leaves the dictionary as it was: the entries before
@@ -142,6 +141,53 @@ bool PackedLeafBuilder::add_group(const uint64_t* keys, const std::byte* vals, u
   keys_.insert(keys_.end(), keys, keys + count);
   vals_.insert(vals_.end(), vals, vals + size_t{count} * shape_.payload);
   return true;
+}
+
+namespace {
+
+// Each field's range over `count` rows of `fields` fields of Size bytes:
+// a field at a time, so its minimum and maximum are two running values in
+// registers, with loads of a size known when compiled.
+template <uint32_t Size>
+void widen_uniform(const std::byte* vals, uint32_t count, size_t fields, uint64_t* lo,
+                   uint64_t* hi) {
+  const size_t row = Size * fields;
+  for (size_t f = 0; f < fields; ++f) {
+    uint64_t mn = lo[f], mx = hi[f];
+    const std::byte* p = vals + f * Size;
+    for (uint32_t i = 0; i < count; ++i, p += row) {
+      const uint64_t v = load_field(p, Size);
+      mn = std::min(mn, v);
+      mx = std::max(mx, v);
+    }
+    lo[f] = mn, hi[f] = mx;
+  }
+}
+
+}  // namespace
+
+// The columns' ranges widened by a group's payloads (into scratch_cols_).
+void PackedLeafBuilder::widen_columns(const std::byte* vals, uint32_t count) {
+  const size_t nf = scratch_cols_.size();
+  uint64_t lo[kMaxUniformFields], hi[kMaxUniformFields];
+  if (nf <= kMaxUniformFields && (shape_.uniform_field == 4 || shape_.uniform_field == 1)) {
+    for (size_t f = 0; f < nf; ++f) lo[f] = scratch_cols_[f].min, hi[f] = scratch_cols_[f].max;
+    if (shape_.uniform_field == 4) {
+      widen_uniform<4>(vals, count, nf, lo, hi);
+    } else {
+      widen_uniform<1>(vals, count, nf, lo, hi);
+    }
+    for (size_t f = 0; f < nf; ++f) scratch_cols_[f] = {lo[f], hi[f]};
+    return;
+  }
+  for (uint32_t i = 0; i < count; ++i) {
+    const std::byte* field = vals + size_t{i} * shape_.payload;
+    for (size_t f = 0; f < nf; ++f) {
+      const uint64_t v = load_field(field, shape_.field_sizes[f]);
+      scratch_cols_[f] = {std::min(scratch_cols_[f].min, v), std::max(scratch_cols_[f].max, v)};
+      field += shape_.field_sizes[f];
+    }
+  }
 }
 
 uint32_t PackedLeafBuilder::add_range(const uint64_t* keys, const std::byte* vals, uint32_t from,

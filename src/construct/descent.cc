@@ -70,13 +70,6 @@ double Descent::vs_min_of(const float* samples) const {
   return std::max<double>(std::min(std::min(m[0], m[1]), std::min(m[2], m[3])), o_.vs_min);
 }
 
-// Splitting is monotone in vs: a lower vs never splits less.
-bool Descent::splits(const Octant& o, double vs) const {
-  const double edge_m = octant_edge(o) * p_.tick_m;
-  const bool too_big = edge_m > vs * inv_rate_;
-  return o.level < o_.min_level || (too_big && o.level < o_.max_level);
-}
-
 // The samples lie in o's box, so their least Vs lies within the bounds: if
 // the lower bound keeps o a leaf, so does the least sample; if the upper
 // bound splits it, so does the least sample.

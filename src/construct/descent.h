@@ -77,7 +77,13 @@ class Descent {
         model_(m),
         inv_rate_(1.0 / (o.freq * o.ppw)),
         has_q_(m.has_q()),
-        payload_bytes_((has_q_ ? 20 : 12) + (p.carved ? 4 : 0)) {}
+        payload_bytes_((has_q_ ? 20 : 12) + (p.carved ? 4 : 0)) {
+    for (int l = 0; l <= kMaxLevel; ++l) {
+      edge_m_[l] = octant_edge(l) * p.tick_m;
+      always_splits_[l] = l < o.min_level;
+      may_split_[l] = l < o.max_level;
+    }
+  }
 
   // Whether the descent splits o (rather than writing it as a leaf).
   bool splits(const Octant& o) const { return judge(o).split; }
@@ -106,7 +112,11 @@ class Descent {
   // Vs at o's n x n x n lattice (n = 3: its 27 sample points).
   void lattice(const Octant& o, int n, float* out) const;
   double vs_min_of(const float* samples) const;
-  bool splits(const Octant& o, double vs) const;
+  // Splitting is monotone in vs: a lower vs never splits less.  Inline,
+  // from tables by level: it is asked several times an octant.
+  bool splits(const Octant& o, double vs) const {
+    return always_splits_[o.level] || (edge_m_[o.level] > vs * inv_rate_ && may_split_[o.level]);
+  }
   bool visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const;
   // Where the ground decides: air is never split (but for --min-level), a
   // leaf it crosses is split down to --surface-edge.
@@ -127,6 +137,8 @@ class Descent {
   double inv_rate_;
   bool has_q_;  // the model's, asked once (a virtual call a leaf was not free)
   size_t payload_bytes_;
+  std::array<double, kMaxLevel + 1> edge_m_;  // a level's edge in metres
+  std::array<bool, kMaxLevel + 1> always_splits_, may_split_;  // --min-level, --max-level
 };
 
 // The domain's subtrees in Z-order: the blocks, split down to task_level
