@@ -253,20 +253,64 @@ Status BucketWorker::run(BucketTask& t) {
     }
   }
   for (const SpillRecord& r : t.incoming) hash_.add(r.key, r.mask);
-  sorted_.resize(hash_.size() + inside_.size());
-  for (size_t i = 0; i < hash_.size(); ++i) sorted_[i] = {hash_.key_at(i), hash_.mask_at(i)};
-  for (size_t i = 0; i < inside_.size(); ++i) sorted_[hash_.size() + i] = {inside_[i], 0xFF};
-  sort_records(sorted_, packed_, scratch_);
-  t.node_keys.resize(sorted_.size());
-  t.node_kinds.resize(sorted_.size());
-  for (size_t i = 0; i < sorted_.size(); ++i) {
+  const bool narrow = sort_packed();
+  if (!narrow) sort_wide();
+  const size_t n = narrow ? packed_.size() : sorted_.size();
+  t.node_keys.resize(n);
+  t.node_kinds.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t key = narrow ? ((packed_[i] >> 8) << zeros_) + lo_ : sorted_[i].key;
+    const auto mask = narrow ? static_cast<uint8_t>(packed_[i]) : sorted_[i].mask;
     NodeKind kind = NodeKind::kAnchored;
-    WEAVER_RETURN_IF_ERROR(classifier_.classify(sorted_[i].key, sorted_[i].mask, &kind));
-    t.node_keys[i] = sorted_[i].key;
+    WEAVER_RETURN_IF_ERROR(classifier_.classify(key, mask, &kind));
+    t.node_keys[i] = key;
     t.node_kinds[i] = static_cast<std::byte>(kind);
     count_kind(kind, &t.counts);
   }
   return Status::Ok();
+}
+
+// The bucket's nodes (the hash's and the blocks' inside corners) as
+// sort_records' words, sorted, straight from where they are: their least
+// key, their offsets' common trailing zeros (those of every key's
+// difference from the first: the lowest bit in which two keys differ is
+// the lowest set bit of their difference) and their span, in one read.
+// False, and packed_ empty, if the span needs more than 56 bits.
+bool BucketWorker::sort_packed() {
+  const size_t in_hash = hash_.size(), n = in_hash + inside_.size();
+  packed_.clear();
+  lo_ = 0, zeros_ = 0;
+  if (n == 0) return true;
+  const uint64_t first = in_hash > 0 ? hash_.key_at(0) : inside_[0];
+  uint64_t lo = UINT64_MAX, hi = 0, differ = 0;
+  auto see = [&](uint64_t k) {
+    lo = std::min(lo, k), hi = std::max(hi, k);
+    differ |= k ^ first;
+  };
+  for (size_t i = 0; i < in_hash; ++i) see(hash_.key_at(i));
+  for (uint64_t k : inside_) see(k);
+  const int zeros = differ == 0 ? 0 : std::countr_zero(differ);
+  const int bits = std::bit_width((hi - lo) >> zeros);
+  if (bits > 56) return false;
+  packed_.resize(n);
+  for (size_t i = 0; i < in_hash; ++i) {
+    packed_[i] = ((hash_.key_at(i) - lo) >> zeros) << 8 | hash_.mask_at(i);
+  }
+  for (size_t i = 0; i < inside_.size(); ++i) {
+    packed_[in_hash + i] = ((inside_[i] - lo) >> zeros) << 8 | 0xFF;
+  }
+  radix_sort(packed_, 8, bits, scratch_);
+  lo_ = lo, zeros_ = zeros;
+  return true;
+}
+
+// A span too wide for sort_packed's words: the nodes as records in
+// sorted_, sorted by sort_records (std::sort, for such a span).
+void BucketWorker::sort_wide() {
+  sorted_.resize(hash_.size() + inside_.size());
+  for (size_t i = 0; i < hash_.size(); ++i) sorted_[i] = {hash_.key_at(i), hash_.mask_at(i)};
+  for (size_t i = 0; i < inside_.size(); ++i) sorted_[hash_.size() + i] = {inside_[i], 0xFF};
+  sort_records(sorted_, wide_packed_, scratch_);
 }
 
 }  // namespace weaver

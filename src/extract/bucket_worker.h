@@ -122,8 +122,15 @@ class BucketWorker {
   NodeClassifier classifier_;
   NodeHash hash_;
   std::vector<uint64_t> inside_;            // nodes strictly inside complete blocks
-  std::vector<SpillRecord> sorted_;         // the bucket's nodes in key order
-  std::vector<uint64_t> packed_, scratch_;  // (offset, mask) words being sorted
+  // The bucket's nodes in key order: packed_'s (offset, mask) words, an
+  // offset being (key - lo_) >> zeros_; or, for a span too wide for them,
+  // sorted_'s records.
+  bool sort_packed();
+  void sort_wide();
+  std::vector<uint64_t> packed_, scratch_, wide_packed_;
+  uint64_t lo_ = 0;
+  int zeros_ = 0;
+  std::vector<SpillRecord> sorted_;
 };
 
 }  // namespace weaver

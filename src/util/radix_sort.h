@@ -10,27 +10,52 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace weaver {
 
 // Sorts `values` ascending by bits [first, first + bits), stably;
-// `scratch` is resized and used as the other buffer.
+// `scratch` is resized and used as the other buffer.  Every digit's counts
+// come from one read of the values (not a read a pass), and a digit that
+// is the same in every value is not passed over.
 // REQUIRES: every value < 2^(first + bits) <= 2^64.
 inline void radix_sort(std::vector<uint64_t>& values, int first, int bits,
                        std::vector<uint64_t>& scratch) {
   constexpr int kDigit = 11;
   constexpr size_t kBuckets = size_t{1} << kDigit;
-  scratch.resize(values.size());
-  for (int shift = first; shift < first + bits; shift += kDigit) {
-    std::array<size_t, kBuckets> count{};
-    for (uint64_t v : values) ++count[(v >> shift) & (kBuckets - 1)];
-    size_t sum = 0;
-    for (size_t& c : count) {
-      const size_t n = c;
-      c = sum;
-      sum += n;
+  constexpr int kMostPasses = (64 + kDigit - 1) / kDigit;
+  const int passes = bits <= 0 ? 0 : (bits + kDigit - 1) / kDigit;
+  const size_t n = values.size();
+  if (passes == 0 || n < 2) return;
+  scratch.resize(n);
+  // Counts of u32 where they can hold n; a thread's own, not on its stack.
+  thread_local std::vector<uint32_t> table;
+  table.resize(size_t{kMostPasses} * kBuckets);
+  std::fill(table.begin(), table.begin() + passes * kBuckets, 0);
+  if (n >= (uint64_t{1} << 32)) {
+    // Too many for u32 counts: a pass at a time, in size_t.
+    for (int shift = first; shift < first + bits; shift += kDigit) {
+      std::vector<size_t> count(kBuckets, 0);
+      for (uint64_t v : values) ++count[(v >> shift) & (kBuckets - 1)];
+      size_t sum = 0;
+      for (size_t& c : count) sum += std::exchange(c, sum);
+      for (uint64_t v : values) scratch[count[(v >> shift) & (kBuckets - 1)]++] = v;
+      values.swap(scratch);
     }
+    return;
+  }
+  for (uint64_t v : values) {
+    for (int p = 0; p < passes; ++p) {
+      ++table[p * kBuckets + ((v >> (first + p * kDigit)) & (kBuckets - 1))];
+    }
+  }
+  for (int p = 0; p < passes; ++p) {
+    uint32_t* count = table.data() + p * kBuckets;
+    const int shift = first + p * kDigit;
+    if (count[(values[0] >> shift) & (kBuckets - 1)] == n) continue;  // one digit: in order
+    uint32_t sum = 0;
+    for (size_t d = 0; d < kBuckets; ++d) sum += std::exchange(count[d], sum);
     for (uint64_t v : values) scratch[count[(v >> shift) & (kBuckets - 1)]++] = v;
     values.swap(scratch);
   }
