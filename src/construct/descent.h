@@ -137,7 +137,7 @@ class Descent {
   double inv_rate_;
   bool has_q_;  // the model's, asked once (a virtual call a leaf was not free)
   size_t payload_bytes_;
-  std::array<double, kMaxLevel + 1> edge_m_;  // a level's edge in metres
+  std::array<double, kMaxLevel + 1> edge_m_;                   // a level's edge in metres
   std::array<bool, kMaxLevel + 1> always_splits_, may_split_;  // --min-level, --max-level
 };
 

@@ -121,7 +121,7 @@ class BucketWorker {
 
   NodeClassifier classifier_;
   NodeHash hash_;
-  std::vector<uint64_t> inside_;            // nodes strictly inside complete blocks
+  std::vector<uint64_t> inside_;  // nodes strictly inside complete blocks
   // The bucket's nodes in key order: packed_'s (offset, mask) words, an
   // offset being (key - lo_) >> zeros_; or, for a span too wide for them,
   // sorted_'s records.
