@@ -84,6 +84,17 @@ Descent::Settled Descent::settle(const Octant& o, double* floor) const {
   return Settled::kNo;
 }
 
+// An octant of `level` in the box has its samples there, so their least
+// Vs is at least the bound's: if that keeps it a leaf, so do they (settle's
+// argument).  A carved plan's cut octants split by --surface-edge too.
+bool Descent::keeps_level_within(int level, const double lo[3], const double hi[3]) const {
+  if (!o_.model_bounds || p_.carved) return false;
+  float vs_lo, vs_hi;
+  if (!model_.vs_bounds(lo, hi, &vs_lo, &vs_hi)) return false;
+  const Octant o{0, 0, 0, static_cast<uint8_t>(level)};
+  return !splits(o, std::max<double>(vs_lo, o_.vs_min));
+}
+
 Judgement Descent::judge(const Octant& o) const {
   return judge_on(o, p_.carved ? ground_side(o) : GroundSide::kSolid);
 }

@@ -93,6 +93,10 @@ class Descent {
   // given o's own (its floor bounds the Vs of o's box from below).
   void judge_children(const Octant& o, const Judgement& parent, const bool* want,
                       Judgement out[8]) const;
+  // Whether the model's bounds over the closed box [lo, hi] (metres) keep
+  // every octant of `level` inside it a leaf, as judge() would (false when
+  // they do not settle it, or the model cannot say, or the ground decides).
+  bool keeps_level_within(int level, const double lo[3], const double hi[3]) const;
   // The leaves of o's subtree into *out; stops, with out->overflow, past cap.
   void visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const;
   // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as

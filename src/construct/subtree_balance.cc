@@ -30,6 +30,7 @@ SubtreeBalancer::SubtreeBalancer(const Descent& descent, bool fill_material)
 
 void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
   if (leaves->keys.empty()) return;
+  if (stands(root, *leaves)) return;
   grow_box(root, *leaves);
   const ConstructPlan& p = descent_.plan();
   // The blocks the grown box meets, each descended again where it meets it.
@@ -64,6 +65,41 @@ void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
   const auto inside_root = std::lower_bound(created_.begin(), created_.end(), octant_key(root));
   if (inside_root == created_.end() || *inside_root >= octant_key_subtree_end(root)) return;
   refine(leaves);
+}
+
+// Whether the balance splits none of the subtree's leaves, known without
+// descending around it.  A created octant inside a leaf of level l is of
+// level l + 1 or finer, and is asked for by an octant one level finer still
+// (a leaf, or an octant created inside a coarser one): every chain starts
+// at a leaf of level l + 2 or finer.  So where the subtree's leaves span
+// two levels at most, m (the coarsest) and m + 1, its leaves stand unless
+// some leaf of level m + 2 meets the grown box of grow_box.  Such a leaf's
+// ancestor of level m + 1 was split, and lies in the grown box (whose
+// sides are on the grid of level m + 1: the root's, a leaf's edge of level
+// m or m + 1, the domain's blocks), here widened by its edge all the same,
+// so as not to rest on that: if the model's bounds over the box keep every
+// octant of level m + 1 a leaf (judge() splits none whose samples lie in
+// it), there is none.  At 1 Hz, 83% of the basin's subtrees (40% of its
+// leaves) are of two levels, and a leaf around the subtrees was descended
+// again for 19% of the leaves instead of 36%.
+bool SubtreeBalancer::stands(const Octant& root, const SubtreeLeaves& leaves) {
+  int coarsest = 0, finest = kMaxLevel;
+  while (coarsest < kMaxLevel && leaves.levels[coarsest] == 0) ++coarsest;
+  while (finest > 0 && leaves.levels[finest] == 0) --finest;
+  if (finest - coarsest >= 2) return false;
+  if (coarsest + 1 > kMaxLevel) return true;  // nothing can be finer than level 20
+  grow_box(root, leaves);
+  const ConstructPlan& p = descent_.plan();
+  const int64_t e = octant_edge(coarsest + 1);
+  double lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    // The domain bounds the wider box too: the octants of level m + 1 are
+    // finer than the blocks, so each lies in one.
+    const int64_t domain_end = int64_t{p.blocks[a]} * octant_edge(p.block_level);
+    lo[a] = double(std::max<int64_t>(0, box_lo_[a] - e)) * p.tick_m;
+    hi[a] = double(std::min<int64_t>(domain_end, box_hi_[a] + e)) * p.tick_m;
+  }
+  return descent_.keeps_level_within(coarsest + 1, lo, hi);
 }
 
 // The subtree's box grown on each side by the edge of the largest own leaf

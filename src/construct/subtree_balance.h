@@ -27,7 +27,10 @@
 //      it.  A new leaf takes the model's material at its centre (or its
 //      parent's, where weaver balance would keep the parent's).
 // Any extra leaf collected only adds requirements the whole octree has too,
-// so the result is exact; the tests compare it with weaver balance.
+// so the result is exact; the tests compare it with weaver balance.  A
+// subtree whose leaves span two levels, with the model's bounds keeping
+// every leaf around it no finer than their finer one, cannot be split by
+// any of them: it skips all three steps (stands(), in the .cc).
 #pragma once
 
 #include <array>
@@ -55,6 +58,8 @@ class SubtreeBalancer {
   uint64_t neighbours_collected() const { return collected_count_; }
 
  private:
+  // Whether the balance can be known to split none of the leaves.
+  bool stands(const Octant& root, const SubtreeLeaves& leaves);
   void grow_box(const Octant& root, const SubtreeLeaves& leaves);
   void collect(const Octant& x, const Judgement& j, const Octant& root);
   bool wanted(const Octant& x, const Octant& root) const;
