@@ -36,16 +36,10 @@ constexpr double kLeavesPerSubtree = 4096;
 // share that falls as the subtree grows, but the balance of a larger one
 // leaves the cache: at 1 Hz, subtrees of 32K to 256K estimated leaves
 // descended 27% again against 36% for 4K to 32K, and took 10-20% longer.
-// Since a subtree of two levels skips its balance where the model's bounds
-// allow (SubtreeBalancer::stands), larger ones pay: at 1 Hz, 16K to 128K
-// estimated leaves descended 7.4% again against 19% for 4K to 32K, and took
-// 0.90x the time.  But a subtree past its cap is visited again as its 8
-// children (the model's small features put up to 3x the estimate in one),
-// so the least is 4K where the budget caps subtrees below 256K leaves
-// (subtree_least_leaves).
+// So its subtrees hold 4K to 32K estimated leaves (the model's small
+// features add up to 3x; past the cap a subtree is visited again as its 8
+// children).
 constexpr double kLeastLeavesPerBalancedSubtree = 4096;
-constexpr double kLeastLeavesPerLargeSubtree = 16384;
-constexpr uint64_t kLargeSubtreeCap = uint64_t{1} << 18;
 // Subtrees in flight per thread: workers run ahead of the writer.
 constexpr size_t kSubtreesPerThread = 8;
 
@@ -118,14 +112,6 @@ class SubtreeVisitor {
   SubtreeBalancer balancer_;
 };
 
-// The most leaves a subtree's visit holds (ConstructOptions::subtree_leaves).
-uint64_t subtree_cap(const ConstructOptions& o, const ConstructMemory& memory) {
-  if (o.subtree_leaves > 0) return o.subtree_leaves;
-  const uint64_t window = kSubtreesPerThread * std::max(1, o.threads);
-  return std::clamp<uint64_t>(memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64,
-                              uint64_t{1} << 19);
-}
-
 // The level of the subtrees: as many levels below the blocks as put about
 // kLeavesPerSubtree estimated leaves in each.
 int subtree_level(const ConstructOptions& o, const ConstructPlan& p) {
@@ -133,10 +119,7 @@ int subtree_level(const ConstructOptions& o, const ConstructPlan& p) {
   double per_subtree = p.estimated_elements / blocks;
   int level = p.block_level;
   if (o.balanced) {
-    const double least = subtree_cap(o, ConstructMemory(o.memory)) >= kLargeSubtreeCap
-                             ? kLeastLeavesPerLargeSubtree
-                             : kLeastLeavesPerBalancedSubtree;
-    while (level < o.max_level && per_subtree >= 8 * least) {
+    while (level < o.max_level && per_subtree >= 8 * kLeastLeavesPerBalancedSubtree) {
       per_subtree /= 8, ++level;
     }
     return level;
@@ -172,7 +155,11 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
                       ConstructResult* r) {
   const int threads = std::max(1, o.threads);
   const size_t window = kSubtreesPerThread * threads;
-  const size_t cap = subtree_cap(o, memory);
+  const size_t cap =
+      o.subtree_leaves > 0
+          ? o.subtree_leaves
+          : std::clamp<uint64_t>(memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64,
+                                 uint64_t{1} << 19);
   WorkQueue<Slot> queue;
   std::vector<std::thread> workers;
   std::vector<std::unique_ptr<SubtreeVisitor>> visitors;
