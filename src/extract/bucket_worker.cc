@@ -310,7 +310,7 @@ void BucketWorker::sort_wide() {
   sorted_.resize(hash_.size() + inside_.size());
   for (size_t i = 0; i < hash_.size(); ++i) sorted_[i] = {hash_.key_at(i), hash_.mask_at(i)};
   for (size_t i = 0; i < inside_.size(); ++i) sorted_[hash_.size() + i] = {inside_[i], 0xFF};
-  sort_records(sorted_, wide_packed_, scratch_);
+  sort_records(sorted_, packed_, scratch_);  // packed_ is free: sort_packed left it empty
 }
 
 }  // namespace weaver

@@ -119,15 +119,16 @@ class BucketWorker {
   // The corners of the complete block of 8^j leaves from `first` on.
   void add_block_lattice(uint64_t first, int j, uint64_t end);
 
-  NodeClassifier classifier_;
-  NodeHash hash_;
-  std::vector<uint64_t> inside_;  // nodes strictly inside complete blocks
   // The bucket's nodes in key order: packed_'s (offset, mask) words, an
   // offset being (key - lo_) >> zeros_; or, for a span too wide for them,
   // sorted_'s records.
   bool sort_packed();
   void sort_wide();
-  std::vector<uint64_t> packed_, scratch_, wide_packed_;
+
+  NodeClassifier classifier_;
+  NodeHash hash_;
+  std::vector<uint64_t> inside_;  // nodes strictly inside complete blocks
+  std::vector<uint64_t> packed_, scratch_;
   uint64_t lo_ = 0;
   int zeros_ = 0;
   std::vector<SpillRecord> sorted_;
