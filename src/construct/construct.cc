@@ -55,10 +55,9 @@ struct Slot {
 
   // As new, but for the leaves' capacity (visit_subtree clears them).
   void reset() {
-    descended = air = cut = 0;
-    least_dt = HUGE_VAL;
-    least_dt_at = 0;
-    done = false;
+    SubtreeLeaves kept = std::move(leaves);
+    *this = Slot{};
+    leaves = std::move(kept);
   }
 };
 

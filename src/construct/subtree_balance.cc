@@ -30,8 +30,8 @@ SubtreeBalancer::SubtreeBalancer(const Descent& descent, bool fill_material)
 
 void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
   if (leaves->keys.empty()) return;
-  if (stands(root, *leaves)) return;
   grow_box(root, *leaves);
+  if (stands(*leaves)) return;
   const ConstructPlan& p = descent_.plan();
   // The blocks the grown box meets, each descended again where it meets it.
   const int64_t block = octant_edge(p.block_level);
@@ -73,7 +73,7 @@ void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
 // (a leaf, or an octant created inside a coarser one): every chain starts
 // at a leaf of level l + 2 or finer.  So where the subtree's leaves span
 // two levels at most, m (the coarsest) and m + 1, its leaves stand unless
-// some leaf of level m + 2 meets the grown box of grow_box.  Such a leaf's
+// some leaf of level m + 2 meets the grown box (grow_box, already run).  Such a leaf's
 // ancestor of level m + 1 was split, and lies in the grown box (whose
 // sides are on the grid of level m + 1: the root's, a leaf's edge of level
 // m or m + 1, the domain's blocks), here widened by its edge all the same,
@@ -82,13 +82,12 @@ void SubtreeBalancer::balance(const Octant& root, SubtreeLeaves* leaves) {
 // it), there is none.  At 1 Hz, 83% of the basin's subtrees (40% of its
 // leaves) are of two levels, and a leaf around the subtrees was descended
 // again for 19% of the leaves instead of 36%.
-bool SubtreeBalancer::stands(const Octant& root, const SubtreeLeaves& leaves) {
+bool SubtreeBalancer::stands(const SubtreeLeaves& leaves) const {
   int coarsest = 0, finest = kMaxLevel;
   while (coarsest < kMaxLevel && leaves.levels[coarsest] == 0) ++coarsest;
   while (finest > 0 && leaves.levels[finest] == 0) --finest;
   if (finest - coarsest >= 2) return false;
   if (coarsest + 1 > kMaxLevel) return true;  // nothing can be finer than level 20
-  grow_box(root, leaves);
   const ConstructPlan& p = descent_.plan();
   const int64_t e = octant_edge(coarsest + 1);
   double lo[3], hi[3];

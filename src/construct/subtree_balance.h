@@ -58,8 +58,9 @@ class SubtreeBalancer {
   uint64_t neighbours_collected() const { return collected_count_; }
 
  private:
-  // Whether the balance can be known to split none of the leaves.
-  bool stands(const Octant& root, const SubtreeLeaves& leaves);
+  // Whether the balance can be known to split none of the leaves (the
+  // grown box made).
+  bool stands(const SubtreeLeaves& leaves) const;
   void grow_box(const Octant& root, const SubtreeLeaves& leaves);
   void collect(const Octant& x, const Judgement& j, const Octant& root);
   bool wanted(const Octant& x, const Octant& root) const;

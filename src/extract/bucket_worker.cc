@@ -208,15 +208,10 @@ void sort_records(std::vector<SpillRecord>& records, std::vector<uint64_t>& pack
                   std::vector<uint64_t>& scratch) {
   const size_t n = records.size();
   if (n < 2) return;
-  uint64_t lo = UINT64_MAX, hi = 0;
-  for (const SpillRecord& r : records) {
-    lo = std::min(lo, r.key);
-    hi = std::max(hi, r.key);
-  }
-  uint64_t offsets = 0;
-  for (const SpillRecord& r : records) offsets |= r.key - lo;
-  const int zeros = offsets == 0 ? 0 : std::countr_zero(offsets);
-  const int bits = std::bit_width((hi - lo) >> zeros);
+  KeySpan span;
+  for (const SpillRecord& r : records) span.add(r.key);
+  const uint64_t lo = span.lo;
+  const int zeros = span.zeros(), bits = span.bits();
   if (bits > 56) {
     std::sort(records.begin(), records.end(),
               [](const SpillRecord& a, const SpillRecord& b) { return a.key < b.key; });
@@ -271,26 +266,19 @@ Status BucketWorker::run(BucketTask& t) {
 }
 
 // The bucket's nodes (the hash's and the blocks' inside corners) as
-// sort_records' words, sorted, straight from where they are: their least
-// key, their offsets' common trailing zeros (those of every key's
-// difference from the first: the lowest bit in which two keys differ is
-// the lowest set bit of their difference) and their span, in one read.
+// sort_records' words, sorted, straight from where they are (their
+// KeySpan in one read).
 // False, and packed_ empty, if the span needs more than 56 bits.
 bool BucketWorker::sort_packed() {
   const size_t in_hash = hash_.size(), n = in_hash + inside_.size();
   packed_.clear();
   lo_ = 0, zeros_ = 0;
   if (n == 0) return true;
-  const uint64_t first = in_hash > 0 ? hash_.key_at(0) : inside_[0];
-  uint64_t lo = UINT64_MAX, hi = 0, differ = 0;
-  auto see = [&](uint64_t k) {
-    lo = std::min(lo, k), hi = std::max(hi, k);
-    differ |= k ^ first;
-  };
-  for (size_t i = 0; i < in_hash; ++i) see(hash_.key_at(i));
-  for (uint64_t k : inside_) see(k);
-  const int zeros = differ == 0 ? 0 : std::countr_zero(differ);
-  const int bits = std::bit_width((hi - lo) >> zeros);
+  KeySpan span;
+  for (size_t i = 0; i < in_hash; ++i) span.add(hash_.key_at(i));
+  for (uint64_t k : inside_) span.add(k);
+  const uint64_t lo = span.lo;
+  const int zeros = span.zeros(), bits = span.bits();
   if (bits > 56) return false;
   packed_.resize(n);
   for (size_t i = 0; i < in_hash; ++i) {

@@ -22,6 +22,7 @@
 // out in Z-order, so the node table is the same whatever the thread count.
 #pragma once
 
+#include <bit>
 #include <cstdint>
 #include <vector>
 
@@ -98,6 +99,23 @@ class BucketReader {
 
 // The 8 corners of the leaf with this key as node keys, corner k at [k].
 void leaf_corner_keys(uint64_t leaf_key, uint64_t out[8]);
+
+// What sort_records packs by: the least and greatest of a set of keys and
+// the bits in which any differs from the first (the lowest bit two keys
+// differ in is the lowest set bit of their difference, so its trailing
+// zeros are their offsets' common ones).
+struct KeySpan {
+  uint64_t first = 0, lo = UINT64_MAX, hi = 0, differ = 0;
+  bool any = false;
+  void add(uint64_t k) {
+    if (!any) first = k, any = true;
+    lo = k < lo ? k : lo, hi = k > hi ? k : hi;
+    differ |= k ^ first;
+  }
+  int zeros() const { return differ == 0 ? 0 : std::countr_zero(differ); }
+  // Bits of an offset (key - lo) >> zeros(); past 56 no mask fits beside it.
+  int bits() const { return any ? std::bit_width((hi - lo) >> zeros()) : 0; }
+};
 
 // Sorts records by key (a radix sort when their keys span few enough bits);
 // packed and scratch are working buffers.

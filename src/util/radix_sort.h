@@ -29,32 +29,20 @@ inline void radix_sort(std::vector<uint64_t>& values, int first, int bits,
   const size_t n = values.size();
   if (passes == 0 || n < 2) return;
   scratch.resize(n);
-  // Counts of u32 where they can hold n; a thread's own, not on its stack.
-  thread_local std::vector<uint32_t> table;
+  // Every pass's counts, a thread's own, not on its stack.
+  thread_local std::vector<size_t> table;
   table.resize(size_t{kMostPasses} * kBuckets);
   std::fill(table.begin(), table.begin() + passes * kBuckets, 0);
-  if (n >= (uint64_t{1} << 32)) {
-    // Too many for u32 counts: a pass at a time, in size_t.
-    for (int shift = first; shift < first + bits; shift += kDigit) {
-      std::vector<size_t> count(kBuckets, 0);
-      for (uint64_t v : values) ++count[(v >> shift) & (kBuckets - 1)];
-      size_t sum = 0;
-      for (size_t& c : count) sum += std::exchange(c, sum);
-      for (uint64_t v : values) scratch[count[(v >> shift) & (kBuckets - 1)]++] = v;
-      values.swap(scratch);
-    }
-    return;
-  }
   for (uint64_t v : values) {
     for (int p = 0; p < passes; ++p) {
       ++table[p * kBuckets + ((v >> (first + p * kDigit)) & (kBuckets - 1))];
     }
   }
   for (int p = 0; p < passes; ++p) {
-    uint32_t* count = table.data() + p * kBuckets;
+    size_t* count = table.data() + p * kBuckets;
     const int shift = first + p * kDigit;
     if (count[(values[0] >> shift) & (kBuckets - 1)] == n) continue;  // one digit: in order
-    uint32_t sum = 0;
+    size_t sum = 0;
     for (size_t d = 0; d < kBuckets; ++d) sum += std::exchange(count[d], sum);
     for (uint64_t v : values) scratch[count[(v >> shift) & (kBuckets - 1)]++] = v;
     values.swap(scratch);
