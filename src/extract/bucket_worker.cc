@@ -29,6 +29,11 @@ uint64_t leaves_end(const std::vector<uint64_t>& leaves) {
   return octant_key_morton(last) + (uint64_t{1} << (3 * (kMaxLevel - octant_key_level(last))));
 }
 
+// The Morton code of corner 7 of the octant at code m with edge 2^bit.
+uint64_t far_corner(uint64_t m, int bit) {
+  return morton_step(morton_step(morton_step(m, 0, bit), 1, bit), 2, bit);
+}
+
 }  // namespace
 
 uint64_t BucketReader::end_after(const std::vector<uint64_t>& leaves) const {
@@ -108,11 +113,26 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
   std::vector<SpillRecord>& run = far_corners_;
   run.clear();
   uint64_t corners[8];
+  // Corner 7 has the largest key: below the end, all are.  A Morton code
+  // grows with each coordinate, so the far corner of an octant holding the
+  // leaf bounds the leaf's: the test is made for its ancestor kNearBlock
+  // levels up, once for all the leaves in that ancestor.
+  constexpr int kNearBlock = 1;
+  // The last such ancestor: the leaves with codes in [clear_lo, clear_hi),
+  // no coarser than it, lie inside it.
+  uint64_t clear_lo = 1, clear_hi = 0;
+  int clear_bit = 0;
   for (uint64_t key : task.leaf_keys) {
-    const int bit = kMaxLevel - octant_key_level(key);
     const uint64_t m = octant_key_morton(key);
-    // Corner 7 has the largest key: below the end, all are.
-    if (morton_step(morton_step(morton_step(m, 0, bit), 1, bit), 2, bit) < task.end) continue;
+    const int bit = kMaxLevel - octant_key_level(key);
+    if (m >= clear_lo && m < clear_hi && bit <= clear_bit) continue;
+    const int up = std::min(bit + kNearBlock, kMaxLevel);
+    const uint64_t block = m & ~((uint64_t{1} << (3 * up)) - 1);
+    if (far_corner(block, up) < task.end) {
+      clear_lo = block, clear_hi = block + (uint64_t{1} << (3 * up)), clear_bit = up;
+      continue;
+    }
+    if (far_corner(m, bit) < task.end) continue;
     leaf_corner_keys(key, corners);
     for (int c = 0; c < 8; ++c) {
       if (corners[c] >= task.end) run.push_back({corners[c], corner_direction_bit(c)});

@@ -44,19 +44,31 @@ void NodeClassifier::set_local(const std::vector<uint64_t>* leaf_keys, uint64_t 
   leaf_keys_ = leaf_keys;
   local_start_ = start;
   local_end_ = end;
-  const size_t n = leaf_keys->size();
+  indexed_ = false;
+}
+
+// Made on the first search of the bucket's leaves, not before: a bucket of
+// one level (all its nodes anchored but on the domain's surface) makes
+// none.  Slots are filled leaf by leaf: a leaf is the first at or after
+// every slot from the one after the last leaf's to its own.
+void NodeClassifier::index_local() {
+  indexed_ = true;
+  const std::vector<uint64_t>& keys = *leaf_keys_;
+  const size_t n = keys.size();
+  const uint64_t start = local_start_;
   // The last bucket ends at UINT64_MAX; pixels' codes end at 2^60.
-  const uint64_t top = std::min(end, uint64_t{1} << (3 * kMaxLevel));
+  const uint64_t top = std::min(local_end_, uint64_t{1} << (3 * kMaxLevel));
   const int span_bits = top > start ? static_cast<int>(std::bit_width(top - start - 1)) : 0;
   slot_shift_ = std::max(0, span_bits - static_cast<int>(std::bit_width(n / 2)));
   const size_t slots = top > start ? ((top - start - 1) >> slot_shift_) + 1 : 0;
   slot_first_.resize(slots + 1);
-  size_t i = 0;
-  for (size_t s = 0; s < slots; ++s) {
-    const uint64_t from = start + (uint64_t{s} << slot_shift_);
-    while (i < n && octant_key_morton((*leaf_keys)[i]) < from) ++i;
-    slot_first_[s] = static_cast<uint32_t>(i);
+  size_t i = 0, s = 0;
+  while (i < n && octant_key_morton(keys[i]) < start) ++i;  // none in a bucket's own leaves
+  for (; i < n && octant_key_morton(keys[i]) < top; ++i) {
+    const size_t own = (octant_key_morton(keys[i]) - start) >> slot_shift_;
+    for (; s <= own; ++s) slot_first_[s] = static_cast<uint32_t>(i);
   }
+  for (; s < slots; ++s) slot_first_[s] = static_cast<uint32_t>(i);
   slot_first_[slots] = static_cast<uint32_t>(n);
 }
 
@@ -93,6 +105,7 @@ Status NodeClassifier::leaf_at(uint64_t pm, int direction, const LeafCode** leaf
   *found = false;
   uint64_t key = 0;
   if (leaf_keys_ != nullptr && pm >= local_start_ && pm < local_end_) {
+    if (!indexed_) index_local();
     const uint64_t* floor = local_floor(pm, pk);
     if (floor == nullptr || !holds_p(*floor)) return Status::Ok();
     key = *floor;

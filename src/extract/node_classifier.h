@@ -34,7 +34,8 @@ class NodeClassifier {
 
   // Leaves of the active bucket (sorted keys), searched instead of the
   // octant table for pixels whose Morton code is in [start, end): no other
-  // leaf can hold those (bucket_worker.h).  Indexes them (slot_first_).
+  // leaf can hold those (bucket_worker.h).  They are indexed (slot_first_)
+  // when first searched.
   void set_local(const std::vector<uint64_t>* leaf_keys, uint64_t start, uint64_t end);
   // Bytes of the index per local leaf, at most.
   static constexpr uint64_t kIndexBytesPerLeaf = 4;
@@ -64,6 +65,7 @@ class NodeClassifier {
   Status leaf_at(uint64_t pm, int direction, const LeafCode** leaf, bool* found);
   // The last local leaf key <= pk, pm's pixel key, or null.
   const uint64_t* local_floor(uint64_t pm, uint64_t pk) const;
+  void index_local();
   // Node m (its Morton code) on the closure of `leaf`.
   Status kind_on(uint64_t m, const LeafCode& leaf, uint8_t mask, NodeKind* kind, uint8_t* covered);
   Status unbalanced(uint64_t m, uint64_t coarse_key, uint8_t mask);
@@ -80,6 +82,7 @@ class NodeClassifier {
   // step on a graded mesh's large buckets).
   std::vector<uint32_t> slot_first_;
   int slot_shift_ = 0;
+  bool indexed_ = false;  // slot_first_ is the active bucket's
   // The leaf leaf_at found last in each direction (the octree does not
   // change, so they stay valid across buckets).
   LeafCode recent_[8];
