@@ -48,7 +48,9 @@ Status LeafReader::take(size_t most, uint64_t stop, std::vector<uint64_t>* out) 
     const uint32_t room = uint32_t(std::min<size_t>(n, most - taken));
     uint32_t k = 1;
     for (; k < room && octant_key_morton(keys[k]) < stop; ++k) {
-      WEAVER_RETURN_IF_ERROR(check_key(keys[k]));
+      // The test inline, the Status only for the message: a Status made
+      // and tested for each key was a third of the reading.
+      if (!octant_key_is_valid(keys[k])) return check_key(keys[k]);
       if (keys[k] < octant_key_subtree_end(keys[k - 1])) return overlap(keys[k - 1], keys[k]);
     }
     out->insert(out->end(), keys, keys + k);

@@ -277,7 +277,8 @@ Status BucketWorker::run(BucketTask& t) {
     const uint64_t key = narrow ? ((packed_[i] >> 8) << zeros_) + lo_ : sorted_[i].key;
     const auto mask = narrow ? static_cast<uint8_t>(packed_[i]) : sorted_[i].mask;
     NodeKind kind = NodeKind::kAnchored;
-    WEAVER_RETURN_IF_ERROR(classifier_.classify(key, mask, &kind));
+    // A full mask is anchored (most nodes): no call, no Status.
+    if (mask != 0xFF) WEAVER_RETURN_IF_ERROR(classifier_.classify(key, mask, &kind));
     t.node_keys[i] = key;
     t.node_kinds[i] = static_cast<std::byte>(kind);
     count_kind(kind, &t.counts);
