@@ -89,13 +89,17 @@ const uint64_t* NodeClassifier::local_floor(uint64_t pm, uint64_t pk) const {
 // a rank's part, else the octant table.  Works on Morton codes: a
 // leaf holds p iff p's code is in its subtree's code range.
 // The leaf is handed out where it is kept, not copied.
-Status NodeClassifier::leaf_at(uint64_t pm, int direction, const LeafCode** leaf, bool* found) {
+const NodeClassifier::LeafCode* NodeClassifier::recent_leaf(uint64_t pm) const {
   for (const LeafCode& r : recent_) {
-    if (((r.morton ^ pm) >> r.span_bits) == 0) {
-      *leaf = &r;
-      *found = true;
-      return Status::Ok();
-    }
+    if (((r.morton ^ pm) >> r.span_bits) == 0) return &r;
+  }
+  return nullptr;
+}
+
+Status NodeClassifier::leaf_at(uint64_t pm, int direction, const LeafCode** leaf, bool* found) {
+  if ((*leaf = recent_leaf(pm)) != nullptr) {
+    *found = true;
+    return Status::Ok();
   }
   const uint64_t pk = pixel_key_of_morton(pm);
   auto holds_p = [pm](uint64_t key) {
@@ -134,14 +138,22 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
     uint64_t p = 0;
     const LeafCode* leaf = nullptr;
     bool found = false;
-    if (direction_pixel(key, d, &p)) WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
+    if (direction_pixel(key, d, &p)) {
+      // The last leaves found first, without a call or a Status: most
+      // pixels are in one of them.
+      if ((leaf = recent_leaf(p)) != nullptr) {
+        found = true;
+      } else {
+        WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
+      }
+    }
     if (!found) {  // outside the root or the domain
       settled |= static_cast<uint8_t>(1u << d);
       continue;
     }
     NodeKind here = NodeKind::kAnchored;
     uint8_t covered = 0;
-    WEAVER_RETURN_IF_ERROR(kind_on(key, *leaf, mask, &here, &covered));
+    if (!kind_on(key, *leaf, &here, &covered)) return not_on(key, *leaf, mask);
     if (*kind != NodeKind::kAnchored && here != *kind) return unbalanced(key, leaf->key, mask);
     *kind = here;
     settled |= covered;
@@ -151,14 +163,13 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
 
 // Node m lies on the closure of `leaf`: its kind, and the cells around m the
 // leaf covers (on an axis where m is strictly inside the leaf, both sides;
-// elsewhere the side the leaf is on).  Every leaf that has m as a corner set
-// its bit in the mask, so finding one here means octants overlap.  Read
-// from the codes axis by axis (the leaf's code is zero below span_bits):
-// the node is on the leaf's near face where their bits of the axis agree,
-// strictly inside where they agree above span_bits only, else on the far
-// face.
-Status NodeClassifier::kind_on(uint64_t m, const LeafCode& leaf, uint8_t mask, NodeKind* kind,
-                               uint8_t* covered) {
+// elsewhere the side the leaf is on).  Read from the codes axis by axis
+// (the leaf's code is zero below span_bits): the node is on the leaf's near
+// face where their bits of the axis agree, strictly inside where they agree
+// above span_bits only, else on the far face.  False where m cannot be on
+// it so (not_on says why): no Status is made for each node.
+bool NodeClassifier::kind_on(uint64_t m, const LeafCode& leaf, NodeKind* kind,
+                             uint8_t* covered) const {
   const uint64_t low = (uint64_t{1} << leaf.span_bits) - 1;
   int inside = 0;
   uint8_t cells = 0xFF;
@@ -170,24 +181,38 @@ Status NodeClassifier::kind_on(uint64_t m, const LeafCode& leaf, uint8_t mask, N
       cells &= plus_side;
     } else if (((mine ^ theirs) & ~low) == 0) {
       // Strictly inside on this axis: at the midpoint, or unbalanced.
-      if (mine != (theirs | uint64_t{1} << (leaf.span_bits - 3 + a))) {
-        return unbalanced(m, leaf.key, mask);
-      }
+      if (mine != (theirs | uint64_t{1} << (leaf.span_bits - 3 + a))) return false;
       ++inside;
     } else {
       cells &= static_cast<uint8_t>(~plus_side);
     }
   }
-  if (inside == 0 || inside == 3) {
-    const Coord n = morton_decode(m);
-    return Status::Corruption("node (" + std::to_string(n.x) + " " + std::to_string(n.y) + " " +
-                              std::to_string(n.z) + ") is inconsistent with leaf " +
-                              describe_octant(octant_from_key(leaf.key)) +
-                              ": overlapping octants?");
-  }
+  if (inside == 0 || inside == 3) return false;
   *kind = inside == 1 ? NodeKind::kEdge : NodeKind::kFace;
   *covered = cells;
-  return Status::Ok();
+  return true;
+}
+
+// Why kind_on said no: m strictly inside the leaf on some axis but off its
+// midpoint (the octree is not 2:1 balanced), or the leaf's corner or
+// centre (every leaf that has m as a corner set its bit in the mask, so
+// finding one here means octants overlap).
+Status NodeClassifier::not_on(uint64_t m, const LeafCode& leaf, uint8_t mask) {
+  const uint64_t low = (uint64_t{1} << leaf.span_bits) - 1;
+  int inside = 0;
+  for (int a = 0; a < 3; ++a) {
+    const uint64_t axis = 0x1249249249249249ULL << a;
+    const uint64_t mine = m & axis, theirs = leaf.morton & axis;
+    if (mine == theirs || ((mine ^ theirs) & ~low) != 0) continue;
+    if (mine != (theirs | uint64_t{1} << (leaf.span_bits - 3 + a))) {
+      return unbalanced(m, leaf.key, mask);
+    }
+    ++inside;
+  }
+  const Coord n = morton_decode(m);
+  return Status::Corruption("node (" + std::to_string(n.x) + " " + std::to_string(n.y) + " " +
+                            std::to_string(n.z) + ") is inconsistent with leaf " +
+                            describe_octant(octant_from_key(leaf.key)) + ": overlapping octants?");
 }
 
 // Names the coarse leaf and a finer element that has node m as a corner.

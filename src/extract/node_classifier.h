@@ -66,8 +66,12 @@ class NodeClassifier {
   // The last local leaf key <= pk, pm's pixel key, or null.
   const uint64_t* local_floor(uint64_t pm, uint64_t pk) const;
   void index_local();
-  // Node m (its Morton code) on the closure of `leaf`.
-  Status kind_on(uint64_t m, const LeafCode& leaf, uint8_t mask, NodeKind* kind, uint8_t* covered);
+  // One of recent_ that holds pixel pm, or null.
+  const LeafCode* recent_leaf(uint64_t pm) const;
+  // Node m (its Morton code) on the closure of `leaf`: false if it cannot
+  // be (not_on gives the error).
+  bool kind_on(uint64_t m, const LeafCode& leaf, NodeKind* kind, uint8_t* covered) const;
+  Status not_on(uint64_t m, const LeafCode& leaf, uint8_t mask);
   Status unbalanced(uint64_t m, uint64_t coarse_key, uint8_t mask);
 
   BTree& octants_;
