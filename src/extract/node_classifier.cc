@@ -101,6 +101,11 @@ Status NodeClassifier::leaf_at(uint64_t pm, int direction, const LeafCode** leaf
     *found = true;
     return Status::Ok();
   }
+  return search_leaf(pm, direction, leaf, found);
+}
+
+// leaf_at past the recent leaves.
+Status NodeClassifier::search_leaf(uint64_t pm, int direction, const LeafCode** leaf, bool* found) {
   const uint64_t pk = pixel_key_of_morton(pm);
   auto holds_p = [pm](uint64_t key) {
     const int bits = 3 * (kMaxLevel - octant_key_level(key));
@@ -144,7 +149,7 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
       if ((leaf = recent_leaf(p)) != nullptr) {
         found = true;
       } else {
-        WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
+        WEAVER_RETURN_IF_ERROR(search_leaf(p, d, &leaf, &found));
       }
     }
     if (!found) {  // outside the root or the domain
@@ -153,7 +158,11 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
     }
     NodeKind here = NodeKind::kAnchored;
     uint8_t covered = 0;
-    if (!kind_on(key, *leaf, &here, &covered)) return not_on(key, *leaf, mask);
+    switch (kind_on(key, *leaf, &here, &covered)) {
+      case OnLeaf::kDangles: break;
+      case OnLeaf::kOffMidpoint: return unbalanced(key, leaf->key, mask);
+      case OnLeaf::kCornerOrCentre: return overlapping(key, leaf->key);
+    }
     if (*kind != NodeKind::kAnchored && here != *kind) return unbalanced(key, leaf->key, mask);
     *kind = here;
     settled |= covered;
@@ -166,10 +175,10 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
 // elsewhere the side the leaf is on).  Read from the codes axis by axis
 // (the leaf's code is zero below span_bits): the node is on the leaf's near
 // face where their bits of the axis agree, strictly inside where they agree
-// above span_bits only, else on the far face.  False where m cannot be on
-// it so (not_on says why): no Status is made for each node.
-bool NodeClassifier::kind_on(uint64_t m, const LeafCode& leaf, NodeKind* kind,
-                             uint8_t* covered) const {
+// above span_bits only, else on the far face.  A verdict, not a Status:
+// the caller makes one only for an error.
+NodeClassifier::OnLeaf NodeClassifier::kind_on(uint64_t m, const LeafCode& leaf, NodeKind* kind,
+                                               uint8_t* covered) const {
   const uint64_t low = (uint64_t{1} << leaf.span_bits) - 1;
   int inside = 0;
   uint8_t cells = 0xFF;
@@ -181,38 +190,25 @@ bool NodeClassifier::kind_on(uint64_t m, const LeafCode& leaf, NodeKind* kind,
       cells &= plus_side;
     } else if (((mine ^ theirs) & ~low) == 0) {
       // Strictly inside on this axis: at the midpoint, or unbalanced.
-      if (mine != (theirs | uint64_t{1} << (leaf.span_bits - 3 + a))) return false;
+      if (mine != (theirs | uint64_t{1} << (leaf.span_bits - 3 + a))) return OnLeaf::kOffMidpoint;
       ++inside;
     } else {
       cells &= static_cast<uint8_t>(~plus_side);
     }
   }
-  if (inside == 0 || inside == 3) return false;
+  if (inside == 0 || inside == 3) return OnLeaf::kCornerOrCentre;
   *kind = inside == 1 ? NodeKind::kEdge : NodeKind::kFace;
   *covered = cells;
-  return true;
+  return OnLeaf::kDangles;
 }
 
-// Why kind_on said no: m strictly inside the leaf on some axis but off its
-// midpoint (the octree is not 2:1 balanced), or the leaf's corner or
-// centre (every leaf that has m as a corner set its bit in the mask, so
-// finding one here means octants overlap).
-Status NodeClassifier::not_on(uint64_t m, const LeafCode& leaf, uint8_t mask) {
-  const uint64_t low = (uint64_t{1} << leaf.span_bits) - 1;
-  int inside = 0;
-  for (int a = 0; a < 3; ++a) {
-    const uint64_t axis = 0x1249249249249249ULL << a;
-    const uint64_t mine = m & axis, theirs = leaf.morton & axis;
-    if (mine == theirs || ((mine ^ theirs) & ~low) != 0) continue;
-    if (mine != (theirs | uint64_t{1} << (leaf.span_bits - 3 + a))) {
-      return unbalanced(m, leaf.key, mask);
-    }
-    ++inside;
-  }
+// Every leaf that has m as a corner set its bit in the mask, so finding one
+// with m as its corner (or centre) here means octants overlap.
+Status NodeClassifier::overlapping(uint64_t m, uint64_t leaf_key) const {
   const Coord n = morton_decode(m);
   return Status::Corruption("node (" + std::to_string(n.x) + " " + std::to_string(n.y) + " " +
                             std::to_string(n.z) + ") is inconsistent with leaf " +
-                            describe_octant(octant_from_key(leaf.key)) + ": overlapping octants?");
+                            describe_octant(octant_from_key(leaf_key)) + ": overlapping octants?");
 }
 
 // Names the coarse leaf and a finer element that has node m as a corner.

@@ -63,15 +63,18 @@ class NodeClassifier {
   // pm is the Morton code of the pixel in `direction` (0..7) of a node.
   // *leaf points into recent_: valid until the next call.
   Status leaf_at(uint64_t pm, int direction, const LeafCode** leaf, bool* found);
+  Status search_leaf(uint64_t pm, int direction, const LeafCode** leaf, bool* found);
   // The last local leaf key <= pk, pm's pixel key, or null.
   const uint64_t* local_floor(uint64_t pm, uint64_t pk) const;
   void index_local();
   // One of recent_ that holds pixel pm, or null.
   const LeafCode* recent_leaf(uint64_t pm) const;
-  // Node m (its Morton code) on the closure of `leaf`: false if it cannot
-  // be (not_on gives the error).
-  bool kind_on(uint64_t m, const LeafCode& leaf, NodeKind* kind, uint8_t* covered) const;
-  Status not_on(uint64_t m, const LeafCode& leaf, uint8_t mask);
+  // Node m (its Morton code) on the closure of `leaf`: dangling from it, or
+  // off the midpoint of its edge or face (unbalanced), or at its corner or
+  // centre (overlapping octants).
+  enum class OnLeaf { kDangles, kOffMidpoint, kCornerOrCentre };
+  OnLeaf kind_on(uint64_t m, const LeafCode& leaf, NodeKind* kind, uint8_t* covered) const;
+  Status overlapping(uint64_t m, uint64_t leaf_key) const;
   Status unbalanced(uint64_t m, uint64_t coarse_key, uint8_t mask);
 
   BTree& octants_;
