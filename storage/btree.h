@@ -75,6 +75,12 @@ class BTree final : public Store {
   // recycle_leaf: the leaf read is offered to the pool as its next victim
   // (a sparse walk over a large table, that would otherwise fill every frame
   // with pages it will not ask again, each frame fresh memory to fault in).
+  // The keys around key's floor, for a caller that asks for many floors
+  // near one another: the packed block (up to page::kPackedBlock keys, into
+  // keys[0, *count)) whose keys are the floors of every k in [keys[0],
+  // *limit).  *count is 0 when the floor is not in key's leaf, or the
+  // table is sharded or plain, or key is UINT64_MAX: floor() answers those.
+  Status floor_block(uint64_t key, uint64_t* keys, uint32_t* count, uint64_t* limit);
   Status floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
                     bool* found, bool recycle_leaf = false);
 

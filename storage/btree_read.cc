@@ -1,4 +1,5 @@
 // B+tree lookups: descent, get, floor, rank, select, cursors.
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -158,6 +159,25 @@ Status BTree::get(uint64_t key, std::byte* payload_out, bool* found) {
 Status BTree::floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, bool* found) {
   if (shards_) return shards_->floor(key, key_out, payload_out, found);
   return floor_rank(key, key_out, payload_out, nullptr, found);
+}
+
+Status BTree::floor_block(uint64_t key, uint64_t* keys, uint32_t* count, uint64_t* limit) {
+  *count = 0;
+  // (No limit is past UINT64_MAX.)
+  if (shards_ || !options_.packed || key == UINT64_MAX) return Status::Ok();
+  seal_tail();
+  if (height_ == 0) return Status::Ok();
+  PageRef lf;
+  uint32_t dir_leaf = 0;
+  WEAVER_RETURN_IF_ERROR(locate(key, false, &lf, &dir_leaf));
+  WEAVER_RETURN_IF_ERROR(open_packed(lf, &reader_));
+  if (!reader_.floor_block(key, keys, count, limit)) {
+    return Status::Corruption(where(lf.page_no()) + ": packed key block out of bounds");
+  }
+  // Past the leaf's last block the next key is in another leaf: the block
+  // answers up to its own last key, or to key (whose floor that is).
+  if (*count > 0 && *limit == 0) *limit = std::max(keys[*count - 1], key) + 1;
+  return Status::Ok();
 }
 
 Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,

@@ -170,6 +170,11 @@ class PackedLeaf {
   bool bound(uint64_t k, bool upper, uint32_t* pos, uint64_t* below = nullptr,
              uint64_t* at = nullptr, bool payload_next = false) const;
   bool key(uint32_t i, uint64_t* out) const;
+  // The block holding the last key <= k, decoded into keys (*cnt of them,
+  // up to kPackedBlock), and *limit, the next block's first key (0 past the
+  // page's last block: the next key is another page's).  *cnt is 0 when
+  // every key of the page is > k.  False if damaged.
+  bool floor_block(uint64_t k, uint64_t* keys, uint32_t* cnt, uint64_t* limit) const;
   // Prefetches block j's payload bits in every column.
   void prefetch_payloads(uint32_t j) const;
   // Writes entry i's payload (shape.payload bytes).

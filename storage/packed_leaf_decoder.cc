@@ -128,6 +128,13 @@ bool PackedLeaf::bound(uint64_t k, bool upper, uint32_t* pos, uint64_t* below, u
   return true;
 }
 
+bool PackedLeaf::floor_block(uint64_t k, uint64_t* keys, uint32_t* cnt, uint64_t* limit) const {
+  const uint32_t c = upper_bound(bases_, m_, k);
+  *cnt = 0;
+  *limit = c < m_ ? load64(bases_ + 8 * size_t{c}) : 0;
+  return c == 0 || block_keys(c - 1, keys, cnt);
+}
+
 bool PackedLeaf::key(uint32_t i, uint64_t* out) const {
   uint64_t keys[kPackedBlock];
   uint32_t cnt = 0;

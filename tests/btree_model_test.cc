@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "storage/btree.h"
+#include "storage/packed_leaf.h"
 #include "test_util.h"
 
 namespace weaver {
@@ -87,6 +88,30 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
       ASSERT_EQ(rank, order_.order_of_key(got_key)) << "floor_rank " << k;
       ASSERT_TRUE(std::equal(it->second.begin(), it->second.end(), rank_buf.begin()));
     }
+    // floor_block: when it gives a block, its keys are the model's run from
+    // the block's first key on, that run holds k's floor, and every key from
+    // the first to the limit has its floor among them.
+    uint64_t block[page::kPackedBlock], limit = 0;
+    uint32_t count = 0;
+    ASSERT_OK(tree_->floor_block(k, block, &count, &limit));
+    if (!GetParam().packed) {
+      ASSERT_EQ(count, 0u) << "floor_block " << k;
+    }
+    if (count == 0) return;
+    ++blocks_given_;
+    ASSERT_TRUE(found) << "floor_block " << k;
+    ASSERT_LE(block[0], k);
+    ASSERT_LT(k, limit);
+    auto run = model_.find(block[0]);
+    for (uint32_t i = 0; i < count; ++i, ++run) {
+      ASSERT_NE(run, model_.end()) << "floor_block " << k;
+      ASSERT_EQ(block[i], run->first) << "floor_block " << k << " key " << i;
+    }
+    // The next key of the table, if any, is at or past the limit.
+    if (run != model_.end()) {
+      ASSERT_LE(limit, run->first) << "floor_block " << k;
+    }
+    ASSERT_GE(limit, block[count - 1] + 1);
   }
 
   // A cursor, and a keys-only cursor beside it.
@@ -193,6 +218,7 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
   uint64_t pool_bytes_ = 0;
   std::unique_ptr<BTree> tree_;
   Map model_;
+  uint64_t blocks_given_ = 0;  // floor_block's answers with a block
   OrderTree order_;
 };
 
@@ -291,6 +317,10 @@ TEST_P(BTreeModel, RandomMixMatchesStdMap) {
   }
   ASSERT_NO_FATAL_FAILURE(reopen());
   ASSERT_NO_FATAL_FAILURE(check_everything());
+  // Packed trees answered most floors from a block.
+  if (GetParam().packed) {
+    EXPECT_GT(blocks_given_, 1000u);
+  }
   // Drain to empty and refill: the empty-tree paths.
   while (!model_.empty()) {
     ASSERT_OK(tree_->erase(model_.begin()->first));

@@ -292,15 +292,18 @@ Status BucketWorker::run(BucketTask& t) {
 // False, and packed_ empty, if the span needs more than 56 bits.
 bool BucketWorker::sort_packed() {
   const size_t in_hash = hash_.size(), n = in_hash + inside_.size();
-  packed_.clear();
   lo_ = 0, zeros_ = 0;
-  if (n == 0) return true;
   KeySpan span;
   for (size_t i = 0; i < in_hash; ++i) span.add(hash_.key_at(i));
   for (uint64_t k : inside_) span.add(k);
   const uint64_t lo = span.lo;
   const int zeros = span.zeros(), bits = span.bits();
-  if (bits > 56) return false;
+  if (n == 0 || bits > 56) {
+    packed_.clear();
+    return n == 0;
+  }
+  // Not cleared first: resize then zeroes only what the last bucket's words
+  // did not reach, and every word is written below.
   packed_.resize(n);
   for (size_t i = 0; i < in_hash; ++i) {
     packed_[i] = ((hash_.key_at(i) - lo) >> zeros) << 8 | hash_.mask_at(i);

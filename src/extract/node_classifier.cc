@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <bit>
 
+#include "storage/packed_leaf.h"
+
 namespace weaver {
 namespace {
 
@@ -124,13 +126,34 @@ Status NodeClassifier::search_leaf(uint64_t pm, int direction, const LeafCode** 
     key = *floor;
   } else {
     bool hit = false;
-    WEAVER_RETURN_IF_ERROR(octants_.floor(pk, &key, nullptr, &hit));
+    WEAVER_RETURN_IF_ERROR(table_floor(pk, &key, &hit));
     if (!hit || !holds_p(key)) return Status::Ok();
   }
   LeafCode& r = recent_[direction];
   r = {octant_key_morton(key), 3 * (kMaxLevel - octant_key_level(key)), key};
   *leaf = &r;
   *found = true;
+  return Status::Ok();
+}
+
+Status NodeClassifier::table_floor(uint64_t pk, uint64_t* key, bool* hit) {
+  static_assert(sizeof(TableBlock::keys) / 8 == page::kPackedBlock);
+  for (const TableBlock& b : table_blocks_) {
+    if (pk >= b.lo && pk < b.limit) {
+      *key = *last_at_most(b.keys, b.count, pk);
+      *hit = true;
+      return Status::Ok();
+    }
+  }
+  TableBlock& b = table_blocks_[next_table_block_];
+  b.lo = UINT64_MAX;  // empty until filled
+  WEAVER_RETURN_IF_ERROR(octants_.floor_block(pk, b.keys, &b.count, &b.limit));
+  // The floor in an earlier leaf, or a table not packed: no block.
+  if (b.count == 0) return octants_.floor(pk, key, nullptr, hit);
+  b.lo = b.keys[0];
+  next_table_block_ = (next_table_block_ + 1) % kTableBlocks;
+  *key = *last_at_most(b.keys, b.count, pk);
+  *hit = true;
   return Status::Ok();
 }
 

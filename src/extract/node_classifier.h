@@ -67,6 +67,8 @@ class NodeClassifier {
   // The last local leaf key <= pk, pm's pixel key, or null.
   const uint64_t* local_floor(uint64_t pm, uint64_t pk) const;
   void index_local();
+  // The octant table's last key <= pk, through table_blocks_.
+  Status table_floor(uint64_t pk, uint64_t* key, bool* hit);
   // One of recent_ that holds pixel pm, or null.
   const LeafCode* recent_leaf(uint64_t pm) const;
   // Node m (its Morton code) on the closure of `leaf`: dangling from it, or
@@ -90,6 +92,18 @@ class NodeClassifier {
   std::vector<uint32_t> slot_first_;
   int slot_shift_ = 0;
   bool indexed_ = false;  // slot_first_ is the active bucket's
+  // Blocks of the octant table's keys read last (BTree::floor_block), each
+  // answering the floors of the keys in [lo, limit): the pixels before a
+  // bucket are asked for again and again near one another, and a descent
+  // and block decode for each was a twelfth of a random octree's extract.
+  struct TableBlock {
+    uint64_t lo = UINT64_MAX, limit = 0;  // empty
+    uint32_t count = 0;
+    uint64_t keys[64];
+  };
+  static constexpr int kTableBlocks = 4;
+  TableBlock table_blocks_[kTableBlocks];
+  int next_table_block_ = 0;  // the one replaced next
   // The leaf leaf_at found last in each direction (the octree does not
   // change, so they stay valid across buckets).
   LeafCode recent_[8];

@@ -14,11 +14,18 @@ namespace weaver {
 class NodeHash {
  public:
   // Empties the table, keeping room for `expected` keys without growing.
+  // A table of the same size is emptied slot by used slot: a bucket fills a
+  // few of the slots sized for its worst case, and clearing them all was 4%
+  // of an extract.
   void reset(size_t expected) {
     size_t cap = 64;
     while (cap < 2 * expected) cap <<= 1;
-    slots_.assign(cap, kEmpty);
-    masks_.assign(cap, 0);
+    if (cap == slots_.size()) {
+      for (uint32_t s : used_) slots_[s] = kEmpty, masks_[s] = 0;
+    } else {
+      slots_.assign(cap, kEmpty);
+      masks_.assign(cap, 0);
+    }
     used_.clear();
     shift_ = 64 - static_cast<int>(std::bit_width(cap) - 1);
   }

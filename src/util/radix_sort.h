@@ -33,10 +33,22 @@ inline void radix_sort(std::vector<uint64_t>& values, int first, int bits,
   thread_local std::vector<size_t> table;
   table.resize(size_t{kMostPasses} * kBuckets);
   std::fill(table.begin(), table.begin() + passes * kBuckets, 0);
-  for (uint64_t v : values) {
-    for (int p = 0; p < passes; ++p) {
-      ++table[p * kBuckets + ((v >> (first + p * kDigit)) & (kBuckets - 1))];
+  // The pass count known when compiled: the loop over passes unrolls (it
+  // was half the counting's instructions).
+  auto count_all = [&]<int kPasses>() {
+    size_t* t = table.data();
+    for (uint64_t v : values) {
+      for (int p = 0; p < kPasses; ++p)
+        ++t[p * kBuckets + ((v >> (first + p * kDigit)) & (kBuckets - 1))];
     }
+  };
+  switch (passes) {
+    case 1: count_all.template operator()<1>(); break;
+    case 2: count_all.template operator()<2>(); break;
+    case 3: count_all.template operator()<3>(); break;
+    case 4: count_all.template operator()<4>(); break;
+    case 5: count_all.template operator()<5>(); break;
+    default: count_all.template operator()<kMostPasses>(); break;
   }
   for (int p = 0; p < passes; ++p) {
     size_t* count = table.data() + p * kBuckets;
