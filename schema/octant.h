@@ -268,6 +268,12 @@ constexpr uint64_t octant_key_morton(uint64_t key) {
   const uint64_t slot = key & 127;
   return ((key >> 7) << 3) | (slot >= kKeyLevel20Slot ? slot - kKeyLevel20Slot : 0);
 }
+// octant_key_morton's arithmetic for any 64-bit value: for a search by
+// Morton code among keys not yet checked.
+constexpr uint64_t octant_key_morton_of_any(uint64_t key) {
+  const uint64_t slot = key & 127;
+  return ((key >> 7) << 3) | (slot >= kKeyLevel20Slot ? (slot - kKeyLevel20Slot) & 7 : 0);
+}
 // REQUIRES: octant_key_is_valid(key).
 constexpr int octant_key_level(uint64_t key) {
   assert(octant_key_is_valid(key));

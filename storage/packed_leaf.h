@@ -147,8 +147,11 @@ class PackedLeafBuilder {
   std::vector<DictSlot> dict_slots_;  // open addressing by a hash of the row
   std::vector<uint32_t> dict_first_;  // by ordinal: the first entry holding the row
   std::vector<size_t> dict_added_;    // slots filled by the group being added
-  size_t dict_max_rows_ = 0;          // past this, no dictionary can beat the columns
-  bool dict_over_ = false;            // the page has more distinct rows than that
+  // By entry: its row's ordinal (while the dictionary is kept), so that
+  // encoding writes them without probing the rows again.
+  std::vector<uint32_t> dict_ordinal_;
+  size_t dict_max_rows_ = 0;  // past this, no dictionary can beat the columns
+  bool dict_over_ = false;    // the page has more distinct rows than that
 };
 
 // Read access to a packed leaf in a page.  Every accessor checks the offsets

@@ -50,6 +50,7 @@ void PackedLeafBuilder::clear() {
   std::fill(cols_.begin(), cols_.end(), Column{});
   std::fill(dict_slots_.begin(), dict_slots_.end(), DictSlot{});
   dict_first_.clear();
+  dict_ordinal_.clear();
   dict_over_ = shape_.payload < kDictMinPayload;
 }
 

@@ -33,17 +33,22 @@ bool PackedLeafBuilder::dict_add(const std::byte* vals, uint32_t count) {
   // Rows come in runs (a mesh's neighbours share their material): a row
   // equal to the one before is in the dictionary already.
   const std::byte* prev = keys_.empty() ? nullptr : vals_.data() + vals_.size() - size;
+  uint32_t ordinal = dict_ordinal_.empty() ? 0 : dict_ordinal_.back();
   for (uint32_t i = 0; i < count; ++i) {
     const std::byte* row = vals + size_t{i} * size;
-    if (prev != nullptr && rows_equal(prev, row, size)) continue;
-    prev = row;
-    const size_t s = dict_probe(row, vals);
-    if (dict_slots_[s].first != UINT32_MAX) continue;
-    if (dict_first_.size() == dict_max_rows_) return false;
-    const auto entry = static_cast<uint32_t>(keys_.size() + i);
-    dict_slots_[s] = {entry, static_cast<uint32_t>(dict_first_.size())};
-    dict_first_.push_back(entry);
-    dict_added_.push_back(s);
+    if (prev == nullptr || !rows_equal(prev, row, size)) {
+      prev = row;
+      const size_t s = dict_probe(row, vals);
+      if (dict_slots_[s].first == UINT32_MAX) {
+        if (dict_first_.size() == dict_max_rows_) return false;
+        const auto entry = static_cast<uint32_t>(keys_.size() + i);
+        dict_slots_[s] = {entry, static_cast<uint32_t>(dict_first_.size())};
+        dict_first_.push_back(entry);
+        dict_added_.push_back(s);
+      }
+      ordinal = dict_slots_[s].ordinal;
+    }
+    dict_ordinal_.push_back(ordinal);
   }
   return true;
 }
@@ -56,6 +61,7 @@ void PackedLeafBuilder::dict_rollback() {
     dict_first_.pop_back();
   }
   dict_added_.clear();
+  if (dict_ordinal_.size() > keys_.size()) dict_ordinal_.resize(keys_.size());
 }
 
 uint64_t PackedLeafBuilder::dictionary_bytes(size_t n, size_t dict_rows) const {
@@ -73,13 +79,7 @@ void PackedLeafBuilder::encode_dictionary(std::byte* pg, std::byte* col) const {
   store64(pg + kFieldsStart, rows);
   pg[kFieldsStart + 8] = static_cast<std::byte>(w);
   BitWriter bits(col);
-  uint32_t ordinal = 0;
-  for (uint32_t i = 0; i < n; ++i) {
-    if (i == 0 || !rows_equal(payload(i), payload(i - 1), shape_.payload)) {
-      ordinal = dict_slots_[dict_probe(payload(i), nullptr)].ordinal;
-    }
-    bits.put(ordinal, w);
-  }
+  for (uint32_t i = 0; i < n; ++i) bits.put(dict_ordinal_[i], w);  // every entry's: not over
   bits.finish();
   std::byte* out = col + bits_to_bytes(uint64_t{n} * w);
   for (uint32_t first : dict_first_) {

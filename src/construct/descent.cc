@@ -246,7 +246,8 @@ bool Descent::visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeav
     return true;
   }
   if (out->elements == cap) return false;
-  emit(o, j, material_at_centre(o), out);
+  out->payloads.resize(out->payloads.size() + payload_bytes_);
+  emit(o, octant_key(o), j, material_at_centre(o), true, out);
   return true;
 }
 
@@ -265,7 +266,14 @@ bool Descent::emit_siblings(const Octant& o, const Judgement* children, size_t c
   }
   Material m[8];
   model_.materials_on_lattice(centres[0], centres[1], centres[2], 2, m);
-  for (int c = 0; c < 8; ++c) emit(octant_child(o, c), children[c], m[c], out);
+  // The children's keys from their parent's (one Morton encoding, not
+  // eight); the subtree's borders only where the parent touches one.
+  const uint64_t parent = octant_key(o);
+  const bool at_border = touches_border(o, out->root);
+  out->payloads.resize(out->payloads.size() + 8 * payload_bytes_);
+  for (int c = 0; c < 8; ++c) {
+    emit(octant_child(o, c), octant_key_child(parent, c), children[c], m[c], at_border, out);
+  }
   return true;
 }
 
@@ -297,11 +305,19 @@ void Descent::to_payload(const Material& m, std::byte* out) const {
   if (p_.carved) std::memcpy(out + at, &solid, 4);
 }
 
+bool Descent::touches_border(const Octant& o, const Octant& root) {
+  const uint32_t e = octant_edge(o), root_e = octant_edge(root);
+  const uint32_t c[3] = {o.x, o.y, o.z}, r[3] = {root.x, root.y, root.z};
+  bool touches = false;
+  for (int a = 0; a < 3; ++a) touches |= (c[a] == r[a]) | (c[a] + e == r[a] + root_e);
+  return touches;
+}
+
 // The worst points per wavelength are those of the least sample; a leaf
 // settled by bounds is sampled only if its floor is below the least Vs of
 // its level so far (else it cannot be the worst).
-void Descent::emit(const Octant& o, const Judgement& j, const Material& m,
-                   SubtreeLeaves* out) const {
+void Descent::emit(const Octant& o, uint64_t key, const Judgement& j, const Material& m,
+                   bool at_border, SubtreeLeaves* out) const {
   double& least = out->least_vs[o.level];
   if (j.vs >= 0) {
     least = std::min(least, j.vs);
@@ -310,18 +326,16 @@ void Descent::emit(const Octant& o, const Judgement& j, const Material& m,
     lattice(o, 3, samples);
     least = std::min(least, vs_min_of(samples));
   }
-  out->keys.push_back(octant_key(o));
   if (p_.carved) out->sides.push_back(j.side);
-  const size_t at = out->payloads.size();
-  out->payloads.resize(at + payload_bytes_);
-  to_payload(m, out->payloads.data() + at);
+  to_payload(m, out->payloads.data() + out->keys.size() * payload_bytes_);
+  out->keys.push_back(key);
   ++out->levels[o.level];
   ++out->elements;
   // How far the subtree's balance looks out (subtree_balance.h) follows the
   // elements alone: a chain of splits that ends in one starts within its
   // own edge of it, whatever air it crosses, and air's own refinement is
   // cut away with it.
-  if (j.side == GroundSide::kAir) return;
+  if (j.side == GroundSide::kAir || !at_border) return;
   const uint32_t e = octant_edge(o), root_e = octant_edge(out->root);
   const uint32_t c[3] = {o.x, o.y, o.z}, r[3] = {out->root.x, out->root.y, out->root.z};
   for (int a = 0; a < 3; ++a) {

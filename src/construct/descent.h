@@ -130,7 +130,13 @@ class Descent {
   GroundSide ground_side(const Octant& o) const;
   bool emit_siblings(const Octant& o, const Judgement* children, size_t cap,
                      SubtreeLeaves* out) const;
-  void emit(const Octant& o, const Judgement& j, const Material& m, SubtreeLeaves* out) const;
+  // o's leaf (key: its key) into out, its payload in the room the caller
+  // made for it; at_border false: o touches no side of the subtree
+  // (out->root), whose borders then stand.
+  void emit(const Octant& o, uint64_t key, const Judgement& j, const Material& m, bool at_border,
+            SubtreeLeaves* out) const;
+  // Whether o (inside root) touches a side of root.
+  static bool touches_border(const Octant& o, const Octant& root);
   void add_figures(SubtreeLeaves* out) const;
   Material material_at_centre(const Octant& o) const;
   void to_payload(const Material& m, std::byte* out) const;
