@@ -161,8 +161,8 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
   *kind = NodeKind::kAnchored;
   if (mask == 0xFF) return Status::Ok();
   uint8_t settled = mask;
-  for (int d = 0; d < 8; ++d) {
-    if ((settled >> d) & 1) continue;
+  while (settled != 0xFF) {
+    const int d = std::countr_zero(static_cast<unsigned>(static_cast<uint8_t>(~settled)));
     uint64_t p = 0;
     const LeafCode* leaf = nullptr;
     bool found = false;
@@ -188,7 +188,7 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
     }
     if (*kind != NodeKind::kAnchored && here != *kind) return unbalanced(key, leaf->key, mask);
     *kind = here;
-    settled |= covered;
+    settled |= covered | static_cast<uint8_t>(1u << d);  // (covered holds d: the leaf is there)
   }
   return Status::Ok();
 }
