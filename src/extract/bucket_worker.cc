@@ -107,11 +107,6 @@ Status BucketReader::gather_counted(BucketTask* task) {
 // Hands the corners of the bucket's leaves at or past its end to the spill
 // store, as one run sorted by key with duplicates merged.
 Status BucketReader::spill_far_corners(const BucketTask& task) {
-  // Every far corner goes in the scratch, which is reused; the run keeps
-  // them with duplicates merged, in a buffer of just their size (the spill
-  // store holds thousands of runs).
-  std::vector<SpillRecord>& run = far_corners_;
-  run.clear();
   uint64_t corners[8];
   // Corner 7 has the largest key: below the end, all are.  A Morton code
   // grows with each coordinate, so the far corner of an octant holding the
@@ -135,25 +130,20 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
     if (far_corner(m, bit) < task.end) continue;
     leaf_corner_keys(key, corners);
     for (int c = 0; c < 8; ++c) {
-      if (corners[c] >= task.end) run.push_back({corners[c], corner_direction_bit(c)});
+      if (corners[c] >= task.end) far_corners_.add(corners[c], corner_direction_bit(c));
     }
   }
-  sort_and_merge(run, packed_, scratch_);
-  return spills_.add_run(std::vector<SpillRecord>(run.begin(), run.end()));
+  return far_corners_.flush(spills_);
 }
 
-void sort_and_merge(std::vector<SpillRecord>& run, std::vector<uint64_t>& packed,
-                    std::vector<uint64_t>& scratch) {
-  sort_records(run, packed, scratch);
-  size_t kept = 0;
-  for (size_t i = 0; i < run.size(); ++i) {
-    if (kept > 0 && run[kept - 1].key == run[i].key) {
-      run[kept - 1].mask |= run[i].mask;
-    } else {
-      run[kept++] = run[i];
-    }
-  }
-  run.resize(kept);
+Status SpillRun::flush(SpillStore& spills) {
+  run_.resize(hash_.size());
+  for (size_t i = 0; i < run_.size(); ++i) run_[i] = {hash_.key_at(i), hash_.mask_at(i)};
+  sort_records(run_, packed_, scratch_);
+  expected_ = std::max<size_t>(run_.size(), 1024);
+  hash_.reset(expected_);
+  // In a buffer of just their size: the spill store holds thousands of runs.
+  return spills.add_run(std::vector<SpillRecord>(run_.begin(), run_.end()));
 }
 
 namespace {

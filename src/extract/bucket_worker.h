@@ -64,6 +64,25 @@ struct BucketTask {
   Status status;
 };
 
+// Nodal pixels bound for the spill store, merged by key as they come (a
+// bucket's far corners are each shared by up to four of its leaves: merged
+// before the sort, a quarter of them are sorted), then handed over as one
+// sorted run.
+class SpillRun {
+ public:
+  SpillRun() { hash_.reset(expected_); }
+  void add(uint64_t key, uint8_t mask) { hash_.add(key, mask); }
+  // What was added since the last flush, sorted by key, one record a key
+  // (its bits ORed), to `spills` as one run; this is then empty.
+  Status flush(SpillStore& spills);
+
+ private:
+  NodeHash hash_;
+  size_t expected_ = 1024;  // the keys of the last run: the next is sized for them
+  std::vector<SpillRecord> run_;
+  std::vector<uint64_t> packed_, scratch_;
+};
+
 // Cuts the octant table into buckets, in Z-order, and routes their spills.
 class BucketReader {
  public:
@@ -91,10 +110,9 @@ class BucketReader {
   LeafReader& cursor_;
   BucketPolicy policy_;
   SpillStore& spills_;
-  std::vector<uint64_t> carry_;           // leaves read past the last cut
-  std::vector<SpillRecord> far_corners_;  // spill_far_corners' scratch
+  std::vector<uint64_t> carry_;  // leaves read past the last cut
+  SpillRun far_corners_;         // spill_far_corners' run
   uint64_t next_start_ = 0;
-  std::vector<uint64_t> packed_, scratch_;  // sort_records' buffers
 };
 
 // The 8 corners of the leaf with this key as node keys, corner k at [k].
@@ -121,10 +139,6 @@ struct KeySpan {
 // packed and scratch are working buffers.
 void sort_records(std::vector<SpillRecord>& records, std::vector<uint64_t>& packed,
                   std::vector<uint64_t>& scratch);
-// Sorts records and merges those of one key (their direction bits ORed): a
-// run for SpillStore::add_run.
-void sort_and_merge(std::vector<SpillRecord>& records, std::vector<uint64_t>& packed,
-                    std::vector<uint64_t>& scratch);
 
 class BucketWorker {
  public:

@@ -53,20 +53,16 @@ Status ghost_leaves(BTree& octants, uint64_t first_leaf, uint64_t stop,
 Status spill_ghost_corners(const std::vector<uint64_t>& ghosts, uint64_t start, uint64_t stop,
                            SpillStore& spills) {
   constexpr size_t kGhostsARun = size_t{1} << 15;  // 256K records at most, 4 MB
-  std::vector<SpillRecord> run;
-  std::vector<uint64_t> packed, scratch;
+  SpillRun run;
   uint64_t corners[8];
   for (size_t from = 0; from < ghosts.size(); from += kGhostsARun) {
-    run.clear();
     for (size_t i = from; i < std::min(ghosts.size(), from + kGhostsARun); ++i) {
       leaf_corner_keys(ghosts[i], corners);
       for (int k = 0; k < 8; ++k) {
-        if (corners[k] >= start && corners[k] < stop)
-          run.push_back({corners[k], corner_direction_bit(k)});
+        if (corners[k] >= start && corners[k] < stop) run.add(corners[k], corner_direction_bit(k));
       }
     }
-    sort_and_merge(run, packed, scratch);
-    WEAVER_RETURN_IF_ERROR(spills.add_run(std::vector<SpillRecord>(run.begin(), run.end())));
+    WEAVER_RETURN_IF_ERROR(run.flush(spills));
   }
   return Status::Ok();
 }
