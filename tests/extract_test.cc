@@ -409,18 +409,22 @@ TEST_F(ExtractTest, ThreadCountsOneToFourGiveTheSameNodeTable) {
 
 // An octant table written directly (import would refuse the overlap, and
 // writes level counts that this table lacks: extract must scan instead).
-void write_raw_octant_table(const std::string& dir, const std::vector<Octant>& octants) {
+void write_raw_keys(const std::string& dir, std::vector<uint64_t> keys) {
   std::unique_ptr<Database> db;
   ASSERT_OK(Database::open(dir, Database::Mode::kWrite, true, &db));
   std::unique_ptr<BTree> t;
   std::string file;
   ASSERT_OK(db->create_table(kOctantTable, TableOptions{}, 1 << 20, &t, &file));
-  std::vector<uint64_t> keys;
-  for (const Octant& o : octants) keys.push_back(octant_key(o));
   std::sort(keys.begin(), keys.end());
   for (uint64_t k : keys) ASSERT_OK(t->append(k, nullptr));
   ASSERT_OK(t->commit());
   ASSERT_OK(db->commit({{kOctantTable, file}}));
+}
+
+void write_raw_octant_table(const std::string& dir, const std::vector<Octant>& octants) {
+  std::vector<uint64_t> keys;
+  for (const Octant& o : octants) keys.push_back(octant_key(o));
+  write_raw_keys(dir, keys);
 }
 
 TEST_F(ExtractTest, RefusesOverlappingOctantsAndScansTablesWithoutLevelCounts) {
@@ -447,6 +451,35 @@ TEST_F(ExtractTest, RefusesOverlappingOctantsAndScansTablesWithoutLevelCounts) {
         const Status st = extract_mesh(bad, o, &r);
         ASSERT_TRUE(st.is_invalid_argument()) << st.to_string();
         EXPECT_NE(st.message().find("(524288 524288 0 1) and (786432 524288 262144 2) overlap"),
+                  std::string::npos)
+            << st.message();
+      }
+    }
+  }
+}
+
+// A key no octant has, mid-page (a level 1 code with bits below its cell,
+// and a slot no level has), is named as corrupt however the leaves are read.
+TEST_F(ExtractTest, RefusesInvalidOctantKeysMidPage) {
+  std::vector<uint64_t> keys;
+  for (int k = 0; k < 8; ++k) keys.push_back(octant_key(octant_child(octant_root(), k)));
+  const uint64_t misaligned = keys[3] + (uint64_t{1} << 7), bad_slot = (keys[5] + 128) | 28;
+  for (uint64_t invalid : {misaligned, bad_slot}) {
+    ASSERT_FALSE(octant_key_is_valid(invalid));
+    std::vector<uint64_t> with = keys;
+    with.push_back(invalid);
+    const std::string bad = dir_.file("raw-invalid-" + std::to_string(invalid));
+    ASSERT_NO_FATAL_FAILURE(write_raw_keys(bad, with));
+    for (int threads : {1, 2}) {
+      for (auto buckets : {ExtractOptions::Buckets::kLevel, ExtractOptions::Buckets::kLeaves}) {
+        ExtractOptions o;
+        o.threads = threads;
+        o.buckets = buckets;
+        o.bucket_level = buckets == ExtractOptions::Buckets::kLevel ? 2 : -1;
+        ExtractResult r;
+        const Status st = extract_mesh(bad, o, &r);
+        ASSERT_TRUE(st.is_corruption()) << st.to_string();
+        EXPECT_NE(st.message().find("invalid octant key " + std::to_string(invalid)),
                   std::string::npos)
             << st.message();
       }

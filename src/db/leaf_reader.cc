@@ -39,18 +39,30 @@ Status LeafReader::next() {
 
 namespace {
 
+// By a key's slot (its low 7 bits), in units of key >> 7 (the Morton code
+// over 8): the bits below its level's cell, which a valid key has clear,
+// and the span of its subtree (0 at level 20, whose subtree ends at the
+// next key).
+struct SlotTables {
+  uint64_t low[128], span[128];
+  constexpr SlotTables() : low(), span() {
+    for (uint64_t slot = 0; slot < 128; ++slot) {
+      const bool below_20 = slot < kKeyLevel20Slot;
+      low[slot] = below_20 ? (uint64_t{1} << (57 - 3 * slot)) - 1 : 0;
+      span[slot] = below_20 ? uint64_t{1} << (57 - 3 * slot) : 0;
+    }
+  }
+};
+constexpr SlotTables kSlots;
+
 // Whether key is valid and starts at or past the end of prev's subtree (prev
-// valid): & for &&, so that a run of keys is checked without branches.
-// In units of key >> 7 (the Morton code over 8), an octant of level slot
-// below 20 spans 2^(3 (20 - slot) - 3); its subtree ends where that is added
-// (past the root's end, no key is that large: octant_key_subtree_end's
-// UINT64_MAX).  Level 20 keys differ in the slot: the end is the next key.
+// valid): & for &&, so that a run of keys is checked without branches.  A
+// level 20 prev's subtree ends at the next key: past it, key > prev.
 inline bool key_follows(uint64_t prev, uint64_t key) {
   const uint64_t slot = key & 127, prev_slot = prev & 127;
-  const uint64_t low = slot < kKeyLevel20Slot ? (uint64_t{1} << (57 - 3 * slot)) - 1 : 0;
-  const uint64_t span = prev_slot < kKeyLevel20Slot ? uint64_t{1} << (57 - 3 * prev_slot) : 0;
-  const bool past = prev_slot < kKeyLevel20Slot ? (key >> 7) >= (prev >> 7) + span : key > prev;
-  return (slot < kKeyLevel20Slot + 8) & (((key >> 7) & low) == 0) & past;
+  const uint64_t units = key >> 7, prev_end = (prev >> 7) + kSlots.span[prev_slot];
+  const bool past = (units > prev_end) | ((units == prev_end) & (key > prev));
+  return ((units & kSlots.low[slot]) == 0) & (slot < kKeyLevel20Slot + 8) & past;
 }
 
 }  // namespace
