@@ -282,18 +282,10 @@ Material DbModel::at(double x, double y, double z) const {
 // the pixels and raster cells of each axis once, then a load or two a point.
 // A lattice reaching outside the region (the octants around a subtree,
 // judged by its balance) takes the points outside it from the table.
-void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
-                            float* out) const {
+template <class Put>
+void DbModel::each_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                              const Put& put) const {
   Reader& r = reader();
-  if (n > 5) {
-    ModelHit h;
-    for (int k = 0; k < n; ++k)
-      for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i) {
-          out[(k * n + j) * n + i] = find(r, xs[i], ys[j], zs[k], &h).ok() ? h.values[1] : 0.0f;
-        }
-    return;
-  }
   const ModelRegion& g = r.region;
   uint32_t px[5], py[5], pz[5], cx[5], cy[5], cz[5];
   bool clamped_x[5], clamped_y[5], clamped_z[5];
@@ -311,15 +303,43 @@ void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
         const Coord p{px[i], py[j], pz[k]};
-        float& v = out[(k * n + j) * n + i];
+        const int index = (k * n + j) * n + i;
         if (covered || g.covers(p)) {
           const int32_t o = g.find(p, cx[i], cy[j], cz[k]);
-          v = o == ModelRegion::kHole ? 0.0f : g.values(o)[1];
+          put(index, o == ModelRegion::kHole ? nullptr : &g.values(o));
         } else {
           const bool clamped = clamped_x[i] || clamped_y[j] || clamped_z[k];
-          v = find_pixel(r, p, clamped, xs[i], ys[j], zs[k], &h).ok() ? h.values[1] : 0.0f;
+          put(index, find_pixel(r, p, clamped, xs[i], ys[j], zs[k], &h).ok() ? &h.values : nullptr);
         }
       }
+}
+
+void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                            float* out) const {
+  if (n > 5) {
+    Reader& r = reader();
+    ModelHit h;
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          out[(k * n + j) * n + i] = find(r, xs[i], ys[j], zs[k], &h).ok() ? h.values[1] : 0.0f;
+        }
+    return;
+  }
+  each_on_lattice(xs, ys, zs, n, [out](int index, const ModelValues* v) {
+    out[index] = v != nullptr ? (*v)[1] : 0.0f;
+  });
+}
+
+// The values at()'s lookup finds (a hole: no material), a lattice at a time:
+// construct's eight sibling leaves, whose centres' pixels were found point by
+// point (a tenth of a construct from a model database).
+void DbModel::materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                                   Material* out) const {
+  if (n > 5) return VelocityModel::materials_on_lattice(xs, ys, zs, n, out);
+  each_on_lattice(xs, ys, zs, n, [out](int index, const ModelValues* v) {
+    out[index] = v != nullptr ? Material{(*v)[0], (*v)[1], (*v)[2], (*v)[3], (*v)[4]} : Material{};
+  });
 }
 
 // at() of a point of the box finds its pixel in [pixel(lo), pixel(hi)]

@@ -59,6 +59,9 @@ class DbModel final : public VelocityModel {
   void focus(const double lo[3], const double hi[3]) const override;
   void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                      float* out) const override;
+  // at()'s materials, found as vs_on_lattice finds its points.
+  void materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                            Material* out) const override;
   // From the focused region's Vs pyramid (model_region.h), where it holds
   // the box; false elsewhere.
   bool vs_bounds(const double lo[3], const double hi[3], float* vs_lo, float* vs_hi) const override;
@@ -78,6 +81,11 @@ class DbModel final : public VelocityModel {
   Status find_pixel(Reader& r, Coord t, bool clamped, double x, double y, double z,
                     ModelHit* hit) const;
   Status hole_at(double x, double y, double z) const;
+  // Calls put(index, values) for each point of the n x n x n lattice (n <=
+  // 5; index (k * n + j) * n + i), values null for a hole.
+  template <class Put>
+  void each_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                       const Put& put) const;
 
   std::string dir_;
   std::unique_ptr<Database> db_;
