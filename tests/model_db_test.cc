@@ -457,9 +457,10 @@ TEST(ModelDb, PointsOutsideTheRegionAnswerAsTheTable) {
   }
 }
 
-// A lattice of samples (construct's 3 x 3 x 3 and 5 x 5 x 5) inside the
-// focused region, across its side or wholly outside it gives at each point
-// the Vs a model never focused looks up there.
+// A lattice of samples (construct's 3 x 3 x 3 and 5 x 5 x 5, and the 2 x 2
+// x 2 of sibling leaves' centres) inside the focused region, across its side
+// or wholly outside it gives at each point the Vs a model never focused looks
+// up there, and the material its at() gives.
 TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
   const std::string model = import_bounds_model("lattices");
   std::unique_ptr<DbModel> m, ref;
@@ -473,7 +474,7 @@ TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
   m->focus(focus_lo, focus_hi);
   int across = 0;
   for (int t = 0; t < 3000; ++t) {
-    const int n = t % 2 == 0 ? 3 : 5;
+    const int n = t % 3 == 0 ? 3 : t % 3 == 1 ? 5 : 2;
     const double side = std::pow(2.0, uniform(5, 11));
     double axes[3][5];
     bool in = true, out = true;
@@ -487,14 +488,23 @@ TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
     }
     across += !in && !out;
     float got[125];
+    Material materials[125];
     m->vs_on_lattice(axes[0], axes[1], axes[2], n, got);
+    m->materials_on_lattice(axes[0], axes[1], axes[2], n, materials);
     for (int k = 0; k < n; ++k)
       for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
           ModelHit want;
           ASSERT_TRUE(ref->lookup(axes[0][i], axes[1][j], axes[2][k], &want).ok());
-          ASSERT_EQ(got[(k * n + j) * n + i], want.values[1])
+          const int at = (k * n + j) * n + i;
+          ASSERT_EQ(got[at], want.values[1])
               << "lattice " << t << " at " << axes[0][i] << " " << axes[1][j] << " " << axes[2][k];
+          const Material a = ref->at(axes[0][i], axes[1][j], axes[2][k]);
+          const Material& b = materials[at];
+          ASSERT_TRUE(a.vp == b.vp && a.vs == b.vs && a.rho == b.rho && a.qp == b.qp &&
+                      a.qs == b.qs)
+              << "materials " << t << " at " << axes[0][i] << " " << axes[1][j] << " "
+              << axes[2][k];
         }
   }
   EXPECT_GT(across, 300) << "lattices across the region's side";
