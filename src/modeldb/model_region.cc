@@ -153,7 +153,16 @@ void ModelRegion::build_raster() {
     }
     if (uint64_t{dims_[0]} * dims_[1] * dims_[2] <= max_cells_) break;
   }
-  raster_.assign(size_t{dims_[0]} * dims_[1] * dims_[2], kHole);
+  const size_t cells = size_t{dims_[0]} * dims_[1] * dims_[2];
+  raster_.assign(cells, kHole);
+  // The cells' Vs ranges (the pyramid's level 0) as the raster is filled,
+  // octant by octant: a pass over the cells after it read each octant's
+  // values in the raster's order, a cache miss a cell.  A hole is Vs 0; a
+  // mixed cell's range is found in build_bounds.
+  if (pyramid_.empty()) pyramid_.emplace_back();
+  Level& base = pyramid_[0];
+  std::copy(dims_, dims_ + 3, base.dims);
+  base.ranges.assign(cells, VsRange{0.0f, 0.0f});
   for (size_t i = 0; i < keys_.size(); ++i) {
     const Octant o = octant_from_key(keys_[i]);
     const uint32_t corner[3] = {o.x, o.y, o.z};
@@ -170,28 +179,24 @@ void ModelRegion::build_raster() {
     }
     if (!meets) continue;
     const int32_t v = whole_cells ? static_cast<int32_t>(i) : kMixed;
+    const float vs = values_[i][1];
+    const VsRange range = whole_cells ? VsRange{vs, vs} : VsRange{HUGE_VALF, -HUGE_VALF};
     for (uint32_t z = from[2]; z <= to[2]; ++z)
       for (uint32_t y = from[1]; y <= to[1]; ++y)
         for (uint32_t x = from[0]; x <= to[0]; ++x) {
-          raster_[(size_t{z} * dims_[1] + y) * dims_[0] + x] = v;
+          const size_t c = (size_t{z} * dims_[1] + y) * dims_[0] + x;
+          raster_[c] = v;
+          base.ranges[c] = range;
         }
   }
 }
 
 void ModelRegion::build_bounds() {
   const size_t cells = raster_.size();
-  pyramid_.resize(1);
-  Level& base = pyramid_[0];
-  std::copy(dims_, dims_ + 3, base.dims);
-  base.ranges.resize(cells);
+  Level& base = pyramid_[0];  // its cells' ranges: build_raster's
   // Mixed cells: the least and greatest Vs of the octants inside, and how
   // much of the cell's part in the box they fill (less: a hole, Vs 0).
   std::vector<uint64_t> filled;
-  for (size_t c = 0; c < cells; ++c) {
-    const int32_t v = raster_[c];
-    const float vs = v >= 0 ? values_[v][1] : 0.0f;
-    base.ranges[c] = v == kMixed ? VsRange{HUGE_VALF, -HUGE_VALF} : VsRange{vs, vs};
-  }
   const uint32_t box_lo[3] = {lo_.x, lo_.y, lo_.z}, box_hi[3] = {hi_.x, hi_.y, hi_.z};
   // The pixels of [from, from + edge) on each axis inside the box.
   const auto in_box = [&](const uint32_t from[3], uint32_t edge) {
@@ -228,10 +233,14 @@ void ModelRegion::build_bounds() {
       base.ranges[c].hi = std::max(base.ranges[c].hi, 0.0f);
     }
   }
-  while (pyramid_.back().dims[0] > 1 || pyramid_.back().dims[1] > 1 ||
-         pyramid_.back().dims[2] > 1) {
-    const Level& fine = pyramid_.back();
-    Level up;
+  // The levels above, in the vectors of the last load's (a level made
+  // afresh at every load was memory faulted in afresh).
+  levels_ = 1;
+  while (pyramid_[levels_ - 1].dims[0] > 1 || pyramid_[levels_ - 1].dims[1] > 1 ||
+         pyramid_[levels_ - 1].dims[2] > 1) {
+    if (pyramid_.size() == levels_) pyramid_.emplace_back();
+    const Level& fine = pyramid_[levels_ - 1];
+    Level& up = pyramid_[levels_];
     for (int a = 0; a < 3; ++a) up.dims[a] = (fine.dims[a] + 1) / 2;
     up.ranges.assign(size_t{up.dims[0]} * up.dims[1] * up.dims[2], VsRange{HUGE_VALF, -HUGE_VALF});
     for (uint32_t z = 0; z < fine.dims[2]; ++z)
@@ -242,7 +251,7 @@ void ModelRegion::build_bounds() {
           u.lo = std::min(u.lo, f.lo);
           u.hi = std::max(u.hi, f.hi);
         }
-    pyramid_.push_back(std::move(up));
+    ++levels_;
   }
 }
 
@@ -251,7 +260,7 @@ bool ModelRegion::vs_bounds(Coord lo, Coord hi, float* vs_lo, float* vs_hi) cons
   const uint32_t from[3] = {cell_x(lo.x), cell_y(lo.y), cell_z(lo.z)};
   const uint32_t to[3] = {cell_x(hi.x), cell_y(hi.y), cell_z(hi.z)};
   int p = 0;
-  while (p + 1 < int(pyramid_.size()) &&
+  while (p + 1 < int(levels_) &&
          ((to[0] >> p) - (from[0] >> p) > 1 || (to[1] >> p) - (from[1] >> p) > 1 ||
           (to[2] >> p) - (from[2] >> p) > 1)) {
     ++p;

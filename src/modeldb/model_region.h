@@ -131,6 +131,7 @@ class ModelRegion {
     std::vector<VsRange> ranges;
   };
   std::vector<Level> pyramid_;  // [0]: the raster's cells; each next halves every side
+  size_t levels_ = 0;           // the pyramid's levels in use (the rest keep their memory)
 };
 
 }  // namespace weaver
