@@ -90,6 +90,20 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
   // The cursor moves past k0: it will stand on the first record at or
   // after the cell's end (a later load may ask for a key before that).
   scan_.known = false;
+  // Inside the box every record is kept: a leaf's run of them at once.
+  while (inside && c.valid() && c.key() < end) {
+    uint32_t n = 0;
+    const uint64_t* keys = c.keys_in_leaf(&n);
+    const uint32_t in_cell = static_cast<uint32_t>(std::lower_bound(keys, keys + n, end) - keys);
+    const size_t room = max_octants - keys_.size();
+    if (room == 0) {
+      *full = true;
+      return Status::Ok();
+    }
+    const uint32_t take = static_cast<uint32_t>(std::min<size_t>(in_cell, room));
+    add_run(keys, c.payload(), take, record_bytes);
+    WEAVER_RETURN_IF_ERROR(c.skip(take));
+  }
   while (c.valid() && c.key() < end) {
     if (keys_.size() == max_octants) {
       *full = true;
@@ -132,6 +146,17 @@ Status ModelRegion::Scan::floor(BTree& t, uint64_t k, uint64_t* key, std::byte* 
   std::memcpy(record, payload, std::min(record_bytes, sizeof(ModelValues)));
   *found = true;
   return Status::Ok();
+}
+
+// n records in a row (keys, and their records record_bytes apart).
+void ModelRegion::add_run(const uint64_t* keys, const std::byte* records, size_t n,
+                          size_t record_bytes) {
+  keys_.insert(keys_.end(), keys, keys + n);
+  const size_t at = values_.size();
+  values_.resize(at + n);
+  const size_t bytes = std::min(record_bytes, sizeof(ModelValues));
+  for (size_t i = 0; i < n; ++i)
+    std::memcpy(values_[at + i].data(), records + i * record_bytes, bytes);
 }
 
 void ModelRegion::add(uint64_t key, const std::byte* record, size_t record_bytes) {
