@@ -217,11 +217,12 @@ void ModelRegion::build_raster() {
 }
 
 void ModelRegion::build_bounds() {
-  const size_t cells = raster_.size();
   Level& base = pyramid_[0];  // its cells' ranges: build_raster's
   // Mixed cells: the least and greatest Vs of the octants inside, and how
-  // much of the cell's part in the box they fill (less: a hole, Vs 0).
-  std::vector<uint64_t> filled;
+  // much of the cell's part in the box they fill (less: a hole, Vs 0).  A
+  // cell is an aligned block of the key order, so its octants come one
+  // after another: each cell's count is finished when the next begins (no
+  // count per cell of the raster, no pass over them all).
   const uint32_t box_lo[3] = {lo_.x, lo_.y, lo_.z}, box_hi[3] = {hi_.x, hi_.y, hi_.z};
   // The pixels of [from, from + edge) on each axis inside the box.
   const auto in_box = [&](const uint32_t from[3], uint32_t edge) {
@@ -233,31 +234,35 @@ void ModelRegion::build_bounds() {
     }
     return n;
   };
+  size_t cell = SIZE_MAX;  // the mixed cell whose octants are being counted
+  uint32_t cell_corner[3] = {0, 0, 0};
+  uint64_t filled = 0;
+  const auto finish_cell = [&] {
+    if (cell == SIZE_MAX || filled >= in_box(cell_corner, uint32_t{1} << shift_)) return;
+    base.ranges[cell].lo = std::min(base.ranges[cell].lo, 0.0f);
+    base.ranges[cell].hi = std::max(base.ranges[cell].hi, 0.0f);
+  };
   for (size_t i = 0; i < keys_.size(); ++i) {
     const Octant o = octant_from_key(keys_[i]);
-    if (o.level <= kMaxLevel - shift_) continue;  // whole cells: ranged above
+    if (o.level <= kMaxLevel - shift_) continue;  // whole cells: ranged in build_raster
     const uint32_t cx = (o.x >> shift_) - base_[0], cy = (o.y >> shift_) - base_[1],
                    cz = (o.z >> shift_) - base_[2];
     if (cx >= dims_[0] || cy >= dims_[1] || cz >= dims_[2]) continue;  // outside the box
     const size_t c = (size_t{cz} * dims_[1] + cy) * dims_[0] + cx;
-    if (filled.empty()) filled.assign(cells, 0);
+    if (c != cell) {
+      finish_cell();
+      cell = c, filled = 0;
+      cell_corner[0] = (cx + base_[0]) << shift_;
+      cell_corner[1] = (cy + base_[1]) << shift_;
+      cell_corner[2] = (cz + base_[2]) << shift_;
+    }
     const uint32_t corner[3] = {o.x, o.y, o.z};
-    filled[c] += in_box(corner, octant_edge(o));
+    filled += in_box(corner, octant_edge(o));
     VsRange& r = base.ranges[c];
     r.lo = std::min(r.lo, values_[i][1]);
     r.hi = std::max(r.hi, values_[i][1]);
   }
-  for (size_t c = 0; c < cells; ++c) {
-    if (raster_[c] != kMixed) continue;
-    const uint32_t cx = uint32_t(c % dims_[0]), cy = uint32_t(c / dims_[0] % dims_[1]),
-                   cz = uint32_t(c / dims_[0] / dims_[1]);
-    const uint32_t corner[3] = {(cx + base_[0]) << shift_, (cy + base_[1]) << shift_,
-                                (cz + base_[2]) << shift_};
-    if (filled.empty() || filled[c] < in_box(corner, uint32_t{1} << shift_)) {
-      base.ranges[c].lo = std::min(base.ranges[c].lo, 0.0f);
-      base.ranges[c].hi = std::max(base.ranges[c].hi, 0.0f);
-    }
-  }
+  finish_cell();
   // The levels above, in the vectors of the last load's (a level made
   // afresh at every load was memory faulted in afresh).
   levels_ = 1;
