@@ -138,21 +138,21 @@ Status NodeClassifier::search_leaf(uint64_t pm, int direction, const LeafCode** 
 
 Status NodeClassifier::table_floor(uint64_t pk, uint64_t* key, bool* hit) {
   static_assert(sizeof(TableBlock::keys) / 8 == page::kPackedBlock);
+  const TableBlock* found = nullptr;
   for (const TableBlock& b : table_blocks_) {
-    if (pk >= b.lo && pk < b.limit) {
-      *key = *last_at_most(b.keys, b.count, pk);
-      *hit = true;
-      return Status::Ok();
-    }
+    if (pk >= b.lo && pk < b.limit) found = &b;
   }
-  TableBlock& b = table_blocks_[next_table_block_];
-  b.lo = UINT64_MAX;  // empty until filled
-  WEAVER_RETURN_IF_ERROR(octants_.floor_block(pk, b.keys, &b.count, &b.limit));
-  // The floor in an earlier leaf, or a table not packed: no block.
-  if (b.count == 0) return octants_.floor(pk, key, nullptr, hit);
-  b.lo = b.keys[0];
-  next_table_block_ = (next_table_block_ + 1) % kTableBlocks;
-  *key = *last_at_most(b.keys, b.count, pk);
+  if (found == nullptr) {
+    TableBlock& b = table_blocks_[next_table_block_];
+    b.lo = UINT64_MAX;  // empty until filled
+    WEAVER_RETURN_IF_ERROR(octants_.floor_block(pk, b.keys, &b.count, &b.limit));
+    // The floor in an earlier leaf, or a table not packed: no block.
+    if (b.count == 0) return octants_.floor(pk, key, nullptr, hit);
+    b.lo = b.keys[0];
+    next_table_block_ = (next_table_block_ + 1) % kTableBlocks;
+    found = &b;
+  }
+  *key = *last_at_most(found->keys, found->count, pk);
   *hit = true;
   return Status::Ok();
 }
