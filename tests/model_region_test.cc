@@ -123,6 +123,34 @@ TEST(ModelRegion, AnswersEveryPixelAsALinearSearchDoes) {
           EXPECT_EQ(r.values(got), octants[want].v);
         }
       }
+      // Vs bounds over sub-boxes of every size (around the graded point in
+      // half the boxes) hold the Vs of every point the reference finds in
+      // them (a hole counts as 0).
+      for (int b = 0; b < 16; ++b) {
+        const int halve = int(rng() % 24);
+        const auto span = [&](uint32_t f, uint32_t l, uint32_t h, uint32_t* from, uint32_t* to) {
+          const uint32_t c =
+              box % 2 ? std::clamp(f, l, h) : l + uint32_t(rng() % (uint64_t{h} - l + 1));
+          const uint32_t w = (h - l) >> halve;
+          *from = c - std::min(w, c - l), *to = c + std::min(w, h - c);
+        };
+        Coord bl, bh;
+        span(focus.x, lo.x, hi.x, &bl.x, &bh.x);
+        span(focus.y, lo.y, hi.y, &bl.y, &bh.y);
+        span(focus.z, lo.z, hi.z, &bl.z, &bh.z);
+        float vs_lo = 0, vs_hi = 0;
+        ASSERT_TRUE(r.vs_bounds(bl, bh, &vs_lo, &vs_hi));
+        for (int s = 0; s < 40; ++s) {
+          const auto any = [&](uint32_t l, uint32_t h) {
+            return s < 8 ? (s & 1 ? h : l) : l + uint32_t(rng() % (uint64_t{h} - l + 1));
+          };
+          const Coord p{any(bl.x, bh.x), any(bl.y, bh.y), any(bl.z, bh.z)};
+          const int want = reference(octants, p);
+          const float vs = want < 0 ? 0.0f : octants[want].v[1];
+          ASSERT_LE(vs_lo, vs) << "seed " << seed << " box " << box;
+          ASSERT_GE(vs_hi, vs) << "seed " << seed << " box " << box;
+        }
+      }
       const Coord outside{hi.x + 1, lo.y, lo.z};
       if (hi.x + 1 < kRootEdge) {
         EXPECT_FALSE(r.covers(outside));

@@ -53,6 +53,9 @@ Status ModelRegion::load(BTree& table, Coord lo, Coord hi, size_t record_bytes,
     scan_ = Scan();
     scan_.table = &table;
   }
+  const uint32_t side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 1;
+  split_edge_ = 1;
+  while (uint64_t{split_edge_} * 16 < side) split_edge_ *= 2;
   for (const Octant& cell : covering_cells(lo, hi)) {
     WEAVER_RETURN_IF_ERROR(scan_cell(table, cell, record_bytes, max_octants, &full));
     if (full) {
@@ -82,37 +85,39 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
     if (keys_.empty() || keys_.back() != floor_key) add(floor_key, record, record_bytes);
     return Status::Ok();
   }
-  const uint64_t end = octant_key_subtree_end(cell);
-  // A cell reaches past the box by up to its own size: its octants there
-  // are skipped, not kept (about half of what the scans read).
   const bool inside = octant_in_box(cell, lo_, hi_);
+  if (!inside && octant_edge(cell) > split_edge_) {
+    // A cell reaching past the box is read as its children that meet it,
+    // down to cells of a sixteenth of the box: the records outside were
+    // half of those read, each tested against the box.
+    for (int k = 0; k < 8; ++k) {
+      const Octant child = octant_child(cell, k);
+      if (!octant_meets_box(child, lo_, hi_)) continue;
+      WEAVER_RETURN_IF_ERROR(scan_cell(table, child, record_bytes, max_octants, full));
+      if (*full) return Status::Ok();
+    }
+    return Status::Ok();
+  }
+  const uint64_t end = octant_key_subtree_end(cell);
+  // The smallest cells reach past the box by up to their own size: their
+  // octants there are skipped, not kept.
   BTreeCursor& c = scan_.cursor;
   // The cursor moves past k0: it will stand on the first record at or
   // after the cell's end (a later load may ask for a key before that).
   scan_.known = false;
-  // Inside the box every record is kept: a leaf's run of them at once.
-  while (inside && c.valid() && c.key() < end) {
+  // A leaf's run of the cell's records at a time: inside the box all are
+  // kept, else those meeting it.
+  while (c.valid() && c.key() < end) {
     uint32_t n = 0;
     const uint64_t* keys = c.keys_in_leaf(&n);
     const uint32_t in_cell = static_cast<uint32_t>(std::lower_bound(keys, keys + n, end) - keys);
     const size_t room = max_octants - keys_.size();
-    if (room == 0) {
+    if (inside ? in_cell > room : !add_meeting(keys, c.payload(), in_cell, record_bytes, room)) {
       *full = true;
       return Status::Ok();
     }
-    const uint32_t take = static_cast<uint32_t>(std::min<size_t>(in_cell, room));
-    add_run(keys, c.payload(), take, record_bytes);
-    WEAVER_RETURN_IF_ERROR(c.skip(take));
-  }
-  while (c.valid() && c.key() < end) {
-    if (keys_.size() == max_octants) {
-      *full = true;
-      return Status::Ok();
-    }
-    if (inside || octant_meets_box(octant_from_key(c.key()), lo_, hi_)) {
-      add(c.key(), c.payload(), record_bytes);
-    }
-    WEAVER_RETURN_IF_ERROR(c.next());
+    if (inside) add_run(keys, c.payload(), in_cell, record_bytes);
+    WEAVER_RETURN_IF_ERROR(c.skip(in_cell));
   }
   scan_.known = true, scan_.k0 = end;
   return Status::Ok();
@@ -159,6 +164,22 @@ void ModelRegion::add_run(const uint64_t* keys, const std::byte* records, size_t
     std::memcpy(values_[at + i].data(), records + i * record_bytes, bytes);
 }
 
+// Of n records in a row, those meeting the box; false if they number more
+// than room.
+bool ModelRegion::add_meeting(const uint64_t* keys, const std::byte* records, size_t n,
+                              size_t record_bytes, size_t room) {
+  const size_t bytes = std::min(record_bytes, sizeof(ModelValues));
+  const size_t most = keys_.size() + room;
+  for (size_t i = 0; i < n; ++i) {
+    if (!octant_meets_box(octant_from_key(keys[i]), lo_, hi_)) continue;
+    if (keys_.size() == most) return false;
+    keys_.push_back(keys[i]);
+    ModelValues& v = values_.emplace_back();
+    std::memcpy(v.data(), records + i * record_bytes, bytes);
+  }
+  return true;
+}
+
 void ModelRegion::add(uint64_t key, const std::byte* record, size_t record_bytes) {
   keys_.push_back(key);
   ModelValues v{};
@@ -167,9 +188,9 @@ void ModelRegion::add(uint64_t key, const std::byte* record, size_t record_bytes
 }
 
 void ModelRegion::build_raster() {
-  int finest = 0;
-  for (uint64_t k : keys_) finest = std::max(finest, octant_key_level(k));
-  shift_ = kMaxLevel - finest;
+  finest_ = 0;
+  for (uint64_t k : keys_) finest_ = std::max(finest_, octant_key_level(k));
+  shift_ = kMaxLevel - finest_;
   const uint32_t lo[3] = {lo_.x, lo_.y, lo_.z}, hi[3] = {hi_.x, hi_.y, hi_.z};
   for (;; ++shift_) {
     for (int a = 0; a < 3; ++a) {
@@ -188,8 +209,22 @@ void ModelRegion::build_raster() {
   Level& base = pyramid_[0];
   std::copy(dims_, dims_ + 3, base.dims);
   base.ranges.assign(cells, VsRange{0.0f, 0.0f});
+  const int cell_level = kMaxLevel - shift_;
   for (size_t i = 0; i < keys_.size(); ++i) {
     const Octant o = octant_from_key(keys_[i]);
+    if (o.level == cell_level) {
+      // One cell exactly (most octants: the raster's cells are the finest
+      // octants' size wherever the box affords it).  A cell before the
+      // box's wraps round to a large index and is skipped.
+      const uint32_t x = (o.x >> shift_) - base_[0], y = (o.y >> shift_) - base_[1],
+                     z = (o.z >> shift_) - base_[2];
+      if (x >= dims_[0] || y >= dims_[1] || z >= dims_[2]) continue;
+      const size_t c = (size_t{z} * dims_[1] + y) * dims_[0] + x;
+      const float vs = values_[i][1];
+      raster_[c] = static_cast<int32_t>(i);
+      base.ranges[c] = VsRange{vs, vs};
+      continue;
+    }
     const uint32_t corner[3] = {o.x, o.y, o.z};
     const uint32_t last = octant_edge(o) - 1;
     const bool whole_cells = o.level <= kMaxLevel - shift_;
@@ -206,13 +241,13 @@ void ModelRegion::build_raster() {
     const int32_t v = whole_cells ? static_cast<int32_t>(i) : kMixed;
     const float vs = values_[i][1];
     const VsRange range = whole_cells ? VsRange{vs, vs} : VsRange{HUGE_VALF, -HUGE_VALF};
+    const size_t row = to[0] - from[0] + 1;
     for (uint32_t z = from[2]; z <= to[2]; ++z)
-      for (uint32_t y = from[1]; y <= to[1]; ++y)
-        for (uint32_t x = from[0]; x <= to[0]; ++x) {
-          const size_t c = (size_t{z} * dims_[1] + y) * dims_[0] + x;
-          raster_[c] = v;
-          base.ranges[c] = range;
-        }
+      for (uint32_t y = from[1]; y <= to[1]; ++y) {
+        const size_t c = (size_t{z} * dims_[1] + y) * dims_[0] + from[0];
+        std::fill_n(raster_.data() + c, row, v);
+        std::fill_n(base.ranges.data() + c, row, range);
+      }
   }
 }
 
@@ -242,7 +277,10 @@ void ModelRegion::build_bounds() {
     base.ranges[cell].lo = std::min(base.ranges[cell].lo, 0.0f);
     base.ranges[cell].hi = std::max(base.ranges[cell].hi, 0.0f);
   };
-  for (size_t i = 0; i < keys_.size(); ++i) {
+  // No octant finer than a cell (the raster's cells are the finest
+  // octant's size): no mixed cells.
+  const size_t mixed_octants = kMaxLevel - shift_ < finest_ ? keys_.size() : 0;
+  for (size_t i = 0; i < mixed_octants; ++i) {
     const Octant o = octant_from_key(keys_[i]);
     if (o.level <= kMaxLevel - shift_) continue;  // whole cells: ranged in build_raster
     const uint32_t cx = (o.x >> shift_) - base_[0], cy = (o.y >> shift_) - base_[1],
@@ -274,13 +312,14 @@ void ModelRegion::build_bounds() {
     for (int a = 0; a < 3; ++a) up.dims[a] = (fine.dims[a] + 1) / 2;
     up.ranges.assign(size_t{up.dims[0]} * up.dims[1] * up.dims[2], VsRange{HUGE_VALF, -HUGE_VALF});
     for (uint32_t z = 0; z < fine.dims[2]; ++z)
-      for (uint32_t y = 0; y < fine.dims[1]; ++y)
+      for (uint32_t y = 0; y < fine.dims[1]; ++y) {
+        const VsRange* f = &fine.ranges[(size_t{z} * fine.dims[1] + y) * fine.dims[0]];
+        VsRange* u = &up.ranges[(size_t{z / 2} * up.dims[1] + y / 2) * up.dims[0]];
         for (uint32_t x = 0; x < fine.dims[0]; ++x) {
-          const VsRange& f = fine.ranges[(size_t{z} * fine.dims[1] + y) * fine.dims[0] + x];
-          VsRange& u = up.ranges[(size_t{z / 2} * up.dims[1] + y / 2) * up.dims[0] + x / 2];
-          u.lo = std::min(u.lo, f.lo);
-          u.hi = std::max(u.hi, f.hi);
+          u[x / 2].lo = std::min(u[x / 2].lo, f[x].lo);
+          u[x / 2].hi = std::max(u[x / 2].hi, f[x].hi);
         }
+      }
     ++levels_;
   }
 }

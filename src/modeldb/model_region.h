@@ -105,6 +105,8 @@ class ModelRegion {
                    bool* full);
   void add(uint64_t key, const std::byte* record, size_t record_bytes);
   void add_run(const uint64_t* keys, const std::byte* records, size_t n, size_t record_bytes);
+  bool add_meeting(const uint64_t* keys, const std::byte* records, size_t n, size_t record_bytes,
+                   size_t room);
   void build_raster();
   // The cells' Vs bounds (pyramid level 0) and the levels above them.
   void build_bounds();
@@ -121,6 +123,8 @@ class ModelRegion {
   Coord lo_{0, 0, 0}, hi_{0, 0, 0};
   std::vector<uint64_t> keys_;  // sorted, disjoint octants
   std::vector<ModelValues> values_;
+  uint32_t split_edge_ = 1;  // cells larger than this reaching past the box are read as children
+  int finest_ = 0;           // the finest octant's level
   int shift_ = 0;
   uint64_t max_cells_ = kMinCells;
   uint32_t base_[3] = {0, 0, 0};  // lo >> shift_
