@@ -83,6 +83,8 @@ Status DbModel::open(const std::string& dir, MemoryBudget memory, int threads,
   for (int a = 0; a < 3; ++a) {
     const double ticks = std::floor(m->info_.extent_m[a] / m->info_.tick_m + 1e-6);
     m->limit_[a] = static_cast<uint32_t>(std::clamp(ticks - 1, 0.0, double(kRootEdge - 1)));
+    m->origin_[a] = m->info_.origin_m[a];
+    m->inner_top_[a] = m->info_.extent_m[a] == 0 ? 0.0 : double(m->limit_[a]);
   }
   *out = std::move(m);
   return Status::Ok();
@@ -110,7 +112,7 @@ DbModel::Reader& DbModel::reader() const {
 // corrected by one where the product rounded across a whole number: the
 // division and libm's floor (no SSE4.1 in the baseline) were a tenth of
 // construct.
-uint32_t DbModel::pixel_on(int a, double m, bool* clamped) const {
+uint32_t DbModel::pixel_near_edge(int a, double m, bool* clamped) const {
   if (info_.extent_m[a] == 0) return 0;  // the model does not vary along this axis
   const double d = m - info_.origin_m[a];
   const double t = d * inv_tick_;

@@ -7,6 +7,7 @@
 // last focused on (modeldb/model_region.h), which answer without the table.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -73,8 +74,25 @@ class DbModel final : public VelocityModel {
   struct Reader;
   DbModel() = default;
   Reader& reader() const;
-  // The pixel of coordinate m (metres) on axis a, clamped into the model's box.
-  uint32_t pixel_on(int a, double m, bool* clamped) const;
+  // The pixel of coordinate m (metres) on axis a, clamped into the model's
+  // box.  Inline for a point well inside the box (construct asks some 15 a
+  // lattice: out of line, they were a tenth of a construct from a model
+  // database); pixel_near_edge answers the rest.
+  uint32_t pixel_on(int a, double m, bool* clamped) const {
+    const double d = m - origin_[a];
+    const double t = d * inv_tick_;
+    if (!(t >= 1 && t < inner_top_[a])) return pixel_near_edge(a, m, clamped);
+    // floor(d / tick) from the product, corrected by one where it rounded
+    // across a whole number; 1 <= t < limit keeps it in [0, limit].
+    int64_t k = static_cast<int64_t>(t);
+    if (double(k) * info_.tick_m > d) {
+      --k;
+    } else if (double(k + 1) * info_.tick_m <= d) {
+      ++k;
+    }
+    return static_cast<uint32_t>(k);
+  }
+  uint32_t pixel_near_edge(int a, double m, bool* clamped) const;
   // The pixel of (x, y, z) metres, clamped into the box (*clamped says so).
   Coord pixel_of(double x, double y, double z, bool* clamped) const;
   Status find(Reader& r, double x, double y, double z, ModelHit* hit) const;
@@ -93,10 +111,12 @@ class DbModel final : public VelocityModel {
   uint64_t octants_ = 0;
   uint64_t serial_ = 0;  // tells this model's readers from an earlier one's at the same address
   uint64_t pool_bytes_ = 0;
-  size_t region_octants_ = 0;        // the most octants a reader's region holds
-  uint64_t region_cells_ = 0;        // the most cells of a reader's region's raster
-  std::array<uint32_t, 3> limit_{};  // ticks: the last pixel inside the box, per axis
-  double inv_tick_ = 1;              // 1 / info_.tick_m
+  size_t region_octants_ = 0;          // the most octants a reader's region holds
+  uint64_t region_cells_ = 0;          // the most cells of a reader's region's raster
+  std::array<uint32_t, 3> limit_{};    // ticks: the last pixel inside the box, per axis
+  double inv_tick_ = 1;                // 1 / info_.tick_m
+  std::array<double, 3> origin_{};     // info_.origin_m
+  std::array<double, 3> inner_top_{};  // limit_, as a double; 0 where the model is flat
   mutable std::mutex mu_;
   mutable std::unordered_map<std::thread::id, std::unique_ptr<Reader>> readers_;
 };
