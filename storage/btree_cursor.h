@@ -71,6 +71,12 @@ class BTreeCursor final : public Cursor {
     i_ = static_cast<uint32_t>(std::lower_bound(keys_, keys_ + n_, k) - keys_);
     return true;
   }
+  // Keeps up to `bytes` of decoded packed leaves (at least the last one),
+  // by page, for when the cursor comes back to them: a model region's scans
+  // read each leaf of the model table about nine times over, and decoding
+  // it was a tenth of a construct from a model database.  Only for a tree
+  // nobody writes while the cursor lives; 0 keeps none.
+  void keep_decoded(size_t bytes) { kept_budget_ = bytes; }
   // The record before the current one in the leaf it holds: false at the
   // leaf's first record, or when not valid().
   bool before_in_leaf(uint64_t* key, const std::byte** payload) const {
@@ -86,6 +92,9 @@ class BTreeCursor final : public Cursor {
   // Positions on `leaf` at index i, moving on to later leaves if i is past its end.
   Status settle();
   Status load_leaf();
+  // load_leaf from, or into, the kept leaves.
+  Status load_kept();
+  Status decode_leaf(uint64_t* keys, std::byte* vals);
 
   BTree* tree_ = nullptr;
   PageRef leaf_;
@@ -99,6 +108,17 @@ class BTreeCursor final : public Cursor {
   std::vector<std::byte> val_buf_;
   bool valid_ = false;
   bool keys_only_ = false;  // see BTree::seek_keys
+  struct KeptLeaf {
+    const BTree* tree = nullptr;  // a sharded table's leaves are another tree's pages
+    uint32_t page_no = 0;
+    uint64_t used = 0;  // kept_clock_ when last loaded
+    std::vector<uint64_t> keys;
+    std::vector<std::byte> vals;
+  };
+  std::vector<KeptLeaf> kept_;
+  size_t kept_budget_ = 0;
+  size_t kept_bytes_ = 0;
+  uint64_t kept_clock_ = 0;
 };
 
 }  // namespace weaver

@@ -111,6 +111,7 @@ class DbModel final : public VelocityModel {
   uint64_t octants_ = 0;
   uint64_t serial_ = 0;  // tells this model's readers from an earlier one's at the same address
   uint64_t pool_bytes_ = 0;
+  uint64_t kept_leaf_bytes_ = 0;       // a reader's region's scans keep this much decoded
   size_t region_octants_ = 0;          // the most octants a reader's region holds
   uint64_t region_cells_ = 0;          // the most cells of a reader's region's raster
   std::array<uint32_t, 3> limit_{};    // ticks: the last pixel inside the box, per axis

@@ -52,6 +52,7 @@ Status ModelRegion::load(BTree& table, Coord lo, Coord hi, size_t record_bytes,
   if (scan_.table != &table) {
     scan_ = Scan();
     scan_.table = &table;
+    scan_.cursor.keep_decoded(kept_leaf_bytes_);
   }
   const uint32_t side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 1;
   split_edge_ = 1;
