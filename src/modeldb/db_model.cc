@@ -63,8 +63,11 @@ Status DbModel::open(const std::string& dir, MemoryBudget memory, int threads,
   // quarter the leaves its region's scans keep decoded (neighbouring
   // regions read the same leaves: at 1 Hz from the 100 m model database,
   // 128 leaves kept answer 75% of the leaves scanned).
-  m->pool_bytes_ = std::max<uint64_t>(per_reader / 4, 1ull << 20);
-  m->kept_leaf_bytes_ = per_reader / 4;
+  // Under 64 MB a reader, none are kept: its page cache, full there, keeps
+  // the half (a peak RSS within --memory 64M).
+  const bool keep = per_reader >= (64ull << 20);
+  m->pool_bytes_ = std::max<uint64_t>(per_reader / (keep ? 4 : 2), 1ull << 20);
+  m->kept_leaf_bytes_ = keep ? per_reader / 4 : 0;
   // The raster: up to 1M cells where a quarter of the reader's share affords
   // them (construct from the 100 m model database: 0.82x the time of 256K
   // cells at 0.5 Hz on one thread, 0.98x at 1 Hz on two; coarser cells sent
