@@ -62,7 +62,8 @@ Status DbModel::open(const std::string& dir, MemoryBudget memory, int threads,
   // Half the reader's share is its table's: a quarter its page cache, a
   // quarter the leaves its region's scans keep decoded (neighbouring
   // regions read the same leaves: at 1 Hz from the 100 m model database,
-  // 128 leaves kept answer 75% of the leaves scanned).
+  // the leaves one construct read, replayed through 128 kept, found 75%
+  // there).
   // Under 64 MB a reader, none are kept: its page cache, full there, keeps
   // the half (a peak RSS within --memory 64M).
   const bool keep = per_reader >= (64ull << 20);
@@ -133,12 +134,7 @@ uint32_t DbModel::pixel_near_edge(int a, double m, bool* clamped) const {
     *clamped = true;
     return limit_[a];
   }
-  int64_t k = static_cast<int64_t>(t);
-  if (double(k) * info_.tick_m > d) {
-    --k;
-  } else if (double(k + 1) * info_.tick_m <= d) {
-    ++k;
-  }
+  const int64_t k = floor_ticks(d, t);
   if (k < 0 || k > int64_t{limit_[a]}) {
     *clamped = true;
     return k < 0 ? 0 : limit_[a];

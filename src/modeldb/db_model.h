@@ -81,18 +81,22 @@ class DbModel final : public VelocityModel {
   uint32_t pixel_on(int a, double m, bool* clamped) const {
     const double d = m - origin_[a];
     const double t = d * inv_tick_;
+    // 1 <= t < limit keeps floor_ticks in [0, limit].
     if (!(t >= 1 && t < inner_top_[a])) return pixel_near_edge(a, m, clamped);
-    // floor(d / tick) from the product, corrected by one where it rounded
-    // across a whole number; 1 <= t < limit keeps it in [0, limit].
+    return static_cast<uint32_t>(floor_ticks(d, t));
+  }
+  uint32_t pixel_near_edge(int a, double m, bool* clamped) const;
+  // floor(d / tick) from t = d / tick's product: its cast, corrected by one
+  // where the product rounded across a whole number.
+  int64_t floor_ticks(double d, double t) const {
     int64_t k = static_cast<int64_t>(t);
     if (double(k) * info_.tick_m > d) {
       --k;
     } else if (double(k + 1) * info_.tick_m <= d) {
       ++k;
     }
-    return static_cast<uint32_t>(k);
+    return k;
   }
-  uint32_t pixel_near_edge(int a, double m, bool* clamped) const;
   // The pixel of (x, y, z) metres, clamped into the box (*clamped says so).
   Coord pixel_of(double x, double y, double z, bool* clamped) const;
   Status find(Reader& r, double x, double y, double z, ModelHit* hit) const;

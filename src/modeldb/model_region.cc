@@ -83,7 +83,7 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
   found = found && key_holds(floor_key, cell);
   if (found) {
     // Cells inside one octant come one after another in Z-order.
-    if (keys_.empty() || keys_.back() != floor_key) add(floor_key, record, record_bytes);
+    if (keys_.empty() || keys_.back() != floor_key) add_run(&floor_key, record, 1, record_bytes);
     return Status::Ok();
   }
   const bool inside = octant_in_box(cell, lo_, hi_);
@@ -181,13 +181,6 @@ bool ModelRegion::add_meeting(const uint64_t* keys, const std::byte* records, si
   return true;
 }
 
-void ModelRegion::add(uint64_t key, const std::byte* record, size_t record_bytes) {
-  keys_.push_back(key);
-  ModelValues v{};
-  std::memcpy(v.data(), record, std::min(record_bytes, sizeof v));
-  values_.push_back(v);
-}
-
 void ModelRegion::build_raster() {
   finest_ = 0;
   for (uint64_t k : keys_) finest_ = std::max(finest_, octant_key_level(k));
@@ -228,7 +221,7 @@ void ModelRegion::build_raster() {
     }
     const uint32_t corner[3] = {o.x, o.y, o.z};
     const uint32_t last = octant_edge(o) - 1;
-    const bool whole_cells = o.level <= kMaxLevel - shift_;
+    const bool whole_cells = o.level <= cell_level;
     uint32_t from[3], to[3];
     bool meets = true;
     for (int a = 0; a < 3; ++a) {

@@ -106,7 +106,6 @@ class ModelRegion {
   };
   Status scan_cell(BTree& table, const Octant& cell, size_t record_bytes, size_t max_octants,
                    bool* full);
-  void add(uint64_t key, const std::byte* record, size_t record_bytes);
   void add_run(const uint64_t* keys, const std::byte* records, size_t n, size_t record_bytes);
   bool add_meeting(const uint64_t* keys, const std::byte* records, size_t n, size_t record_bytes,
                    size_t room);
