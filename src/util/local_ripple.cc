@@ -223,23 +223,39 @@ void LocalRipple::Lane::take(const Ask* begin, const Ask* end, int l,
   candidates.clear();
   recent.clear();
   bool several = false;  // chunks settled: made is in order within each
+  // Each neighbour is stored past the last candidate and kept by moving the
+  // count, not by a branch: whether the recent keys hold it is a coin toss
+  // to the predictor (its mispredictions were a third of this loop).
+  size_t count = 0;
   for (const Ask* a = begin; a != end; ++a) {
     uint32_t asked = parent_asks::kTouchedBy[a->children];
     // The parent's siblings are there (leaves or inner) when its own
     // parent is inner, as it is above a leaf of the input: only the
     // neighbours outside it are asked about.
     if (!a->created && l >= 2) asked &= kLeavingParent[octant_key_child_id(a->parent)];
+    if (candidates.size() < count + kFaceAndEdgeDirections.size()) {
+      candidates.resize(std::max(2 * candidates.size(), count + 64));
+    }
+    uint64_t* out = candidates.data();
     for (uint32_t bits = asked; bits != 0; bits &= bits - 1) {
       uint64_t nb = 0;
-      if (octant_key_neighbour(a->parent, kFaceAndEdgeDirections[std::countr_zero(bits)], &nb)) {
-        if (!recent.seen(nb)) candidates.push_back(nb);
-      }
+      const bool in_root =
+          octant_key_neighbour(a->parent, kFaceAndEdgeDirections[std::countr_zero(bits)], &nb);
+      // (Outside the root nb is 0, the root's key: no candidate's, whose
+      // level is at least 1, so putting it among the recent keys only
+      // lets a repeat through.)
+      const bool fresh = !recent.seen(nb);
+      out[count] = nb;
+      count += in_root & fresh;
     }
-    if (candidates.size() >= kChunk) {
+    if (count >= kChunk) {
+      candidates.resize(count);
       settle(l - 1, holders);
+      count = 0;
       several = true;
     }
   }
+  candidates.resize(count);
   settle(l - 1, holders);
   if (several) sort_unique(made, l - 1, scratch);
 }

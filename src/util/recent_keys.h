@@ -18,9 +18,9 @@ class RecentKeys {
   // Whether key is in its slot already; else it is put there.
   bool seen(uint64_t key) {
     uint64_t& slot = slots_[(key * 0x9E3779B97F4A7C15ULL) >> (64 - kBits)];
-    if (slot == key) return true;
+    const bool hit = slot == key;  // no branch: callers keep or drop by it
     slot = key;
-    return false;
+    return hit;
   }
 
  private:
