@@ -45,7 +45,8 @@ class VelocityModel {
   }
   // at() at every point (xs[i], ys[j], zs[k]) of an n x n x n lattice, into
   // out[(k * n + j) * n + i], the same to the bit: construct asks it for the
-  // centres of eight sibling leaves (n = 2).  Models override it when the
+  // centres of eight sibling leaves (n = 2), into storage it has not
+  // initialised: each out[] is assigned whole.  Models override it when the
   // points can share work.
   virtual void materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                                     Material* out) const {
