@@ -95,6 +95,28 @@ class VerifyTest : public ::testing::Test {
     return of_kind.empty() ? 0 : of_kind[seed % of_kind.size()];
   }
 
+  // The octant table written again with level counts in its metadata that
+  // put every leaf at level 3 (false).  The node table derived from the
+  // octants is dropped with them.
+  void claim_false_level_counts() {
+    std::unique_ptr<Database> db;
+    ASSERT_OK(Database::open(db_, Database::Mode::kWrite, false, &db));
+    std::unique_ptr<BTree> old_t, t;
+    ASSERT_OK(db->open_table(kOctantTable, 1 << 20, &old_t));
+    TableOptions o = old_t->options();
+    LevelCounts levels{};
+    levels[3] = old_t->size();
+    o.metadata = levels_to_metadata(levels);
+    std::string file;
+    ASSERT_OK(db->create_table(kOctantTable, o, 1 << 20, &t, &file));
+    BTreeCursor c;
+    ASSERT_OK(old_t->seek_cursor(0, &c));
+    Status built;
+    for (; c.valid() && built.ok(); built = c.next()) built = t->append(c.key(), c.payload());
+    if (built.ok()) built = t->commit();
+    ASSERT_OK(db->publish(kOctantTable, file, t, built));
+  }
+
   std::string table_file(const std::string& name) {
     std::unique_ptr<Database> db;
     EXPECT_OK(Database::open(db_, Database::Mode::kRead, false, &db));
@@ -250,24 +272,50 @@ TEST_F(VerifyTest, NamesADamagedPageAndWrongLevelCounts) {
   // Restore the nodes, then claim a wrong level histogram in the octants.
   write_nodes(nodes_);
   ASSERT_TRUE(verify().ok());
-  std::unique_ptr<Database> db;
-  ASSERT_OK(Database::open(db_, Database::Mode::kWrite, false, &db));
-  std::unique_ptr<BTree> old_t, t;
-  ASSERT_OK(db->open_table(kOctantTable, 1 << 20, &old_t));
-  TableOptions o = old_t->options();
-  LevelCounts levels{};
-  levels[3] = old_t->size();  // all at level 3: false
-  o.metadata = levels_to_metadata(levels);
-  std::string file;
-  ASSERT_OK(db->create_table(kOctantTable, o, 1 << 20, &t, &file));
-  BTreeCursor c;
-  ASSERT_OK(old_t->seek_cursor(0, &c));
-  Status built;
-  for (; c.valid() && built.ok(); built = c.next()) built = t->append(c.key(), c.payload());
-  if (built.ok()) built = t->commit();
-  ASSERT_OK(db->publish(kOctantTable, file, t, built));
-  db.reset();
+  ASSERT_NO_FATAL_FAILURE(claim_false_level_counts());
   expect_problem("metadata counts");
+}
+
+// Two tables damaged at once (a node page, the octants' level counts): the
+// tables are checked on several threads, and reported as one thread would,
+// the same problems and lines in the same order.
+TEST_F(VerifyTest, TablesCheckedOnThreadsReportInTableOrder) {
+  ASSERT_NO_FATAL_FAILURE(build(random_balanced(17, 2, 2, 1, 2, 3000, 6)));
+  ASSERT_NO_FATAL_FAILURE(claim_false_level_counts());
+  write_nodes(nodes_);  // (replacing the octants dropped the nodes derived from them)
+  {
+    std::fstream f(table_file(kNodeTable), std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(4096 + 4096 + 100);  // inside the second page after the header
+    f.put('\x5a');
+  }
+  auto run = [&](int threads, std::vector<std::string>* lines) {
+    VerifyReport r;
+    VerifyOptions o;
+    o.memory = MemoryBudget(8 << 20);
+    o.threads = threads;
+    o.progress = [lines](const std::string& line) { lines->push_back(line); };
+    EXPECT_OK(verify_database(db_, o, &r));
+    return r;
+  };
+  std::vector<std::string> one_lines;
+  const VerifyReport one = run(1, &one_lines);
+  bool page = false, counts = false;
+  for (const std::string& p : one.problems) {
+    page = page || p.find("page") != std::string::npos;
+    counts = counts || p.find("metadata counts") != std::string::npos;
+  }
+  EXPECT_TRUE(page && counts) << (one.problems.empty() ? "no problem" : one.problems[0]);
+  ASSERT_GE(one.problems.size(), 2u);
+  ASSERT_FALSE(one_lines.empty());  // the damaged table has no line: its problem says it
+  for (int threads : {2, 3}) {
+    std::vector<std::string> lines;
+    const VerifyReport r = run(threads, &lines);
+    EXPECT_EQ(r.problems, one.problems) << threads;
+    EXPECT_EQ(lines, one_lines) << threads;
+    EXPECT_EQ(r.tables, one.tables);
+    EXPECT_EQ(r.records, one.records);
+    EXPECT_EQ(r.pages, one.pages);
+  }
 }
 
 TEST_F(VerifyTest, CommandExitStatus) {
