@@ -34,8 +34,9 @@ constexpr char kUsage[] =
     "  --memory BYTES   memory budget (default 256M): the table caches, and half\n"
     "                   for the balance check's out-of-core sort, then the nodes\n"
     "                   derived again\n"
-    "  --threads N      threads for the node check (default: the number of\n"
-    "                   cores); the same report for every N\n"
+    "  --threads N      threads for the storage check (a table each at a time),\n"
+    "                   the boundary check and the node check (default: the\n"
+    "                   number of cores); the same report for every N\n"
     "  --quiet          no progress line on stderr for the mesh check (default: nodes\n"
     "                   checked of the node table, updated on a terminal, every 10 s\n"
     "                   otherwise); the line per finished check is always printed\n";

@@ -30,7 +30,7 @@ struct VerifyOptions {
   MemoryBudget memory;
   bool mesh = true;          // also check the mesh invariants
   size_t max_problems = 20;  // stop collecting after this many
-  int threads = 1;           // the node check's threads (the same report for any count)
+  int threads = 1;  // for the storage, boundary and node checks (the same report on any count)
   // Classify every node again from the leaves around it (8 lookups a node),
   // independently of the extractor's code, rather than compare the table
   // with the nodes the extractor's bucket sort derives again.
