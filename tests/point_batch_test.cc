@@ -20,14 +20,17 @@ namespace weaver {
 namespace {
 
 // The rows of a batch of `points` (text lines), with `helpers` helpers and
-// `batch_points` at a time (0: the Explorer's).
+// `batch_points` at a time (0: the Explorer's); with `errors`, what it said
+// of the lines that are no points.
 std::string rows_of(Explorer& ex, const std::vector<Explorer*>& helpers, const std::string& points,
-                    cli::OutputMode mode, size_t batch_points) {
+                    cli::OutputMode mode, size_t batch_points, std::string* errors = nullptr) {
   char* out = nullptr;
   size_t out_size = 0;
   std::FILE* o = open_memstream(&out, &out_size);
   std::FILE* in = fmemopen(const_cast<char*>(points.data()), points.size(), "r");
-  std::FILE* err = std::fopen("/dev/null", "w");
+  char* said = nullptr;
+  size_t said_size = 0;
+  std::FILE* err = open_memstream(&said, &said_size);
   cli::PointBatchOptions opt;
   opt.mode = mode;
   opt.helpers = helpers;
@@ -39,6 +42,8 @@ std::string rows_of(Explorer& ex, const std::vector<Explorer*>& helpers, const s
   std::fclose(o);
   std::string text(out, out_size);
   std::free(out);
+  if (errors != nullptr) *errors = std::string(said, said_size);
+  std::free(said);
   return text;
 }
 
@@ -64,8 +69,19 @@ TEST(PointBatchThreads, HelpersAndLanesWriteWhatOneThreadWrites) {
                   : std::to_string(o.x + rng() % e) + " " + std::to_string(o.y + rng() % e) + " " +
                         std::to_string(o.z + rng() % e) + "\n";
   }
+  // The lines that are no points are named in input order, each with its
+  // number, alone and with a helper.
+  std::string expected_errors;
+  for (int i = 0; i < 60000; i += 997) {
+    expected_errors += "points:" + std::to_string(i + 1) +
+                       ": 'not' is not a whole number of ticks (0 to 4294967294)\n";
+  }
   for (const cli::OutputMode mode : {cli::OutputMode::kJson, cli::OutputMode::kCsv}) {
-    const std::string alone = rows_of(*ex, {}, points, mode, 0);
+    std::string errors;
+    const std::string alone = rows_of(*ex, {}, points, mode, 0, &errors);
+    EXPECT_EQ(errors, expected_errors);
+    rows_of(*ex, {helper.get()}, points, mode, 0, &errors);
+    EXPECT_EQ(errors, expected_errors);
     ASSERT_GT(alone.size(), points.size());
     // Inside but for the far corner's (a share left unanswered would show).
     const auto count = [&](const std::string& word) {
