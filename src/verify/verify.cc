@@ -145,10 +145,7 @@ Status check_tables(const Database& db, const std::vector<std::string>& names, u
                     const VerifyOptions& o, Problems& problems, VerifyReport* r,
                     std::vector<bool>* usable) {
   std::vector<TableCheck> checks(names.size());
-  const int threads = static_cast<int>(
-      std::clamp<size_t>(size_t(std::max(1, o.threads)), 1, std::max<size_t>(1, names.size())));
-  VerifyOptions quiet = o;
-  quiet.progress = nullptr;
+  const int threads = std::max(1, std::min(o.threads, static_cast<int>(names.size())));
   usable->assign(names.size(), false);
   std::mutex mu;  // over `reported` and what is reported
   size_t next = 0, reported = 0;
@@ -175,7 +172,7 @@ Status check_tables(const Database& db, const std::vector<std::string>& names, u
         i = next++;
       }
       TableCheck& c = checks[i];
-      Problems found(quiet, &c.report);
+      Problems found(o, &c.report);  // (check_table hands its line back, never prints it)
       c.status =
           check_table(db, names[i], pool_bytes / threads, found, &c.report, &c.usable, &c.line);
       std::lock_guard<std::mutex> lock(mu);
