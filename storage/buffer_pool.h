@@ -112,6 +112,8 @@ class BufferPool {
   File* file_;
   uint32_t page_size_;
   static constexpr size_t kChunkBytes = size_t{2} << 20;
+  // Chunks given 4 KiB pages before the pool asks for huge ones (allocate_chunk).
+  static constexpr size_t kPlainChunks = 2;
   std::vector<AlignedBytes> chunks_;  // the frames' pages, 2^chunk_shift_ frames a chunk
   int chunk_shift_ = 0;
   AlignedBytes staging_{nullptr, AlignedArrayDelete{64}};  // kMaxWriteRun pages, coalesced writes
