@@ -179,6 +179,32 @@ TEST(ModelRegion, PastItsCapTheRegionStaysUnloaded) {
   EXPECT_EQ(r.octants(), octants.size());
 }
 
+// The cap holds exactly, also where the box's cells each lie inside one
+// model octant (found by a floor, not a scan): eight octants of level 1
+// under cells of level 2 load with a cap of 8 and not with 7 (the region
+// makes room for the cap once and never grows past it).
+TEST(ModelRegion, TheCapHoldsForOctantsLargerThanTheCells) {
+  std::vector<ModelOctant> octants;
+  for (int k = 0; k < 8; ++k) {
+    const float vs = 500.0f + 100.0f * float(k);
+    octants.push_back({octant_child(octant_root(), k), ModelValues{2 * vs, vs, 2000, 0, 0}});
+  }
+  const std::string dir = write_model("cap_floors", octants);
+  std::unique_ptr<Database> db;
+  ASSERT_TRUE(Database::open(dir, Database::Mode::kRead, false, &db).ok());
+  std::unique_ptr<BTree> t;
+  ASSERT_TRUE(db->open_table(kModelTable, 8 << 20, &t).ok());
+  ModelRegion r;
+  const Coord all{kRootEdge - 1, kRootEdge - 1, kRootEdge - 1};
+  ASSERT_TRUE(r.load(*t, {0, 0, 0}, all, 12, 7).ok());
+  EXPECT_FALSE(r.loaded());
+  ASSERT_TRUE(r.load(*t, {0, 0, 0}, all, 12, 8).ok());
+  ASSERT_TRUE(r.loaded());
+  EXPECT_EQ(r.octants(), 8u);
+  const Coord far{kRootEdge - 1, kRootEdge - 1, kRootEdge - 1};
+  EXPECT_EQ(r.values(r.find(far))[1], 1200.0f);
+}
+
 // weaver verify knows a model table: its octants disjoint (as every octant
 // table) and its values in range, naming the first octant out of range.
 TEST(ModelRegion, VerifyChecksAModelTablesValues) {

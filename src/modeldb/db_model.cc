@@ -78,12 +78,16 @@ Status DbModel::open(const std::string& dir, MemoryBudget memory, int threads,
          2 * m->region_cells_ * ModelRegion::kBytesPerCell <= per_reader / 4) {
     m->region_cells_ *= 2;
   }
-  // A region octant takes its key and values twice over at most (vectors
-  // grow by doubling); the octants seen outside it about 220 KiB.
+  // A region octant takes its key and values (the region makes room for
+  // region_octants_ of them once, and never grows past); the octants seen
+  // outside it about 220 KiB.  (Counted twice over, as vectors growing by
+  // doubling would hold, the regions of a 0.5 Hz construct from the 100 m
+  // model database on two threads at the default --memory did not fit:
+  // every point of those subtrees then searched the table, 2.0x the time.)
   const uint64_t fixed =
       m->region_cells_ * ModelRegion::kBytesPerCell + Reader::kSeen * sizeof(Reader::Found);
   const uint64_t region_bytes = per_reader / 2 > fixed + (1ull << 20) ? per_reader / 2 - fixed : 0;
-  m->region_octants_ = std::max<size_t>(region_bytes / (2 * (8 + sizeof(ModelValues))), 4096);
+  m->region_octants_ = std::max<size_t>(region_bytes / (8 + sizeof(ModelValues)), 4096);
   std::unique_ptr<BTree> t;
   WEAVER_RETURN_IF_ERROR(m->db_->open_table(kModelTable, m->pool_bytes_, &t));
   model_info_from_metadata(t->options().metadata, &m->info_);

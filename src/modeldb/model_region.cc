@@ -54,6 +54,10 @@ Status ModelRegion::load(BTree& table, Coord lo, Coord hi, size_t record_bytes,
     scan_.table = &table;
     scan_.cursor.keep_decoded(kept_leaf_bytes_);
   }
+  // Room for the most octants a region holds, made once: the vectors never
+  // grow (and so never hold twice what they use while they copy).
+  keys_.reserve(max_octants);
+  values_.reserve(max_octants);
   const uint32_t side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) + 1;
   split_edge_ = 1;
   while (uint64_t{split_edge_} * 16 < side) split_edge_ *= 2;
@@ -83,7 +87,13 @@ Status ModelRegion::scan_cell(BTree& table, const Octant& cell, size_t record_by
   found = found && key_holds(floor_key, cell);
   if (found) {
     // Cells inside one octant come one after another in Z-order.
-    if (keys_.empty() || keys_.back() != floor_key) add_run(&floor_key, record, 1, record_bytes);
+    if (keys_.empty() || keys_.back() != floor_key) {
+      if (keys_.size() == max_octants) {
+        *full = true;
+        return Status::Ok();
+      }
+      add_run(&floor_key, record, 1, record_bytes);
+    }
     return Status::Ok();
   }
   const bool inside = octant_in_box(cell, lo_, hi_);
