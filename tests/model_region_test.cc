@@ -159,24 +159,35 @@ TEST(ModelRegion, AnswersEveryPixelAsALinearSearchDoes) {
   }
 }
 
+// A model table opened for reading, and a region over the whole root
+// loaded from it (the region last: it goes before the table it read).
+struct WholeRoot {
+  std::unique_ptr<Database> db;
+  std::unique_ptr<BTree> table;
+  ModelRegion region;
+  void open(const std::string& dir) {
+    ASSERT_TRUE(Database::open(dir, Database::Mode::kRead, false, &db).ok());
+    ASSERT_TRUE(db->open_table(kModelTable, 8 << 20, &table).ok());
+  }
+  Status load(size_t cap) {
+    const Coord all{kRootEdge - 1, kRootEdge - 1, kRootEdge - 1};
+    return region.load(*table, {0, 0, 0}, all, 12, cap);
+  }
+};
+
 TEST(ModelRegion, PastItsCapTheRegionStaysUnloaded) {
   std::mt19937_64 rng(9);
   std::vector<ModelOctant> octants;
   grow(octant_root(), 4, {0, 0, 0}, rng, 1000000, &octants);
   ASSERT_GT(octants.size(), 64u);
-  const std::string dir = write_model("cap", octants);
-  std::unique_ptr<Database> db;
-  ASSERT_TRUE(Database::open(dir, Database::Mode::kRead, false, &db).ok());
-  std::unique_ptr<BTree> t;
-  ASSERT_TRUE(db->open_table(kModelTable, 8 << 20, &t).ok());
-  ModelRegion r;
-  const Coord all{kRootEdge - 1, kRootEdge - 1, kRootEdge - 1};
-  ASSERT_TRUE(r.load(*t, {0, 0, 0}, all, 12, 64).ok());
-  EXPECT_FALSE(r.loaded());
-  EXPECT_FALSE(r.covers({0, 0, 0}));
-  ASSERT_TRUE(r.load(*t, {0, 0, 0}, all, 12, octants.size()).ok());
-  EXPECT_TRUE(r.loaded());
-  EXPECT_EQ(r.octants(), octants.size());
+  WholeRoot w;
+  ASSERT_NO_FATAL_FAILURE(w.open(write_model("cap", octants)));
+  ASSERT_TRUE(w.load(64).ok());
+  EXPECT_FALSE(w.region.loaded());
+  EXPECT_FALSE(w.region.covers({0, 0, 0}));
+  ASSERT_TRUE(w.load(octants.size()).ok());
+  EXPECT_TRUE(w.region.loaded());
+  EXPECT_EQ(w.region.octants(), octants.size());
 }
 
 // The cap holds exactly, also where the box's cells each lie inside one
@@ -189,20 +200,15 @@ TEST(ModelRegion, TheCapHoldsForOctantsLargerThanTheCells) {
     const float vs = 500.0f + 100.0f * float(k);
     octants.push_back({octant_child(octant_root(), k), ModelValues{2 * vs, vs, 2000, 0, 0}});
   }
-  const std::string dir = write_model("cap_floors", octants);
-  std::unique_ptr<Database> db;
-  ASSERT_TRUE(Database::open(dir, Database::Mode::kRead, false, &db).ok());
-  std::unique_ptr<BTree> t;
-  ASSERT_TRUE(db->open_table(kModelTable, 8 << 20, &t).ok());
-  ModelRegion r;
-  const Coord all{kRootEdge - 1, kRootEdge - 1, kRootEdge - 1};
-  ASSERT_TRUE(r.load(*t, {0, 0, 0}, all, 12, 7).ok());
-  EXPECT_FALSE(r.loaded());
-  ASSERT_TRUE(r.load(*t, {0, 0, 0}, all, 12, 8).ok());
-  ASSERT_TRUE(r.loaded());
-  EXPECT_EQ(r.octants(), 8u);
+  WholeRoot w;
+  ASSERT_NO_FATAL_FAILURE(w.open(write_model("cap_floors", octants)));
+  ASSERT_TRUE(w.load(7).ok());
+  EXPECT_FALSE(w.region.loaded());
+  ASSERT_TRUE(w.load(8).ok());
+  ASSERT_TRUE(w.region.loaded());
+  EXPECT_EQ(w.region.octants(), 8u);
   const Coord far{kRootEdge - 1, kRootEdge - 1, kRootEdge - 1};
-  EXPECT_EQ(r.values(r.find(far))[1], 1200.0f);
+  EXPECT_EQ(w.region.values(w.region.find(far))[1], 1200.0f);
 }
 
 // weaver verify knows a model table: its octants disjoint (as every octant
