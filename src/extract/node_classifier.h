@@ -101,7 +101,10 @@ class NodeClassifier {
     uint32_t count = 0;
     uint64_t keys[64];
   };
-  static constexpr int kTableBlocks = 4;
+  // 16: random 1M's extract decodes 12.3K blocks against 17.3K with 4
+  // (1.577G instructions against 1.590G); 32 and 64 cost more to search
+  // than they save.
+  static constexpr int kTableBlocks = 16;
   TableBlock table_blocks_[kTableBlocks];
   int next_table_block_ = 0;  // the one replaced next
   // The leaf leaf_at found last in each direction (the octree does not
