@@ -164,7 +164,6 @@ Status ModelRegion::Scan::floor(BTree& t, uint64_t k, uint64_t* key, std::byte* 
   return Status::Ok();
 }
 
-// n records in a row (keys, and their records record_bytes apart).
 namespace {
 
 // Record i's fields (its first min(record_bytes, 20) bytes) into out, which
@@ -185,6 +184,7 @@ void copy_record(const std::byte* records, size_t i, size_t record_bytes, ModelV
 
 }  // namespace
 
+// n records in a row (keys, and their records record_bytes apart).
 void ModelRegion::add_run(const uint64_t* keys, const std::byte* records, size_t n,
                           size_t record_bytes) {
   keys_.insert(keys_.end(), keys, keys + n);
