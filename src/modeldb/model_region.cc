@@ -32,11 +32,12 @@ std::vector<Octant> covering_cells(Coord lo, Coord hi) {
 
 }  // namespace
 
+// The raster keeps its cells (unread while nothing is loaded): a load that
+// writes every cell need not fill them first (build_raster).
 void ModelRegion::clear() {
   loaded_ = false;
   keys_.clear();
   values_.clear();
-  raster_.clear();
 }
 
 Status ModelRegion::load(BTree& table, Coord lo, Coord hi, size_t record_bytes,
@@ -220,16 +221,33 @@ void ModelRegion::build_raster() {
     if (uint64_t{dims_[0]} * dims_[1] * dims_[2] <= max_cells_) break;
   }
   const size_t cells = size_t{dims_[0]} * dims_[1] * dims_[2];
-  raster_.assign(cells, kHole);
-  // The cells' Vs ranges (the pyramid's level 0) as the raster is filled,
-  // octant by octant: a pass over the cells after it read each octant's
-  // values in the raster's order, a cache miss a cell.  A hole is Vs 0; a
-  // mixed cell's range is found in build_bounds.
   if (pyramid_.empty()) pyramid_.emplace_back();
   Level& base = pyramid_[0];
   std::copy(dims_, dims_ + 3, base.dims);
-  base.ranges.assign(cells, VsRange{0.0f, 0.0f});
+  // The octants of most loads cover every cell of the box (a model has no
+  // holes, and the box lies inside it): the cells are written as they are,
+  // without marking them holes first (that fill was a twentieth of a
+  // load), and only where some cell was left are they filled and written
+  // again.
+  raster_.resize(cells);
+  base.ranges.resize(cells);
+  if (fill_cells() != cells) {
+    raster_.assign(cells, kHole);
+    base.ranges.assign(cells, VsRange{0.0f, 0.0f});
+    fill_cells();
+  }
+}
+
+// The cells' Vs ranges (the pyramid's level 0) as the raster is filled,
+// octant by octant: a pass over the cells after it read each octant's
+// values in the raster's order, a cache miss a cell.  A hole is Vs 0; a
+// mixed cell's range is found in build_bounds.  The octants are disjoint,
+// and those of a mixed cell come one after another (a cell is an aligned
+// block of the key order), so each cell counted is counted once.
+size_t ModelRegion::fill_cells() {
+  Level& base = pyramid_[0];
   const int cell_level = kMaxLevel - shift_;
+  size_t written = 0, mixed_cell = SIZE_MAX;
   for (size_t i = 0; i < keys_.size(); ++i) {
     const Octant o = octant_from_key(keys_[i]);
     if (o.level == cell_level) {
@@ -243,6 +261,7 @@ void ModelRegion::build_raster() {
       const float vs = values_[i][1];
       raster_[c] = static_cast<int32_t>(i);
       base.ranges[c] = VsRange{vs, vs};
+      ++written;
       continue;
     }
     const uint32_t corner[3] = {o.x, o.y, o.z};
@@ -267,8 +286,15 @@ void ModelRegion::build_raster() {
         const size_t c = (size_t{z} * dims_[1] + y) * dims_[0] + from[0];
         std::fill_n(raster_.data() + c, row, v);
         std::fill_n(base.ranges.data() + c, row, range);
+        if (whole_cells) {
+          written += row;
+        } else if (c != mixed_cell) {
+          mixed_cell = c;
+          ++written;
+        }
       }
   }
+  return written;
 }
 
 void ModelRegion::build_bounds() {
@@ -335,7 +361,14 @@ void ModelRegion::build_bounds() {
       for (uint32_t y = 0; y < fine.dims[1]; ++y) {
         const VsRange* f = &fine.ranges[(size_t{z} * fine.dims[1] + y) * fine.dims[0]];
         VsRange* u = &up.ranges[(size_t{z / 2} * up.dims[1] + y / 2) * up.dims[0]];
-        for (uint32_t x = 0; x < fine.dims[0]; ++x) {
+        // Two fine cells an up cell: one update of it, not two.
+        uint32_t x = 0;
+        for (; x + 1 < fine.dims[0]; x += 2) {
+          VsRange& t = u[x / 2];
+          t.lo = std::min(t.lo, std::min(f[x].lo, f[x + 1].lo));
+          t.hi = std::max(t.hi, std::max(f[x].hi, f[x + 1].hi));
+        }
+        if (x < fine.dims[0]) {
           u[x / 2].lo = std::min(u[x / 2].lo, f[x].lo);
           u[x / 2].hi = std::max(u[x / 2].hi, f[x].hi);
         }

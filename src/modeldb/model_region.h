@@ -110,6 +110,9 @@ class ModelRegion {
   bool add_meeting(const uint64_t* keys, const std::byte* records, size_t n, size_t record_bytes,
                    size_t room);
   void build_raster();
+  // Writes the loaded octants into the raster and their cells' Vs ranges;
+  // the cells written.
+  size_t fill_cells();
   // The cells' Vs bounds (pyramid level 0) and the levels above them.
   void build_bounds();
   // The Vs bounds of cell (x, y, z) of pyramid level p.
