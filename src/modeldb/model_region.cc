@@ -245,55 +245,71 @@ void ModelRegion::build_raster() {
 // and those of a mixed cell come one after another (a cell is an aligned
 // block of the key order), so each cell counted is counted once.
 size_t ModelRegion::fill_cells() {
-  Level& base = pyramid_[0];
-  const int cell_level = kMaxLevel - shift_;
+  // The members the loop reads, as locals: the stores to the cells could
+  // alias them otherwise, and each octant would load them again.
+  const int shift = shift_, cell_level = kMaxLevel - shift;
+  const uint32_t base[3] = {base_[0], base_[1], base_[2]};
+  const uint32_t dims[3] = {dims_[0], dims_[1], dims_[2]};
+  const uint64_t* keys = keys_.data();
+  const ModelValues* values = values_.data();
+  int32_t* raster = raster_.data();
+  VsRange* ranges = pyramid_[0].ranges.data();
+  const size_t n = keys_.size();
   size_t written = 0, mixed_cell = SIZE_MAX;
-  for (size_t i = 0; i < keys_.size(); ++i) {
-    const Octant o = octant_from_key(keys_[i]);
-    if (o.level == cell_level) {
-      // One cell exactly (most octants: the raster's cells are the finest
-      // octants' size wherever the box affords it).  A cell before the
-      // box's wraps round to a large index and is skipped.
-      const uint32_t x = (o.x >> shift_) - base_[0], y = (o.y >> shift_) - base_[1],
-                     z = (o.z >> shift_) - base_[2];
-      if (x >= dims_[0] || y >= dims_[1] || z >= dims_[2]) continue;
-      const size_t c = (size_t{z} * dims_[1] + y) * dims_[0] + x;
-      const float vs = values_[i][1];
-      raster_[c] = static_cast<int32_t>(i);
-      base.ranges[c] = VsRange{vs, vs};
-      ++written;
+  for (size_t i = 0; i < n; ++i) {
+    if (octant_key_level(keys[i]) != cell_level) {
+      written += fill_octant_cells(i, &mixed_cell);
       continue;
     }
-    const uint32_t corner[3] = {o.x, o.y, o.z};
-    const uint32_t last = octant_edge(o) - 1;
-    const bool whole_cells = o.level <= cell_level;
-    uint32_t from[3], to[3];
-    bool meets = true;
-    for (int a = 0; a < 3; ++a) {
-      const int64_t f = int64_t(corner[a] >> shift_) - base_[a];
-      const int64_t t = int64_t((corner[a] + last) >> shift_) - base_[a];
-      from[a] = static_cast<uint32_t>(std::max<int64_t>(f, 0));
-      to[a] = static_cast<uint32_t>(std::min<int64_t>(t, dims_[a] - 1));
-      meets = meets && t >= 0 && f < dims_[a];
-    }
-    if (!meets) continue;
-    const int32_t v = whole_cells ? static_cast<int32_t>(i) : kMixed;
-    const float vs = values_[i][1];
-    const VsRange range = whole_cells ? VsRange{vs, vs} : VsRange{HUGE_VALF, -HUGE_VALF};
-    const size_t row = to[0] - from[0] + 1;
-    for (uint32_t z = from[2]; z <= to[2]; ++z)
-      for (uint32_t y = from[1]; y <= to[1]; ++y) {
-        const size_t c = (size_t{z} * dims_[1] + y) * dims_[0] + from[0];
-        std::fill_n(raster_.data() + c, row, v);
-        std::fill_n(base.ranges.data() + c, row, range);
-        if (whole_cells) {
-          written += row;
-        } else if (c != mixed_cell) {
-          mixed_cell = c;
-          ++written;
-        }
-      }
+    // One cell exactly (most octants: the raster's cells are the finest
+    // octants' size wherever the box affords it).  A cell before the
+    // box's wraps round to a large index and is skipped.
+    const Coord p = morton_decode(octant_key_morton(keys[i]));
+    const uint32_t x = (p.x >> shift) - base[0], y = (p.y >> shift) - base[1],
+                   z = (p.z >> shift) - base[2];
+    if (x >= dims[0] || y >= dims[1] || z >= dims[2]) continue;
+    const size_t c = (size_t{z} * dims[1] + y) * dims[0] + x;
+    const float vs = values[i][1];
+    raster[c] = static_cast<int32_t>(i);
+    ranges[c] = VsRange{vs, vs};
+    ++written;
   }
+  return written;
+}
+
+// Octant i, larger or smaller than a cell, into the cells it meets: the
+// cells written (a mixed cell once: *mixed_cell is the last one counted).
+size_t ModelRegion::fill_octant_cells(size_t i, size_t* mixed_cell) {
+  const Octant o = octant_from_key(keys_[i]);
+  const int cell_level = kMaxLevel - shift_;
+  const uint32_t corner[3] = {o.x, o.y, o.z};
+  const uint32_t last = octant_edge(o) - 1;
+  const bool whole_cells = o.level <= cell_level;
+  uint32_t from[3], to[3];
+  for (int a = 0; a < 3; ++a) {
+    const int64_t f = int64_t(corner[a] >> shift_) - base_[a];
+    const int64_t t = int64_t((corner[a] + last) >> shift_) - base_[a];
+    if (t < 0 || f >= dims_[a]) return 0;
+    from[a] = static_cast<uint32_t>(std::max<int64_t>(f, 0));
+    to[a] = static_cast<uint32_t>(std::min<int64_t>(t, dims_[a] - 1));
+  }
+  const int32_t v = whole_cells ? static_cast<int32_t>(i) : kMixed;
+  const float vs = values_[i][1];
+  const VsRange range = whole_cells ? VsRange{vs, vs} : VsRange{HUGE_VALF, -HUGE_VALF};
+  const size_t row = to[0] - from[0] + 1;
+  size_t written = 0;
+  for (uint32_t z = from[2]; z <= to[2]; ++z)
+    for (uint32_t y = from[1]; y <= to[1]; ++y) {
+      const size_t c = (size_t{z} * dims_[1] + y) * dims_[0] + from[0];
+      std::fill_n(raster_.data() + c, row, v);
+      std::fill_n(pyramid_[0].ranges.data() + c, row, range);
+      if (whole_cells) {
+        written += row;
+      } else if (c != *mixed_cell) {
+        *mixed_cell = c;
+        ++written;
+      }
+    }
   return written;
 }
 

@@ -113,6 +113,7 @@ class ModelRegion {
   // Writes the loaded octants into the raster and their cells' Vs ranges;
   // the cells written.
   size_t fill_cells();
+  size_t fill_octant_cells(size_t i, size_t* mixed_cell);
   // The cells' Vs bounds (pyramid level 0) and the levels above them.
   void build_bounds();
   // The Vs bounds of cell (x, y, z) of pyramid level p.
