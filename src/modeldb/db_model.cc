@@ -83,7 +83,7 @@ Status DbModel::open(const std::string& dir, MemoryBudget memory, int threads,
   // outside it about 220 KiB.  (Counted twice over, as vectors growing by
   // doubling would hold, the regions of a 0.5 Hz construct from the 100 m
   // model database on two threads at the default --memory did not fit:
-  // every point of those subtrees then searched the table, 2.0x the time.)
+  // every point of those subtrees then searched the table: 2.1x the time.)
   const uint64_t fixed =
       m->region_cells_ * ModelRegion::kBytesPerCell + Reader::kSeen * sizeof(Reader::Found);
   const uint64_t region_bytes = per_reader / 2 > fixed + (1ull << 20) ? per_reader / 2 - fixed : 0;

@@ -7,7 +7,6 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
-#include <mutex>
 
 #include "balance/balance.h"
 #include "boundary/boundary.h"
@@ -23,6 +22,7 @@
 #include "modeldb/model_table.h"
 #include "query/aggregates.h"
 #include "storage/btree.h"
+#include "util/ordered_run.h"
 #include "util/parallel.h"
 #include "verify/mesh_check.h"
 
@@ -128,60 +128,53 @@ Status check_table(const Database& db, const std::string& name, uint64_t pool_by
 
 // One table's storage check, made apart from the others'.
 struct TableCheck {
+  size_t table = 0;     // its index in the names
   VerifyReport report;  // its counts and problems
   std::string line;     // its progress line
   bool usable = false;
-  bool done = false;
   Status status;
 };
 
 // Every table's storage check, on up to o.threads threads (a table each at
 // a time, the pool's share cut between them: one read the tables of the
-// 1 Hz mesh in 3.4 s, a third of verify).  Each is reported once it and
-// those before it are done, in table order, as one thread would: the same
-// problems, lines and counts on any count.  *usable[i]: whether table i
-// can serve the mesh checks.
+// 1 Hz mesh in 3.4 s, a third of verify), reported in table order as one
+// thread would (util/ordered_run.h): the same problems, lines and counts on
+// any count.  A table whose check failed (an I/O error) ends the report, as
+// it ended one thread's loop.  *usable[i]: whether table i can serve the
+// mesh checks.
 Status check_tables(const Database& db, const std::vector<std::string>& names, uint64_t pool_bytes,
                     const VerifyOptions& o, Problems& problems, VerifyReport* r,
                     std::vector<bool>* usable) {
-  std::vector<TableCheck> checks(names.size());
   const int threads = std::max(1, std::min(o.threads, static_cast<int>(names.size())));
   usable->assign(names.size(), false);
-  std::mutex mu;  // over `reported` and what is reported
-  size_t next = 0, reported = 0;
-  auto report_done = [&] {  // REQUIRES: mu held
-    // A table whose check failed (an I/O error, returned once all are
-    // done) ends the report, as it ended one thread's loop.
-    for (; reported < checks.size() && checks[reported].done && checks[reported].status.ok();
-         ++reported) {
-      TableCheck& c = checks[reported];
-      for (std::string& p : c.report.problems) problems.add(std::move(p));
-      r->tables += c.report.tables;
-      r->records += c.report.records;
-      r->pages += c.report.pages;
-      (*usable)[reported] = c.usable;
-      if (!c.line.empty()) problems.progress(c.line);
-    }
+  size_t next = 0;
+  Status st;
+  auto make = [&](TableCheck* c) {
+    if (next == names.size()) return false;
+    *c = TableCheck{};
+    c->table = next++;
+    return true;
   };
-  WEAVER_RETURN_IF_ERROR(run_shares(threads, [&](int) {
-    while (true) {
-      size_t i = 0;
-      {
-        std::lock_guard<std::mutex> lock(mu);
-        if (next == names.size()) return Status::Ok();
-        i = next++;
-      }
-      TableCheck& c = checks[i];
-      Problems found(o, &c.report);  // (check_table hands its line back, never prints it)
-      c.status =
-          check_table(db, names[i], pool_bytes / threads, found, &c.report, &c.usable, &c.line);
-      std::lock_guard<std::mutex> lock(mu);
-      c.done = true;
-      report_done();
-    }
-  }));
-  for (const TableCheck& c : checks) WEAVER_RETURN_IF_ERROR(c.status);
-  return Status::Ok();
+  auto work = [&](int, TableCheck* c) {
+    Problems found(o, &c->report);  // (check_table hands its line back, never prints it)
+    c->status = check_table(db, names[c->table], pool_bytes / threads, found, &c->report,
+                            &c->usable, &c->line);
+  };
+  auto write = [&](TableCheck* c) {
+    st = c->status;
+    if (!st.ok()) return false;
+    for (std::string& p : c->report.problems) problems.add(std::move(p));
+    r->tables += c->report.tables;
+    r->records += c->report.records;
+    r->pages += c->report.pages;
+    (*usable)[c->table] = c->usable;
+    if (!c->line.empty()) problems.progress(c->line);
+    return true;
+  };
+  // Every table may be in flight at once (a few): a large one then holds up
+  // only the report, not the checks of those after it.
+  OrderedRun<TableCheck>(std::max<size_t>(names.size(), 1), make, work, write).go(threads);
+  return st;
 }
 
 // One thread's share of the node check: table handles of its own (a B+tree
