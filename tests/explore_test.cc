@@ -299,5 +299,44 @@ TEST(Explore, ElementsAndNodesByIdMatchTheReferenceMesh) {
   EXPECT_TRUE(ex->node(ref.nodes.size(), &n).is_invalid_argument());
 }
 
+// Random points spread over a table of a few hundred leaf pages, about one
+// to a page, sorted: the batch is shown sparse by its first window (64 points)
+// and asks the rest key by key, so it decodes no more than that window's
+// pages (a first window of 1024 decoded nearly every page here), and its
+// answers are those of one question a point.
+TEST(Explore, ASparseBatchDecodesOnlyItsFirstWindowsPages) {
+  GenOptions g;
+  g.seed = 5;
+  g.leaves = testing::scaled(200000, 100000);
+  g.max_level = 12;
+  std::vector<Octant> leaves;
+  ASSERT_OK(generate_octree(g, &leaves));
+  testing::TempDir dir;
+  // Plain pages (about 500 keys each): hundreds of pages from few leaves.
+  ImportOptions io;
+  io.packed = false;
+  ImportResult ir;
+  ASSERT_OK(write_octant_text(dir.file("o.txt"), leaves, ""));
+  ASSERT_OK(import_octants(dir.file("db"), dir.file("o.txt"), io, &ir));
+  auto ex = open(dir.file("db"));
+  ASSERT_TRUE(ex);
+  std::mt19937_64 rng(11);
+  std::vector<Coord> points(testing::scaled(500, 250));
+  for (Coord& c : points) {
+    c = {uint32_t(rng() % kRootEdge), uint32_t(rng() % kRootEdge), uint32_t(rng() % kRootEdge)};
+  }
+  std::vector<PointHit> hits(points.size());
+  ASSERT_OK(ex->locate_batch(points.data(), points.size(), hits.data()));
+  EXPECT_LE(ex->octant_pages_decoded(), 64u);
+  EXPECT_GT(ex->octant_pages_decoded(), 8u);  // the first window was walked dense
+  for (size_t i = 0; i < points.size(); ++i) {
+    PointHit one;
+    ASSERT_OK(ex->locate(points[i], &one));
+    ASSERT_EQ(hits[i].inside, one.inside) << i;
+    ASSERT_EQ(hits[i].id, one.id) << i;
+    ASSERT_EQ(hits[i].leaf, one.leaf) << i;
+  }
+}
+
 }  // namespace
 }  // namespace weaver

@@ -20,23 +20,26 @@ constexpr size_t kDenseBatch = 64;
 // more than two descents a point (175 against 50 ms for a zoom-0 tile of
 // the 2 Hz basin), and the rest of the batch is asked key by key.
 constexpr size_t kDensityWindow = 1024;
+constexpr size_t kFirstWindow = kDensityWindow / 16;
 
 // The watch over one batch's lookups in a window: dense at first (unless
 // the batch is small), key by key once a window of points proves sparse.
-// After a batch that ended key by key (a million random points come in
-// batches of 100K or more), the first window is short: a sparse batch then
-// decodes at most 64 whole pages before it goes key by key, not up to 1024
-// (10% of the time of a million random points on the 2 Hz mesh).
+// The first window (kFirstWindow) is short: a sparse batch then decodes at most 64 whole
+// pages before it goes key by key, not up to 1024 (at 2 Hz a page holds
+// about 3900 leaves, and decoding one costs about 80 instructions a leaf:
+// the first 1024 of a million random points decoded 440 pages, a tenth of
+// the instructions of 200K points on one thread).  A dense batch (sorted
+// points many to a page) finds its first 64 points in one or two pages and
+// stays dense.
 class DensityWatch {
  public:
-  DensityWatch(LeafWindow& w, size_t n)
-      : w_(w), before_(w.decodes()), first_(w.sparse() ? kDensityWindow / 16 : kDensityWindow) {
+  DensityWatch(LeafWindow& w, size_t n) : w_(w), before_(w.decodes()) {
     w.set_sparse(n < kDenseBatch);
   }
   // Before the k-th lookup of the batch.
   void at(size_t k) {
-    const size_t window = k < first_ ? first_ : kDensityWindow;
-    const size_t from = k < first_ ? 0 : first_;
+    const size_t window = k < kFirstWindow ? kFirstWindow : kDensityWindow;
+    const size_t from = k < kFirstWindow ? 0 : kFirstWindow;
     if ((k - from) % window != window - 1 || w_.sparse()) return;
     const uint64_t decodes = w_.decodes();
     if (decodes - before_ > window / 8) w_.set_sparse(true, true);
@@ -46,7 +49,6 @@ class DensityWatch {
  private:
   LeafWindow& w_;
   uint64_t before_;
-  size_t first_;  // the first window's points
 };
 
 // The key of the octant of `level` (below 20) that holds pixel c.

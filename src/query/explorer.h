@@ -98,6 +98,11 @@ class Explorer {
   // buffers itself (cli/point_batch.h).
   uint64_t batch_bytes() const { return batch_bytes_; }
 
+  // Leaf pages of the octant table decoded whole by batches so far (a
+  // dense batch's walk; a sparse one asks key by key): for tests and
+  // diagnostics.
+  uint64_t octant_pages_decoded() const { return octant_window_->decodes(); }
+
   // The leaf holding tick point p; any p (past the root is outside).
   Status locate(Coord p, PointHit* out);
   // Whether tick point p, which no leaf holds, lies above the ground of a
