@@ -1,26 +1,25 @@
 #include "cli/point_batch.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <memory>
 #include <thread>
 #include <vector>
 
+#include "cli/point_line.h"
 #include "cli/row_writer.h"
 #include "query/shared_batch.h"
 #include "util/huge_pages.h"
 #include "util/interrupt.h"
 #include "util/ordered_run.h"
-#include "util/printable.h"
-#include "util/read_decimal.h"
 
 namespace weaver::cli {
 namespace {
 
 // A coordinate that lies outside every mesh: the answer is "outside".
 constexpr uint32_t kFar = UINT32_MAX;
+static_assert(kFar == kTickLimit);
 
 // Lines of a stream, read 64 KiB at a time (getline's per-line cost shows
 // at a million lines a second; a larger buffer gains nothing, and one point
@@ -117,22 +116,7 @@ class BatchRunner {
   bool add(const char* s, size_t n, std::string* why) {
     if (points_.size() == points_.capacity()) grow();
     double v[3];
-    int count = 0;
-    size_t i = 0;
-    while (i < n) {
-      while (i < n && (s[i] == ' ' || s[i] == '\t' || s[i] == ',' || s[i] == '\r')) ++i;
-      if (i == n) break;
-      size_t j = i;
-      while (j < n && s[j] != ' ' && s[j] != '\t' && s[j] != ',' && s[j] != '\r') ++j;
-      if (count == 3) return *why = "more than 3 numbers", false;
-      if (!parse(s + i, s + j, &v[count])) {
-        *why = "'" + printable(std::string_view(s + i, j - i)) + "' is not " +
-               (o_.metres ? "a number" : "a whole number of ticks (0 to 4294967294)");
-        return false;
-      }
-      ++count, i = j;
-    }
-    if (count < 3) return *why = "expected 3 numbers: x y z", false;
+    if (!parse_point_line(s, n, o_.metres, v, why)) return false;
     Coord c;
     uint32_t* axis[3] = {&c.x, &c.y, &c.z};
     for (int a = 0; a < 3; ++a) *axis[a] = to_tick(v[a], a);
@@ -242,18 +226,6 @@ class BatchRunner {
     run.go(int(parts));
     w_.count_rows(n);
     return st;
-  }
-
-  bool parse(const char* b, const char* e, double* v) const {
-    if (o_.metres) {
-      const auto r = read_decimal(b, e, *v);
-      return r.ec == std::errc() && r.ptr == e && std::isfinite(*v);
-    }
-    // Ticks are whole and below 2^32 - 1 (a mesh lies within 0..2^20).
-    uint64_t t = 0;
-    const auto r = std::from_chars(b, e, t);
-    *v = double(t);
-    return r.ec == std::errc() && r.ptr == e && t < kFar;
   }
 
   uint32_t to_tick(double v, int axis) const {
