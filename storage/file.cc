@@ -80,6 +80,14 @@ class PosixFile final : public File {
 
 }  // namespace
 
+int open_for_reading(const std::string& path) {
+#ifdef O_NOATIME
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOATIME);
+  if (fd >= 0 || errno != EPERM) return fd;  // EPERM: not the owner's to ask
+#endif
+  return ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+}
+
 Status open_posix_file(const std::string& path, OpenMode mode, std::unique_ptr<File>* out) {
   int flags = O_CLOEXEC;
   switch (mode) {
@@ -87,7 +95,8 @@ Status open_posix_file(const std::string& path, OpenMode mode, std::unique_ptr<F
     case OpenMode::kReadWrite: flags |= O_RDWR; break;
     case OpenMode::kCreateTruncate: flags |= O_RDWR | O_CREAT | O_TRUNC; break;
   }
-  const int fd = ::open(path.c_str(), flags, 0644);
+  const int fd =
+      mode == OpenMode::kReadOnly ? open_for_reading(path) : ::open(path.c_str(), flags, 0644);
   if (fd < 0) return Status::IOError(errno_text("cannot open", path));
   *out = std::make_unique<PosixFile>(fd, path);
   return Status::Ok();

@@ -31,6 +31,10 @@ class File {
 enum class OpenMode { kReadOnly, kReadWrite, kCreateTruncate };
 
 Status open_posix_file(const std::string& path, OpenMode mode, std::unique_ptr<File>* out);
+// A descriptor open for reading (O_CLOEXEC), or -1 with errno set.  Without
+// access-time updates where the file's owner may ask for that: every read
+// of a file opened otherwise asks the kernel whether to update the time.
+int open_for_reading(const std::string& path);
 // A read-only File over a duplicate of an open descriptor (the original stays
 // open): a reader's snapshot survives the file being unlinked by a writer.
 Status dup_posix_file(int fd, const std::string& path, std::unique_ptr<File>* out);

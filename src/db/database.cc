@@ -19,6 +19,7 @@
 #include "db/node_table.h"
 #include "db/octant_table.h"
 #include "db/partition_table.h"
+#include "storage/file.h"
 #include "storage/manifest_file.h"
 
 namespace fs = std::filesystem;
@@ -76,7 +77,7 @@ Status Database::open_snapshot() {
     for (const auto& [name, value] : tables_) {
       for (const std::string& file : table_value_files(value)) {
         const std::string path = dir_ + "/" + file;
-        const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        const int fd = open_for_reading(path);
         if (fd < 0 && errno == ENOENT) {
           missing = true;
           gone = {name, value};
