@@ -81,8 +81,13 @@ class BTree final : public Store {
   // *limit).  *count is 0 when the floor is not in key's leaf, or the
   // table is sharded or plain, or key is UINT64_MAX: floor() answers those.
   Status floor_block(uint64_t key, uint64_t* keys, uint32_t* count, uint64_t* limit);
+  // The last key <= key, its payload and its rank.  walk: one of a walk of
+  // keys in ascending order that reads each leaf about once (a batch of
+  // sparse points): the leaf is kept for the floors after it, which mostly
+  // land in it, and offered to the pool as its next victim once the walk
+  // leaves it.
   Status floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
-                    bool* found, bool recycle_leaf = false);
+                    bool* found, bool walk = false);
 
   // The leaf where key is or would be: all its keys, decoded, and the rank of
   // its first record.  For callers that rank many nearby keys at once
@@ -201,6 +206,7 @@ class BTree final : public Store {
   // Every change calls this: the directory no longer matches the tree.
   void changed() {
     dir_.reset();
+    held_ = HeldLeaf{};
     reads_since_change_ = 0;
   }
   bool has_directory() const { return dir_ && !dir_->empty(); }
@@ -300,6 +306,22 @@ class BTree final : public Store {
   uint32_t shard_headers_ = 0;  // file headers in a sharded tree's files (one a shard)
 
   std::shared_ptr<const LeafDirectory> dir_;  // null until built, and after any change
+  // A walk's leaf (floor_rank): a packed leaf of the directory, pinned and
+  // opened, and the keys the directory routes to it, [lo, hi).
+  struct HeldLeaf {
+    PageRef ref;
+    page::PackedLeaf reader;
+    uint32_t dir_leaf = 0;
+    uint64_t lo = 1, hi = 0;  // none
+  };
+  HeldLeaf held_;
+  // The walk's floor from the held leaf; false (nothing set) when key is
+  // not routed to it or lies before its first key.
+  bool held_floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank);
+  // Holds lf, the leaf floor_rank_at read for key, if it is the one the
+  // directory routes key to; else recycles it.  REQUIRES: none held.
+  Status hold_leaf(uint64_t key, PageRef lf);
+  void release_held();  // recycled: the walk has left it
   uint64_t reads_since_change_ = 0;
   uint64_t dir_budget_ = 0;  // the directory's share of the memory budget
 };

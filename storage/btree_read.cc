@@ -181,11 +181,55 @@ Status BTree::floor_block(uint64_t key, uint64_t* keys, uint32_t* count, uint64_
 }
 
 Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
-                         bool* found, bool recycle_leaf) {
+                         bool* found, bool walk) {
+  if (walk && held_floor(key, key_out, payload_out, rank)) {
+    *found = true;
+    return Status::Ok();
+  }
+  // Let go of the held leaf first: a walk pins no more pages than a lookup.
+  if (walk) release_held();
   PageRef lf;
-  const Status st = floor_rank_at(key, key_out, payload_out, rank, found, &lf);
-  if (recycle_leaf) lf.recycle();
-  return st;
+  WEAVER_RETURN_IF_ERROR(floor_rank_at(key, key_out, payload_out, rank, found, &lf));
+  return walk ? hold_leaf(key, std::move(lf)) : Status::Ok();
+}
+
+// A sorted walk of a million random points over the 2 Hz basin's 1.3B
+// leaves lands about 8 points in each leaf it reads: the 7 after the first
+// skip the directory's search, the pool's lookup and the opening of the
+// packed page.
+bool BTree::held_floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank) {
+  if (key < held_.lo || key >= held_.hi) return false;
+  uint32_t ub = 0;
+  uint64_t below = 0;
+  if (!held_.reader.bound(key, true, &ub, &below, nullptr,
+                          payload_out != nullptr && payload_ > 0) ||
+      ub == 0) {
+    return false;  // before the leaf's first key, or a damaged block: the general path's
+  }
+  *key_out = below;
+  if (rank != nullptr) *rank = dir_->first_rank(held_.dir_leaf) + ub - 1;
+  if (payload_out != nullptr && payload_ > 0) held_.reader.payload(ub - 1, payload_out);
+  return true;
+}
+
+void BTree::release_held() {
+  held_.ref.recycle();
+  held_.lo = 1, held_.hi = 0;
+}
+
+Status BTree::hold_leaf(uint64_t key, PageRef lf) {
+  const bool held = lf && options_.packed && !shards_ && has_directory();
+  const uint32_t j = held ? dir_->find(key) : 0;
+  if (!held || dir_->page(j) != lf.page_no()) {  // (the floor was in the leaf before)
+    lf.recycle();
+    return Status::Ok();
+  }
+  WEAVER_RETURN_IF_ERROR(open_packed(lf, &held_.reader));
+  held_.ref = std::move(lf);
+  held_.dir_leaf = j;
+  held_.lo = dir_->fence(j);
+  held_.hi = j + 1 < dir_->size() ? dir_->fence(j + 1) : UINT64_MAX;
+  return Status::Ok();
 }
 
 Status BTree::floor_rank_at(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
