@@ -24,13 +24,13 @@ constexpr size_t kFirstWindow = kDensityWindow / 16;
 
 // The watch over one batch's lookups in a window: dense at first (unless
 // the batch is small), key by key once a window of points proves sparse.
-// The first window (kFirstWindow) is short: a sparse batch then decodes at most 64 whole
-// pages before it goes key by key, not up to 1024 (at 2 Hz a page holds
-// about 3900 leaves, and decoding one costs about 80 instructions a leaf:
-// the first 1024 of a million random points decoded 440 pages, a tenth of
-// the instructions of 200K points on one thread).  A dense batch (sorted
-// points many to a page) finds its first 64 points in one or two pages and
-// stays dense.
+// The first window (kFirstWindow) is short: a sparse batch then decodes at
+// most 64 whole pages before it goes key by key, not up to 1024 (at 2 Hz a
+// page holds about 3900 leaves, and decoding one costs about 80
+// instructions a leaf: the first 1024 of a million random points decoded
+// 440 pages, a tenth of the instructions of 200K points on one thread).  A
+// dense batch (sorted points many to a page) finds its first 64 points in
+// one or two pages and stays dense.
 class DensityWatch {
  public:
   DensityWatch(LeafWindow& w, size_t n) : w_(w), before_(w.decodes()) {
