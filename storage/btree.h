@@ -222,8 +222,10 @@ class BTree final : public Store {
   // For floor, when every key of the leaf `key` is routed to is > key (a
   // separator went stale when its key was erased): the leaf before it, or
   // *first_leaf.  dir_leaf as locate gave it.
+  // *routed: the directory's index of lf when the floor is in the leaf the
+  // directory routes key to, else kNoDirLeaf.
   Status floor_rank_at(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
-                       bool* found, PageRef* lf);
+                       bool* found, PageRef* lf, uint32_t* routed);
   Status preceding_leaf(uint64_t key, uint32_t dir_leaf, PageRef* leaf, bool* first_leaf);
   // REQUIRES: height_ > 0.  With rank_before, also counts the records in the
   // subtrees left of the path.
@@ -318,9 +320,9 @@ class BTree final : public Store {
   // The walk's floor from the held leaf; false (nothing set) when key is
   // not routed to it or lies before its first key.
   bool held_floor(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank);
-  // Holds lf, the leaf floor_rank_at read for key, if it is the one the
-  // directory routes key to; else recycles it.  REQUIRES: none held.
-  Status hold_leaf(uint64_t key, PageRef lf);
+  // Holds lf, the leaf floor_rank_at read, if the directory routed its key
+  // to it (routed, its index); else recycles it.  REQUIRES: none held.
+  Status hold_leaf(uint32_t routed, PageRef lf);
   void release_held();  // recycled: the walk has left it
   uint64_t reads_since_change_ = 0;
   uint64_t dir_budget_ = 0;  // the directory's share of the memory budget

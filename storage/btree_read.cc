@@ -189,8 +189,9 @@ Status BTree::floor_rank(uint64_t key, uint64_t* key_out, std::byte* payload_out
   // Let go of the held leaf first: a walk pins no more pages than a lookup.
   if (walk) release_held();
   PageRef lf;
-  WEAVER_RETURN_IF_ERROR(floor_rank_at(key, key_out, payload_out, rank, found, &lf));
-  return walk ? hold_leaf(key, std::move(lf)) : Status::Ok();
+  uint32_t routed = kNoDirLeaf;
+  WEAVER_RETURN_IF_ERROR(floor_rank_at(key, key_out, payload_out, rank, found, &lf, &routed));
+  return walk ? hold_leaf(routed, std::move(lf)) : Status::Ok();
 }
 
 // A sorted walk of a million random points over the 2 Hz basin's 1.3B
@@ -217,13 +218,12 @@ void BTree::release_held() {
   held_.lo = 1, held_.hi = 0;
 }
 
-Status BTree::hold_leaf(uint64_t key, PageRef lf) {
-  const bool held = lf && options_.packed && !shards_ && has_directory();
-  const uint32_t j = held ? dir_->find(key) : 0;
-  if (!held || dir_->page(j) != lf.page_no()) {  // (the floor was in the leaf before)
+Status BTree::hold_leaf(uint32_t routed, PageRef lf) {
+  if (!lf || routed == kNoDirLeaf || !options_.packed || !has_directory()) {
     lf.recycle();
     return Status::Ok();
   }
+  const uint32_t j = routed;
   WEAVER_RETURN_IF_ERROR(open_packed(lf, &held_.reader));
   held_.ref = std::move(lf);
   held_.dir_leaf = j;
@@ -233,8 +233,9 @@ Status BTree::hold_leaf(uint64_t key, PageRef lf) {
 }
 
 Status BTree::floor_rank_at(uint64_t key, uint64_t* key_out, std::byte* payload_out, uint64_t* rank,
-                            bool* found, PageRef* leaf_ref) {
+                            bool* found, PageRef* leaf_ref, uint32_t* routed) {
   PageRef& lf = *leaf_ref;
+  *routed = kNoDirLeaf;
   if (shards_) {  // each shard ranks its own keys: the set adds them up
     WEAVER_RETURN_IF_ERROR(shards_->floor(key, key_out, payload_out, found));
     return *found ? shards_->rank_exact(*key_out, rank, found) : Status::Ok();
@@ -275,6 +276,7 @@ Status BTree::floor_rank_at(uint64_t key, uint64_t* key_out, std::byte* payload_
   }
   *found = true;
   *key_out = below;
+  *routed = dir_leaf;  // (kNoDirLeaf without a directory)
   if (rank != nullptr) *rank = before + ub - 1;
   if (payload_out != nullptr) return leaf_payload(lf, ub - 1, payload_out);
   return Status::Ok();
