@@ -12,6 +12,8 @@
 #include <random>
 #include <vector>
 
+#include "number_strings.h"
+
 namespace weaver::cli {
 namespace {
 
@@ -83,40 +85,12 @@ void expect_same(const std::string& line) {
 }
 
 TEST(PointLine, ReadsWhatSplittingFirstReads) {
-  const std::vector<std::string> pieces = {"0",
-                                           "12",
-                                           "24351.78",
-                                           "-1200",
-                                           "0.5",
-                                           "5.",
-                                           ".5",
-                                           "-.5",
-                                           "+5",
-                                           "-",
-                                           ".",
-                                           "1e5",
-                                           "1.5e",
-                                           "2.5E-2",
-                                           "1e400",
-                                           "inf",
-                                           "-inf",
-                                           "nan",
-                                           "0x10",
-                                           "12abc",
-                                           "1.2.3",
-                                           "12-3",
-                                           "x",
-                                           "4294967294",
-                                           "4294967295",
-                                           "99999999999999999999",
-                                           "007",
-                                           "1048575",
-                                           "3.0517578125",
-                                           "-0",
-                                           "\xff",
-                                           "#",
-                                           "1;2",
-                                           "\"3\""};
+  // read_decimal's edge cases, and tokens of ticks and of lines.
+  std::vector<std::string> pieces(std::begin(testing::kNumberEdgeCases),
+                                  std::end(testing::kNumberEdgeCases));
+  pieces.insert(pieces.end(), {"12", "0.5", "1e400", "12-3", "x", "4294967294", "4294967295",
+                               "99999999999999999999", "007", "1048575", "3.0517578125", "\xff",
+                               "#", "1;2", "\"3\""});
   const std::vector<std::string> separators = {" ", "\t", ",", "\r", "  ", ", ", "\t,\r", ""};
   std::mt19937_64 rng(3);
   for (int line = 0; line < 20000; ++line) {
