@@ -45,19 +45,26 @@ std::map<uint64_t, uint8_t> masks_of(const std::vector<Octant>& leaves) {
   return masks;
 }
 
+// The leaves (sorted) as a new octant table in dir, and their keys.
+void write_table(testing::TempDir& dir, const std::vector<Octant>& leaves,
+                 std::unique_ptr<BTree>* table, std::vector<uint64_t>* keys) {
+  std::unique_ptr<File> f;
+  ASSERT_OK(open_posix_file(dir.file("octants"), OpenMode::kCreateTruncate, &f));
+  ASSERT_OK(BTree::create(std::move(f), TableOptions{}, 1 << 20, table));
+  keys->clear();
+  for (const Octant& o : leaves) keys->push_back(octant_key(o));
+  ASSERT_OK((*table)->append_batch(keys->data(), nullptr, keys->size()));
+}
+
 TEST(NodeClassifierTest, EveryConfigurationOfTheCellsAroundANodeMatchesTheReference) {
   testing::TempDir dir;
   int configs = 0, dangling = 0;
   const int step = static_cast<int>(testing::scaled(1, 7));  // sanitizers: every 7th
   for (int config = 1; config < 6561; config += step) {
     const std::vector<Octant> leaves = octree_of(config);
-    std::unique_ptr<File> f;
-    ASSERT_OK(open_posix_file(dir.file("octants"), OpenMode::kCreateTruncate, &f));
     std::unique_ptr<BTree> table;
-    ASSERT_OK(BTree::create(std::move(f), TableOptions{}, 1 << 20, &table));
     std::vector<uint64_t> keys;
-    for (const Octant& o : leaves) keys.push_back(octant_key(o));
-    ASSERT_OK(table->append_batch(keys.data(), nullptr, keys.size()));
+    ASSERT_NO_FATAL_FAILURE(write_table(dir, leaves, &table, &keys));
     const reference::Mesh ref = reference::extract(leaves);
     const std::map<uint64_t, uint8_t> masks = masks_of(leaves);
     ASSERT_EQ(masks.size(), ref.nodes.size());
@@ -81,6 +88,39 @@ TEST(NodeClassifierTest, EveryConfigurationOfTheCellsAroundANodeMatchesTheRefere
     ++configs;
   }
   EXPECT_GT(dangling, configs);  // the configurations do exercise dangling nodes
+}
+
+// The nodes dangling on a coarse leaf ask for it in many directions, far
+// apart in Z-order; the leaf is searched for once, then found in the cache.
+// Cell 0 of the root split, the other seven level-1 leaves: the nodes on
+// cell 0's far faces dangle on the six cells that share a face or an edge
+// with it, and each of those is asked for by several of them.
+TEST(NodeClassifierTest, ACoarseLeafIsSearchedForOnceForAllTheNodesOnIt) {
+  testing::TempDir dir;
+  const int config = 2 + 3 * (1 + 3 + 9 + 27 + 81 + 243 + 729);  // cell 0 split
+  const std::vector<Octant> leaves = octree_of(config);
+  ASSERT_EQ(leaves.size(), 15u);
+  std::unique_ptr<BTree> table;
+  std::vector<uint64_t> keys;
+  ASSERT_NO_FATAL_FAILURE(write_table(dir, leaves, &table, &keys));
+  const reference::Mesh ref = reference::extract(leaves);
+  const std::map<uint64_t, uint8_t> masks = masks_of(leaves);
+  NodeClassifier plain(*table), all_local(*table);
+  all_local.set_local(&keys, 0, UINT64_MAX);
+  int dangling = 0;
+  for (const reference::MeshNode& node : ref.nodes) {
+    if (node.kind == NodeKind::kAnchored) continue;
+    const uint64_t key = node_key(node.c);
+    NodeKind a = NodeKind::kAnchored, b = NodeKind::kAnchored;
+    ASSERT_OK(plain.classify(key, masks.at(key), &a));
+    ASSERT_OK(all_local.classify(key, masks.at(key), &b));
+    ASSERT_EQ(a, node.kind);
+    ASSERT_EQ(b, node.kind);
+    ++dangling;
+  }
+  EXPECT_GT(dangling, 6);
+  EXPECT_EQ(plain.searches(), 6u);      // each coarse leaf once, from the table
+  EXPECT_EQ(all_local.searches(), 1u);  // the first search cached every local leaf
 }
 
 }  // namespace

@@ -52,6 +52,8 @@ struct BucketPolicy {
   // A part's ghost layer (ghost_layer.h): the leaves of earlier parts
   // around its nodes, sorted; their corners reach it as spills beforehand.
   const std::vector<uint64_t>* ghosts = nullptr;
+  // Each worker's classifier's cache of leaves: 2^cache_bits keys.
+  int cache_bits = NodeClassifier::kCacheBits;
 };
 
 struct BucketTask {
@@ -142,7 +144,8 @@ void sort_records(std::vector<SpillRecord>& records, std::vector<uint64_t>& pack
 
 class BucketWorker {
  public:
-  BucketWorker(BTree& octants, const BucketPolicy& policy) : classifier_(octants) {
+  BucketWorker(BTree& octants, const BucketPolicy& policy)
+      : classifier_(octants, policy.cache_bits) {
     if (policy.ghosts != nullptr) classifier_.set_ghosts(policy.ghosts, policy.start);
   }
   Status run(BucketTask& task);

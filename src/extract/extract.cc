@@ -24,9 +24,10 @@ namespace weaver {
 namespace {
 
 // Bytes of memory per finest-level leaf in the active bucket: its key, room
-// for 1.5 nodes in a half-full hash table (1.5 x 9 bytes / 0.5), the sort
-// vector, and the classifier's index of the bucket's leaves.
-constexpr uint64_t kBytesPerLeaf = 8 + 27 + 16 + NodeClassifier::kIndexBytesPerLeaf;
+// for 1.5 nodes in a half-full hash table (1.5 x 9 bytes / 0.5) and the sort
+// vector.
+constexpr uint64_t kBytesPerLeaf = 8 + 27 + 16;
+
 // No bucket holds more than 8^kMaxBucketDepth finest leaves (kLevel) or
 // kMaxBucketLeaves leaves (kLeaves) whatever the budget: its hash table then
 // stays in the CPU caches.  Larger buckets only save spills, which cost far
@@ -79,12 +80,14 @@ ExtractMemory::ExtractMemory(const ExtractOptions& o) : plan(o.memory) {
     // Every vertex searches the store: the larger its cache, the fewer
     // searches go to disk.
     search_store = plan.take("search node store", 1, 2);
+    classifier_cache = plan.take("classifier cache", 1, 64, NodeClassifier::kCacheBytes);
     return;
   }
   // Pixels spilled to later buckets wait here; past it they go to a file.
   spill = plan.take("spill cap", 1, 8);
   if (o.threads <= 1) {
     // The one active bucket: the larger, the fewer spills (S2).
+    classifier_cache = plan.take("classifier cache", 1, 64, NodeClassifier::kCacheBytes);
     bucket = plan.take("bucket", 1, 2);
     return;
   }
@@ -92,6 +95,8 @@ ExtractMemory::ExtractMemory(const ExtractOptions& o) : plan(o.memory) {
   // Each worker holds one bucket (at the default budget and 2 threads, as
   // large as kMaxBucketDepth allows); the aggregate hits of each go through
   // its own pool (a pool serves one thread).
+  classifier_cache =
+      plan.take("classifier caches (all workers)", 1, 64, n * NodeClassifier::kCacheBytes) / n;
   bucket = plan.take("buckets (all workers)", 1, 8) / n;
   worker_pool = plan.take("worker pools (all workers)", 1, 16) / n;
   // Buckets read ahead so that workers never wait for the reader: 8 a
@@ -167,6 +172,7 @@ Status extract_mesh(const std::string& db_dir, const ExtractOptions& options,
     result->bucket_level = -1;
     result->bucket_leaves = 0;
     st = extract_by_search(*octants, *nodes, scratch, memory.search_store,
+                           NodeClassifier::cache_bits_for(memory.classifier_cache),
                            options.store == ExtractOptions::Store::kLsm, result);
   } else {
     st = extract_by_sort(*db, *octants, appender(*nodes), scratch, memory, options, result);

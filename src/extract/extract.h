@@ -77,8 +77,9 @@ struct ExtractMemory {
   explicit ExtractMemory(const ExtractOptions& options);
 
   MemoryPlan plan;
-  uint64_t octant_pool = 0;  // the octant table read in order
-  uint64_t node_pool = 0;    // the node table written by sorted append
+  uint64_t octant_pool = 0;       // the octant table read in order
+  uint64_t node_pool = 0;         // the node table written by sorted append
+  uint64_t classifier_cache = 0;  // each worker's NodeClassifier's cache of leaves
   // kSort:
   uint64_t spill = 0;        // spilled pixels held in memory before a file
   uint64_t bucket = 0;       // one worker's bucket: its leaves and hash table

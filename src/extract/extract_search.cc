@@ -57,8 +57,9 @@ Status record_vertices(BTree& octants, Store& scratch, ExtractResult* result) {
   return Status::Ok();
 }
 
-Status number_and_classify(BTree& octants, Store& scratch, BTree& nodes, ExtractResult* result) {
-  NodeClassifier classifier(octants);
+Status number_and_classify(BTree& octants, Store& scratch, BTree& nodes, int cache_bits,
+                           ExtractResult* result) {
+  NodeClassifier classifier(octants, cache_bits);
   std::unique_ptr<Cursor> cursor;
   WEAVER_RETURN_IF_ERROR(scratch.seek(0, &cursor));
   Cursor& c = *cursor;
@@ -91,7 +92,8 @@ TableOptions scratch_options() {
 
 // Both stores end on disk before the numbering pass, as the paper's node
 // B-tree does: the B+tree committed, the LSM compacted (one run) and committed.
-Status build_and_number(BTree& octants, Store& scratch, BTree& nodes, ExtractResult* result) {
+Status build_and_number(BTree& octants, Store& scratch, BTree& nodes, int cache_bits,
+                        ExtractResult* result) {
   WEAVER_RETURN_IF_ERROR(record_vertices(octants, scratch, result));
   if (auto* lsm = dynamic_cast<LsmTree*>(&scratch)) {
     WEAVER_RETURN_IF_ERROR(lsm->compact());
@@ -102,13 +104,13 @@ Status build_and_number(BTree& octants, Store& scratch, BTree& nodes, ExtractRes
     WEAVER_RETURN_IF_ERROR(tree.commit());
     result->search_tree_bytes = tree.file_bytes();
   }
-  return number_and_classify(octants, scratch, nodes, result);
+  return number_and_classify(octants, scratch, nodes, cache_bits, result);
 }
 
 }  // namespace
 
 Status extract_by_search(BTree& octants, BTree& nodes, const std::string& scratch_path,
-                         uint64_t store_bytes, bool lsm, ExtractResult* result) {
+                         uint64_t store_bytes, int cache_bits, bool lsm, ExtractResult* result) {
   Status st;
   if (lsm) {
     // Half the share to the memtable, half to the pools of its runs (at
@@ -119,7 +121,7 @@ Status extract_by_search(BTree& octants, BTree& nodes, const std::string& scratc
     o.run_pool_bytes = std::max<uint64_t>(store_bytes / 2 / 16, 1 << 16);
     std::unique_ptr<LsmTree> scratch;
     st = LsmTree::create(scratch_path + ".lsm", o, &scratch);
-    if (st.ok()) st = build_and_number(octants, *scratch, nodes, result);
+    if (st.ok()) st = build_and_number(octants, *scratch, nodes, cache_bits, result);
     scratch.reset();
     std::error_code ec;
     std::filesystem::remove_all(scratch_path + ".lsm", ec);
@@ -129,7 +131,7 @@ Status extract_by_search(BTree& octants, BTree& nodes, const std::string& scratc
   WEAVER_RETURN_IF_ERROR(open_posix_file(scratch_path + ".bt", OpenMode::kCreateTruncate, &f));
   std::unique_ptr<BTree> scratch;
   st = BTree::create(std::move(f), scratch_options(), store_bytes, &scratch);
-  if (st.ok()) st = build_and_number(octants, *scratch, nodes, result);
+  if (st.ok()) st = build_and_number(octants, *scratch, nodes, cache_bits, result);
   scratch.reset();
   std::remove((scratch_path + ".bt").c_str());
   return st;

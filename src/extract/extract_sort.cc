@@ -46,6 +46,7 @@ Status extract_by_sort(const Database& db, BTree& octants, const NodeBatchSink& 
                        const std::string& scratch_path, const ExtractMemory& memory,
                        const ExtractOptions& options, ExtractResult* result, ExtractPart* part) {
   BucketPolicy policy{result->bucket_level, result->bucket_leaves};
+  policy.cache_bits = NodeClassifier::cache_bits_for(memory.classifier_cache);
   SpillStore spills(scratch_path, memory.spill);
   if (part != nullptr) {
     policy.start = part->start;

@@ -47,68 +47,17 @@ void NodeClassifier::set_local(const std::vector<uint64_t>* leaf_keys, uint64_t 
   leaf_keys_ = leaf_keys;
   local_start_ = start;
   local_end_ = end;
-  indexed_ = false;
+  local_cached_ = false;
 }
 
-// Made on the first search of the bucket's leaves, not before: a bucket of
-// one level (all its nodes anchored but on the domain's surface) makes
-// none.  Slots are filled leaf by leaf: a leaf is the first at or after
-// every slot from the one after the last leaf's to its own.
-void NodeClassifier::index_local() {
-  indexed_ = true;
-  const std::vector<uint64_t>& keys = *leaf_keys_;
-  const size_t n = keys.size();
-  const uint64_t start = local_start_;
-  // The last bucket ends at UINT64_MAX; pixels' codes end at 2^60.
-  const uint64_t top = std::min(local_end_, uint64_t{1} << (3 * kMaxLevel));
-  const int span_bits = top > start ? static_cast<int>(std::bit_width(top - start - 1)) : 0;
-  slot_shift_ = std::max(0, span_bits - static_cast<int>(std::bit_width(n / 2)));
-  const size_t slots = top > start ? ((top - start - 1) >> slot_shift_) + 1 : 0;
-  slot_first_.resize(slots + 1);
-  size_t i = 0, s = 0;
-  while (i < n && octant_key_morton(keys[i]) < start) ++i;  // none in a bucket's own leaves
-  for (; i < n && octant_key_morton(keys[i]) < top; ++i) {
-    const size_t own = (octant_key_morton(keys[i]) - start) >> slot_shift_;
-    for (; s <= own; ++s) slot_first_[s] = static_cast<uint32_t>(i);
-  }
-  for (; s < slots; ++s) slot_first_[s] = static_cast<uint32_t>(i);
-  slot_first_[slots] = static_cast<uint32_t>(n);
-}
-
-// Leaves before pm's slot start before it, so their keys are <= pk; leaves
-// after it start after pm, so theirs are > pk.
-const uint64_t* NodeClassifier::local_floor(uint64_t pm, uint64_t pk) const {
-  const size_t s = (pm - local_start_) >> slot_shift_;
-  const uint32_t lo = slot_first_[s], hi = slot_first_[s + 1];
-  const uint64_t* keys = leaf_keys_->data();
-  if (const uint64_t* f = last_at_most(keys + lo, hi - lo, pk)) return f;
-  return lo > 0 ? keys + lo - 1 : nullptr;
-}
-
-// The leaf holding pixel p, if any: one of the last found in each direction
-// if it holds p (the nodes come in Z-order, and the nodes along a coarse
-// leaf's face or edge all ask for it in the same direction), else the active bucket's leaves if p
-// is in its range (no other leaf can hold it), else the ghosts if p is before
-// a rank's part, else the octant table.  Works on Morton codes: a
-// leaf holds p iff p's code is in its subtree's code range.
-// The leaf is handed out where it is kept, not copied.
-const NodeClassifier::LeafCode* NodeClassifier::recent_leaf(uint64_t pm) const {
-  for (const LeafCode& r : recent_) {
-    if (((r.morton ^ pm) >> r.span_bits) == 0) return &r;
-  }
-  return nullptr;
-}
-
-Status NodeClassifier::leaf_at(uint64_t pm, int direction, const LeafCode** leaf, bool* found) {
-  if ((*leaf = recent_leaf(pm)) != nullptr) {
-    *found = true;
-    return Status::Ok();
-  }
-  return search_leaf(pm, direction, leaf, found);
-}
-
-// leaf_at past the recent leaves.
-Status NodeClassifier::search_leaf(uint64_t pm, int direction, const LeafCode** leaf, bool* found) {
+// The leaf holding pixel pm, if any: the active bucket's leaves' if pm is
+// in its range (no other leaf can hold it), else the ghosts' if pm is before
+// a rank's part, else the octant table's.  Works on Morton codes: a leaf
+// holds pm iff pm's code is in its subtree's code range.  A bucket's leaves
+// go into the cache on its first search, not before: a bucket of one level
+// (all its nodes anchored but on the domain's surface) makes none.
+Status NodeClassifier::search_leaf(uint64_t pm, const LeafCode** leaf, bool* found) {
+  ++searches_;
   const uint64_t pk = pixel_key_of_morton(pm);
   auto holds_p = [pm](uint64_t key) {
     const int bits = 3 * (kMaxLevel - octant_key_level(key));
@@ -117,8 +66,11 @@ Status NodeClassifier::search_leaf(uint64_t pm, int direction, const LeafCode** 
   *found = false;
   uint64_t key = 0;
   if (leaf_keys_ != nullptr && pm >= local_start_ && pm < local_end_) {
-    if (!indexed_) index_local();
-    const uint64_t* floor = local_floor(pm, pk);
+    if (!local_cached_) {
+      for (uint64_t k : *leaf_keys_) remember(k);
+      local_cached_ = true;
+    }
+    const uint64_t* floor = last_at_most(leaf_keys_->data(), leaf_keys_->size(), pk);
     if (floor == nullptr || !holds_p(*floor)) return Status::Ok();
     key = *floor;
   } else if (ghosts_ != nullptr && pm < ghosts_below_) {
@@ -130,9 +82,9 @@ Status NodeClassifier::search_leaf(uint64_t pm, int direction, const LeafCode** 
     WEAVER_RETURN_IF_ERROR(table_floor(pk, &key, &hit));
     if (!hit || !holds_p(key)) return Status::Ok();
   }
-  LeafCode& r = recent_[direction];
-  r = {octant_key_morton(key), 3 * (kMaxLevel - octant_key_level(key)), key};
-  *leaf = &r;
+  remember(key);
+  handed_ = {octant_key_morton(key), 3 * (kMaxLevel - octant_key_level(key)), key};
+  *leaf = &handed_;
   *found = true;
   return Status::Ok();
 }
@@ -161,6 +113,10 @@ Status NodeClassifier::table_floor(uint64_t pk, uint64_t* key, bool* hit) {
 Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
   *kind = NodeKind::kAnchored;
   if (mask == 0xFF) return Status::Ok();
+  // The one level a leaf it dangles from can have (cached_leaf): one above
+  // the finest lattice the node lies on; below 0 for the root's corners.
+  const int coarse = kMaxLevel - 1 - std::countr_zero(key | (uint64_t{1} << 63)) / 3;
+  const int coarse_span = 3 * (kMaxLevel - coarse);
   uint8_t settled = mask;
   while (settled != 0xFF) {
     const int d = std::countr_zero(static_cast<unsigned>(static_cast<uint8_t>(~settled)));
@@ -168,12 +124,12 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
     const LeafCode* leaf = nullptr;
     bool found = false;
     if (direction_pixel(key, d, &p)) {
-      // The last leaves found first, without a call or a Status: most
-      // pixels are in one of them.
-      if ((leaf = recent_leaf(p)) != nullptr) {
+      // The cache first, without a call or a Status: most pixels are in a
+      // leaf found before.
+      if (coarse >= 0 && (leaf = cached_leaf(p, coarse, coarse_span)) != nullptr) {
         found = true;
       } else {
-        WEAVER_RETURN_IF_ERROR(search_leaf(p, d, &leaf, &found));
+        WEAVER_RETURN_IF_ERROR(search_leaf(p, &leaf, &found));
       }
     }
     if (!found) {  // outside the root or the domain
@@ -264,7 +220,7 @@ Status NodeClassifier::unbalanced(uint64_t m, uint64_t coarse_key, uint8_t mask)
     const LeafCode* leaf = nullptr;
     bool found = false;
     if (!((mask >> d) & 1) || !direction_pixel(m, d, &p)) continue;
-    WEAVER_RETURN_IF_ERROR(leaf_at(p, d, &leaf, &found));
+    WEAVER_RETURN_IF_ERROR(search_leaf(p, &leaf, &found));
     if (found) {
       fine = describe_octant(octant_from_key(leaf->key));
       break;
