@@ -182,29 +182,34 @@ uint8_t axis_cells(int at, int side, int axis) {
 
 }  // namespace
 
-// The (side + 1)^3 corners of a complete block (first leaf's key given),
-// each once with the bits of all the leaves around it.  The corners strictly
-// inside the block are anchored and no other leaf has them (nor does a
-// spill: those are corners of other buckets' leaves), so they skip the
-// hash.  For 8 leaves that is 27 hash updates instead of 64; for 64 leaves
-// 98 and 27 inside; for 512 leaves 386 and 343 inside.
+// A complete block's corners are (side + 1)^3 points, side = 2^j.  Those
+// of its half-open lattice (no coordinate at `side`) are recorded as the
+// block and made again, in key order, by merge_nodes; only the corners on
+// its far faces are hashed (for 8 leaves 19 of 27; for 512 leaves 217 of
+// 729), as every corner of a leaf outside a block is.  The corners strictly
+// inside the block are anchored and no other leaf has them; those on its
+// near faces may be other leaves' corners too (hashed, or spilled here):
+// merge_nodes ORs their bits together.
 void BucketWorker::add_block_lattice(uint64_t first, int j, uint64_t end) {
   const int bit = kMaxLevel - octant_key_level(first);
   const int side = 1 << j;
+  blocks_.push_back({octant_key_morton(first), j, bit});
+  auto add = [&](uint64_t key, uint8_t cells) {
+    if (key < end) hash_.add(key, cells);
+  };
   uint64_t plane = octant_key_morton(first);
   for (int c = 0; c <= side; ++c, plane = morton_step(plane, 2, bit)) {
     const uint8_t cells_z = axis_cells(c, side, 2);
     uint64_t row = plane;
     for (int b = 0; b <= side; ++b, row = morton_step(row, 1, bit)) {
       const uint8_t cells_yz = cells_z & axis_cells(b, side, 1);
+      if (b < side && c < side) {  // only the row's far end is on a far face
+        add(morton_step(row, 0, bit + j), cells_yz & axis_cells(side, side, 0));
+        continue;
+      }
       uint64_t key = row;
       for (int a = 0; a <= side; ++a, key = morton_step(key, 0, bit)) {
-        const uint8_t cells = cells_yz & axis_cells(a, side, 0);
-        if (cells == 0xFF) {
-          inside_.push_back(key);
-        } else if (key < end) {
-          hash_.add(key, cells);
-        }
+        add(key, cells_yz & axis_cells(a, side, 0));
       }
     }
   }
@@ -245,7 +250,7 @@ Status BucketWorker::run(BucketTask& t) {
   hash_.reset(t.leaf_keys.size() * 3 / 2 + t.incoming.size() + 64);
   uint64_t corners[8];
   const std::vector<uint64_t>& leaves = t.leaf_keys;
-  inside_.clear();
+  blocks_.clear();
   for (size_t i = 0; i < leaves.size();) {
     if (const int j = complete_block(&leaves[i], leaves.size() - i)) {
       add_block_lattice(leaves[i], j, t.end);
@@ -258,34 +263,107 @@ Status BucketWorker::run(BucketTask& t) {
     }
   }
   for (const SpillRecord& r : t.incoming) hash_.add(r.key, r.mask);
-  const bool narrow = sort_packed();
-  if (!narrow) sort_wide();
-  const size_t n = narrow ? packed_.size() : sorted_.size();
+  if (sort_packed()) {
+    struct Words {
+      const uint64_t* w;
+      uint64_t lo;
+      int zeros;
+      uint64_t key(size_t i) const { return ((w[i] >> 8) << zeros) + lo; }
+      uint8_t mask(size_t i) const { return static_cast<uint8_t>(w[i]); }
+    };
+    return merge_nodes(Words{packed_.data(), lo_, zeros_}, packed_.size(), t);
+  }
+  sort_wide();
+  struct Records {
+    const SpillRecord* r;
+    uint64_t key(size_t i) const { return r[i].key; }
+    uint8_t mask(size_t i) const { return r[i].mask; }
+  };
+  return merge_nodes(Records{sorted_.data()}, sorted_.size(), t);
+}
+
+namespace {
+
+// The cells of a block's half-open lattice point i (its offset in Morton
+// order, < 512) that the block's leaves fill: on an axis where the point is
+// at 0, the + side only.  One table serves every block size: for a block of
+// 8^j leaves, i < 8^j has no bits above 3j.
+constexpr std::array<uint8_t, 512> near_cells_table() {
+  std::array<uint8_t, 512> t{};
+  for (int i = 0; i < 512; ++i) {
+    uint8_t cells = 0xFF;
+    if ((i & 0x49) == 0) cells &= 0xAA;
+    if ((i & 0x92) == 0) cells &= 0xCC;
+    if ((i & 0x124) == 0) cells &= 0xF0;
+    t[i] = cells;
+  }
+  return t;
+}
+constexpr std::array<uint8_t, 512> kNearCells = near_cells_table();
+
+}  // namespace
+
+// Both inputs are in key order and the blocks' lattices are disjoint, so one
+// pass merges them; a point in both (a near face's corner that an earlier
+// leaf or a spill has too) is one node with both masks.
+template <typename Sorted>
+Status BucketWorker::merge_nodes(const Sorted& sorted, size_t count, BucketTask& t) {
+  size_t bound = count;
+  for (const Block& b : blocks_) bound += size_t{1} << (3 * b.j);
+  t.node_keys.resize(bound);
+  t.node_kinds.resize(bound);
+  size_t n = 0, h = 0;
+  // False on a classifier's error (in `error`): a Status for every node
+  // cost more than the rest of its merge.
+  Status error;
+  // Dangling nodes by kind (the rest are anchored).
+  uint64_t dangling[3] = {0, 0, 0};
+  auto emit = [&](uint64_t key, uint8_t mask) {
+    NodeKind kind = NodeKind::kAnchored;
+    // A full mask is anchored (most nodes): no call.
+    if (mask != 0xFF) {
+      if (!(error = classifier_.classify(key, mask, &kind)).ok()) return false;
+      ++dangling[static_cast<int>(kind)];
+    }
+    t.node_keys[n] = key;
+    t.node_kinds[n++] = static_cast<std::byte>(kind);
+    return true;
+  };
+  // The next hashed node's key, UINT64_MAX past the last (no node's).
+  auto key_at = [&](size_t i) { return i < count ? sorted.key(i) : UINT64_MAX; };
+  uint64_t next = key_at(0);
+  for (const Block& b : blocks_) {
+    const uint64_t points = uint64_t{1} << (3 * b.j);
+    for (uint64_t i = 0; i < points; ++i) {
+      const uint64_t key = b.first + (i << (3 * b.bit));
+      for (; next < key; next = key_at(++h)) {
+        if (!emit(next, sorted.mask(h))) return error;
+      }
+      uint8_t mask = kNearCells[i];
+      if (next == key) mask |= sorted.mask(h), next = key_at(++h);
+      if (!emit(key, mask)) return error;
+    }
+  }
+  for (; h < count; ++h) {
+    if (!emit(sorted.key(h), sorted.mask(h))) return error;
+  }
   t.node_keys.resize(n);
   t.node_kinds.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    const uint64_t key = narrow ? ((packed_[i] >> 8) << zeros_) + lo_ : sorted_[i].key;
-    const auto mask = narrow ? static_cast<uint8_t>(packed_[i]) : sorted_[i].mask;
-    NodeKind kind = NodeKind::kAnchored;
-    // A full mask is anchored (most nodes): no call, no Status.
-    if (mask != 0xFF) WEAVER_RETURN_IF_ERROR(classifier_.classify(key, mask, &kind));
-    t.node_keys[i] = key;
-    t.node_kinds[i] = static_cast<std::byte>(kind);
-    count_kind(kind, &t.counts);
-  }
+  t.counts.nodes = n;
+  t.counts.edge = dangling[static_cast<int>(NodeKind::kEdge)];
+  t.counts.face = dangling[static_cast<int>(NodeKind::kFace)];
+  t.counts.anchored = n - t.counts.edge - t.counts.face;
   return Status::Ok();
 }
 
-// The bucket's nodes (the hash's and the blocks' inside corners) as
-// sort_records' words, sorted, straight from where they are (their
-// KeySpan in one read).
+// The hashed nodes as sort_records' words, sorted, straight from the hash
+// (their KeySpan in one read).
 // False, and packed_ empty, if the span needs more than 56 bits.
 bool BucketWorker::sort_packed() {
-  const size_t in_hash = hash_.size(), n = in_hash + inside_.size();
+  const size_t n = hash_.size();
   lo_ = 0, zeros_ = 0;
   KeySpan span;
-  for (size_t i = 0; i < in_hash; ++i) span.add(hash_.key_at(i));
-  for (uint64_t k : inside_) span.add(k);
+  for (size_t i = 0; i < n; ++i) span.add(hash_.key_at(i));
   const uint64_t lo = span.lo;
   const int zeros = span.zeros(), bits = span.bits();
   if (n == 0 || bits > 56) {
@@ -295,11 +373,8 @@ bool BucketWorker::sort_packed() {
   // Not cleared first: resize then zeroes only what the last bucket's words
   // did not reach, and every word is written below.
   packed_.resize(n);
-  for (size_t i = 0; i < in_hash; ++i) {
+  for (size_t i = 0; i < n; ++i) {
     packed_[i] = ((hash_.key_at(i) - lo) >> zeros) << 8 | hash_.mask_at(i);
-  }
-  for (size_t i = 0; i < inside_.size(); ++i) {
-    packed_[in_hash + i] = ((inside_[i] - lo) >> zeros) << 8 | 0xFF;
   }
   radix_sort(packed_, 8, bits, scratch_);
   lo_ = lo, zeros_ = zeros;
@@ -309,9 +384,8 @@ bool BucketWorker::sort_packed() {
 // A span too wide for sort_packed's words: the nodes as records in
 // sorted_, sorted by sort_records (std::sort, for such a span).
 void BucketWorker::sort_wide() {
-  sorted_.resize(hash_.size() + inside_.size());
+  sorted_.resize(hash_.size());
   for (size_t i = 0; i < hash_.size(); ++i) sorted_[i] = {hash_.key_at(i), hash_.mask_at(i)};
-  for (size_t i = 0; i < inside_.size(); ++i) sorted_[hash_.size() + i] = {inside_[i], 0xFF};
   sort_records(sorted_, packed_, scratch_);  // packed_ is free: sort_packed left it empty
 }
 

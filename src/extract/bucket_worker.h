@@ -18,8 +18,10 @@
 // The reader (one thread, in Z-order) gathers the bucket's leaves, hands
 // their corners at or past `end` to the spill store as one sorted run, and
 // takes the spills below `end`.  A worker (any thread) then merges the nodal
-// pixels in a hash, sorts them and classifies each node.  Tasks are written
-// out in Z-order, so the node table is the same whatever the thread count.
+// pixels in a hash and sorts them, merges them with the lattices of the
+// bucket's complete blocks of leaves (made in key order, never hashed), and
+// classifies each node.  Tasks are written out in Z-order, so the node table
+// is the same whatever the thread count.
 #pragma once
 
 #include <bit>
@@ -151,18 +153,32 @@ class BucketWorker {
   Status run(BucketTask& task);
 
  private:
-  // The corners of the complete block of 8^j leaves from `first` on.
+  // A complete block of 8^j leaves of edge 2^bit from the one with Morton
+  // code `first` on.  Its half-open lattice, the (2^j)^3 corners in
+  // [first, first + 8^j << 3 bit), are its leaves' near corners, in Morton
+  // order at first + (i << 3 bit): they are merged into the sorted nodes
+  // as they are made (merge_nodes), not hashed and sorted.
+  struct Block {
+    uint64_t first = 0;
+    int j = 0, bit = 0;
+  };
+  // Records the complete block of 8^j leaves from `first` on and hashes
+  // the corners on its far faces.
   void add_block_lattice(uint64_t first, int j, uint64_t end);
 
-  // The bucket's nodes in key order: packed_'s (offset, mask) words, an
+  // The hashed nodes in key order: packed_'s (offset, mask) words, an
   // offset being (key - lo_) >> zeros_; or, for a span too wide for them,
   // sorted_'s records.
   bool sort_packed();
   void sort_wide();
+  // The hashed nodes (`sorted`, in key order) and the blocks' lattices
+  // merged, classified and written to t.
+  template <typename Sorted>
+  Status merge_nodes(const Sorted& sorted, size_t count, BucketTask& t);
 
   NodeClassifier classifier_;
   NodeHash hash_;
-  std::vector<uint64_t> inside_;  // nodes strictly inside complete blocks
+  std::vector<Block> blocks_;  // the bucket's complete blocks, in key order
   std::vector<uint64_t> packed_, scratch_;
   uint64_t lo_ = 0;
   int zeros_ = 0;

@@ -27,12 +27,13 @@ class NodeHash {
       masks_.assign(cap, 0);
     }
     used_.clear();
+    limit_ = cap / 2;
     shift_ = 64 - static_cast<int>(std::bit_width(cap) - 1);
   }
 
   // ORs bits into the key's mask, inserting the key if new.
   void add(uint64_t key, uint8_t bits) {
-    if (2 * (used_.size() + 1) > slots_.size()) grow();
+    if (used_.size() >= limit_) grow();
     const size_t s = find_slot(key);
     if (slots_[s] == kEmpty) {
       slots_[s] = key;
@@ -67,6 +68,7 @@ class NodeHash {
   std::vector<uint64_t> slots_;
   std::vector<uint8_t> masks_;
   std::vector<uint32_t> used_;
+  size_t limit_ = 0;  // at most half the slots are used: past it, grow
   int shift_ = 58;
 };
 
