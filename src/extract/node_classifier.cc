@@ -110,6 +110,58 @@ Status NodeClassifier::table_floor(uint64_t pk, uint64_t* key, bool* hit) {
   return Status::Ok();
 }
 
+namespace {
+
+// The cells around a node that a leaf with the node on its closure covers,
+// by the axes on which the node is strictly inside the leaf (bits 0-2) and
+// those on which it is on the leaf's far face (bits 3-5): both sides of an
+// inside axis, the - side of a far one, the + side of the rest.
+constexpr std::array<uint8_t, 64> covered_cells_table() {
+  std::array<uint8_t, 64> t{};
+  for (int i = 0; i < 64; ++i) {
+    uint8_t cells = 0xFF;
+    for (int a = 0; a < 3; ++a) {
+      const uint8_t plus_side = a == 0 ? 0xAA : a == 1 ? 0xCC : 0xF0;  // cells with bit a set
+      if ((i >> a) & 1) continue;
+      cells &= (i >> (3 + a)) & 1 ? static_cast<uint8_t>(~plus_side) : plus_side;
+    }
+    t[i] = cells;
+  }
+  return t;
+}
+constexpr std::array<uint8_t, 64> kCoveredCells = covered_cells_table();
+
+}  // namespace
+
+// Node m lies on the closure of `leaf`: its kind, and the cells around m the
+// leaf covers (on an axis where m is strictly inside the leaf, both sides;
+// elsewhere the side the leaf is on).  Read from the codes, all axes at
+// once (the leaf's code is zero below span_bits, s): m's coordinate on an
+// axis is the leaf's (near face), the leaf's plus less than its edge
+// (inside), or plus its edge (far face, which flips the axis's bit at
+// s + a and leaves those below it zero).  So the bits of m ^ leaf below s
+// are the inside axes' offsets, which at an edge's midpoint or a face's
+// centre are exactly their bits at s - 3 + a; the bits at s + a mark the
+// far axes.  A verdict, not a Status: the caller makes one only for an
+// error.
+inline NodeClassifier::OnLeaf NodeClassifier::kind_on(uint64_t m, const LeafCode& leaf,
+                                                      NodeKind* kind, uint8_t* covered) const {
+  const int s = leaf.span_bits;
+  if (s == 0) return OnLeaf::kCornerOrCentre;  // every node on a pixel is its corner
+  const uint64_t diff = m ^ leaf.morton;
+  const uint64_t offsets = diff & ((uint64_t{1} << s) - 1);
+  const uint64_t midpoints = uint64_t{7} << (s - 3);
+  if ((offsets & ~midpoints) != 0) return OnLeaf::kOffMidpoint;
+  const unsigned inside = static_cast<unsigned>(offsets >> (s - 3));
+  // How many of the three bits are set, from a table of 2-bit counts
+  // (std::popcount is a dozen instructions on a baseline x86-64 build).
+  const unsigned count = (0xE994u >> (2 * inside)) & 3;
+  if (count == 0 || count == 3) return OnLeaf::kCornerOrCentre;
+  *kind = count == 1 ? NodeKind::kEdge : NodeKind::kFace;
+  *covered = kCoveredCells[inside | ((diff >> s) & 7) << 3];
+  return OnLeaf::kDangles;
+}
+
 Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
   *kind = NodeKind::kAnchored;
   if (mask == 0xFF) return Status::Ok();
@@ -148,58 +200,6 @@ Status NodeClassifier::classify(uint64_t key, uint8_t mask, NodeKind* kind) {
     settled |= covered | static_cast<uint8_t>(1u << d);  // (covered holds d: the leaf is there)
   }
   return Status::Ok();
-}
-
-namespace {
-
-// The cells around a node that a leaf with the node on its closure covers,
-// by the axes on which the node is strictly inside the leaf (bits 0-2) and
-// those on which it is on the leaf's far face (bits 3-5): both sides of an
-// inside axis, the - side of a far one, the + side of the rest.
-constexpr std::array<uint8_t, 64> covered_cells_table() {
-  std::array<uint8_t, 64> t{};
-  for (int i = 0; i < 64; ++i) {
-    uint8_t cells = 0xFF;
-    for (int a = 0; a < 3; ++a) {
-      const uint8_t plus_side = a == 0 ? 0xAA : a == 1 ? 0xCC : 0xF0;  // cells with bit a set
-      if ((i >> a) & 1) continue;
-      cells &= (i >> (3 + a)) & 1 ? static_cast<uint8_t>(~plus_side) : plus_side;
-    }
-    t[i] = cells;
-  }
-  return t;
-}
-constexpr std::array<uint8_t, 64> kCoveredCells = covered_cells_table();
-
-}  // namespace
-
-// Node m lies on the closure of `leaf`: its kind, and the cells around m the
-// leaf covers (on an axis where m is strictly inside the leaf, both sides;
-// elsewhere the side the leaf is on).  Read from the codes, all axes at
-// once (the leaf's code is zero below span_bits, s): m's coordinate on an
-// axis is the leaf's (near face), the leaf's plus less than its edge
-// (inside), or plus its edge (far face, which flips the axis's bit at
-// s + a and leaves those below it zero).  So the bits of m ^ leaf below s
-// are the inside axes' offsets, which at an edge's midpoint or a face's
-// centre are exactly their bits at s - 3 + a; the bits at s + a mark the
-// far axes.  A verdict, not a Status: the caller makes one only for an
-// error.
-NodeClassifier::OnLeaf NodeClassifier::kind_on(uint64_t m, const LeafCode& leaf, NodeKind* kind,
-                                               uint8_t* covered) const {
-  const int s = leaf.span_bits;
-  if (s == 0) return OnLeaf::kCornerOrCentre;  // every node on a pixel is its corner
-  const uint64_t diff = m ^ leaf.morton;
-  const uint64_t offsets = diff & ((uint64_t{1} << s) - 1);
-  const uint64_t midpoints = uint64_t{7} << (s - 3);
-  if ((offsets & ~midpoints) != 0) return OnLeaf::kOffMidpoint;
-  const unsigned inside = static_cast<unsigned>(offsets >> (s - 3));
-  // How many of the three bits are set, from a table of 2-bit counts
-  // (std::popcount is a dozen instructions on a baseline x86-64 build).
-  const unsigned count = (0xE994u >> (2 * inside)) & 3;
-  if (count == 0 || count == 3) return OnLeaf::kCornerOrCentre;
-  *kind = count == 1 ? NodeKind::kEdge : NodeKind::kFace;
-  *covered = kCoveredCells[inside | ((diff >> s) & 7) << 3];
-  return OnLeaf::kDangles;
 }
 
 // Every leaf that has m as a corner set its bit in the mask, so finding one
