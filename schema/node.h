@@ -63,4 +63,29 @@ inline int node_anchors(Coord n, NodeKind kind, Coord out[4]) {
   return corners;
 }
 
+// node_anchors' answer as node keys (Morton codes), from the node's key
+// alone, without decoding it: an axis whose coordinate has the fewest
+// trailing zeros has its lowest set bit at 3 * zeros + axis, the fewest
+// being a third of the key's trailing zeros.  Ascending.  For checks of
+// every dangling node (weaver verify), where decoding, re-encoding and
+// sorting coordinates cost more than the lookups of the anchors.
+// Accepts: the key of a dangling node of that kind.
+inline int node_anchor_keys(uint64_t m, NodeKind kind, uint64_t out[4]) {
+  if (kind == NodeKind::kAnchored || m == 0) return 0;
+  const int low = std::countr_zero(m) / 3;
+  const unsigned lowest = static_cast<unsigned>(m >> (3 * low)) & 7;  // the axes at `low`
+  const int a0 = std::countr_zero(lowest);
+  const uint64_t down = morton_step_back(m, a0, low), up = morton_step(m, a0, low);
+  if (kind == NodeKind::kEdge) {
+    out[0] = down, out[1] = up;
+    return 2;
+  }
+  const unsigned rest = lowest & (lowest - 1);
+  const int a1 = rest == 0 ? a0 : std::countr_zero(rest);
+  out[0] = morton_step_back(down, a1, low), out[1] = morton_step_back(up, a1, low);
+  out[2] = morton_step(down, a1, low), out[3] = morton_step(up, a1, low);
+  std::sort(out, out + 4);
+  return 4;
+}
+
 }  // namespace weaver

@@ -114,8 +114,9 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
   // the end clears every leaf inside it, which (the leaves in key order)
   // are the next ones up to its end, each with one comparison.  Climbing
   // one level at a time, it is found once for a run of such leaves (for
-  // the 0.5 Hz basin's 11.4M leaves, 330M instructions fewer than a test
-  // of each leaf's parent).
+  // the 0.5 Hz basin's 11.4M leaves, 94M instructions fewer than a test of
+  // each leaf's parent; the 13% of leaves with corners past the end cost
+  // the rest).
   // The last such ancestor: the leaves with codes below clear_hi, no
   // coarser than it, lie inside it.
   uint64_t clear_hi = 0;

@@ -102,9 +102,9 @@ class NodeChecker {
 
   // The anchors of dangling node id (key, kind): nodes, and anchored.
   Status anchors(uint64_t key, NodeKind kind, uint64_t id) {
-    const Coord p = morton_decode(key);
-    return check_anchors(p, kind,
-                         [&] { return "node " + std::to_string(id) + " at " + describe_point(p); });
+    return check_anchors(key, kind, [&] {
+      return "node " + std::to_string(id) + " at " + describe_point(morton_decode(key));
+    });
   }
 
   // Checks the node with this key, stored kind and id.
@@ -138,16 +138,18 @@ class NodeChecker {
                      ", the leaves around it make it " + node_kind_name(expected));
     }
     if (kind != NodeKind::kAnchored) ++report_->dangling;
-    return check_anchors(p, kind, name);
+    return check_anchors(key, kind, name);
   }
 
  private:
+  // The node's anchors from its key (node_anchor_keys: no decoding, the
+  // coordinates made only for a message).
   template <class Name>
-  Status check_anchors(Coord p, NodeKind kind, const Name& name) {
-    Coord anchors[4];
-    const int n = node_anchors(p, kind, anchors);
+  Status check_anchors(uint64_t node, NodeKind kind, const Name& name) {
+    uint64_t anchors[4];
+    const int n = node_anchor_keys(node, kind, anchors);
     for (int i = 0; i < n; ++i) {
-      const uint64_t key = node_key(anchors[i]);
+      const uint64_t key = anchors[i];
       // Neighbouring dangling nodes share anchors: those found anchored
       // lately need no second lookup.
       uint64_t& seen = anchored_[(key * 0x9E3779B97F4A7C15ull) >> (64 - kAnchoredBits)];
@@ -156,12 +158,13 @@ class NodeChecker {
       bool found = false;
       WEAVER_RETURN_IF_ERROR(nodes_.get(key, &k, &found));
       if (!found)
-        return problem(name() + ": its anchor " + describe_point(anchors[i]) + " is not a node");
+        return problem(name() + ": its anchor " + describe_point(morton_decode(key)) +
+                       " is not a node");
       // Face+edge 2:1 balance keeps every anchor anchored where the leaves
       // fill their parents; next to holes finer than that it cannot (a
       // fine leaf may touch a leaf two levels coarser at a point alone).
       if (static_cast<NodeKind>(*k) != NodeKind::kAnchored) {
-        return problem(name() + ": its anchor " + describe_point(anchors[i]) +
+        return problem(name() + ": its anchor " + describe_point(morton_decode(key)) +
                        " is not anchored (it dangles too: a chain of dependencies, which "
                        "holes in the domain finer than the leaves' parents allow)");
       }
