@@ -373,6 +373,20 @@ constexpr uint64_t node_key(Coord p) {
   return morton_encode(p);
 }
 
+// node_is_valid(morton_decode(key)) without decoding: no coordinate past
+// 2^20.  Its bit 20 is key bit 60 + axis; with it set, the axis's lower
+// bits must be clear.  Key bit 63 (x's bit 21, which morton_decode drops)
+// must be clear too: no node's key has it.  For scans of every node
+// (weaver verify).
+constexpr bool node_key_is_valid(uint64_t key) {
+  bool valid = (key >> 63) == 0;
+  for (int a = 0; a < 3; ++a) {
+    const uint64_t below = (0x1249249249249249ULL << a) & ((uint64_t{1} << 60) - 1);
+    valid &= !(((key >> (60 + a)) & 1) && (key & below) != 0);
+  }
+  return valid;
+}
+
 // "(x y z level)" in ticks, for messages.
 inline std::string describe_octant(const Octant& o) {
   return "(" + std::to_string(o.x) + " " + std::to_string(o.y) + " " + std::to_string(o.z) + " " +

@@ -81,17 +81,29 @@ Status scan_model(BTree& t, const std::string& name, Problems& problems) {
   return Status::Ok();
 }
 
+// Node keys and kinds: a leaf page's records at a time, checked without a
+// branch each and from the key (node_key_is_valid), not decoded: a call, a
+// decode and a branch a node took a fifth of a 1 Hz verify.
 Status scan_nodes(BTree& t, const std::string& name, Problems& problems) {
+  const size_t stride = t.options().schema.record_size();
   BTreeCursor c;
   WEAVER_RETURN_IF_ERROR(t.seek_cursor(0, &c));
-  for (uint64_t id = 0; c.valid(); ++id) {
-    const Coord p = morton_decode(c.key());
-    if (!node_is_valid(p) || static_cast<uint8_t>(c.payload()[0]) > 2) {
-      problems.add("table " + name + ": node " + std::to_string(id) + " (key " +
-                   std::to_string(c.key()) + ") has an invalid coordinate or kind");
+  for (uint64_t id = 0; c.valid();) {
+    uint32_t n = 0;
+    const uint64_t* keys = c.keys_in_leaf(&n);
+    const std::byte* kinds = c.payload();  // the leaf's records' in a row
+    bool good = true;
+    for (uint32_t i = 0; i < n; ++i) {
+      good &= node_key_is_valid(keys[i]) & (static_cast<uint8_t>(kinds[i * stride]) <= 2);
+    }
+    for (uint32_t i = 0; !good && i < n; ++i) {
+      if (node_key_is_valid(keys[i]) && static_cast<uint8_t>(kinds[i * stride]) <= 2) continue;
+      problems.add("table " + name + ": node " + std::to_string(id + i) + " (key " +
+                   std::to_string(keys[i]) + ") has an invalid coordinate or kind");
       return Status::Ok();
     }
-    WEAVER_RETURN_IF_ERROR(c.next());
+    id += n;
+    WEAVER_RETURN_IF_ERROR(c.skip(n));
   }
   return Status::Ok();
 }

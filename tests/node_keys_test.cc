@@ -1,6 +1,7 @@
-// node_anchor_keys (from a node's key, no decoding) against node_anchors
-// (from its coordinates) on generated dangling nodes of every level, both
-// kinds, every axis or pair of axes, on the root's far faces too.
+// What is read from a node's key without decoding it, against the same
+// from its coordinates: node_anchor_keys against node_anchors on generated
+// dangling nodes of every level, both kinds, every axis or pair of axes, on
+// the root's far faces too; node_key_is_valid against node_is_valid.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -46,6 +47,29 @@ TEST(NodeAnchors, KeysFromTheNodeKeyAreThoseOfItsCoordinates) {
   EXPECT_EQ(cases, kMaxLevel * 6 * 40);
   uint64_t keys[4];
   EXPECT_EQ(node_anchor_keys(node_key({4, 8, 12}), NodeKind::kAnchored, keys), 0);
+}
+
+TEST(NodeKeys, ValidWithoutDecodingExactlyWhenTheCoordinatesAre) {
+  std::mt19937_64 rng(20);
+  const uint32_t edge = kRootEdge;
+  const uint32_t near[] = {0,        1,           edge / 2, edge - 1, edge, edge + 1, 2 * edge - 1,
+                           2 * edge, 4 * edge - 1};
+  int valid = 0, invalid = 0;
+  auto check = [&](uint64_t key) {
+    // morton_decode keeps 21 bits an axis: key bit 63 (x's bit 21) is
+    // refused apart, as no node's key has it.
+    const bool expected = (key >> 63) == 0 && node_is_valid(morton_decode(key));
+    ASSERT_EQ(node_key_is_valid(key), expected) << "key " << key;
+    (expected ? valid : invalid) += 1;
+  };
+  for (uint32_t x : near)
+    for (uint32_t y : near)
+      for (uint32_t z : near) {
+        if (x < 2 * edge && y < 2 * edge && z < 2 * edge) check(morton_encode({x, y, z}));
+      }
+  for (int i = 0; i < 100000; ++i) check(rng() >> (rng() % 8));
+  EXPECT_GT(valid, 1000);
+  EXPECT_GT(invalid, 1000);
 }
 
 }  // namespace
