@@ -29,47 +29,13 @@ constexpr const char* node_kind_name(NodeKind k) {
   return "?";
 }
 
-// Trailing zero bits of a node coordinate; 0 counts as 31 (a multiple of everything).
-constexpr int coord_zeros(uint32_t v) { return v == 0 ? 31 : std::countr_zero(v); }
-
-// The anchors of a dangling node, in ascending node-key order (which is the
-// order of their node ids).  Returns how many (2 or 4), or 0 for an anchored
-// node.  Accepts: node coordinates of a dangling node of that kind.
-inline int node_anchors(Coord n, NodeKind kind, Coord out[4]) {
-  if (kind == NodeKind::kAnchored) return 0;
-  const uint32_t c[3] = {n.x, n.y, n.z};
-  const int z[3] = {coord_zeros(n.x), coord_zeros(n.y), coord_zeros(n.z)};
-  const int low = std::min(z[0], std::min(z[1], z[2]));
-  const uint32_t h = uint32_t{1} << low;
-  int axes[2], count = 0;
-  for (int a = 0; a < 3 && count < 2; ++a) {
-    if (z[a] == low) axes[count++] = a;
-  }
-  const int corners = kind == NodeKind::kEdge ? 2 : 4;
-  for (int k = 0; k < corners; ++k) {
-    uint32_t p[3] = {c[0], c[1], c[2]};
-    p[axes[0]] = (k & 1) ? c[axes[0]] + h : c[axes[0]] - h;
-    if (kind == NodeKind::kFace) p[axes[1]] = (k & 2) ? c[axes[1]] + h : c[axes[1]] - h;
-    out[k] = {p[0], p[1], p[2]};
-  }
-  // Sort by node key (at most 4 items).
-  for (int i = 1; i < corners; ++i) {
-    for (int j = i; j > 0 && morton_encode(out[j]) < morton_encode(out[j - 1]); --j) {
-      const Coord t = out[j];
-      out[j] = out[j - 1];
-      out[j - 1] = t;
-    }
-  }
-  return corners;
-}
-
-// node_anchors' answer as node keys (Morton codes), from the node's key
-// alone, without decoding it: an axis whose coordinate has the fewest
-// trailing zeros has its lowest set bit at 3 * zeros + axis, the fewest
-// being a third of the key's trailing zeros.  Ascending.  For checks of
-// every dangling node (weaver verify), where decoding, re-encoding and
-// sorting coordinates cost more than the lookups of the anchors.
-// Accepts: the key of a dangling node of that kind.
+// The anchors of a dangling node as node keys (Morton codes), ascending
+// (which is the order of their node ids), from the node's key alone: an
+// axis whose coordinate has the fewest trailing zeros has its lowest set
+// bit at 3 * zeros + axis, the fewest being a third of the key's trailing
+// zeros, and the anchors are h = 2^zeros either way along the first one
+// (edge) or two (face) such axes.  Returns how many (2 or 4), or 0 for an
+// anchored node.  Accepts: the key of a dangling node of that kind.
 inline int node_anchor_keys(uint64_t m, NodeKind kind, uint64_t out[4]) {
   if (kind == NodeKind::kAnchored || m == 0) return 0;
   const int low = std::countr_zero(m) / 3;
@@ -86,6 +52,15 @@ inline int node_anchor_keys(uint64_t m, NodeKind kind, uint64_t out[4]) {
   out[2] = morton_step(down, a1, low), out[3] = morton_step(up, a1, low);
   std::sort(out, out + 4);
   return 4;
+}
+
+// node_anchor_keys' anchors as coordinates, in the same order.
+// Accepts: node coordinates of a dangling node of that kind.
+inline int node_anchors(Coord n, NodeKind kind, Coord out[4]) {
+  uint64_t keys[4];
+  const int count = node_anchor_keys(morton_encode(n), kind, keys);
+  for (int i = 0; i < count; ++i) out[i] = morton_decode(keys[i]);
+  return count;
 }
 
 }  // namespace weaver

@@ -1,9 +1,12 @@
 // What is read from a node's key without decoding it, against the same
-// from its coordinates: node_anchor_keys against node_anchors on generated
-// dangling nodes of every level, both kinds, every axis or pair of axes, on
-// the root's far faces too; node_key_is_valid against node_is_valid.
+// from its coordinates: node_anchor_keys (and node_anchors, its coordinates)
+// against anchors moved and sorted as coordinates on generated dangling
+// nodes of every level, both kinds, every axis or pair of axes, on the
+// root's far faces too; node_key_is_valid against node_is_valid.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <bit>
 #include <random>
 
 #include "schema/node.h"
@@ -11,6 +14,32 @@
 
 namespace weaver {
 namespace {
+
+// The reference: the axes with the fewest trailing zeros (0 counting as
+// 31) found on the coordinates, the node moved h = 2^zeros either way along
+// the first one (edge) or two (face), sorted by node key.
+int reference_anchors(Coord n, NodeKind kind, Coord out[4]) {
+  if (kind == NodeKind::kAnchored) return 0;
+  const uint32_t c[3] = {n.x, n.y, n.z};
+  int z[3];
+  for (int a = 0; a < 3; ++a) z[a] = c[a] == 0 ? 31 : std::countr_zero(c[a]);
+  const int low = std::min({z[0], z[1], z[2]});
+  const uint32_t h = uint32_t{1} << low;
+  int axes[2] = {0, 0}, count = 0;
+  for (int a = 0; a < 3 && count < 2; ++a) {
+    if (z[a] == low) axes[count++] = a;
+  }
+  const int corners = kind == NodeKind::kEdge ? 2 : 4;
+  for (int k = 0; k < corners; ++k) {
+    uint32_t p[3] = {c[0], c[1], c[2]};
+    p[axes[0]] = (k & 1) ? c[axes[0]] + h : c[axes[0]] - h;
+    if (kind == NodeKind::kFace) p[axes[1]] = (k & 2) ? c[axes[1]] + h : c[axes[1]] - h;
+    out[k] = {p[0], p[1], p[2]};
+  }
+  std::sort(out, out + corners,
+            [](const Coord& a, const Coord& b) { return node_key(a) < node_key(b); });
+  return corners;
+}
 
 // A coordinate that is an odd multiple of h (inside) or a multiple of 2h
 // (on the coarse leaf's lattice, 0 and the root's far side included).
@@ -32,11 +61,13 @@ TEST(NodeAnchors, KeysFromTheNodeKeyAreThoseOfItsCoordinates) {
       for (int r = 0; r < 40; ++r) {
         const Coord c{coordinate(rng, h, axes & 1), coordinate(rng, h, axes & 2),
                       coordinate(rng, h, axes & 4)};
-        Coord anchors[4];
-        const int n = node_anchors(c, kind, anchors);
+        Coord anchors[4], coords[4];
+        const int n = reference_anchors(c, kind, anchors);
         uint64_t keys[4];
         ASSERT_EQ(node_anchor_keys(node_key(c), kind, keys), n);
+        ASSERT_EQ(node_anchors(c, kind, coords), n);
         for (int i = 0; i < n; ++i) {
+          ASSERT_EQ(node_key(coords[i]), node_key(anchors[i]));
           ASSERT_EQ(keys[i], node_key(anchors[i])) << "node " << c.x << " " << c.y << " " << c.z
                                                    << " level " << level << " anchor " << i;
         }

@@ -76,18 +76,23 @@ ExtractMemory::ExtractMemory(const ExtractOptions& o) : plan(o.memory) {
   octant_pool = plan.take("octant table pool", 1, 8, 32ull << 20);
   // A sorted append touches only the right spine of the node table.
   node_pool = plan.take("node table pool", 1, 32, 8ull << 20);
-  if (o.algorithm == ExtractOptions::Algorithm::kSearch) {
+  // Each classifier's cache of leaves: a worker's each, or the one of the
+  // search or of one thread.
+  const bool search = o.algorithm == ExtractOptions::Algorithm::kSearch;
+  const uint64_t classifiers = search || o.threads <= 1 ? 1 : static_cast<uint64_t>(o.threads);
+  classifier_cache =
+      plan.take("classifier caches", 1, 64, classifiers * NodeClassifier::kCacheBytes) /
+      classifiers;
+  if (search) {
     // Every vertex searches the store: the larger its cache, the fewer
     // searches go to disk.
     search_store = plan.take("search node store", 1, 2);
-    classifier_cache = plan.take("classifier cache", 1, 64, NodeClassifier::kCacheBytes);
     return;
   }
   // Pixels spilled to later buckets wait here; past it they go to a file.
   spill = plan.take("spill cap", 1, 8);
   if (o.threads <= 1) {
     // The one active bucket: the larger, the fewer spills (S2).
-    classifier_cache = plan.take("classifier cache", 1, 64, NodeClassifier::kCacheBytes);
     bucket = plan.take("bucket", 1, 2);
     return;
   }
@@ -95,8 +100,6 @@ ExtractMemory::ExtractMemory(const ExtractOptions& o) : plan(o.memory) {
   // Each worker holds one bucket (at the default budget and 2 threads, as
   // large as kMaxBucketDepth allows); the aggregate hits of each go through
   // its own pool (a pool serves one thread).
-  classifier_cache =
-      plan.take("classifier caches (all workers)", 1, 64, n * NodeClassifier::kCacheBytes) / n;
   bucket = plan.take("buckets (all workers)", 1, 8) / n;
   worker_pool = plan.take("worker pools (all workers)", 1, 16) / n;
   // Buckets read ahead so that workers never wait for the reader: 8 a
