@@ -251,11 +251,9 @@ bool Descent::visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeav
   return true;
 }
 
-// o's eight children, all leaves, with their materials from one lattice of
-// their centres, computed as material() computes each.
-bool Descent::emit_siblings(const Octant& o, const Judgement* children, size_t cap,
-                            SubtreeLeaves* out) const {
-  if (out->elements + 8 > cap) return false;
+// The materials at the centres of o's eight children (child c's in m[c]),
+// from one lattice, computed as material() computes each.
+void Descent::child_materials(const Octant& o, Material* m) const {
   const double t = p_.tick_m;
   const uint32_t e = octant_edge(o.level + 1);
   const double half = e * t / 2;
@@ -264,12 +262,27 @@ bool Descent::emit_siblings(const Octant& o, const Judgement* children, size_t c
   for (int a = 0; a < 3; ++a) {
     for (int i = 0; i < 2; ++i) centres[a][i] = (start[a] + i * e) * t + half;
   }
+  model_.materials_on_lattice(centres[0], centres[1], centres[2], 2, m);
+}
+
+void Descent::children_materials(const Octant& o, std::byte* out) const {
+  alignas(Material) unsigned char storage[8 * sizeof(Material)];
+  Material* m = reinterpret_cast<Material*>(storage);
+  child_materials(o, m);
+  for (int c = 0; c < 8; ++c) to_payload(m[c], out + c * payload_bytes_);
+}
+
+// o's eight children, all leaves, with their materials from one lattice of
+// their centres.
+bool Descent::emit_siblings(const Octant& o, const Judgement* children, size_t cap,
+                            SubtreeLeaves* out) const {
+  if (out->elements + 8 > cap) return false;
   // Storage the model fills (every model assigns each Material whole), not
   // eight Materials zeroed first: that zeroing was a `rep stos`, a fifth of
   // this function.  (An array of bytes implicitly creates the Materials.)
   alignas(Material) unsigned char storage[8 * sizeof(Material)];
   Material* m = reinterpret_cast<Material*>(storage);
-  model_.materials_on_lattice(centres[0], centres[1], centres[2], 2, m);
+  child_materials(o, m);
   // The children's keys from their parent's (one Morton encoding, not
   // eight); the subtree's borders only where the parent touches one.
   const uint64_t parent = octant_key(o);

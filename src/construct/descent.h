@@ -102,6 +102,9 @@ class Descent {
   // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as
   // f32), payload_bytes() of them into out.
   void material(const Octant& o, std::byte* out) const;
+  // The records of o's eight children, child c's at out + c *
+  // payload_bytes(): material() of each, from one lattice of their centres.
+  void children_materials(const Octant& o, std::byte* out) const;
   // material_schema's record, and the solid fraction where the ground is carved.
   size_t payload_bytes() const { return payload_bytes_; }
   const ConstructPlan& plan() const { return p_; }
@@ -139,6 +142,7 @@ class Descent {
   static bool touches_border(const Octant& o, const Octant& root);
   void add_figures(SubtreeLeaves* out) const;
   Material material_at_centre(const Octant& o) const;
+  void child_materials(const Octant& o, Material* m) const;
   void to_payload(const Material& m, std::byte* out) const;
 
   const ConstructOptions& o_;

@@ -135,25 +135,42 @@ void SubtreeBalancer::collect(const Octant& x, const Judgement& j, const Octant&
 }
 
 // Each own leaf split just enough to resolve the created octants inside it.
+// The leaves between two split ones are copied as a run; a new leaf first
+// takes its parent leaf's record, and, where the model fills new leaves,
+// its material after the walk: eight siblings from one lattice of their
+// centres (most splits make whole sibling groups), any other leaf alone.
 void SubtreeBalancer::refine(SubtreeLeaves* leaves) {
   out_.clear();
+  fresh_.clear();
   const size_t bytes = descent_.payload_bytes();
   const bool carved = descent_.plan().carved;
+  const uint64_t* keys = leaves->keys.data();
+  const std::byte* payloads = leaves->payloads.data();
+  size_t copied = 0;  // the leaves before it are in out_
+  auto copy_until = [&](size_t end) {
+    out_.keys.insert(out_.keys.end(), keys + copied, keys + end);
+    out_.payloads.insert(out_.payloads.end(), payloads + copied * bytes, payloads + end * bytes);
+    if (carved) {
+      out_.sides.insert(out_.sides.end(), leaves->sides.begin() + copied,
+                        leaves->sides.begin() + end);
+    }
+  };
+  out_.levels = leaves->levels;
   resolve_leaves(
-      leaves->keys.data(), leaves->keys.size(), created_,
-      [&](size_t i) {
-        const std::byte* payload = leaves->payloads.data() + i * bytes;
-        if (carved) out_.sides.push_back(leaves->sides[i]);
-        out_.keys.push_back(leaves->keys[i]);
-        out_.payloads.insert(out_.payloads.end(), payload, payload + bytes);
-        ++out_.levels[octant_key_level(leaves->keys[i])];
-        return Status::Ok();
-      },
+      keys, leaves->keys.size(), created_, [](size_t) { return Status::Ok(); },
       [&](size_t i, uint64_t key, bool is_new) {
+        if (copied <= i) {  // the first leaf of i's split
+          copy_until(i);
+          copied = i + 1;
+          --out_.levels[octant_key_level(keys[i])];
+        }
         // A part of a leaf wholly on one side of the ground is on it too.
         if (carved) out_.sides.push_back(leaves->sides[i]);
-        return emit_leaf(key, is_new, leaves->payloads.data() + i * bytes);
+        add_leaf(key, is_new, payloads + i * bytes);
+        return Status::Ok();
       });
+  copy_until(leaves->keys.size());
+  fill_materials();
   out_.elements = out_.keys.size();
   int coarsest = 0;
   while (out_.levels[coarsest] == 0) ++coarsest;
@@ -165,19 +182,35 @@ void SubtreeBalancer::refine(SubtreeLeaves* leaves) {
   leaves->largest_edge_m = octant_edge(coarsest) * descent_.plan().tick_m;
 }
 
-// A leaf of the refinement into out_: a new one with the model's material
-// at its centre (or a copy of its parent's), else as it was.
-Status SubtreeBalancer::emit_leaf(uint64_t key, bool is_new, const std::byte* parent_payload) {
-  const size_t bytes = descent_.payload_bytes(), at = out_.payloads.size();
+// A leaf of a split into out_, with its parent's record (a new one is
+// noted, to take the model's material at its centre where it fills).
+void SubtreeBalancer::add_leaf(uint64_t key, bool is_new, const std::byte* parent_payload) {
+  const size_t bytes = descent_.payload_bytes();
+  if (is_new && fill_) fresh_.push_back(out_.keys.size());
   out_.keys.push_back(key);
-  out_.payloads.resize(at + bytes);
-  if (is_new && fill_) {
-    descent_.material(octant_from_key(key), out_.payloads.data() + at);
-  } else {
-    std::memcpy(out_.payloads.data() + at, parent_payload, bytes);
-  }
+  out_.payloads.insert(out_.payloads.end(), parent_payload, parent_payload + bytes);
   ++out_.levels[octant_key_level(key)];
-  return Status::Ok();
+}
+
+// The model's material for each new leaf noted, by sibling groups where
+// all eight are new and one after another.
+void SubtreeBalancer::fill_materials() {
+  const size_t bytes = descent_.payload_bytes();
+  for (size_t f = 0; f < fresh_.size();) {
+    const size_t at = fresh_[f];
+    const uint64_t key = out_.keys[at];
+    std::byte* payload = out_.payloads.data() + at * bytes;
+    // fresh_ rises by one at least an entry: eight entries spanning eight
+    // places are those places, and eight leaves of one parent its children.
+    if (f + 8 <= fresh_.size() && fresh_[f + 7] == at + 7 && octant_key_child_id(key) == 0 &&
+        octant_key_parent(out_.keys[at + 7]) == octant_key_parent(key)) {
+      descent_.children_materials(octant_from_key(octant_key_parent(key)), payload);
+      f += 8;
+    } else {
+      descent_.material(octant_from_key(key), payload);
+      ++f;
+    }
+  }
 }
 
 }  // namespace weaver

@@ -65,7 +65,8 @@ class SubtreeBalancer {
   void collect(const Octant& x, const Judgement& j, const Octant& root);
   bool wanted(const Octant& x, const Octant& root) const;
   void refine(SubtreeLeaves* leaves);
-  Status emit_leaf(uint64_t key, bool is_new, const std::byte* parent_payload);
+  void add_leaf(uint64_t key, bool is_new, const std::byte* parent_payload);
+  void fill_materials();
 
   const Descent& descent_;
   const bool fill_;
@@ -75,6 +76,7 @@ class SubtreeBalancer {
   std::vector<uint64_t> local_;              // those and the subtree's leaves, in key order
   LocalRipple ripple_;
   std::vector<uint64_t> created_;
+  std::vector<size_t> fresh_;  // where refine's new leaves are in out_, to fill
   SubtreeLeaves out_;
   uint64_t collected_count_ = 0;
 };

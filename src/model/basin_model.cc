@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <cstdio>
 
+#include "util/truncated_quotient.h"
+
 namespace weaver {
 namespace {
 
@@ -26,13 +28,46 @@ class Basin final : public VelocityModel {
   Material at(double x, double y, double z) const override {
     return material_of(z, sediment_depth(x, y), x, y, inclusion_cell());
   }
-  // The bowl depth once per column, the rest per point as at().
+  // The bowl depth once per column; the materials of sediment and of rock
+  // once per depth (they follow from Vs, which follows from the depth), and
+  // the inclusion cell's index once per coordinate; then each point takes
+  // one of three.  The values are at()'s, to the bit.
   void materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                             Material* out) const override {
     if (n > kLatticeMax) return VelocityModel::materials_on_lattice(xs, ys, zs, n, out);
-    double columns[kLatticeMax * kLatticeMax * kLatticeMax];
-    lattice_as_columns(zs, n, columns);
-    materials_on_columns(xs, ys, columns, n, out);
+    // Storage assigned whole below, not Materials zeroed first (a fifth of
+    // the function).
+    alignas(Material) unsigned char storage[2 * kLatticeMax * sizeof(Material)];
+    Material* sediment = reinterpret_cast<Material*>(storage);
+    Material* rock = sediment + kLatticeMax;
+    uint64_t cell_of[3][kLatticeMax];
+    const double* axes[3] = {xs, ys, zs};
+    for (int k = 0; k < n; ++k) {
+      sediment[k] = material_for(vs_of(zs[k], true, false), true);
+      rock[k] = material_for(vs_of(zs[k], false, false), false);
+    }
+    for (int a = 0; a < 3; ++a) {
+      for (int i = 0; i < n; ++i) cell_of[a][i] = InclusionCell::index(axes[a][i]);
+    }
+    const Material inclusion = material_for(vs_of(0, false, true), false);
+    InclusionCell& cell = inclusion_cell();
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double depth = sediment_depth(xs[i], ys[j]);
+        const bool may_hold = xs[i] >= 0 && ys[j] >= 0;
+        for (int k = 0; k < n; ++k) {
+          const Material* m = &rock[k];
+          if (zs[k] < depth) {
+            m = &sediment[k];
+          } else if (may_hold && zs[k] >= 0 && zs[k] < kInclusionDepth &&
+                     cell.holds_in(cell_of[0][i], cell_of[1][j], cell_of[2][k], xs[i], ys[j],
+                                   zs[k])) {
+            m = &inclusion;
+          }
+          out[(k * n + j) * n + i] = *m;
+        }
+      }
+    }
   }
   // The bowl depth once per column of the lattice; Vs of sediment and of
   // rock, and the inclusion cell's index, once per depth; an inclusion
@@ -223,17 +258,20 @@ class Basin final : public VelocityModel {
     const double r2 = kInclusionRadius * kInclusionRadius;
     bool some = false;
     for (uint64_t k = first[2]; k <= last[2]; ++k)
-      for (uint64_t j = first[1]; j <= last[1]; ++j)
+      for (uint64_t j = first[1]; j <= last[1]; ++j) {
+        const uint64_t row = InclusionSite::row_hash(j, k);
         for (uint64_t i = first[0]; i <= last[0]; ++i) {
-          const InclusionSite s = InclusionSite::of(i, j, k);
-          if (!s.has) continue;
-          double near2 = 0, far2 = 0;
-          axis_distance(s.c[0], lo[0], hi[0], &near2, &far2);
-          axis_distance(s.c[1], lo[1], hi[1], &near2, &far2);
-          axis_distance(s.c[2], lo[2], hi[2], &near2, &far2);
+          const uint64_t h = InclusionSite::cell_hash(i, row);
+          if (!InclusionSite::has_site(h)) continue;
+          double c[3], near2 = 0, far2 = 0;
+          InclusionSite::centre(i, j, k, h, c);
+          axis_distance(c[0], lo[0], hi[0], &near2, &far2);
+          axis_distance(c[1], lo[1], hi[1], &near2, &far2);
+          axis_distance(c[2], lo[2], hi[2], &near2, &far2);
           if (far2 < r2 * (1 - kRadiusMargin) && in_layer && cells == 1) return Reach::kAll;
           if (near2 < r2 * (1 + kRadiusMargin)) some = true;
         }
+      }
     return some ? Reach::kSome : Reach::kNone;
   }
 
@@ -241,9 +279,11 @@ class Basin final : public VelocityModel {
   // The material at (x, y, z), under a sediment floor at depth.
   static Material material_of(double z, double depth, double x, double y, InclusionCell& cell) {
     const bool sediment = z < depth;
-    const double vs = vs_of(z, sediment, !sediment && cell.holds(x, y, z));
-    // Poisson-solid-like Vp for rock, a water-saturated floor for sediments
-    // and inclusions; Gardner-like density.
+    return material_for(vs_of(z, sediment, !sediment && cell.holds(x, y, z)), sediment);
+  }
+  // Poisson-solid-like Vp for rock, a water-saturated floor for sediments
+  // and inclusions; Gardner-like density.
+  static Material material_for(double vs, bool sediment) {
     const double vp = std::max(1500.0, vs * (sediment ? 2.0 : std::sqrt(3.0)));
     const double rho = 1700 + 0.29 * vs;
     return {static_cast<float>(vp), static_cast<float>(vs), static_cast<float>(rho)};
@@ -283,16 +323,26 @@ class Basin final : public VelocityModel {
   }
 
   // Whether cell (i, j, k) holds an inclusion, and its centre.
+  // The hash is a chain, k's mixed first: a row of cells along x shares
+  // the mix of its (j, k) (row_hash), and only a cell that has an
+  // inclusion needs its centre.
   struct InclusionSite {
     bool has;
     double c[3];
-    static InclusionSite of(uint64_t i, uint64_t j, uint64_t k) {
-      const uint64_t h = mix(i * 0x100000001b3ull ^ mix(j * 0x2545f491ull ^ mix(k)));
+    static uint64_t row_hash(uint64_t j, uint64_t k) { return mix(j * 0x2545f491ull ^ mix(k)); }
+    static uint64_t cell_hash(uint64_t i, uint64_t row) { return mix(i * 0x100000001b3ull ^ row); }
+    static bool has_site(uint64_t h) { return (h & 0xffff) < kInclusionShare * 65536; }
+    static void centre(uint64_t i, uint64_t j, uint64_t k, uint64_t h, double* c) {
       const double span = (kInclusionCell - 2 * kInclusionRadius) / 65536;
-      return {(h & 0xffff) < kInclusionShare * 65536,
-              {i * kInclusionCell + kInclusionRadius + span * ((h >> 16) & 0xffff),
-               j * kInclusionCell + kInclusionRadius + span * ((h >> 32) & 0xffff),
-               k * kInclusionCell + kInclusionRadius + span * ((h >> 48) & 0xffff)}};
+      c[0] = i * kInclusionCell + kInclusionRadius + span * ((h >> 16) & 0xffff);
+      c[1] = j * kInclusionCell + kInclusionRadius + span * ((h >> 32) & 0xffff);
+      c[2] = k * kInclusionCell + kInclusionRadius + span * ((h >> 48) & 0xffff);
+    }
+    static InclusionSite of(uint64_t i, uint64_t j, uint64_t k) {
+      const uint64_t h = cell_hash(i, row_hash(j, k));
+      InclusionSite s{has_site(h), {}};
+      centre(i, j, k, h, s.c);
+      return s;
     }
   };
 
@@ -314,9 +364,9 @@ class Basin final : public VelocityModel {
       const double dx = x - cx_, dy = y - cy_, dz = z - cz_;
       return dx * dx + dy * dy + dz * dz < kInclusionRadius * kInclusionRadius;
     }
-    static uint64_t index(double v) {
-      return v < 0 ? 0 : static_cast<uint64_t>(v / kInclusionCell);
-    }
+    // (A product, not a division: a division was a twentieth of the
+    // lattices' time.)
+    static uint64_t index(double v) { return truncated_quotient(v, kInclusionCell); }
 
    private:
     void locate(uint64_t i, uint64_t j, uint64_t k) {
