@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <random>
 
 #include "construct/descent.h"
@@ -167,41 +168,96 @@ void expect_bounds_hold(const VelocityModel& m, const double lo[3], double edge,
   if (settled != nullptr) *settled += vs_lo == vs_hi;
 }
 
-TEST(Models, VsBoundsHoldAtEveryPointOfTheBox) {
-  std::mt19937_64 rng(11);
+// The boxes the bounds tests ask about, each to f(model, lo, edge, kind):
+// kind 0, boxes of every size anywhere in the domain (reaching `past` m
+// beyond its near sides), for each model; for the basin, kind 1, boxes of
+// 1 to soft_edge m at points in and near inclusions, and kind 2, boxes
+// across the rim and floor of the bowl at (22, 24) km.
+template <class F>
+void each_test_box(double past, double soft_edge, std::mt19937_64& rng, const F& f) {
   std::uniform_real_distribution<double> unit(0, 1);
   for (const char* name : {"halfspace", "loh1", "basin"}) {
     std::unique_ptr<VelocityModel> m;
     ASSERT_OK(make_model(name, "", &m));
-    int settled = 0;
     for (int i = 0; i < 3000; ++i) {
       const double edge = std::ldexp(100000.0, -int(rng() % 16));
-      const double lo[3] = {unit(rng) * 100000, unit(rng) * 100000, unit(rng) * 8000};
-      expect_bounds_hold(*m, lo, edge, rng, &settled);
+      const double lo[3] = {unit(rng) * 100000 - past, unit(rng) * 100000 - past,
+                            unit(rng) * 8000 - past};
+      f(*m, lo, edge, 0);
     }
-    EXPECT_GT(settled, 0) << name;
   }
   std::unique_ptr<VelocityModel> m;
   ASSERT_OK(make_model("basin", "", &m));
-  // Boxes of 1 to 100 m at points in and near inclusions, and across rims.
   const std::vector<std::array<double, 3>> soft = soft_points(*m);
   ASSERT_GT(soft.size(), 20u);
-  std::uniform_real_distribution<double> jitter(-60, 60), edge(1, 100);
-  int inside = 0;
+  std::uniform_real_distribution<double> jitter(-60, 60), edge(1, soft_edge);
   for (int i = 0; i < 20000; ++i) {
     const auto& c = soft[rng() % soft.size()];
     const double lo[3] = {c[0] + jitter(rng), c[1] + jitter(rng), c[2] + jitter(rng)};
-    int one = 0;
-    float vs_hi = 0;
-    expect_bounds_hold(*m, lo, edge(rng), rng, &one, &vs_hi);
-    inside += one && vs_hi == 100;
+    f(*m, lo, edge(rng), 1);
   }
-  for (int i = 0; i < 5000; ++i) {  // across the rim and floor of the bowl at (22, 24) km
+  for (int i = 0; i < 5000; ++i) {
     const double a = unit(rng) * 6.2832, r = 11000 * (0.9 + 0.2 * unit(rng));
     const double lo[3] = {22000 + r * std::cos(a), 24000 + r * std::sin(a), unit(rng) * 2500};
-    expect_bounds_hold(*m, lo, std::ldexp(800.0, -int(rng() % 8)), rng);
+    f(*m, lo, std::ldexp(800.0, -int(rng() % 8)), 2);
   }
-  EXPECT_GT(inside, 100);  // boxes wholly inside an inclusion are settled as such
+}
+
+TEST(Models, VsBoundsHoldAtEveryPointOfTheBox) {
+  std::mt19937_64 rng(11);
+  std::map<std::string, int> settled;
+  int inside = 0;
+  each_test_box(0, 100, rng,
+                [&](const VelocityModel& m, const double lo[3], double edge, int kind) {
+                  int one = 0;
+                  float vs_hi = 0;
+                  expect_bounds_hold(m, lo, edge, rng, &one, &vs_hi);
+                  if (kind == 0) settled[m.describe()] += one;
+                  // boxes wholly inside an inclusion are settled as such
+                  if (kind == 1) inside += one && vs_hi == 100;
+                });
+  ASSERT_EQ(settled.size(), 3u);
+  for (const auto& [model, n] : settled) EXPECT_GT(n, 0) << model;
+  EXPECT_GT(inside, 100);
+}
+
+// The eight halves' bounds at once are eight calls' bounds, bit for bit,
+// for every model (the basin shares its work between them; the others take
+// the default), some halves wanted and some not.
+void expect_eighths_as_calls(const VelocityModel& m, const double lo[3], double edge,
+                             std::mt19937_64& rng, int* looked) {
+  double edges[3][3];
+  for (int a = 0; a < 3; ++a) edges[a][0] = lo[a], edges[a][1] = lo[a] + edge / 2;
+  for (int a = 0; a < 3; ++a) edges[a][2] = lo[a] + edge;
+  bool want[8];
+  for (bool& w : want) w = rng() % 4 != 0;
+  float got_lo[8] = {}, got_hi[8] = {};
+  bool ok[8] = {};
+  m.vs_bounds_of_eighths(edges, want, got_lo, got_hi, ok);
+  for (int c = 0; c < 8; ++c) {
+    if (!want[c]) continue;
+    double box_lo[3], box_hi[3];
+    for (int a = 0; a < 3; ++a) {
+      const int b = (c >> a) & 1;
+      box_lo[a] = edges[a][b], box_hi[a] = edges[a][b + 1];
+    }
+    float want_lo = 0, want_hi = 0;
+    const bool want_ok = m.vs_bounds(box_lo, box_hi, &want_lo, &want_hi);
+    ASSERT_EQ(ok[c], want_ok) << lo[0] << " " << lo[1] << " " << lo[2] << " edge " << edge;
+    if (!want_ok) continue;
+    ASSERT_EQ(got_lo[c], want_lo) << lo[0] << " " << lo[1] << " " << lo[2] << " edge " << edge;
+    ASSERT_EQ(got_hi[c], want_hi) << lo[0] << " " << lo[1] << " " << lo[2] << " edge " << edge;
+    ++*looked;
+  }
+}
+
+TEST(Models, BoundsOfEighthsAreThoseOfEachEighth) {
+  std::mt19937_64 rng(12);
+  int looked = 0;
+  each_test_box(50, 1300, rng, [&](const VelocityModel& m, const double lo[3], double edge, int) {
+    expect_eighths_as_calls(m, lo, edge, rng, &looked);
+  });
+  EXPECT_GT(looked, 150000);
 }
 
 TEST(GridModel, InterpolatesAndClamps) {

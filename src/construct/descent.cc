@@ -74,14 +74,56 @@ double Descent::vs_min_of(const float* samples) const {
 // the lower bound keeps o a leaf, so does the least sample; if the upper
 // bound splits it, so does the least sample.
 Descent::Settled Descent::settle(const Octant& o, double* floor) const {
+  if (!o_.model_bounds) return Settled::kNo;
   float lo, hi;
   double box_lo[3], box_hi[3];
   box(o, box_lo, box_hi);
-  if (!o_.model_bounds || !model_.vs_bounds(box_lo, box_hi, &lo, &hi)) return Settled::kNo;
+  const bool ok = model_.vs_bounds(box_lo, box_hi, &lo, &hi);  // before lo and hi are read
+  return settled_by(o, ok, lo, hi, floor);
+}
+
+// What bounds [lo, hi] on the Vs of o's box say (ok false: the model gave
+// none), and the floor they give.
+Descent::Settled Descent::settled_by(const Octant& o, bool ok, float lo, float hi,
+                                     double* floor) const {
+  if (!ok) return Settled::kNo;
   *floor = std::max<double>(lo, o_.vs_min);
   if (!splits(o, *floor)) return Settled::kLeaf;
   if (splits(o, std::max<double>(hi, o_.vs_min))) return Settled::kSplit;
   return Settled::kNo;
+}
+
+// settle() for the children c of o with ask[c], their bounds asked of the
+// model at once (their boxes share work); open[c] where they do not
+// settle it.  Each box's sides as box() computes the child's.
+void Descent::settle_children(const Octant& o, const bool ask[8], Judgement out[8],
+                              bool open[8]) const {
+  if (!o_.model_bounds) {
+    for (int c = 0; c < 8; ++c) open[c] = ask[c];
+    return;
+  }
+  const double quarter = p_.tick_m / 4;
+  const uint64_t e4 = 4 * uint64_t{octant_edge(o)};
+  const uint32_t start[3] = {o.x, o.y, o.z};
+  double edges[3][3];
+  for (int a = 0; a < 3; ++a) {
+    const uint64_t base = 4 * uint64_t{start[a]};
+    edges[a][0] = double(base) * quarter;
+    edges[a][1] = double(base + e4 / 2) * quarter;
+    edges[a][2] = double(base + e4) * quarter;
+  }
+  float lo[8], hi[8];
+  bool ok[8] = {};
+  model_.vs_bounds_of_eighths(edges, ask, lo, hi, ok);
+  for (int c = 0; c < 8; ++c) {
+    if (!ask[c]) continue;
+    Judgement& j = out[c];
+    const double parent_floor = j.floor;
+    const Settled s = settled_by(octant_child(o, c), ok[c], lo[c], hi[c], &j.floor);
+    j.floor = std::max(j.floor, parent_floor);
+    open[c] = s == Settled::kNo;
+    j.split = s == Settled::kSplit;
+  }
 }
 
 // An octant of `level` in the box has its samples there, so their least
@@ -154,8 +196,8 @@ void Descent::judge_children(const Octant& o, const Judgement& parent, const boo
                              Judgement out[8]) const {
   const double floor = parent.floor;
   const int kSharedLattice = want == nullptr ? 4 : 9;
-  bool open[8] = {};
-  int opened = 0;
+  bool ask[8] = {}, open[8] = {};
+  bool asked = false;
   for (int c = 0; c < 8; ++c) {
     if (want != nullptr && !want[c]) continue;
     const Octant child = octant_child(o, c);
@@ -168,15 +210,13 @@ void Descent::judge_children(const Octant& o, const Judgement& parent, const boo
         continue;
       }
     }
-    if (!splits(child, floor)) continue;
-    const Settled s = settle(child, &j.floor);
-    j.floor = std::max(j.floor, floor);
-    if (s == Settled::kNo) {
-      open[c] = true, ++opened;
-    } else {
-      j.split = s == Settled::kSplit;
-    }
+    ask[c] = splits(child, floor);
+    asked |= ask[c];
   }
+  if (!asked) return;
+  settle_children(o, ask, out, open);
+  int opened = 0;
+  for (int c = 0; c < 8; ++c) opened += open[c];
   if (opened == 0) return;
   float fine[125];
   if (opened >= kSharedLattice) lattice(o, 5, fine);

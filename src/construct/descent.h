@@ -114,6 +114,8 @@ class Descent {
   enum class Settled { kLeaf, kSplit, kNo };
   // What the model's bounds over o's box say, and the floor they give.
   Settled settle(const Octant& o, double* floor) const;
+  Settled settled_by(const Octant& o, bool ok, float lo, float hi, double* floor) const;
+  void settle_children(const Octant& o, const bool ask[8], Judgement out[8], bool open[8]) const;
   // o's closed box in metres, its corners as lattice() computes them.
   void box(const Octant& o, double lo[3], double hi[3]) const;
   // Vs at o's n x n x n lattice (n = 3: its 27 sample points).

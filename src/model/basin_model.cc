@@ -156,22 +156,56 @@ class Basin final : public VelocityModel {
   // either kind.
   bool vs_bounds(const double lo[3], const double hi[3], float* vs_lo,
                  float* vs_hi) const override {
-    const Span depth = sediment_depth_span(lo, hi);
-    Span vs;
-    if (lo[2] < depth.hi) {  // some point may be above its floor
-      vs.add(static_cast<float>(vs_of(lo[2], true, false)));
-      vs.add(static_cast<float>(vs_of(hi[2], true, false)));
-    }
-    if (hi[2] >= depth.lo) {  // some point may be in rock
-      const Reach reach = inclusion_reach(lo, hi);
-      if (reach != Reach::kAll) {
-        vs.add(static_cast<float>(vs_of(lo[2], false, false)));
-        vs.add(static_cast<float>(vs_of(hi[2], false, false)));
-      }
-      if (reach != Reach::kNone) vs.add(static_cast<float>(kInclusionVs));
-    }
+    const float sediment[2] = {static_cast<float>(vs_of(lo[2], true, false)),
+                               static_cast<float>(vs_of(hi[2], true, false))};
+    const float rock[2] = {static_cast<float>(vs_of(lo[2], false, false)),
+                           static_cast<float>(vs_of(hi[2], false, false))};
+    const Span vs = vs_span(lo[2], hi[2], sediment_depth_span(lo, hi), sediment, rock,
+                            [&] { return inclusion_reach(lo, hi); });
     *vs_lo = vs.lo, *vs_hi = vs.hi;
     return true;
+  }
+  // The same for the eight halves of a box: the bowls' depth over each
+  // quarter of its columns (shared by the two halves in z), Vs at the three
+  // depths, the cells' indices at the three coordinates of each axis, and
+  // the inclusion sites of the whole box's cells, each found once.
+  void vs_bounds_of_eighths(const double edges[3][3], const bool want[8], float vs_lo[8],
+                            float vs_hi[8], bool ok[8]) const override {
+    float sediment[3], rock[3];
+    uint64_t index[3][3];
+    for (int t = 0; t < 3; ++t) {
+      sediment[t] = static_cast<float>(vs_of(edges[2][t], true, false));
+      rock[t] = static_cast<float>(vs_of(edges[2][t], false, false));
+      for (int a = 0; a < 3; ++a) index[a][t] = InclusionCell::index(edges[a][t]);
+    }
+    Span depth[4];
+    bool depth_known[4] = {};
+    SiteBlock block;
+    int block_state = 0;  // 0: not looked for, 1: found, 2: too many cells
+    for (int c = 0; c < 8; ++c) {
+      if (!want[c]) continue;
+      const int b[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+      double lo[3], hi[3];
+      uint64_t first[3], last[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = edges[a][b[a]], hi[a] = edges[a][b[a] + 1];
+        first[a] = index[a][b[a]], last[a] = index[a][b[a] + 1];
+      }
+      const int quarter = c & 3;
+      if (!depth_known[quarter]) {
+        depth[quarter] = sediment_depth_span(lo, hi), depth_known[quarter] = true;
+      }
+      auto reach = [&] {
+        if (block_state == 0) {
+          const uint64_t whole_first[3] = {index[0][0], index[1][0], index[2][0]};
+          const uint64_t whole_last[3] = {index[0][2], index[1][2], index[2][2]};
+          block_state = find_sites(whole_first, whole_last, &block) ? 1 : 2;
+        }
+        return inclusion_reach(lo, hi, first, last, block_state == 1 ? &block : nullptr);
+      };
+      const Span vs = vs_span(lo[2], hi[2], depth[quarter], sediment + b[2], rock + b[2], reach);
+      vs_lo[c] = static_cast<float>(vs.lo), vs_hi[c] = static_cast<float>(vs.hi), ok[c] = true;
+    }
   }
 
   std::string describe() const override {
@@ -244,34 +278,93 @@ class Basin final : public VelocityModel {
   // inclusion without looking: only coarse octants do, and they split.
   static constexpr uint64_t kMostCellsLooked = 27;
 
-  // Whether the rock points of [lo, hi] may lie in an inclusion: none, some,
-  // or all of the box (inside one sphere, which lies inside its cell).
-  static Reach inclusion_reach(const double lo[3], const double hi[3]) {
-    if (lo[2] >= kInclusionDepth || hi[0] < 0 || hi[1] < 0 || hi[2] < 0) return Reach::kNone;
-    const bool in_layer = lo[0] >= 0 && lo[1] >= 0 && lo[2] >= 0 && hi[2] < kInclusionDepth;
-    uint64_t first[3], last[3], cells = 1;
-    for (int a = 0; a < 3; ++a) {
-      first[a] = InclusionCell::index(lo[a]), last[a] = InclusionCell::index(hi[a]);
-      cells *= last[a] - first[a] + 1;
+  // The Vs of each kind of point the box [z_lo, z_hi] in depth may hold,
+  // over columns whose bowls' depth lies in `depth`: sediment[0..1] and
+  // rock[0..1] are each kind's Vs at z_lo and z_hi; reach() says whether
+  // its rock points may lie in an inclusion.
+  template <class ReachOf>
+  static Span vs_span(double z_lo, double z_hi, const Span& depth, const float* sediment,
+                      const float* rock, const ReachOf& reach) {
+    Span vs;
+    if (z_lo < depth.hi) {  // some point may be above its floor
+      vs.add(sediment[0]);
+      vs.add(sediment[1]);
     }
-    if (cells > kMostCellsLooked) return Reach::kSome;
-    const double r2 = kInclusionRadius * kInclusionRadius;
-    bool some = false;
+    if (z_hi >= depth.lo) {  // some point may be in rock
+      const Reach r = reach();
+      if (r != Reach::kAll) {
+        vs.add(rock[0]);
+        vs.add(rock[1]);
+      }
+      if (r != Reach::kNone) vs.add(static_cast<float>(kInclusionVs));
+    }
+    return vs;
+  }
+
+  // The inclusion sites of a block of at most kMostCellsLooked cells.
+  struct SiteBlock {
+    uint64_t first[3], size[3];
+    bool has[kMostCellsLooked];
+    double c[kMostCellsLooked][3];
+    size_t at(uint64_t i, uint64_t j, uint64_t k) const {
+      return ((k - first[2]) * size[1] + (j - first[1])) * size[0] + (i - first[0]);
+    }
+  };
+  // The sites of the cells [first, last] (false: more than kMostCellsLooked).
+  static bool find_sites(const uint64_t first[3], const uint64_t last[3], SiteBlock* b) {
+    uint64_t cells = 1;
+    for (int a = 0; a < 3; ++a) {
+      b->first[a] = first[a], b->size[a] = last[a] - first[a] + 1;
+      cells *= b->size[a];
+    }
+    if (cells > kMostCellsLooked) return false;
+    size_t s = 0;
     for (uint64_t k = first[2]; k <= last[2]; ++k)
       for (uint64_t j = first[1]; j <= last[1]; ++j) {
         const uint64_t row = InclusionSite::row_hash(j, k);
-        for (uint64_t i = first[0]; i <= last[0]; ++i) {
+        for (uint64_t i = first[0]; i <= last[0]; ++i, ++s) {
           const uint64_t h = InclusionSite::cell_hash(i, row);
-          if (!InclusionSite::has_site(h)) continue;
-          double c[3], near2 = 0, far2 = 0;
-          InclusionSite::centre(i, j, k, h, c);
-          axis_distance(c[0], lo[0], hi[0], &near2, &far2);
-          axis_distance(c[1], lo[1], hi[1], &near2, &far2);
-          axis_distance(c[2], lo[2], hi[2], &near2, &far2);
+          b->has[s] = InclusionSite::has_site(h);
+          if (b->has[s]) InclusionSite::centre(i, j, k, h, b->c[s]);
+        }
+      }
+    return true;
+  }
+
+  // Whether the rock points of [lo, hi] may lie in an inclusion: none, some,
+  // or all of the box (inside one sphere, which lies inside its cell).
+  static Reach inclusion_reach(const double lo[3], const double hi[3]) {
+    uint64_t first[3], last[3];
+    for (int a = 0; a < 3; ++a) {
+      first[a] = InclusionCell::index(lo[a]), last[a] = InclusionCell::index(hi[a]);
+    }
+    return inclusion_reach(lo, hi, first, last, nullptr);
+  }
+  // The same, the cells [first, last] the box meets known, and their sites
+  // found already where `block` (holding them) is not null.
+  static Reach inclusion_reach(const double lo[3], const double hi[3], const uint64_t first[3],
+                               const uint64_t last[3], const SiteBlock* block) {
+    if (lo[2] >= kInclusionDepth || hi[0] < 0 || hi[1] < 0 || hi[2] < 0) return Reach::kNone;
+    const bool in_layer = lo[0] >= 0 && lo[1] >= 0 && lo[2] >= 0 && hi[2] < kInclusionDepth;
+    uint64_t cells = 1;
+    for (int a = 0; a < 3; ++a) cells *= last[a] - first[a] + 1;
+    if (cells > kMostCellsLooked) return Reach::kSome;
+    SiteBlock own;
+    if (block == nullptr) find_sites(first, last, &own), block = &own;
+    const double r2 = kInclusionRadius * kInclusionRadius;
+    bool some = false;
+    for (uint64_t k = first[2]; k <= last[2]; ++k)
+      for (uint64_t j = first[1]; j <= last[1]; ++j)
+        for (uint64_t i = first[0]; i <= last[0]; ++i) {
+          const size_t s = block->at(i, j, k);
+          if (!block->has[s]) continue;
+          double near2 = 0, far2 = 0;
+          axis_distance(block->c[s][0], lo[0], hi[0], &near2, &far2);
+          axis_distance(block->c[s][1], lo[1], hi[1], &near2, &far2);
+          axis_distance(block->c[s][2], lo[2], hi[2], &near2, &far2);
           if (far2 < r2 * (1 - kRadiusMargin) && in_layer && cells == 1) return Reach::kAll;
           if (near2 < r2 * (1 + kRadiusMargin)) some = true;
         }
-      }
     return some ? Reach::kSome : Reach::kNone;
   }
 

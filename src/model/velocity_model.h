@@ -82,6 +82,23 @@ class VelocityModel {
     (void)lo, (void)hi, (void)vs_lo, (void)vs_hi;
     return false;
   }
+  // vs_bounds of each box c with want[c] among the eight that halve a box
+  // on every axis: box c spans [edges[a][b], edges[a][b + 1]] on axis a,
+  // b its bit a; ok[c] is vs_bounds' answer.  The same answers as eight
+  // calls (construct asks it for an octant's children); models override it
+  // where the boxes share work.
+  virtual void vs_bounds_of_eighths(const double edges[3][3], const bool want[8], float vs_lo[8],
+                                    float vs_hi[8], bool ok[8]) const {
+    for (int c = 0; c < 8; ++c) {
+      if (!want[c]) continue;
+      double lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        const int b = (c >> a) & 1;
+        lo[a] = edges[a][b], hi[a] = edges[a][b + 1];
+      }
+      ok[c] = vs_bounds(lo, hi, &vs_lo[c], &vs_hi[c]);
+    }
+  }
   // The points asked next (until the next focus, on this thread) lie in the
   // box [lo, hi] (metres, bounds included): construct says so before each
   // subtree.  A model read from storage loads the box once; others ignore it.

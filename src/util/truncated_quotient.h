@@ -14,11 +14,12 @@ namespace weaver {
 // 0 for v <= 0.
 inline uint64_t truncated_quotient(double v, double d) {
   if (v <= 0) return 0;
+  // Signed conversions: one instruction each way (the quotient is below 2^52).
   const double p = v * (1 / d);
-  const uint64_t q = static_cast<uint64_t>(p);
+  const int64_t q = static_cast<int64_t>(p);
   const double frac = p - static_cast<double>(q);
   if (frac < 1e-9 || frac > 1 - 1e-9) return static_cast<uint64_t>(v / d);
-  return q;
+  return static_cast<uint64_t>(q);
 }
 
 }  // namespace weaver
