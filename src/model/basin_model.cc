@@ -43,70 +43,25 @@ class Basin final : public VelocityModel {
     alignas(Material) unsigned char storage[2 * kLatticeMax * sizeof(Material)];
     Material* sediment = reinterpret_cast<Material*>(storage);
     Material* rock = sediment + kLatticeMax;
-    uint64_t cell_of[3][kLatticeMax];
-    const double* axes[3] = {xs, ys, zs};
     for (int k = 0; k < n; ++k) {
       sediment[k] = material_for(vs_of(zs[k], true, false), true);
       rock[k] = material_for(vs_of(zs[k], false, false), false);
     }
-    for (int a = 0; a < 3; ++a) {
-      for (int i = 0; i < n; ++i) cell_of[a][i] = InclusionCell::index(axes[a][i]);
-    }
     const Material inclusion = material_for(vs_of(0, false, true), false);
-    InclusionCell& cell = inclusion_cell();
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        const double depth = sediment_depth(xs[i], ys[j]);
-        const bool may_hold = xs[i] >= 0 && ys[j] >= 0;
-        for (int k = 0; k < n; ++k) {
-          const Material* m = &rock[k];
-          if (zs[k] < depth) {
-            m = &sediment[k];
-          } else if (may_hold && zs[k] >= 0 && zs[k] < kInclusionDepth &&
-                     cell.holds_in(cell_of[0][i], cell_of[1][j], cell_of[2][k], xs[i], ys[j],
-                                   zs[k])) {
-            m = &inclusion;
-          }
-          out[(k * n + j) * n + i] = *m;
-        }
-      }
-    }
+    pick_on_lattice(xs, ys, zs, n, sediment, rock, inclusion, inclusion_cell(), out);
   }
-  // The bowl depth once per column of the lattice; Vs of sediment and of
-  // rock, and the inclusion cell's index, once per depth; an inclusion
-  // cell's hash once per run of points in the same cell (a small octant's
-  // points share one); Vs only.  The values are at()'s, to the bit.
+  // The same with Vs only; an inclusion cell's hash once per run of points
+  // in the same cell (a small octant's points share one).
   void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                      float* out) const override {
     if (n > kLatticeMax) return VelocityModel::vs_on_lattice(xs, ys, zs, n, out);
-    float sediment_vs[kLatticeMax], rock_vs[kLatticeMax];
-    uint64_t cell_of[3][kLatticeMax];
-    const double* axes[3] = {xs, ys, zs};
+    float sediment[kLatticeMax], rock[kLatticeMax];
     for (int k = 0; k < n; ++k) {
-      sediment_vs[k] = static_cast<float>(vs_of(zs[k], true, false));
-      rock_vs[k] = static_cast<float>(vs_of(zs[k], false, false));
-    }
-    for (int a = 0; a < 3; ++a) {
-      for (int i = 0; i < n; ++i) cell_of[a][i] = InclusionCell::index(axes[a][i]);
+      sediment[k] = static_cast<float>(vs_of(zs[k], true, false));
+      rock[k] = static_cast<float>(vs_of(zs[k], false, false));
     }
     InclusionCell cell;
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        const double depth = sediment_depth(xs[i], ys[j]);
-        const bool may_hold = xs[i] >= 0 && ys[j] >= 0;
-        for (int k = 0; k < n; ++k) {
-          float vs = rock_vs[k];
-          if (zs[k] < depth) {
-            vs = sediment_vs[k];
-          } else if (may_hold && zs[k] >= 0 && zs[k] < kInclusionDepth &&
-                     cell.holds_in(cell_of[0][i], cell_of[1][j], cell_of[2][k], xs[i], ys[j],
-                                   zs[k])) {
-            vs = static_cast<float>(kInclusionVs);
-          }
-          out[(k * n + j) * n + i] = vs;
-        }
-      }
-    }
+    pick_on_lattice(xs, ys, zs, n, sediment, rock, static_cast<float>(kInclusionVs), cell, out);
   }
 
   // Columns of their own depths (a model under a ground): the bowl depth
@@ -175,6 +130,38 @@ class Basin final : public VelocityModel {
  private:
   static constexpr int kLatticeMax = 8;
 
+  // Each point (xs[i], ys[j], zs[k]) of an n x n x n lattice (n at most
+  // kLatticeMax) takes the value of its kind, as at() finds it: sediment[k]
+  // above its column's bowl floor, `inclusion` inside an inclusion, else
+  // rock[k]; into out[(k * n + j) * n + i].  The bowl depth once per
+  // column, the inclusion cells' indices once per coordinate.
+  template <class T>
+  static void pick_on_lattice(const double* xs, const double* ys, const double* zs, int n,
+                              const T* sediment, const T* rock, const T& inclusion,
+                              InclusionCell& cell, T* out) {
+    uint64_t cell_of[3][kLatticeMax];
+    const double* axes[3] = {xs, ys, zs};
+    for (int a = 0; a < 3; ++a) {
+      for (int i = 0; i < n; ++i) cell_of[a][i] = InclusionCell::index(axes[a][i]);
+    }
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double depth = sediment_depth(xs[i], ys[j]);
+        const bool may_hold = xs[i] >= 0 && ys[j] >= 0;
+        for (int k = 0; k < n; ++k) {
+          const T* v = &rock[k];
+          if (zs[k] < depth) {
+            v = &sediment[k];
+          } else if (may_hold && zs[k] >= 0 && zs[k] < kInclusionDepth &&
+                     cell.holds_in(cell_of[0][i], cell_of[1][j], cell_of[2][k], xs[i], ys[j],
+                                   zs[k])) {
+            v = &inclusion;
+          }
+          out[(k * n + j) * n + i] = *v;
+        }
+      }
+    }
+  }
   // The material at (x, y, z), under a sediment floor at depth.
   static Material material_of(double z, double depth, double x, double y, InclusionCell& cell) {
     const bool sediment = z < depth;
