@@ -64,10 +64,14 @@ void check_one(const Octant& o) {
       ASSERT_EQ(fast, slow);
     }
     if (o.level < kMaxLevel) {
-      uint64_t by_key = 0;
+      uint64_t by_key = 0, by_parts = 1;
       ASSERT_EQ(octant_key_neighbour(key, d, &by_key), in_fast);
+      ASSERT_EQ(KeyNeighbours(key).neighbour(d, &by_parts), in_fast);
       if (in_fast) {
         ASSERT_EQ(by_key, octant_key(slow));
+        ASSERT_EQ(by_parts, octant_key(slow));
+      } else {
+        ASSERT_EQ(by_parts, 0u);
       }
     }
   }

@@ -237,10 +237,10 @@ void LocalRipple::Lane::take(const Ask* begin, const Ask* end, int l,
       candidates.resize(std::max(2 * candidates.size(), count + 64));
     }
     uint64_t* out = candidates.data();
+    const KeyNeighbours around(a->parent);  // each axis stepped once, not once a neighbour
     for (uint32_t bits = asked; bits != 0; bits &= bits - 1) {
       uint64_t nb = 0;
-      const bool in_root =
-          octant_key_neighbour(a->parent, kFaceAndEdgeDirections[std::countr_zero(bits)], &nb);
+      const bool in_root = around.neighbour(kFaceAndEdgeDirections[std::countr_zero(bits)], &nb);
       // (Outside the root nb is 0, the root's key: no candidate's, whose
       // level is at least 1, so putting it among the recent keys only
       // lets a repeat through.)
