@@ -513,6 +513,53 @@ TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
 // Construct from a model database decides the octants its bounds settle as
 // the samples would: the tables, balanced and not, are those of a construct
 // that samples every octant, over a domain past the model's box (clamped).
+// The eight halves' bounds at once are eight calls' bounds, bit for bit,
+// and say none where a call says none (a half reaching past the focused
+// region), for boxes of every size, aligned or not, some halves not asked.
+TEST(ModelDb, BoundsOfEighthsAreThoseOfEachEighth) {
+  const std::string model = import_bounds_model("eighths");
+  std::unique_ptr<DbModel> m;
+  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &m).ok());
+  const double focus_lo[3] = {300, 0, 100}, focus_hi[3] = {7900, 7000, 5500};
+  m->focus(focus_lo, focus_hi);
+  std::mt19937_64 rng(8);
+  const auto uniform = [&](double a, double b) {
+    return std::uniform_real_distribution<double>(a, b)(rng);
+  };
+  int looked = 0, refused = 0;
+  for (int n = 0; n < 4000; ++n) {
+    const double side = std::pow(2.0, uniform(3, 13));
+    double edges[3][3];
+    for (int a = 0; a < 3; ++a) {
+      const double lo = n % 2 ? std::floor(uniform(0, 8000) / 100) * 100 : uniform(0, 8000);
+      edges[a][0] = lo, edges[a][1] = lo + side / 2, edges[a][2] = lo + side;
+    }
+    bool want[8];
+    for (bool& w : want) w = rng() % 4 != 0;
+    float got_lo[8] = {}, got_hi[8] = {};
+    bool ok[8] = {};
+    m->vs_bounds_of_eighths(edges, want, got_lo, got_hi, ok);
+    for (int c = 0; c < 8; ++c) {
+      if (!want[c]) continue;
+      double lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        const int b = (c >> a) & 1;
+        lo[a] = edges[a][b], hi[a] = edges[a][b + 1];
+      }
+      float want_lo = 0, want_hi = 0;
+      const bool want_ok = m->vs_bounds(lo, hi, &want_lo, &want_hi);
+      ASSERT_EQ(ok[c], want_ok) << "box " << n << " half " << c;
+      refused += !want_ok;
+      if (!want_ok) continue;
+      ASSERT_EQ(got_lo[c], want_lo) << "box " << n << " half " << c;
+      ASSERT_EQ(got_hi[c], want_hi) << "box " << n << " half " << c;
+      ++looked;
+    }
+  }
+  EXPECT_GT(looked, 5000);
+  EXPECT_GT(refused, 500);
+}
+
 TEST(ModelDb, VsBoundsChangeNoConstructedTable) {
   const std::string model = import_bounds_model("bounds_construct");
   for (bool balanced : {true, false}) {

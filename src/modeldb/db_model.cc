@@ -363,6 +363,23 @@ bool DbModel::vs_bounds(const double lo[3], const double hi[3], float* vs_lo, fl
                             pixel_of(hi[0], hi[1], hi[2], &clamped), vs_lo, vs_hi);
 }
 
+void DbModel::vs_bounds_of_eighths(const double edges[3][3], const bool want[8], float vs_lo[8],
+                                   float vs_hi[8], bool ok[8]) const {
+  Reader& r = reader();
+  bool clamped = false;
+  uint32_t pixel[3][3];  // by axis and coordinate (pixel_of's, an axis at a time)
+  for (int a = 0; a < 3; ++a) {
+    for (int t = 0; t < 3; ++t) pixel[a][t] = pixel_on(a, edges[a][t], &clamped);
+  }
+  for (int c = 0; c < 8; ++c) {
+    if (!want[c]) continue;
+    const int b[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+    const Coord lo{pixel[0][b[0]], pixel[1][b[1]], pixel[2][b[2]]};
+    const Coord hi{pixel[0][b[0] + 1], pixel[1][b[1] + 1], pixel[2][b[2] + 1]};
+    ok[c] = r.opened.ok() && r.region.vs_bounds(lo, hi, &vs_lo[c], &vs_hi[c]);
+  }
+}
+
 std::string DbModel::describe() const {
   return "model database " + dir_ + " (" + info_.source + ", " + std::to_string(octants_) +
          " octants)";

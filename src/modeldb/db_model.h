@@ -66,6 +66,9 @@ class DbModel final : public VelocityModel {
   // From the focused region's Vs pyramid (model_region.h), where it holds
   // the box; false elsewhere.
   bool vs_bounds(const double lo[3], const double hi[3], float* vs_lo, float* vs_hi) const override;
+  // The eight halves' pixels found once an axis (three coordinates each).
+  void vs_bounds_of_eighths(const double edges[3][3], const bool want[8], float vs_lo[8],
+                            float vs_hi[8], bool ok[8]) const override;
   std::string describe() const override;
   std::string geo() const override { return info_.geo; }
   bool has_q() const override { return info_.has_q; }
