@@ -12,6 +12,7 @@
 
 #include "construct/construct.h"
 #include "db/database.h"
+#include "eighths_check.h"
 #include "model/grid_model.h"
 #include "model/material_merge.h"
 #include "modeldb/db_model.h"
@@ -536,25 +537,8 @@ TEST(ModelDb, BoundsOfEighthsAreThoseOfEachEighth) {
     }
     bool want[8];
     for (bool& w : want) w = rng() % 4 != 0;
-    float got_lo[8] = {}, got_hi[8] = {};
-    bool ok[8] = {};
-    m->vs_bounds_of_eighths(edges, want, got_lo, got_hi, ok);
-    for (int c = 0; c < 8; ++c) {
-      if (!want[c]) continue;
-      double lo[3], hi[3];
-      for (int a = 0; a < 3; ++a) {
-        const int b = (c >> a) & 1;
-        lo[a] = edges[a][b], hi[a] = edges[a][b + 1];
-      }
-      float want_lo = 0, want_hi = 0;
-      const bool want_ok = m->vs_bounds(lo, hi, &want_lo, &want_hi);
-      ASSERT_EQ(ok[c], want_ok) << "box " << n << " half " << c;
-      refused += !want_ok;
-      if (!want_ok) continue;
-      ASSERT_EQ(got_lo[c], want_lo) << "box " << n << " half " << c;
-      ASSERT_EQ(got_hi[c], want_hi) << "box " << n << " half " << c;
-      ++looked;
-    }
+    expect_eighths_as_calls(*m, edges, want, &looked, &refused);
+    if (HasFatalFailure()) return;
   }
   EXPECT_GT(looked, 5000);
   EXPECT_GT(refused, 500);
