@@ -326,17 +326,23 @@ std::string import_bounds_model(const std::string& name) {
   return model;
 }
 
+// The box the bounds tests focus their model on, inside the model's own.
+constexpr double kBoundsFocusLo[3] = {300, 0, 100}, kBoundsFocusHi[3] = {7900, 7000, 5500};
+
+// The model database at `model`, opened and focused on that box.
+void open_focused(const std::string& model, std::unique_ptr<DbModel>* m) {
+  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, m).ok());
+  (*m)->focus(kBoundsFocusLo, kBoundsFocusHi);
+}
+
 // The bounds of a box hold the Vs at() gives at every point of it, corners
 // and faces included (the reference: a 7 x 7 x 7 lattice over the closed
 // box and 200 random points in it, each looked up alone), for boxes of every
 // size, aligned or not, inside the focused region; and they are tight where
 // the model is uniform.  Outside the region there are none.
 TEST(ModelDb, VsBoundsHoldEveryPointOfTheBox) {
-  const std::string model = import_bounds_model("bounds");
   std::unique_ptr<DbModel> m;
-  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &m).ok());
-  const double focus_lo[3] = {300, 0, 100}, focus_hi[3] = {7900, 7000, 5500};
-  m->focus(focus_lo, focus_hi);
+  ASSERT_NO_FATAL_FAILURE(open_focused(import_bounds_model("bounds"), &m));
   std::mt19937_64 rng(7);
   const auto uniform = [&](double a, double b) {
     return std::uniform_real_distribution<double>(a, b)(rng);
@@ -346,10 +352,10 @@ TEST(ModelDb, VsBoundsHoldEveryPointOfTheBox) {
     double lo[3], hi[3];
     const double side = n < 4 ? 6000 : std::pow(2.0, uniform(3, 12));
     for (int a = 0; a < 3; ++a) {
-      const double room = focus_hi[a] - focus_lo[a];
+      const double room = kBoundsFocusHi[a] - kBoundsFocusLo[a];
       const double s = std::min(side, room);
-      lo[a] = n % 2 ? focus_lo[a] + std::floor(uniform(0, room - s) / 100) * 100
-                    : uniform(focus_lo[a], focus_hi[a] - s);
+      lo[a] = n % 2 ? kBoundsFocusLo[a] + std::floor(uniform(0, room - s) / 100) * 100
+                    : uniform(kBoundsFocusLo[a], kBoundsFocusHi[a] - s);
       hi[a] = lo[a] + s;
     }
     float vs_lo = 0, vs_hi = 0;
@@ -511,18 +517,12 @@ TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
   EXPECT_GT(across, 300) << "lattices across the region's side";
 }
 
-// Construct from a model database decides the octants its bounds settle as
-// the samples would: the tables, balanced and not, are those of a construct
-// that samples every octant, over a domain past the model's box (clamped).
 // The eight halves' bounds at once are eight calls' bounds, bit for bit,
 // and say none where a call says none (a half reaching past the focused
 // region), for boxes of every size, aligned or not, some halves not asked.
 TEST(ModelDb, BoundsOfEighthsAreThoseOfEachEighth) {
-  const std::string model = import_bounds_model("eighths");
   std::unique_ptr<DbModel> m;
-  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &m).ok());
-  const double focus_lo[3] = {300, 0, 100}, focus_hi[3] = {7900, 7000, 5500};
-  m->focus(focus_lo, focus_hi);
+  ASSERT_NO_FATAL_FAILURE(open_focused(import_bounds_model("eighths"), &m));
   std::mt19937_64 rng(8);
   const auto uniform = [&](double a, double b) {
     return std::uniform_real_distribution<double>(a, b)(rng);
@@ -544,6 +544,9 @@ TEST(ModelDb, BoundsOfEighthsAreThoseOfEachEighth) {
   EXPECT_GT(refused, 500);
 }
 
+// Construct from a model database decides the octants its bounds settle as
+// the samples would: the tables, balanced and not, are those of a construct
+// that samples every octant, over a domain past the model's box (clamped).
 TEST(ModelDb, VsBoundsChangeNoConstructedTable) {
   const std::string model = import_bounds_model("bounds_construct");
   for (bool balanced : {true, false}) {
