@@ -364,6 +364,16 @@ constexpr uint64_t octant_key_child(uint64_t key, int c) {
   return ((m >> 3) << 7) | slot;
 }
 
+// What the keys of two octants of `level` next to each other in Z-order
+// differ by (the later's minus the earlier's): the octants of one level
+// inside an octant have keys key_0 + i * stride, i their Z-order there.
+// REQUIRES: level < kMaxLevel (the level-20 keys hold a code's last bits
+// in their level byte).
+constexpr uint64_t octant_key_stride(int level) {
+  assert(level >= 0 && level < kMaxLevel);
+  return uint64_t{1} << (3 * (kMaxLevel - level) - 3 + 7);
+}
+
 // The key of the level-20 octant whose Morton code is m (a pixel's code).
 // REQUIRES: m < 2^60.
 constexpr uint64_t pixel_key_of_morton(uint64_t m) {

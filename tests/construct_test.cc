@@ -70,17 +70,17 @@ TEST(Models, BasinInclusionsSitInShallowRockOnly) {
 }
 
 // The basin's shared-work lattices (of Vs, and of whole materials) agree
-// point by point with plain samples, on the 3- and 5-point lattices
-// construct asks for.
+// point by point with plain samples, on the lattices construct asks for
+// (2 to 8 points a side).
 void expect_lattice_matches_sampling(const VelocityModel& m, double x, double y, double z, double h,
                                      int n, int* soft) {
-  double axes[3][5] = {};
+  double axes[3][8] = {};
   for (int i = 0; i < n; ++i)
     axes[0][i] = x + i * h, axes[1][i] = y + i * h, axes[2][i] = z + i * h;
-  float fast[125], plain[125];
+  float fast[512], plain[512];
   m.vs_on_lattice(axes[0], axes[1], axes[2], n, fast);
   m.VelocityModel::vs_on_lattice(axes[0], axes[1], axes[2], n, plain);
-  Material materials[125];
+  Material materials[512];
   m.materials_on_lattice(axes[0], axes[1], axes[2], n, materials);
   for (int p = 0; p < n * n * n; ++p) {
     ASSERT_EQ(fast[p], plain[p]) << x << " " << y << " " << z << " " << h << " n " << n << " at "
@@ -91,7 +91,7 @@ void expect_lattice_matches_sampling(const VelocityModel& m, double x, double y,
   }
   // Columns of their own depths, as a model under a ground asks: each
   // column shifted, some above z = 0.
-  double zs[125];
+  double zs[512];
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i)
       for (int k = 0; k < n; ++k)
@@ -119,14 +119,16 @@ std::vector<std::array<double, 3>> soft_points(const VelocityModel& m) {
 }
 
 TEST(Models, BasinLatticeMatchesSampling) {
-  constexpr int kSizes[3] = {2, 3, 5};  // sibling centres, an octant's samples, its children's
+  // Sibling centres, an octant's samples, its children's, and the centres
+  // of a block of leaves (4 and 8 a side).
+  constexpr int kSizes[5] = {2, 3, 5, 4, 8};
   std::unique_ptr<VelocityModel> m;
   ASSERT_OK(make_model("basin", "", &m));
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> x(0, 100000), z(0, 8000), h(1, 400);
   int soft = 0;
   for (int i = 0; i < 20000; ++i) {
-    expect_lattice_matches_sampling(*m, x(rng), x(rng), z(rng), h(rng), kSizes[i % 3], &soft);
+    expect_lattice_matches_sampling(*m, x(rng), x(rng), z(rng), h(rng), kSizes[i % 5], &soft);
   }
   // Small lattices at and around inclusions (the cached cell of the fast
   // path), across 600 m cell borders too.
@@ -137,7 +139,7 @@ TEST(Models, BasinLatticeMatchesSampling) {
   for (int i = 0; i < 20000; ++i) {
     const auto& c = inclusions[rng() % inclusions.size()];
     expect_lattice_matches_sampling(*m, c[0] + jitter(rng), c[1] + jitter(rng), c[2] + jitter(rng),
-                                    small(rng), kSizes[i % 3], &soft);
+                                    small(rng), kSizes[i % 5], &soft);
   }
   EXPECT_GT(soft, 20000);  // the lattices do meet inclusions
 }
@@ -412,17 +414,22 @@ TEST(Construct, AnyThreadCountAndBudgetWritesTheSameTable) {
 }
 
 // Octants settled by the model's bounds are the ones samples would have
-// settled the same way: the tables, balanced and not, and the figures are
+// settled the same way, and so are the blocks of leaves the bounds show to
+// be of one level: the tables, balanced and not, and the figures are
 // those of a construct that samples every octant, on a corner of the basin
 // holding part of a bowl and a few hundred inclusions (3 m leaves in 3 km
-// of rock: the basin's deepest grading), and on LOH.1.
+// of rock: the basin's deepest grading; its blocks lie in inclusions), on a
+// corner at 0.5 Hz (blocks in graded rock and sediment, a bowl), and on
+// LOH.1 (blocks in its layers).
 TEST(Construct, ModelBoundsChangeNothingButTheSamplesTaken) {
   struct Case {
     const char* model;
     double freq;
     std::array<double, 3> domain_m;
   };
-  const Case cases[] = {{"basin", 1.0, {14000, 14000, 3000}}, {"loh1", 2.0, {8000, 4000, 3000}}};
+  const Case cases[] = {{"basin", 1.0, {14000, 14000, 3000}},
+                        {"basin", 0.5, {25000, 25000, 6250}},
+                        {"loh1", 2.0, {8000, 4000, 3000}}};
   for (const Case& c : cases) {
     for (bool balanced : {true, false}) {
       std::string tables[2];
@@ -442,6 +449,10 @@ TEST(Construct, ModelBoundsChangeNothingButTheSamplesTaken) {
       }
       SCOPED_TRACE(std::string(c.model) + (balanced ? ", balanced" : ", unbalanced"));
       EXPECT_GT(results[0].elements, 10000u);
+      // Without bounds every leaf is judged; with them most are written as
+      // blocks of one level, which must change nothing either.
+      EXPECT_EQ(results[0].blocked, 0u);
+      EXPECT_GT(results[1].blocked, 2000u);
       ASSERT_EQ(tables[1], tables[0]);
       EXPECT_EQ(results[1].levels, results[0].levels);
       EXPECT_EQ(results[1].worst_ppw, results[0].worst_ppw);

@@ -464,8 +464,9 @@ TEST(ModelDb, PointsOutsideTheRegionAnswerAsTheTable) {
   }
 }
 
-// A lattice of samples (construct's 3 x 3 x 3 and 5 x 5 x 5, and the 2 x 2
-// x 2 of sibling leaves' centres) inside the focused region, across its side
+// A lattice of samples (construct's 3 x 3 x 3 and 5 x 5 x 5, the 2 x 2 x 2
+// of sibling leaves' centres, and the 4 x 4 x 4 and 8 x 8 x 8 of a block of
+// leaves' centres) inside the focused region, across its side
 // or wholly outside it gives at each point the Vs a model never focused looks
 // up there, and the material its at() gives.
 TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
@@ -481,9 +482,10 @@ TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
   m->focus(focus_lo, focus_hi);
   int across = 0;
   for (int t = 0; t < 3000; ++t) {
-    const int n = t % 3 == 0 ? 3 : t % 3 == 1 ? 5 : 2;
+    constexpr int kSizes[5] = {3, 5, 2, 4, 8};  // construct's lattices
+    const int n = kSizes[t % 5];
     const double side = std::pow(2.0, uniform(5, 11));
-    double axes[3][5];
+    double axes[3][8];
     bool in = true, out = true;
     for (int a = 0; a < 3; ++a) {
       const double from = uniform(focus_lo[a] - 1500, focus_hi[a] + 500);
@@ -494,8 +496,8 @@ TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
       }
     }
     across += !in && !out;
-    float got[125];
-    Material materials[125];
+    float got[512];
+    Material materials[512];
     m->vs_on_lattice(axes[0], axes[1], axes[2], n, got);
     m->materials_on_lattice(axes[0], axes[1], axes[2], n, materials);
     for (int k = 0; k < n; ++k)

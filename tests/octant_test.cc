@@ -56,6 +56,14 @@ void check_one(const Octant& o) {
       ASSERT_LT(octant_key(c), octant_key_subtree_end(o));
     }
   }
+  // The octants of one level inside o, in Z-order, step by the stride.
+  if (o.level + 2 < kMaxLevel) {
+    const uint64_t first = octant_key(reference::child(reference::child(o, 0), 0));
+    for (int i = 0; i < 64; ++i) {
+      const Octant g = reference::child(reference::child(o, i / 8), i % 8);
+      ASSERT_EQ(octant_key(g), first + i * octant_key_stride(o.level + 2));
+    }
+  }
   for (const Direction d : kAllDirections) {
     Octant fast{}, slow{};
     const bool in_fast = octant_neighbour(o, d, &fast);

@@ -143,6 +143,9 @@ struct ConstructResult {
   // Balanced: the descent's leaves before the balance split some, and the
   // leaves outside the subtrees descended again to balance them against.
   uint64_t descended = 0, neighbours = 0;
+  // The descent's leaves written as whole blocks of one level, unjudged
+  // one by one (Descent::emit_block).
+  uint64_t blocked = 0;
   // Carved: the leaves dropped as wholly above the ground, and the kept
   // leaves the ground crosses (solid fraction below 1).
   uint64_t air = 0, cut = 0;

@@ -14,6 +14,7 @@ void SubtreeLeaves::clear() {
   sides.clear();
   levels = {};
   elements = 0;
+  blocked = 0;
   smallest_edge_m = largest_edge_m = worst_ppw = 0;
   least_vs.fill(HUGE_VAL);
   border_lo = border_hi = {};
@@ -30,6 +31,7 @@ void SubtreeLeaves::add_to(ConstructResult* r) const {
   r->largest_edge_m = std::max(r->largest_edge_m, largest_edge_m);
   if (r->elements == 0 || worst_ppw < r->worst_ppw) r->worst_ppw = worst_ppw;
   r->elements += elements;
+  r->blocked += blocked;
   r->span.add(span);
 }
 
@@ -73,21 +75,22 @@ double Descent::vs_min_of(const float* samples) const {
 // The samples lie in o's box, so their least Vs lies within the bounds: if
 // the lower bound keeps o a leaf, so does the least sample; if the upper
 // bound splits it, so does the least sample.
-Descent::Settled Descent::settle(const Octant& o, double* floor) const {
+Descent::Settled Descent::settle(const Octant& o, double* floor, double* ceiling) const {
   if (!o_.model_bounds) return Settled::kNo;
   float lo, hi;
   double box_lo[3], box_hi[3];
   box(o, box_lo, box_hi);
   const bool ok = model_.vs_bounds(box_lo, box_hi, &lo, &hi);  // before lo and hi are read
-  return settled_by(o, ok, lo, hi, floor);
+  return settled_by(o, ok, lo, hi, floor, ceiling);
 }
 
 // What bounds [lo, hi] on the Vs of o's box say (ok false: the model gave
-// none), and the floor they give.
-Descent::Settled Descent::settled_by(const Octant& o, bool ok, float lo, float hi,
-                                     double* floor) const {
+// none), and the floor they give; the ceiling is lowered to hi's.
+Descent::Settled Descent::settled_by(const Octant& o, bool ok, float lo, float hi, double* floor,
+                                     double* ceiling) const {
   if (!ok) return Settled::kNo;
   *floor = std::max<double>(lo, o_.vs_min);
+  *ceiling = std::min(*ceiling, std::max<double>(hi, o_.vs_min));
   if (!splits(o, *floor)) return Settled::kLeaf;
   if (splits(o, std::max<double>(hi, o_.vs_min))) return Settled::kSplit;
   return Settled::kNo;
@@ -119,7 +122,7 @@ void Descent::settle_children(const Octant& o, const bool ask[8], Judgement out[
     if (!ask[c]) continue;
     Judgement& j = out[c];
     const double parent_floor = j.floor;
-    const Settled s = settled_by(octant_child(o, c), ok[c], lo[c], hi[c], &j.floor);
+    const Settled s = settled_by(octant_child(o, c), ok[c], lo[c], hi[c], &j.floor, &j.ceiling);
     j.floor = std::max(j.floor, parent_floor);
     open[c] = s == Settled::kNo;
     j.split = s == Settled::kSplit;
@@ -149,7 +152,7 @@ Judgement Descent::judge_on(const Octant& o, GroundSide side) const {
     apply_ground(o, side, &j);
     return j;
   }
-  const Settled s = settle(o, &j.floor);
+  const Settled s = settle(o, &j.floor, &j.ceiling);
   if (s != Settled::kNo) {
     j.split = s == Settled::kSplit;
   } else {
@@ -202,7 +205,7 @@ void Descent::judge_children(const Octant& o, const Judgement& parent, const boo
     if (want != nullptr && !want[c]) continue;
     const Octant child = octant_child(o, c);
     Judgement& j = out[c];
-    j = Judgement{false, floor, -1};
+    j = Judgement{false, floor, -1, GroundSide::kSolid, parent.ceiling};
     if (p_.carved) {
       const GroundSide side = parent.side == GroundSide::kCut ? ground_side(child) : parent.side;
       if (side != GroundSide::kSolid) {
@@ -275,6 +278,10 @@ void Descent::add_figures(SubtreeLeaves* out) const {
 // False once the subtree has more than cap leaves.
 bool Descent::visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const {
   if (j.split) {
+    // A block of one level whose floor cannot lower the level's least Vs
+    // is written whole; otherwise its leaves are judged one by one.
+    const int level = uniform_leaf_level(o, j);
+    if (level > 0 && out->least_vs[level] <= j.floor) return emit_block(o, level, cap, out);
     Judgement children[8];
     judge_children(o, j, nullptr, children);
     bool leaves = true;
@@ -288,6 +295,85 @@ bool Descent::visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeav
   if (out->elements == cap) return false;
   out->payloads.resize(out->payloads.size() + payload_bytes_);
   emit(o, octant_key(o), j, material_at_centre(o), true, out);
+  return true;
+}
+
+// Every octant below o has its samples in o's box, between j's floor and
+// ceiling.  If each level from o's children's to `level - 1` splits at
+// the ceiling, the descent splits every octant there whatever it finds
+// (splitting is monotone in Vs); if `level` is a leaf at the floor, every
+// octant there is a leaf: none is ever sampled, and its floor, at least
+// j's, is all emit() would look at.
+int Descent::uniform_leaf_level(const Octant& o, const Judgement& j) const {
+  if (!blocks_ || j.ceiling == HUGE_VAL) return 0;
+  int level = o.level + 1;
+  while (level < kMaxLevel && level_splits(level, j.floor)) ++level;
+  if (level < o.level + 2 || level >= kMaxLevel || level_splits(level, j.floor)) return 0;
+  return level_splits(level - 1, j.ceiling) ? level : 0;
+}
+
+namespace {
+
+// Where the leaf of Z-order t lies in a lattice of side 2^bits (x fastest):
+// bit 3b of t is bit b of x, 3b + 1 of y, 3b + 2 of z.
+template <int kBits>
+constexpr std::array<uint16_t, 1 << (3 * kBits)> lattice_of_z_order() {
+  std::array<uint16_t, 1 << (3 * kBits)> at{};
+  for (int t = 0; t < (1 << (3 * kBits)); ++t) {
+    int c[3] = {};
+    for (int b = 0; b < kBits; ++b)
+      for (int a = 0; a < 3; ++a) c[a] |= ((t >> (3 * b + a)) & 1) << b;
+    at[t] = static_cast<uint16_t>((c[2] << (2 * kBits)) | (c[1] << kBits) | c[0]);
+  }
+  return at;
+}
+constexpr auto kLatticeOf4 = lattice_of_z_order<2>();
+constexpr auto kLatticeOf8 = lattice_of_z_order<3>();
+
+}  // namespace
+
+bool Descent::emit_block(const Octant& o, int level, size_t cap, SubtreeLeaves* out) const {
+  const int depth = level - o.level;
+  const size_t count = size_t{1} << (3 * depth);
+  if (out->elements + count > cap) return false;
+  const size_t first = out->keys.size();
+  out->keys.resize(first + count);
+  out->payloads.resize((first + count) * payload_bytes_);
+  const uint64_t key0 = octant_key(Octant{o.x, o.y, o.z, static_cast<uint8_t>(level)});
+  const uint64_t stride = octant_key_stride(level);
+  for (size_t i = 0; i < count; ++i) out->keys[first + i] = key0 + i * stride;
+  // The materials a lattice of centres at a time, 8 a side where the block
+  // holds that many, else 4 (the model shares each column's and each
+  // depth's work); the lattices in Z-order, whose leaves follow each other.
+  const int side = depth >= 3 ? 8 : 4;
+  const uint16_t* lattice_of = side == 8 ? kLatticeOf8.data() : kLatticeOf4.data();
+  const int per = side * side * side;
+  const double t = p_.tick_m;
+  const uint32_t e = octant_edge(level);
+  const double half = e * t / 2;
+  alignas(Material) unsigned char storage[512 * sizeof(Material)];
+  Material* m = reinterpret_cast<Material*>(storage);
+  std::byte* payload = out->payloads.data() + first * payload_bytes_;
+  for (size_t part = 0; part < count / per; ++part) {
+    const Coord at = morton_decode(part);
+    const uint32_t start[3] = {o.x + at.x * side * e, o.y + at.y * side * e, o.z + at.z * side * e};
+    double centres[3][8];
+    for (int a = 0; a < 3; ++a) {
+      for (int i = 0; i < side; ++i) centres[a][i] = (start[a] + i * e) * t + half;
+    }
+    model_.materials_on_lattice(centres[0], centres[1], centres[2], side, m);
+    for (int i = 0; i < per; ++i, payload += payload_bytes_) to_payload(m[lattice_of[i]], payload);
+  }
+  out->levels[level] += count;
+  out->elements += count;
+  out->blocked += count;
+  // The block's leaves on a side of the subtree are there if it is.
+  const uint32_t root_e = octant_edge(out->root), block_e = octant_edge(o);
+  const uint32_t c[3] = {o.x, o.y, o.z}, r[3] = {out->root.x, out->root.y, out->root.z};
+  for (int a = 0; a < 3; ++a) {
+    if (c[a] == r[a]) out->border_lo[a] = std::max(out->border_lo[a], e);
+    if (c[a] + block_e == r[a] + root_e) out->border_hi[a] = std::max(out->border_hi[a], e);
+  }
   return true;
 }
 
@@ -342,24 +428,6 @@ Material Descent::material_at_centre(const Octant& o) const {
 
 void Descent::material(const Octant& o, std::byte* out) const {
   to_payload(material_at_centre(o), out);
-}
-
-void Descent::to_payload(const Material& m, std::byte* out) const {
-  // Field by field, each a fixed 4 bytes: one copy of a variable 12 or 20
-  // bytes from an array just stored read across two stores, which the core
-  // cannot forward, and stalled (6.6% of a one-thread construct).
-  std::memcpy(out, &m.vp, 4);
-  std::memcpy(out + 4, &m.vs, 4);
-  std::memcpy(out + 8, &m.rho, 4);
-  size_t at = 12;
-  if (has_q_) {
-    std::memcpy(out + 12, &m.qp, 4);
-    std::memcpy(out + 16, &m.qs, 4);
-    at = 20;
-  }
-  // The solid fraction, last, is 1 until the carve (construct/carve.h) sets it.
-  const float solid = 1.0f;
-  if (p_.carved) std::memcpy(out + at, &solid, 4);
 }
 
 bool Descent::touches_border(const Octant& o, const Octant& root) {

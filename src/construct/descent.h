@@ -11,14 +11,21 @@
 // would settle it the same way.  Most octants are settled so: the bulk of
 // the rock and sediment, the inside of inclusions.  A split whose children
 // must mostly be sampled evaluates its 5 x 5 x 5 lattice once, 125 samples
-// for the 216 of the children's own lattices.  Subtrees are independent, so
-// workers may visit them in any order; their leaves are written in Z-order
-// (construct.cc), and the table is the same for any number of threads.
+// for the 216 of the children's own lattices.  Where the bounds show every
+// leaf under an octant to be of one level (each level above it splits at
+// their upper bound, it is a leaf at their lower), those leaves are written
+// as a block, their materials from lattices of their centres, none judged
+// alone (64% of the descent's leaves of the basin at 0.5 Hz).  Subtrees are
+// independent, so workers may visit them in any order; their leaves are
+// written in Z-order (construct.cc), and the table is the same for any
+// number of threads.
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "construct/carve.h"
@@ -37,6 +44,7 @@ struct SubtreeLeaves {
   std::vector<GroundSide> sides;
   LevelCounts levels{};
   uint64_t elements = 0;
+  uint64_t blocked = 0;  // of the descent's leaves, those of whole blocks
   double smallest_edge_m = 0, largest_edge_m = 0, worst_ppw = 0;
   // The least Vs of the leaves of each level (the worst points per
   // wavelength follow from it once the subtree is done, without a division
@@ -59,12 +67,15 @@ struct SubtreeLeaves {
 // (so its descendants' too); vs, where it was sampled, is its least sample
 // (else a negative number).  side is the octant's side of the ground: an
 // octant wholly below (or above) it has its children there too, so only a
-// cut octant's children are asked.
+// cut octant's children are asked.  ceiling bounds the Vs of the box from
+// above where the model's bounds were asked of it or of an ancestor (else
+// HUGE_VAL): with the floor it may show every leaf below to be of one level.
 struct Judgement {
   bool split = false;
   double floor = 0;
   double vs = -1;
   GroundSide side = GroundSide::kSolid;
+  double ceiling = HUGE_VAL;
 };
 
 class Descent {
@@ -77,6 +88,7 @@ class Descent {
         model_(m),
         inv_rate_(1.0 / (o.freq * o.ppw)),
         has_q_(m.has_q()),
+        blocks_(o.model_bounds && !p.carved),
         payload_bytes_((has_q_ ? 20 : 12) + (p.carved ? 4 : 0)) {
     for (int l = 0; l <= kMaxLevel; ++l) {
       edge_m_[l] = octant_edge(l) * p.tick_m;
@@ -97,6 +109,11 @@ class Descent {
   // every octant of `level` inside it a leaf, as judge() would (false when
   // they do not settle it, or the model cannot say, or the ground decides).
   bool keeps_level_within(int level, const double lo[3], const double hi[3]) const;
+  // The one level of all the leaves under o (split by j), where j's floor
+  // and ceiling show it: each level above it splits at the ceiling, and it
+  // is a leaf at the floor.  0 where they do not, or where the leaves would
+  // be o's children alone (emit_siblings' case).
+  int uniform_leaf_level(const Octant& o, const Judgement& j) const;
   // The leaves of o's subtree into *out; stops, with out->overflow, past cap.
   void visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const;
   // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as
@@ -113,8 +130,9 @@ class Descent {
  private:
   enum class Settled { kLeaf, kSplit, kNo };
   // What the model's bounds over o's box say, and the floor they give.
-  Settled settle(const Octant& o, double* floor) const;
-  Settled settled_by(const Octant& o, bool ok, float lo, float hi, double* floor) const;
+  Settled settle(const Octant& o, double* floor, double* ceiling) const;
+  Settled settled_by(const Octant& o, bool ok, float lo, float hi, double* floor,
+                     double* ceiling) const;
   void settle_children(const Octant& o, const bool ask[8], Judgement out[8], bool open[8]) const;
   // o's closed box in metres, its corners as lattice() computes them.
   void box(const Octant& o, double lo[3], double hi[3]) const;
@@ -123,9 +141,15 @@ class Descent {
   double vs_min_of(const float* samples) const;
   // Splitting is monotone in vs: a lower vs never splits less.  Inline,
   // from tables by level: it is asked several times an octant.
-  bool splits(const Octant& o, double vs) const {
-    return always_splits_[o.level] || (edge_m_[o.level] > vs * inv_rate_ && may_split_[o.level]);
+  bool splits(const Octant& o, double vs) const { return level_splits(o.level, vs); }
+  bool level_splits(int level, double vs) const {
+    return always_splits_[level] || (edge_m_[level] > vs * inv_rate_ && may_split_[level]);
   }
+  // The leaves of `level` under o (uniform_leaf_level's), in Z-order, a
+  // 4 x 4 x 4 lattice of their materials at a time; false past cap.
+  // REQUIRES: the subtree's least Vs of `level` is at most j's floor (so no
+  // leaf's samples could lower it).
+  bool emit_block(const Octant& o, int level, size_t cap, SubtreeLeaves* out) const;
   bool visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const;
   // Where the ground decides: air is never split (but for --min-level), a
   // leaf it crosses is split down to --surface-edge.
@@ -145,13 +169,31 @@ class Descent {
   void add_figures(SubtreeLeaves* out) const;
   Material material_at_centre(const Octant& o) const;
   void child_materials(const Octant& o, Material* m) const;
-  void to_payload(const Material& m, std::byte* out) const;
+  // Field by field, each a fixed 4 bytes: one copy of a variable 12 or 20
+  // bytes from an array just stored read across two stores, which the core
+  // cannot forward, and stalled (6.6% of a one-thread construct).  Inline:
+  // a block's leaves take one each.
+  void to_payload(const Material& m, std::byte* out) const {
+    std::memcpy(out, &m.vp, 4);
+    std::memcpy(out + 4, &m.vs, 4);
+    std::memcpy(out + 8, &m.rho, 4);
+    size_t at = 12;
+    if (has_q_) {
+      std::memcpy(out + 12, &m.qp, 4);
+      std::memcpy(out + 16, &m.qs, 4);
+      at = 20;
+    }
+    // The solid fraction, last, is 1 until the carve (construct/carve.h) sets it.
+    const float solid = 1.0f;
+    if (p_.carved) std::memcpy(out + at, &solid, 4);
+  }
 
   const ConstructOptions& o_;
   const ConstructPlan& p_;
   const VelocityModel& model_;
   double inv_rate_;
-  bool has_q_;  // the model's, asked once (a virtual call a leaf was not free)
+  bool has_q_;   // the model's, asked once (a virtual call a leaf was not free)
+  bool blocks_;  // uniform_leaf_level may find blocks: bounds asked, no ground
   size_t payload_bytes_;
   std::array<double, kMaxLevel + 1> edge_m_;                   // a level's edge in metres
   std::array<bool, kMaxLevel + 1> always_splits_, may_split_;  // --min-level, --max-level

@@ -125,12 +125,27 @@ void SubtreeBalancer::collect(const Octant& x, const Judgement& j, const Octant&
     collected_.push_back(octant_key(x));
     return;
   }
+  if (const int level = descent_.uniform_leaf_level(x, j); level > 0) {
+    collect_level(x, level, root);
+    return;
+  }
   bool want[8];
   for (int c = 0; c < 8; ++c) want[c] = wanted(octant_child(x, c), root);
   Judgement children[8];
   descent_.judge_children(x, j, want, children);
   for (int c = 0; c < 8; ++c) {
     if (want[c]) collect(octant_child(x, c), children[c], root);
+  }
+}
+
+void SubtreeBalancer::collect_level(const Octant& x, int level, const Octant& root) {
+  if (x.level == level) {
+    collected_.push_back(octant_key(x));
+    return;
+  }
+  for (int c = 0; c < 8; ++c) {
+    const Octant child = octant_child(x, c);
+    if (wanted(child, root)) collect_level(child, level, root);
   }
 }
 

@@ -63,6 +63,9 @@ class SubtreeBalancer {
   bool stands(const SubtreeLeaves& leaves) const;
   void grow_box(const Octant& root, const SubtreeLeaves& leaves);
   void collect(const Octant& x, const Judgement& j, const Octant& root);
+  // The same under an x whose leaves are all of `level`
+  // (Descent::uniform_leaf_level), without asking the model.
+  void collect_level(const Octant& x, int level, const Octant& root);
   bool wanted(const Octant& x, const Octant& root) const;
   void refine(SubtreeLeaves* leaves);
   void add_leaf(uint64_t key, bool is_new, const std::byte* parent_payload);

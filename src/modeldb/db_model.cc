@@ -298,8 +298,9 @@ void DbModel::each_on_lattice(const double* xs, const double* ys, const double* 
                               const Put& put) const {
   Reader& r = reader();
   const ModelRegion& g = r.region;
-  uint32_t px[5], py[5], pz[5], cx[5], cy[5], cz[5];
-  bool clamped_x[5], clamped_y[5], clamped_z[5];
+  uint32_t px[kLatticeMost], py[kLatticeMost], pz[kLatticeMost];
+  uint32_t cx[kLatticeMost], cy[kLatticeMost], cz[kLatticeMost];
+  bool clamped_x[kLatticeMost], clamped_y[kLatticeMost], clamped_z[kLatticeMost];
   bool covered = g.loaded();
   for (int i = 0; i < n; ++i) {
     clamped_x[i] = clamped_y[i] = clamped_z[i] = false;
@@ -327,7 +328,7 @@ void DbModel::each_on_lattice(const double* xs, const double* ys, const double* 
 
 void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                             float* out) const {
-  if (n > 5) {
+  if (n > kLatticeMost) {
     Reader& r = reader();
     ModelHit h;
     for (int k = 0; k < n; ++k)
@@ -347,7 +348,7 @@ void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs
 // point (a tenth of a construct from a model database).
 void DbModel::materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                                    Material* out) const {
-  if (n > 5) return VelocityModel::materials_on_lattice(xs, ys, zs, n, out);
+  if (n > kLatticeMost) return VelocityModel::materials_on_lattice(xs, ys, zs, n, out);
   each_on_lattice(xs, ys, zs, n, [out](int index, const ModelValues* v) {
     out[index] = v != nullptr ? Material{(*v)[0], (*v)[1], (*v)[2], (*v)[3], (*v)[4]} : Material{};
   });

@@ -107,7 +107,9 @@ class DbModel final : public VelocityModel {
                     ModelHit* hit) const;
   Status hole_at(double x, double y, double z) const;
   // Calls put(index, values) for each point of the n x n x n lattice (n <=
-  // 5; index (k * n + j) * n + i), values null for a hole.
+  // kLatticeMost; index (k * n + j) * n + i), values null for a hole.
+  // Construct asks 5 a side of a split and 4 or 8 of a block of leaves.
+  static constexpr int kLatticeMost = 8;
   template <class Put>
   void each_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                        const Put& put) const;
