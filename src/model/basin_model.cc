@@ -134,27 +134,96 @@ class Basin final : public VelocityModel {
   // kLatticeMax) takes the value of its kind, as at() finds it: sediment[k]
   // above its column's bowl floor, `inclusion` inside an inclusion, else
   // rock[k]; into out[(k * n + j) * n + i].  The bowl depth once per
-  // column, the inclusion cells' indices once per coordinate.
+  // column, the inclusion cells' indices once per coordinate; and where the
+  // lattice lies in one cell (a small octant's) its site once, or where it
+  // lies outside the inclusions' layer none at all.
   template <class T>
   static void pick_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                               const T* sediment, const T* rock, const T& inclusion,
                               InclusionCell& cell, T* out) {
-    uint64_t cell_of[3][kLatticeMax];
+    double depth[kLatticeMax * kLatticeMax];
+    column_depths(xs, ys, n, depth);
+    bool in_layer[3][kLatticeMax];  // x, y >= 0; 0 <= z < kInclusionDepth
+    bool any[3] = {};
     const double* axes[3] = {xs, ys, zs};
     for (int a = 0; a < 3; ++a) {
-      for (int i = 0; i < n; ++i) cell_of[a][i] = InclusionCell::index(axes[a][i]);
+      for (int i = 0; i < n; ++i) {
+        const double v = axes[a][i];
+        in_layer[a][i] = v >= 0 && (a < 2 || v < kInclusionDepth);
+        any[a] |= in_layer[a][i];
+      }
+    }
+    if (!(any[0] && any[1] && any[2])) {
+      pick_without_inclusions(zs, n, depth, sediment, rock, out);
+      return;
+    }
+    uint64_t cell_of[3][kLatticeMax];
+    bool one_cell = true;
+    for (int a = 0; a < 3; ++a) {
+      for (int i = 0; i < n; ++i) {
+        cell_of[a][i] = InclusionCell::index(axes[a][i]);
+        one_cell = one_cell && cell_of[a][i] == cell_of[a][0];
+      }
+    }
+    if (one_cell) {
+      pick_in_one_cell(xs, ys, zs, n, depth, in_layer,
+                       InclusionSite::of(cell_of[0][0], cell_of[1][0], cell_of[2][0]), sediment,
+                       rock, inclusion, out);
+      return;
     }
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
-        const double depth = sediment_depth(xs[i], ys[j]);
-        const bool may_hold = xs[i] >= 0 && ys[j] >= 0;
+        const double d = depth[j * n + i];
+        const bool may_hold = in_layer[0][i] && in_layer[1][j];
         for (int k = 0; k < n; ++k) {
           const T* v = &rock[k];
-          if (zs[k] < depth) {
+          if (zs[k] < d) {
             v = &sediment[k];
-          } else if (may_hold && zs[k] >= 0 && zs[k] < kInclusionDepth &&
+          } else if (may_hold && in_layer[2][k] &&
                      cell.holds_in(cell_of[0][i], cell_of[1][j], cell_of[2][k], xs[i], ys[j],
                                    zs[k])) {
+            v = &inclusion;
+          }
+          out[(k * n + j) * n + i] = *v;
+        }
+      }
+    }
+  }
+  template <class T>
+  static void pick_without_inclusions(const double* zs, int n, const double* depth,
+                                      const T* sediment, const T* rock, T* out) {
+    for (int k = 0; k < n; ++k) {
+      for (int c = 0; c < n * n; ++c) out[k * n * n + c] = zs[k] < depth[c] ? sediment[k] : rock[k];
+    }
+  }
+  // All points in the cell of `site`: its sphere's test from each axis's
+  // squared distances, summed as InclusionCell::holds_in sums them.
+  template <class T>
+  static void pick_in_one_cell(const double* xs, const double* ys, const double* zs, int n,
+                               const double* depth, const bool (*in_layer)[kLatticeMax],
+                               const InclusionSite& site, const T* sediment, const T* rock,
+                               const T& inclusion, T* out) {
+    if (!site.has) {
+      pick_without_inclusions(zs, n, depth, sediment, rock, out);
+      return;
+    }
+    double square[3][kLatticeMax];
+    const double* axes[3] = {xs, ys, zs};
+    for (int a = 0; a < 3; ++a) {
+      for (int i = 0; i < n; ++i) {
+        const double d = axes[a][i] - site.c[a];
+        square[a][i] = d * d;
+      }
+    }
+    constexpr double r2 = kInclusionRadius * kInclusionRadius;
+    for (int k = 0; k < n; ++k) {
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+          const T* v = &rock[k];
+          if (zs[k] < depth[j * n + i]) {
+            v = &sediment[k];
+          } else if (in_layer[0][i] && in_layer[1][j] && in_layer[2][k] &&
+                     square[0][i] + square[1][j] + square[2][k] < r2) {
             v = &inclusion;
           }
           out[(k * n + j) * n + i] = *v;

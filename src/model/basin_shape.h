@@ -37,17 +37,40 @@ inline double vs_of(double z, bool sediment, bool inclusion) {
   return std::min(vs, kRockVsMax);
 }
 
-// Depth of the sediment floor at (x, y): the deepest bowl there; each bowl
-// is a smooth quartic dish, zero at its rim.
-inline double sediment_depth(double x, double y) {
+// Depth of the sediment floor at (x, y) under `count` bowls: the deepest
+// there; each bowl is a smooth quartic dish, zero at its rim.
+inline double deepest_bowl(const Bowl* bowls, int count, double x, double y) {
   double d = 0;
-  for (const Bowl& b : kBowls) {
+  for (int i = 0; i < count; ++i) {
+    const Bowl& b = bowls[i];
     const double dx = x - b.cx, dy = y - b.cy, r2 = b.radius * b.radius;
     if (dx * dx + dy * dy >= r2) continue;  // outside the rim: q >= 1, no division
     const double q = (dx * dx + dy * dy) / r2;
     if (q < 1) d = std::max(d, b.depth * (1 - q) * (1 - q));
   }
   return d;
+}
+
+// Depth of the sediment floor at (x, y).
+inline double sediment_depth(double x, double y) { return deepest_bowl(kBowls, kBowlCount, x, y); }
+
+// sediment_depth at each column (xs[i], ys[j]) of an n x n lattice, into
+// depth[j * n + i]; a bowl whose rim the lattice's columns all lie outside
+// is not looked at (its nearest point to them is at r or more, so each
+// column's own distance is too, rounding being monotone): the same values.
+inline void column_depths(const double* xs, const double* ys, int n, double* depth) {
+  const auto [x_lo, x_hi] = std::minmax_element(xs, xs + n);
+  const auto [y_lo, y_hi] = std::minmax_element(ys, ys + n);
+  Bowl near[kBowlCount];
+  int count = 0;
+  for (const Bowl& b : kBowls) {
+    const double dx = std::clamp(b.cx, *x_lo, *x_hi) - b.cx;
+    const double dy = std::clamp(b.cy, *y_lo, *y_hi) - b.cy;
+    if (dx * dx + dy * dy < b.radius * b.radius) near[count++] = b;
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) depth[j * n + i] = deepest_bowl(near, count, xs[i], ys[j]);
+  }
 }
 
 inline uint64_t mix(uint64_t v) {  // splitmix64's finaliser
@@ -76,7 +99,7 @@ struct InclusionSite {
   static InclusionSite of(uint64_t i, uint64_t j, uint64_t k) {
     const uint64_t h = cell_hash(i, row_hash(j, k));
     InclusionSite s{has_site(h), {}};
-    centre(i, j, k, h, s.c);
+    if (s.has) centre(i, j, k, h, s.c);  // (three of four cells have none)
     return s;
   }
 };
