@@ -76,6 +76,13 @@ void merge_ranges(const std::vector<std::pair<const uint64_t*, const uint64_t*>>
   }
 }
 
+// Whether keys[0..8) are a parent's eight children (keys[0] its child 0).
+bool whole_siblings(const uint64_t* keys, uint64_t stride) {
+  bool whole = true;
+  for (int c = 1; c < 8; ++c) whole &= keys[c] == keys[0] + c * stride;
+  return whole;
+}
+
 }  // namespace
 
 // Only the leaves two levels finer than the coarsest ask (an octant of
@@ -151,8 +158,20 @@ size_t LocalRipple::bytes(const std::vector<uint64_t>& created) const {
 // come one after another among the leaves of their level).
 void LocalRipple::gather(const std::vector<uint64_t>& local, int coarsest, int finest) {
   holders_.clear();
-  for (uint64_t key : local) {
+  const size_t n = local.size();
+  for (size_t i = 0; i < n;) {
+    const uint64_t key = local[i];
     const int level = octant_key_level(key);
+    // Eight siblings whole, the common case (a parent split once): their
+    // keys a stride apart from its child 0.  Taken at once.
+    if (level < kMaxLevel && i + 8 <= n && octant_key_child_id(key) == 0 &&
+        whole_siblings(&local[i], octant_key_stride(level))) {
+      if (level <= finest - 2) holders_.insert(holders_.end(), &local[i], &local[i] + 8);
+      if (level >= coarsest + 2) leaf_asks_[level].push_back({octant_key_parent(key), 255, false});
+      i += 8;
+      continue;
+    }
+    ++i;
     if (level <= finest - 2) holders_.push_back(key);
     if (level < coarsest + 2) continue;
     const uint64_t parent = octant_key_parent(key);
