@@ -165,10 +165,13 @@ class Basin final : public VelocityModel {
         one_cell = one_cell && cell_of[a][i] == cell_of[a][0];
       }
     }
+    double centre[3];
+    if (one_cell && !cell.site_of(cell_of[0][0], cell_of[1][0], cell_of[2][0], centre)) {
+      pick_without_inclusions(zs, n, depth, sediment, rock, out);
+      return;
+    }
     if (one_cell) {
-      pick_in_one_cell(xs, ys, zs, n, depth, in_layer,
-                       InclusionSite::of(cell_of[0][0], cell_of[1][0], cell_of[2][0]), sediment,
-                       rock, inclusion, out);
+      pick_in_one_cell(xs, ys, zs, n, depth, in_layer, centre, sediment, rock, inclusion, out);
       return;
     }
     for (int j = 0; j < n; ++j) {
@@ -196,34 +199,33 @@ class Basin final : public VelocityModel {
       for (int c = 0; c < n * n; ++c) out[k * n * n + c] = zs[k] < depth[c] ? sediment[k] : rock[k];
     }
   }
-  // All points in the cell of `site`: its sphere's test from each axis's
-  // squared distances, summed as InclusionCell::holds_in sums them.
+  // All points in one cell, whose inclusion is centred at `centre`: its
+  // sphere's test from each axis's squared distances, summed as
+  // InclusionCell::holds_in sums them (a column whose own part reaches r
+  // already holds no point of it).
   template <class T>
   static void pick_in_one_cell(const double* xs, const double* ys, const double* zs, int n,
                                const double* depth, const bool (*in_layer)[kLatticeMax],
-                               const InclusionSite& site, const T* sediment, const T* rock,
+                               const double centre[3], const T* sediment, const T* rock,
                                const T& inclusion, T* out) {
-    if (!site.has) {
-      pick_without_inclusions(zs, n, depth, sediment, rock, out);
-      return;
-    }
     double square[3][kLatticeMax];
     const double* axes[3] = {xs, ys, zs};
     for (int a = 0; a < 3; ++a) {
       for (int i = 0; i < n; ++i) {
-        const double d = axes[a][i] - site.c[a];
+        const double d = axes[a][i] - centre[a];
         square[a][i] = d * d;
       }
     }
     constexpr double r2 = kInclusionRadius * kInclusionRadius;
-    for (int k = 0; k < n; ++k) {
-      for (int j = 0; j < n; ++j) {
-        for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const double d = depth[j * n + i], column = square[0][i] + square[1][j];
+        const bool reaches = in_layer[0][i] && in_layer[1][j] && column < r2;
+        for (int k = 0; k < n; ++k) {
           const T* v = &rock[k];
-          if (zs[k] < depth[j * n + i]) {
+          if (zs[k] < d) {
             v = &sediment[k];
-          } else if (in_layer[0][i] && in_layer[1][j] && in_layer[2][k] &&
-                     square[0][i] + square[1][j] + square[2][k] < r2) {
+          } else if (reaches && in_layer[2][k] && column + square[2][k] < r2) {
             v = &inclusion;
           }
           out[(k * n + j) * n + i] = *v;

@@ -122,6 +122,13 @@ class InclusionCell {
     const double dx = x - cx_, dy = y - cy_, dz = z - cz_;
     return dx * dx + dy * dy + dz * dz < kInclusionRadius * kInclusionRadius;
   }
+  // Whether cell (i, j, k) has an inclusion, and then its centre into c
+  // (the last cell asked is remembered, as for holds_in).
+  bool site_of(uint64_t i, uint64_t j, uint64_t k, double c[3]) {
+    if (!known_ || i != i_ || j != j_ || k != k_) locate(i, j, k);
+    c[0] = cx_, c[1] = cy_, c[2] = cz_;
+    return has_;
+  }
   // (A product, not a division: a division was a twentieth of the
   // lattices' time.)
   static uint64_t index(double v) { return truncated_quotient(v, kInclusionCell); }
