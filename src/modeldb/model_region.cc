@@ -399,8 +399,8 @@ bool ModelRegion::vs_bounds(Coord lo, Coord hi, float* vs_lo, float* vs_hi) cons
   const uint32_t to[3] = {cell_x(hi.x), cell_y(hi.y), cell_z(hi.z)};
   int p = 0;
   while (p + 1 < int(levels_) &&
-         ((to[0] >> p) - (from[0] >> p) > 1 || (to[1] >> p) - (from[1] >> p) > 1 ||
-          (to[2] >> p) - (from[2] >> p) > 1)) {
+         ((to[0] >> p) - (from[0] >> p) > 2 || (to[1] >> p) - (from[1] >> p) > 2 ||
+          (to[2] >> p) - (from[2] >> p) > 2)) {
     ++p;
   }
   float l = HUGE_VALF, h = -HUGE_VALF;
