@@ -145,10 +145,10 @@ class Descent {
   bool level_splits(int level, double vs) const {
     return always_splits_[level] || (edge_m_[level] > vs * inv_rate_ && may_split_[level]);
   }
-  // The leaves of `level` under o (uniform_leaf_level's), in Z-order, a
-  // 4 x 4 x 4 lattice of their materials at a time; false past cap.
-  // REQUIRES: the subtree's least Vs of `level` is at most j's floor (so no
-  // leaf's samples could lower it).
+  // The leaves of `level` under o (uniform_leaf_level's), in Z-order, their
+  // materials from lattices of 8 (or 4) centres a side; false past cap.
+  // REQUIRES: the subtree's least Vs of `level` is at most the floor of o's
+  // judgement (so no leaf's samples could lower it).
   bool emit_block(const Octant& o, int level, size_t cap, SubtreeLeaves* out) const;
   bool visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const;
   // Where the ground decides: air is never split (but for --min-level), a

@@ -123,7 +123,8 @@ void model_columns(const Ground& g, const double* xs, const double* ys, const do
   }
 }
 
-// A lattice's model z's: on the stack for construct's (n up to 5).
+// A lattice's model z's: on the stack for construct's (n up to 8: a block's
+// centres).
 class ColumnDepths {
  public:
   ColumnDepths(const Ground& g, const double* xs, const double* ys, const double* zs, int n) {
@@ -135,7 +136,7 @@ class ColumnDepths {
   const double* data() const { return data_; }
 
  private:
-  static constexpr size_t kOnStack = 125;
+  static constexpr size_t kOnStack = 512;
   double stack_[kOnStack];
   std::vector<double> heap_;
   double* data_;
