@@ -192,6 +192,8 @@ class Basin final : public VelocityModel {
       }
     }
   }
+  // Sediment above each column's bowl floor, rock below it: no point of
+  // the lattice can be in an inclusion.
   template <class T>
   static void pick_without_inclusions(const double* zs, int n, const double* depth,
                                       const T* sediment, const T* rock, T* out) {
