@@ -169,6 +169,16 @@ class Descent {
   void add_figures(SubtreeLeaves* out) const;
   Material material_at_centre(const Octant& o) const;
   void child_materials(const Octant& o, Material* m) const;
+  // The centres (metres) of n leaves of edge e (ticks) a side from the
+  // corner start, each axis's as material_at_centre computes a leaf's: the
+  // same integer tick times the tick's metres, plus half the edge.
+  void leaf_centres(const uint32_t start[3], uint32_t e, int n, double centres[3][8]) const {
+    const double t = p_.tick_m, half = e * t / 2;
+    for (int a = 0; a < 3; ++a) {
+      for (int i = 0; i < n; ++i) centres[a][i] = (start[a] + i * e) * t + half;
+    }
+  }
+  static void note_border(const Octant& o, uint32_t e, SubtreeLeaves* out);
   // Field by field, each a fixed 4 bytes: one copy of a variable 12 or 20
   // bytes from an array just stored read across two stores, which the core
   // cannot forward, and stalled (6.6% of a one-thread construct).  Inline:

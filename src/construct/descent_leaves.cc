@@ -89,9 +89,7 @@ bool Descent::emit_block(const Octant& o, int level, size_t cap, SubtreeLeaves* 
   const int side = depth >= 3 ? 8 : 4;
   const uint16_t* lattice_of = side == 8 ? kLatticeOf8.data() : kLatticeOf4.data();
   const int per = side * side * side;
-  const double t = p_.tick_m;
   const uint32_t e = octant_edge(level);
-  const double half = e * t / 2;
   alignas(Material) unsigned char storage[512 * sizeof(Material)];
   Material* m = reinterpret_cast<Material*>(storage);
   std::byte* payload = out->payloads.data() + first * payload_bytes_;
@@ -99,9 +97,7 @@ bool Descent::emit_block(const Octant& o, int level, size_t cap, SubtreeLeaves* 
     const Coord at = morton_decode(part);
     const uint32_t start[3] = {o.x + at.x * side * e, o.y + at.y * side * e, o.z + at.z * side * e};
     double centres[3][8];
-    for (int a = 0; a < 3; ++a) {
-      for (int i = 0; i < side; ++i) centres[a][i] = (start[a] + i * e) * t + half;
-    }
+    leaf_centres(start, e, side, centres);
     model_.materials_on_lattice(centres[0], centres[1], centres[2], side, m);
     for (int i = 0; i < per; ++i, payload += payload_bytes_) to_payload(m[lattice_of[i]], payload);
   }
@@ -109,26 +105,16 @@ bool Descent::emit_block(const Octant& o, int level, size_t cap, SubtreeLeaves* 
   out->elements += count;
   out->blocked += count;
   // The block's leaves on a side of the subtree are there if it is.
-  const uint32_t root_e = octant_edge(out->root), block_e = octant_edge(o);
-  const uint32_t c[3] = {o.x, o.y, o.z}, r[3] = {out->root.x, out->root.y, out->root.z};
-  for (int a = 0; a < 3; ++a) {
-    if (c[a] == r[a]) out->border_lo[a] = std::max(out->border_lo[a], e);
-    if (c[a] + block_e == r[a] + root_e) out->border_hi[a] = std::max(out->border_hi[a], e);
-  }
+  note_border(o, e, out);
   return true;
 }
 
 // The materials at the centres of o's eight children (child c's in m[c]),
 // from one lattice, computed as material() computes each.
 void Descent::child_materials(const Octant& o, Material* m) const {
-  const double t = p_.tick_m;
-  const uint32_t e = octant_edge(o.level + 1);
-  const double half = e * t / 2;
   const uint32_t start[3] = {o.x, o.y, o.z};
-  double centres[3][2];
-  for (int a = 0; a < 3; ++a) {
-    for (int i = 0; i < 2; ++i) centres[a][i] = (start[a] + i * e) * t + half;
-  }
+  double centres[3][8];
+  leaf_centres(start, octant_edge(o.level + 1), 2, centres);
   model_.materials_on_lattice(centres[0], centres[1], centres[2], 2, m);
 }
 
@@ -202,11 +188,17 @@ void Descent::emit(const Octant& o, uint64_t key, const Judgement& j, const Mate
   // own edge of it, whatever air it crosses, and air's own refinement is
   // cut away with it.
   if (j.side == GroundSide::kAir || !at_border) return;
-  const uint32_t e = octant_edge(o), root_e = octant_edge(out->root);
+  note_border(o, octant_edge(o), out);
+}
+
+// Leaves of edge e fill o: on each side of the subtree (out->root) that o
+// touches, the largest leaf there is at least e.
+void Descent::note_border(const Octant& o, uint32_t e, SubtreeLeaves* out) {
+  const uint32_t o_e = octant_edge(o), root_e = octant_edge(out->root);
   const uint32_t c[3] = {o.x, o.y, o.z}, r[3] = {out->root.x, out->root.y, out->root.z};
   for (int a = 0; a < 3; ++a) {
     if (c[a] == r[a]) out->border_lo[a] = std::max(out->border_lo[a], e);
-    if (c[a] + e == r[a] + root_e) out->border_hi[a] = std::max(out->border_hi[a], e);
+    if (c[a] + o_e == r[a] + root_e) out->border_hi[a] = std::max(out->border_hi[a], e);
   }
 }
 

@@ -171,26 +171,35 @@ class Basin final : public VelocityModel {
       return;
     }
     if (one_cell) {
-      pick_in_one_cell(xs, ys, zs, n, depth, in_layer, centre, sediment, rock, inclusion, out);
-      return;
-    }
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i < n; ++i) {
-        const double d = depth[j * n + i];
-        const bool may_hold = in_layer[0][i] && in_layer[1][j];
-        for (int k = 0; k < n; ++k) {
-          const T* v = &rock[k];
-          if (zs[k] < d) {
-            v = &sediment[k];
-          } else if (may_hold && in_layer[2][k] &&
-                     cell.holds_in(cell_of[0][i], cell_of[1][j], cell_of[2][k], xs[i], ys[j],
-                                   zs[k])) {
-            v = &inclusion;
-          }
-          out[(k * n + j) * n + i] = *v;
+      // All points in one cell, its inclusion centred at `centre`: the
+      // sphere's test from each axis's squared distances, summed as
+      // InclusionCell::holds_in sums them.
+      double square[3][kLatticeMax];
+      for (int a = 0; a < 3; ++a) {
+        for (int i = 0; i < n; ++i) {
+          const double d = axes[a][i] - centre[a];
+          square[a][i] = d * d;
         }
       }
+      // (A column whose own part reaches r holds no point of it.)
+      constexpr double r2 = kInclusionRadius * kInclusionRadius;
+      pick_each(
+          zs, n, depth, sediment, rock, inclusion, out,
+          [&](int i, int j) {
+            return in_layer[0][i] && in_layer[1][j] && square[0][i] + square[1][j] < r2;
+          },
+          [&](int i, int j, int k) {
+            return in_layer[2][k] && square[0][i] + square[1][j] + square[2][k] < r2;
+          });
+      return;
     }
+    pick_each(
+        zs, n, depth, sediment, rock, inclusion, out,
+        [&](int i, int j) { return in_layer[0][i] && in_layer[1][j]; },
+        [&](int i, int j, int k) {
+          return in_layer[2][k] &&
+                 cell.holds_in(cell_of[0][i], cell_of[1][j], cell_of[2][k], xs[i], ys[j], zs[k]);
+        });
   }
   // Sediment above each column's bowl floor, rock below it: no point of
   // the lattice can be in an inclusion.
@@ -201,33 +210,22 @@ class Basin final : public VelocityModel {
       for (int c = 0; c < n * n; ++c) out[k * n * n + c] = zs[k] < depth[c] ? sediment[k] : rock[k];
     }
   }
-  // All points in one cell, whose inclusion is centred at `centre`: its
-  // sphere's test from each axis's squared distances, summed as
-  // InclusionCell::holds_in sums them (a column whose own part reaches r
-  // already holds no point of it).
-  template <class T>
-  static void pick_in_one_cell(const double* xs, const double* ys, const double* zs, int n,
-                               const double* depth, const bool (*in_layer)[kLatticeMax],
-                               const double centre[3], const T* sediment, const T* rock,
-                               const T& inclusion, T* out) {
-    double square[3][kLatticeMax];
-    const double* axes[3] = {xs, ys, zs};
-    for (int a = 0; a < 3; ++a) {
-      for (int i = 0; i < n; ++i) {
-        const double d = axes[a][i] - centre[a];
-        square[a][i] = d * d;
-      }
-    }
-    constexpr double r2 = kInclusionRadius * kInclusionRadius;
+  // Each point sediment above its column's bowl floor, else `inclusion`
+  // where its column may hold one (column(i, j)) and it does (point(i, j,
+  // k)), else rock.
+  template <class T, class Column, class Point>
+  static void pick_each(const double* zs, int n, const double* depth, const T* sediment,
+                        const T* rock, const T& inclusion, T* out, const Column& column,
+                        const Point& point) {
     for (int j = 0; j < n; ++j) {
       for (int i = 0; i < n; ++i) {
-        const double d = depth[j * n + i], column = square[0][i] + square[1][j];
-        const bool reaches = in_layer[0][i] && in_layer[1][j] && column < r2;
+        const double d = depth[j * n + i];
+        const bool may_hold = column(i, j);
         for (int k = 0; k < n; ++k) {
           const T* v = &rock[k];
           if (zs[k] < d) {
             v = &sediment[k];
-          } else if (reaches && in_layer[2][k] && column + square[2][k] < r2) {
+          } else if (may_hold && point(i, j, k)) {
             v = &inclusion;
           }
           out[(k * n + j) * n + i] = *v;
