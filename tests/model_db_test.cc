@@ -466,19 +466,22 @@ TEST(ModelDb, PointsOutsideTheRegionAnswerAsTheTable) {
 
 // A lattice of samples (construct's 3 x 3 x 3 and 5 x 5 x 5, the 2 x 2 x 2
 // of sibling leaves' centres, and the 4 x 4 x 4 and 8 x 8 x 8 of a block of
-// leaves' centres) inside the focused region, across its side
-// or wholly outside it gives at each point the Vs a model never focused looks
-// up there, and the material its at() gives.
-TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
-  const std::string model = import_bounds_model("lattices");
+// leaves' centres) inside the focused region, across its side or wholly
+// outside it gives at each point the Vs a model never focused looks up
+// there, and the material its at() gives.  The region focused on is a small
+// box (its raster cells the finest octants') and, in 24 MB, the large bounds
+// box (more finest octants than the raster then holds: its cells are
+// coarser, and those holding finer octants of differing Vs are searched).
+void expect_lattices_sample_as_lookups(const std::string& model, MemoryBudget memory,
+                                       const double focus_lo[3], const double focus_hi[3],
+                                       uint64_t seed) {
   std::unique_ptr<DbModel> m, ref;
-  ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &m).ok());
+  ASSERT_TRUE(DbModel::open(model, memory, 1, &m).ok());
   ASSERT_TRUE(DbModel::open(model, MemoryBudget(), 1, &ref).ok());
-  std::mt19937_64 rng(17);
+  std::mt19937_64 rng(seed);
   const auto uniform = [&](double a, double b) {
     return std::uniform_real_distribution<double>(a, b)(rng);
   };
-  const double focus_lo[3] = {2000, 2000, 1000}, focus_hi[3] = {5000, 5000, 3000};
   m->focus(focus_lo, focus_hi);
   int across = 0;
   for (int t = 0; t < 3000; ++t) {
@@ -517,6 +520,15 @@ TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
         }
   }
   EXPECT_GT(across, 300) << "lattices across the region's side";
+}
+
+TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {
+  const std::string model = import_bounds_model("lattices");
+  const double small_lo[3] = {2000, 2000, 1000}, small_hi[3] = {5000, 5000, 3000};
+  ASSERT_NO_FATAL_FAILURE(
+      expect_lattices_sample_as_lookups(model, MemoryBudget(), small_lo, small_hi, 17));
+  ASSERT_NO_FATAL_FAILURE(expect_lattices_sample_as_lookups(model, MemoryBudget(24ull << 20),
+                                                            kBoundsFocusLo, kBoundsFocusHi, 18));
 }
 
 // The eight halves' bounds at once are eight calls' bounds, bit for bit,

@@ -317,14 +317,43 @@ void DbModel::each_on_lattice(const double* xs, const double* ys, const double* 
         const Coord p{px[i], py[j], pz[k]};
         const int index = (k * n + j) * n + i;
         if (covered || g.covers(p)) {
-          const int32_t o = g.find(p, cx[i], cy[j], cz[k]);
-          put(index, o == ModelRegion::kHole ? nullptr : &g.values(o));
+          put.in_region(g, index, p, cx[i], cy[j], cz[k]);
         } else {
           const bool clamped = clamped_x[i] || clamped_y[j] || clamped_z[k];
           put(index, find_pixel(r, p, clamped, xs[i], ys[j], zs[k], &h).ok() ? &h.values : nullptr);
         }
       }
 }
+
+namespace {
+
+// each_on_lattice's answers as Vs: a point in the region from its cell's Vs
+// range where that is one value (ModelRegion::vs_at).
+struct PutVs {
+  float* out;
+  void in_region(const ModelRegion& g, int index, Coord p, uint32_t cx, uint32_t cy,
+                 uint32_t cz) const {
+    out[index] = g.vs_at(p, cx, cy, cz);
+  }
+  void operator()(int index, const ModelValues* v) const {
+    out[index] = v != nullptr ? (*v)[1] : 0.0f;
+  }
+};
+
+// ... and as materials: every value of the octant holding the point.
+struct PutMaterials {
+  Material* out;
+  void in_region(const ModelRegion& g, int index, Coord p, uint32_t cx, uint32_t cy,
+                 uint32_t cz) const {
+    const int32_t o = g.find(p, cx, cy, cz);
+    (*this)(index, o == ModelRegion::kHole ? nullptr : &g.values(o));
+  }
+  void operator()(int index, const ModelValues* v) const {
+    out[index] = v != nullptr ? Material{(*v)[0], (*v)[1], (*v)[2], (*v)[3], (*v)[4]} : Material{};
+  }
+};
+
+}  // namespace
 
 void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                             float* out) const {
@@ -338,20 +367,13 @@ void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs
         }
     return;
   }
-  each_on_lattice(xs, ys, zs, n, [out](int index, const ModelValues* v) {
-    out[index] = v != nullptr ? (*v)[1] : 0.0f;
-  });
+  each_on_lattice(xs, ys, zs, n, PutVs{out});
 }
 
-// The values at()'s lookup finds (a hole: no material), a lattice at a time:
-// construct's eight sibling leaves, whose centres' pixels were found point by
-// point (a tenth of a construct from a model database).
 void DbModel::materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                                    Material* out) const {
   if (n > kLatticeMost) return VelocityModel::materials_on_lattice(xs, ys, zs, n, out);
-  each_on_lattice(xs, ys, zs, n, [out](int index, const ModelValues* v) {
-    out[index] = v != nullptr ? Material{(*v)[0], (*v)[1], (*v)[2], (*v)[3], (*v)[4]} : Material{};
-  });
+  each_on_lattice(xs, ys, zs, n, PutMaterials{out});
 }
 
 // at() of a point of the box finds its pixel in [pixel(lo), pixel(hi)]

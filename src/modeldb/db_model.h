@@ -106,8 +106,10 @@ class DbModel final : public VelocityModel {
   Status find_pixel(Reader& r, Coord t, bool clamped, double x, double y, double z,
                     ModelHit* hit) const;
   Status hole_at(double x, double y, double z) const;
-  // Calls put(index, values) for each point of the n x n x n lattice (n <=
-  // kLatticeMost; index (k * n + j) * n + i), values null for a hole.
+  // Answers each point of the n x n x n lattice (n <= kLatticeMost; index
+  // (k * n + j) * n + i): put.in_region(region, index, pixel, its cells)
+  // where the focused region holds it, else put(index, values), values
+  // null for a hole.
   // Construct asks 5 a side of a split and 4 or 8 of a block of leaves.
   static constexpr int kLatticeMost = 8;
   template <class Put>
