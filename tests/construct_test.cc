@@ -463,14 +463,15 @@ TEST(Construct, ModelBoundsChangeNothingButTheSamplesTaken) {
 }
 
 // The subtrees come block by block in Z-order, each split where the descent
-// splits it down to the task level: the same list as every block of the
-// domain, sorted by key and split so (the reference), for block counts that
-// are no power of two; and a domain of 999 x 999 x 374 blocks of 100 m
-// (373M of them, 6 GB as a list) gives its first subtrees at once, in little
-// memory (the list was once built whole before the first).
+// splits it down to the task level, but for octants the caller takes whole:
+// the same list as every block of the domain, sorted by key and split so
+// (the reference), for block counts that are no power of two; and a domain of 999 x 999 x 374
+// blocks of 100 m (373M of them, 6 GB as a list) gives its first subtrees at once, in little memory
+// (the list was once built whole before the first).
 TEST(Construct, SubtreesComeInZOrderWithoutListingEveryBlock) {
   std::unique_ptr<VelocityModel> model;
   ASSERT_OK(make_model("basin", "", &model));
+  size_t taken_whole_in_all = 0;
   for (const std::array<double, 3> domain :
        {std::array<double, 3>{100000, 80000, 37500}, {70000, 50000, 30000}, {5000, 3000, 1000}}) {
     ConstructOptions o;
@@ -480,29 +481,45 @@ TEST(Construct, SubtreesComeInZOrderWithoutListingEveryBlock) {
     ASSERT_OK(plan_construct(o, &p));
     const Descent descent(o, p, *model);
     const int task_level = p.block_level + 2;
-    std::vector<Octant> want, stack;
-    const uint32_t e = octant_edge(p.block_level);
-    for (uint32_t k = 0; k < p.blocks[2]; ++k)
-      for (uint32_t j = 0; j < p.blocks[1]; ++j)
-        for (uint32_t i = 0; i < p.blocks[0]; ++i)
-          stack.push_back({i * e, j * e, k * e, uint8_t(p.block_level)});
-    std::sort(stack.begin(), stack.end(),
-              [](const Octant& a, const Octant& b) { return octant_key(a) > octant_key(b); });
-    while (!stack.empty()) {
-      const Octant top = stack.back();
-      stack.pop_back();
-      if (top.level >= task_level || !descent.splits(top)) {
-        want.push_back(top);
-        continue;
+    // Without octants taken whole, and with a third of them (by key).
+    const auto a_third = [](const Octant& x) {
+      return octant_key(x) * 0x9E3779B97F4A7C15ULL % 3 == 0;
+    };
+    for (const SubtreeList::Whole& whole : {SubtreeList::Whole{}, SubtreeList::Whole{a_third}}) {
+      std::vector<Octant> want, stack;
+      const uint32_t e = octant_edge(p.block_level);
+      for (uint32_t k = 0; k < p.blocks[2]; ++k)
+        for (uint32_t j = 0; j < p.blocks[1]; ++j)
+          for (uint32_t i = 0; i < p.blocks[0]; ++i)
+            stack.push_back({i * e, j * e, k * e, uint8_t(p.block_level)});
+      std::sort(stack.begin(), stack.end(),
+                [](const Octant& a, const Octant& b) { return octant_key(a) > octant_key(b); });
+      size_t taken_whole = 0;  // octants the list would split, taken whole
+      while (!stack.empty()) {
+        const Octant top = stack.back();
+        stack.pop_back();
+        const bool whole_here = top.level < task_level && whole && whole(top);
+        if (top.level >= task_level || whole_here || !descent.splits(top)) {
+          want.push_back(top);
+          taken_whole += whole_here && descent.splits(top);
+          continue;
+        }
+        for (int c = 7; c >= 0; --c) stack.push_back(octant_child(top, c));
       }
-      for (int c = 7; c >= 0; --c) stack.push_back(octant_child(top, c));
+      if (!whole) {
+        EXPECT_EQ(taken_whole, 0u);
+      }
+      taken_whole_in_all += taken_whole;
+      SubtreeList list(descent, p, task_level, whole);
+      std::vector<Octant> got;
+      for (Octant r; list.next(&r);) got.push_back(r);
+      ASSERT_EQ(got.size(), want.size()) << domain[0] << " x " << domain[1];
+      for (size_t i = 0; i < got.size(); ++i) {
+        ASSERT_EQ(octant_key(got[i]), octant_key(want[i])) << i;
+      }
     }
-    SubtreeList list(descent, p, task_level);
-    std::vector<Octant> got;
-    for (Octant r; list.next(&r);) got.push_back(r);
-    ASSERT_EQ(got.size(), want.size()) << domain[0] << " x " << domain[1];
-    for (size_t i = 0; i < got.size(); ++i) ASSERT_EQ(octant_key(got[i]), octant_key(want[i])) << i;
   }
+  EXPECT_GT(taken_whole_in_all, 0u);
   ConstructOptions o;
   o.domain_m = {99900, 99900, 37400};
   o.freq = 0.25;

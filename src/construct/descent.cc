@@ -269,8 +269,8 @@ int Descent::uniform_leaf_level(const Octant& o, const Judgement& j) const {
   return level_splits(level - 1, j.ceiling) ? level : 0;
 }
 
-SubtreeList::SubtreeList(const Descent& d, const ConstructPlan& p, int task_level)
-    : descent_(d), block_level_(p.block_level), task_level_(task_level) {
+SubtreeList::SubtreeList(const Descent& d, const ConstructPlan& p, int task_level, Whole whole)
+    : descent_(d), block_level_(p.block_level), task_level_(task_level), whole_(std::move(whole)) {
   const uint32_t e = octant_edge(p.block_level);
   for (int a = 0; a < 3; ++a) domain_ticks_[a] = p.blocks[a] * e;
   stack_.push_back({0, 0, 0, 0});
@@ -285,7 +285,8 @@ bool SubtreeList::next(Octant* o) {
     const Octant top = stack_.back();
     stack_.pop_back();
     if (top.level <= block_level_ && !meets_domain(top)) continue;
-    if (top.level >= block_level_ && (top.level >= task_level_ || !descent_.splits(top))) {
+    if (top.level >= block_level_ &&
+        (top.level >= task_level_ || (whole_ && whole_(top)) || !descent_.splits(top))) {
       *o = top;
       return true;
     }

@@ -26,6 +26,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <vector>
 
 #include "construct/carve.h"
@@ -215,7 +216,10 @@ class Descent {
 // 100 m has 373M of them).
 class SubtreeList {
  public:
-  SubtreeList(const Descent& d, const ConstructPlan& p, int task_level);
+  // whole(o): an octant of the blocks' level or finer, above task_level,
+  // that is a subtree as it is (null: none is).
+  using Whole = std::function<bool(const Octant&)>;
+  SubtreeList(const Descent& d, const ConstructPlan& p, int task_level, Whole whole = nullptr);
   // The next subtree; false after the last.
   bool next(Octant* o);
 
@@ -225,6 +229,7 @@ class SubtreeList {
 
   const Descent& descent_;
   int block_level_, task_level_;
+  Whole whole_;
   std::array<uint32_t, 3> domain_ticks_;  // the blocks' far sides
   std::vector<Octant> stack_;             // the next on top
 };

@@ -106,6 +106,10 @@ class VelocityModel {
     (void)lo;
     (void)hi;
   }
+  // Whether focus() loads the box (a model read from storage): construct
+  // then keeps its subtrees at their level, since a larger box costs that
+  // model more to load and search than the fewer leaves around it save.
+  virtual bool loads_focus() const { return false; }
   // Whether at() gives Qp and Qs (else they are 0): a mesh built from such a
   // model carries them to its leaves and exports.
   virtual bool has_q() const { return false; }

@@ -58,6 +58,7 @@ class DbModel final : public VelocityModel {
 
   Material at(double x, double y, double z) const override;
   void focus(const double lo[3], const double hi[3]) const override;
+  bool loads_focus() const override { return true; }
   void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                      float* out) const override;
   // at()'s materials, found as vs_on_lattice finds its points.
