@@ -370,6 +370,9 @@ void DbModel::vs_on_lattice(const double* xs, const double* ys, const double* zs
   each_on_lattice(xs, ys, zs, n, PutVs{out});
 }
 
+// The values at()'s lookup finds (a hole: no material), a lattice at a time:
+// construct's eight sibling leaves, whose centres' pixels were found point by
+// point (a tenth of a construct from a model database).
 void DbModel::materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                                    Material* out) const {
   if (n > kLatticeMost) return VelocityModel::materials_on_lattice(xs, ys, zs, n, out);
