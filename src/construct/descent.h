@@ -152,6 +152,9 @@ class Descent {
   // judgement (so no leaf's samples could lower it).
   bool emit_block(const Octant& o, int level, size_t cap, SubtreeLeaves* out) const;
   bool visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const;
+  // Focuses the model on subtree o's box and the margin its balance asks
+  // for; o's judgement.
+  Judgement focus_on(const Octant& o) const;
   // Where the ground decides: air is never split (but for --min-level), a
   // leaf it crosses is split down to --surface-edge.
   void apply_ground(const Octant& o, GroundSide side, Judgement* j) const;
