@@ -230,9 +230,9 @@ void Descent::visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) con
 // those leaves are no larger (construct from the 100 m model database:
 // 0.89x the time at 0.5 Hz on one thread, 0.85x at 1 Hz on two; a
 // sixteenth was 0.85x and 0.92x); now the margin is twice the coarsest leaf
-// the ceiling of o's bounds allows (and two ticks, for rounding), less than
-// the eighth where the subtrees are large against their leaves (the
-// region read 1.8x the model at 0.5 Hz).  It is asked first as the
+// the ceiling of o's bounds allows (and two ticks, for rounding) where that
+// is less than the eighth: where the subtrees are large against their
+// leaves (the region read 1.8x the model at 0.5 Hz).  It is asked first as the
 // thread's last subtree needed (its neighbour's material is alike), then
 // again, larger, where o needs more.  Analytic models ignore the focus.
 Judgement Descent::focus_on(const Octant& o) const {
@@ -256,7 +256,10 @@ Judgement Descent::focus_on(const Octant& o) const {
   if (j.ceiling < HUGE_VAL) {
     int level = o.level;
     while (level < kMaxLevel && level_splits(level, j.ceiling)) ++level;
-    need = 2 * edge_m_[level] + 2 * p_.tick_m;
+    // Never more than the eighth: where the leaves are coarser, the
+    // balance loads its own box (a region of many times the subtree's
+    // side could pass the region's room and be dropped after loading).
+    need = std::min(need, 2 * edge_m_[level] + 2 * p_.tick_m);
   }
   if (need > guess) focus(need);
   last_share = need / edge;
