@@ -133,23 +133,6 @@ int subtree_level(const ConstructOptions& o, const ConstructPlan& p) {
   return level;
 }
 
-// The domain's subtrees: those of subtree_level(), and, balanced, coarser
-// octants taken whole where the estimate puts at most `most` leaves in them
-// (kMostLeavesPerWholeSubtree, within the cap); none for a model that loads
-// its focus (VelocityModel::loads_focus).
-SubtreeList list_subtrees(const ConstructOptions& o, const ConstructPlan& p, const Descent& descent,
-                          const ZOrderShare& share, double most) {
-  if (!o.balanced || most <= 0 || descent.model().loads_focus()) {
-    return SubtreeList(descent, p, subtree_level(o, p));
-  }
-  const double total = p.estimated_elements;
-  return SubtreeList(descent, p, subtree_level(o, p), [&share, total, most](const Octant& x) {
-    const uint64_t k = octant_key(x);
-    const double f = share.fraction_before(octant_key_subtree_end(x)) - share.fraction_before(k);
-    return f * total <= most;
-  });
-}
-
 // A parallel run's part: the subtrees whose share of the estimate begins in
 // it.
 int rank_of_subtree(const ConstructOptions& o, const ZOrderShare& share, const Octant& root) {
@@ -175,12 +158,28 @@ double most_whole_leaves(const ConstructOptions& o, const ConstructMemory& memor
   return std::min<double>(kMostLeavesPerWholeSubtree, double(subtree_cap(o, memory)) / 8);
 }
 
+// The domain's subtrees: those of subtree_level(), and, balanced, coarser
+// octants taken whole where the estimate puts at most most_whole_leaves()
+// in them; none for a model that loads its focus (VelocityModel::loads_focus).
+SubtreeList list_subtrees(const ConstructOptions& o, const ConstructPlan& p, const Descent& descent,
+                          const ZOrderShare& share, const ConstructMemory& memory) {
+  if (!o.balanced || descent.model().loads_focus()) {
+    return SubtreeList(descent, p, subtree_level(o, p));
+  }
+  const double total = p.estimated_elements, most = most_whole_leaves(o, memory);
+  return SubtreeList(descent, p, subtree_level(o, p), [&share, total, most](const Octant& x) {
+    const uint64_t k = octant_key(x);
+    const double f = share.fraction_before(octant_key_subtree_end(x)) - share.fraction_before(k);
+    return f * total <= most;
+  });
+}
+
 // Where o.shard's file lies among the shards: the ranks given a subtree
 // write one each (a subtree has a leaf at least).
 ShardPlace place_of_shard(const ConstructOptions& o, const ConstructPlan& p, const Descent& descent,
                           const ZOrderShare& share, const ConstructMemory& memory) {
   std::vector<bool> has(o.shards, false);
-  SubtreeList subtrees = list_subtrees(o, p, descent, share, most_whole_leaves(o, memory));
+  SubtreeList subtrees = list_subtrees(o, p, descent, share, memory);
   for (Octant root; subtrees.next(&root);) has[rank_of_subtree(o, share, root)] = true;
   return shard_place_among(has, o.shard);
 }
@@ -211,7 +210,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
       });
     }
   }
-  SubtreeList subtrees = list_subtrees(o, p, descent, share, most_whole_leaves(o, memory));
+  SubtreeList subtrees = list_subtrees(o, p, descent, share, memory);
   auto ours = [&](const Octant& root) { return rank_of_subtree(o, share, root) == o.shard; };
   std::deque<std::unique_ptr<Slot>> in_flight;  // Z-order
   // Written slots, taken again: their vectors keep their capacity, so a

@@ -236,13 +236,10 @@ void Descent::visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) con
 // thread's last subtree needed (its neighbour's material is alike), then
 // again, larger, where o needs more.  Analytic models ignore the focus.
 Judgement Descent::focus_on(const Octant& o) const {
+  if (!model_.loads_focus()) return judge(o);  // focus() would do nothing
   double lo[3], hi[3];
   box(o, lo, hi);
   const double edge = hi[0] - lo[0];
-  if (!model_.loads_focus()) {
-    model_.focus(lo, hi);
-    return judge(o);
-  }
   thread_local double last_share = 1.0 / 8;  // the last margin, as a share of its subtree's edge
   auto focus = [&](double margin) {
     const double l[3] = {lo[0] - margin, lo[1] - margin, lo[2] - margin};
@@ -254,8 +251,7 @@ Judgement Descent::focus_on(const Octant& o) const {
   const Judgement j = judge(o);
   double need = edge / 8;  // no ceiling: as before
   if (j.ceiling < HUGE_VAL) {
-    int level = o.level;
-    while (level < kMaxLevel && level_splits(level, j.ceiling)) ++level;
+    const int level = first_leaf_level(o.level, j.ceiling);
     // Never more than the eighth: where the leaves are coarser, the
     // balance loads its own box (a region of many times the subtree's
     // side could pass the region's room and be dropped after loading).
@@ -297,8 +293,7 @@ bool Descent::visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeav
 // j's, is all emit() would look at.
 int Descent::uniform_leaf_level(const Octant& o, const Judgement& j) const {
   if (!blocks_ || j.ceiling == HUGE_VAL) return 0;
-  int level = o.level + 1;
-  while (level < kMaxLevel && level_splits(level, j.floor)) ++level;
+  const int level = first_leaf_level(o.level + 1, j.floor);
   if (level < o.level + 2 || level >= kMaxLevel || level_splits(level, j.floor)) return 0;
   return level_splits(level - 1, j.ceiling) ? level : 0;
 }

@@ -145,7 +145,15 @@ class Descent {
   bool splits(const Octant& o, double vs) const { return level_splits(o.level, vs); }
   bool level_splits(int level, double vs) const {
     return always_splits_[level] || (edge_m_[level] > vs * inv_rate_ && may_split_[level]);
+  }  // The first level from `from` on at which vs keeps an octant a leaf (or
+  // kMaxLevel): the finest leaves under a floor of vs, the coarsest under a
+  // ceiling of vs.
+  int first_leaf_level(int from, double vs) const {
+    int level = from;
+    while (level < kMaxLevel && level_splits(level, vs)) ++level;
+    return level;
   }
+
   // The leaves of `level` under o (uniform_leaf_level's), in Z-order, their
   // materials from lattices of 8 (or 4) centres a side; false past cap.
   // REQUIRES: the subtree's least Vs of `level` is at most the floor of o's

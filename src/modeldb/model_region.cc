@@ -348,7 +348,7 @@ void ModelRegion::build_bounds() {
     const uint32_t cx = (o.x >> shift_) - base_[0], cy = (o.y >> shift_) - base_[1],
                    cz = (o.z >> shift_) - base_[2];
     if (cx >= dims_[0] || cy >= dims_[1] || cz >= dims_[2]) continue;  // outside the box
-    const size_t c = (size_t{cz} * dims_[1] + cy) * dims_[0] + cx;
+    const size_t c = cell_index(cx, cy, cz);
     if (c != cell) {
       finish_cell();
       cell = c, filled = 0;

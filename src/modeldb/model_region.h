@@ -78,7 +78,7 @@ class ModelRegion {
   uint32_t cell_z(uint32_t z) const { return (z >> shift_) - base_[2]; }
   // The octant holding pixel p, given its cells: an index, or kHole.
   int32_t find(Coord p, uint32_t cx, uint32_t cy, uint32_t cz) const {
-    const int32_t v = raster_[(size_t{cz} * dims_[1] + cy) * dims_[0] + cx];
+    const int32_t v = raster_[cell_index(cx, cy, cz)];
     return v != kMixed ? v : search(p);
   }
   int32_t find(Coord p) const { return find(p, cell_x(p.x), cell_y(p.y), cell_z(p.z)); }
@@ -88,11 +88,16 @@ class ModelRegion {
   // are in key order, the cells by row: read for each point of construct's
   // lattices, they were a third of its time in them, in cache misses.)
   float vs_at(Coord p, uint32_t cx, uint32_t cy, uint32_t cz) const {
-    const size_t c = (size_t{cz} * dims_[1] + cy) * dims_[0] + cx;
+    const size_t c = cell_index(cx, cy, cz);
     const VsRange& r = pyramid_[0].ranges[c];
     if (r.lo == r.hi) return r.lo;
     const int32_t o = raster_[c] != kMixed ? raster_[c] : search(p);
     return o == kHole ? 0.0f : values_[o][1];
+  }
+
+  // Where cell (cx, cy, cz) is in the raster and the pyramid's level 0.
+  size_t cell_index(uint32_t cx, uint32_t cy, uint32_t cz) const {
+    return (size_t{cz} * dims_[1] + cy) * dims_[0] + cx;
   }
 
   // Bounds on the Vs at every pixel of the box [lo, hi] (bounds included;
