@@ -133,11 +133,16 @@ void build_reference(const ModelCase& c, const std::string& path, Reference* ref
 
 // The case built balanced in one pass, checked against the reference's
 // counts and (small cases) leaves; the caller compares the tables' bytes.
+// subtree_leaves, subtree_pool: the subtrees' rooms and pool (0: as the
+// budget allows).
 void build_balanced(const ModelCase& c, const Reference& ref, const std::string& balanced,
-                    int threads, uint64_t budget, ConstructResult* r) {
+                    int threads, uint64_t budget, ConstructResult* r, uint64_t subtree_leaves = 0,
+                    uint64_t subtree_pool = 0) {
   ConstructOptions o = c.options;
   o.balanced = true;
   o.threads = threads;
+  o.subtree_leaves = subtree_leaves;
+  o.subtree_pool = subtree_pool;
   o.memory = MemoryBudget(budget);
   ConstructPlan plan;
   ASSERT_OK(construct_octree(balanced, o, &plan, r));
@@ -186,6 +191,42 @@ TEST(BalancedConstruct, WritesWhatConstructThenBalanceWriteByteForByte) {
   // some cases were small enough for tests/reference.
   EXPECT_GT(overflowed, 0u);
   EXPECT_GT(against_reference, 0u);
+}
+
+// Subtrees that take leaves from a shared pool past their own rooms
+// (construct/leaf_room.h) write the same table, and pass their rooms less
+// often than fixed rooms of the same size: at rooms of 64 leaves, with a
+// pool and without, and at the budget that pools (1G).
+TEST(BalancedConstruct, APoolOfLeavesChangesNothingButTheSubtreesVisitedAgain) {
+  testing::TempDir dir;
+  uint64_t fewer = 0;
+  for (const ModelCase& c : cases(dir)) {
+    SCOPED_TRACE(c.name);
+    Reference ref;
+    ASSERT_NO_FATAL_FAILURE(build_reference(c, dir.file("ref"), &ref));
+    const std::string expected = testing::table_bytes(ref.path);
+    ConstructResult fixed, pooled, budgeted;
+    for (int t : {1, 2}) {
+      SCOPED_TRACE(std::to_string(t) + " threads");
+      const std::string got = dir.file("got");
+      ASSERT_NO_FATAL_FAILURE(
+          build_balanced(c, ref, got, t, MemoryBudget::kDefaultBytes, &fixed, 64, 0));
+      ASSERT_EQ(testing::table_bytes(got), expected);
+      std::filesystem::remove_all(got);
+      ASSERT_NO_FATAL_FAILURE(
+          build_balanced(c, ref, got, t, MemoryBudget::kDefaultBytes, &pooled, 64, 4096));
+      ASSERT_EQ(testing::table_bytes(got), expected);
+      std::filesystem::remove_all(got);
+      EXPECT_LE(pooled.subtrees_over, fixed.subtrees_over);
+      fewer += pooled.subtrees_over < fixed.subtrees_over;
+      ASSERT_NO_FATAL_FAILURE(build_balanced(c, ref, got, t, 1ull << 30, &budgeted));
+      ASSERT_EQ(testing::table_bytes(got), expected);
+      std::filesystem::remove_all(got);
+    }
+    std::filesystem::remove_all(ref.path);
+  }
+  // Some subtrees past their own room of 64 finished in the pool's.
+  EXPECT_GT(fewer, 0u);
 }
 
 // Model databases (what `weaver construct --model grid:FILE` or

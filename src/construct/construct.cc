@@ -14,6 +14,7 @@
 #include "construct/descent.h"
 #include "construct/estimate.h"
 #include "construct/subtree_balance.h"
+#include "construct/subtree_slots.h"
 #include "db/database.h"
 #include "model/geo_frame.h"
 #include "model/velocity_model.h"
@@ -46,26 +47,11 @@ constexpr double kLeastLeavesPerBalancedSubtree = 4096;
 // 9.5% of the leaves instead of 19.3%).  Not more: at 2 Hz, where the
 // estimate is a third of the leaves, larger ones gained nothing.
 constexpr double kMostLeavesPerWholeSubtree = 65536;
+// The least even share of the subtrees' room (leaves) at which they share a
+// pool (subtree_rooms): --memory 512M and up on two threads, 256M on one.
+constexpr uint64_t kLeastPooledRoom = uint64_t{1} << 18;
 // Subtrees in flight per thread: workers run ahead of the writer.
 constexpr size_t kSubtreesPerThread = 8;
-
-// One subtree on its way from a worker to the table.
-struct Slot {
-  Octant root;
-  SubtreeLeaves leaves;
-  uint64_t descended = 0;      // leaves before the balance
-  uint64_t air = 0, cut = 0;   // carved: leaves dropped, leaves cut (carve.h)
-  double least_dt = HUGE_VAL;  // the least edge / vp of its leaves (s), and where
-  size_t least_dt_at = 0;
-  bool done = false;  // set by the worker (WorkQueue)
-
-  // As new, but for the leaves' capacity (visit_subtree clears them).
-  void reset() {
-    SubtreeLeaves kept = std::move(leaves);
-    *this = Slot{};
-    leaves = std::move(kept);
-  }
-};
 
 // New leaves take the model's material at their centre where weaver balance
 // would (it opens the model the table names; a grid file it cannot name),
@@ -76,10 +62,10 @@ bool fills_material(const ConstructOptions& o) { return o.model != "grid"; }
 // against the leaves around it.  An overflowing subtree is left as it is.
 class SubtreeVisitor {
  public:
-  SubtreeVisitor(const ConstructOptions& o, const Descent& d, size_t cap)
-      : descent_(d), cap_(cap), balanced_(o.balanced), balancer_(d, fills_material(o)) {}
+  SubtreeVisitor(const ConstructOptions& o, const Descent& d)
+      : descent_(d), balanced_(o.balanced), balancer_(d, fills_material(o)) {}
   void visit(Slot* s) {
-    descent_.visit_subtree(s->root, cap_, &s->leaves);
+    descent_.visit_subtree(s->root, s->room, &s->leaves);
     if (s->leaves.overflow) return;
     const bool carved = descent_.plan().carved;
     if (balanced_) {
@@ -112,7 +98,6 @@ class SubtreeVisitor {
   }
 
   const Descent& descent_;
-  size_t cap_;
   bool balanced_;
   SubtreeBalancer balancer_;
 };
@@ -141,21 +126,39 @@ int rank_of_subtree(const ConstructOptions& o, const ZOrderShare& share, const O
   return std::min(static_cast<int>(f), o.shards - 1);
 }
 
-// The most leaves a subtree's visit holds (then it is visited again as its
-// 8 children): its share of the budget, or the tests' o.subtree_leaves.
-size_t subtree_cap(const ConstructOptions& o, const ConstructMemory& memory) {
+// The leaves a subtree's visit may hold (leaf_room.h; past them it is
+// visited again as its 8 children).
+struct SubtreeRooms {
+  size_t own = 0, most = 0;  // each subtree's own room, and the most it may take
+  uint64_t spare = 0;        // the pool the subtrees in flight share
+  uint64_t even = 0;         // the budget's room for them over their number
+};
+
+// The subtrees in flight share the budget's room for them evenly, each
+// owning half its even share and lending the other half to the pool; one
+// takes at most 4 even shares.  Only where the even share is
+// kLeastPooledRoom or more: the balance's buffers (one set a thread, about
+// 70 bytes a leaf of the largest subtree it balanced, not in the budget's
+// plan) grow with the largest subtree, and at --memory 64M subtrees of 4
+// even shares took the 2 Hz construct to 101 MB.  Below it each room is
+// fixed, no pool.  The tests' o.subtree_leaves is a fixed room, with
+// o.subtree_pool a pool of that many leaves.
+SubtreeRooms subtree_rooms(const ConstructOptions& o, const ConstructMemory& memory) {
+  if (o.subtree_leaves > 0) {
+    return {o.subtree_leaves, 4 * o.subtree_leaves, o.subtree_pool, o.subtree_leaves};
+  }
   const size_t window = kSubtreesPerThread * std::max(1, o.threads);
-  return o.subtree_leaves > 0
-             ? o.subtree_leaves
-             : std::clamp<uint64_t>(memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64,
-                                    uint64_t{1} << 19);
+  const uint64_t even = std::clamp<uint64_t>(
+      memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64, uint64_t{1} << 19);
+  if (even < kLeastPooledRoom) return {even, even, 0, even};
+  return {even / 2, 4 * even, window * (even - even / 2), even};
 }
 
 // The estimated leaves of a subtree taken whole: kMostLeavesPerWholeSubtree,
-// or less where the cap is small (the estimate may be a third of the
-// leaves, and a subtree over the cap is descended twice).
+// or less where the rooms are small (the estimate may be a third of the
+// leaves, and a subtree past its room is descended twice).
 double most_whole_leaves(const ConstructOptions& o, const ConstructMemory& memory) {
-  return std::min<double>(kMostLeavesPerWholeSubtree, double(subtree_cap(o, memory)) / 8);
+  return std::min<double>(kMostLeavesPerWholeSubtree, double(subtree_rooms(o, memory).even) / 8);
 }
 
 // The domain's subtrees: those of subtree_level(), and, balanced, coarser
@@ -193,12 +196,13 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
                       ConstructResult* r) {
   const int threads = std::max(1, o.threads);
   const size_t window = kSubtreesPerThread * threads;
-  const size_t cap = subtree_cap(o, memory);
+  const SubtreeRooms rooms = subtree_rooms(o, memory);
+  SubtreeSlots slots(rooms.own, rooms.most, rooms.spare);
   WorkQueue<Slot> queue;
   std::vector<std::thread> workers;
   std::vector<std::unique_ptr<SubtreeVisitor>> visitors;
   for (int i = 0; i < threads; ++i) {
-    visitors.push_back(std::make_unique<SubtreeVisitor>(o, descent, cap));
+    visitors.push_back(std::make_unique<SubtreeVisitor>(o, descent));
   }
   if (threads > 1) {
     for (int i = 0; i < threads; ++i) {
@@ -213,19 +217,8 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
   SubtreeList subtrees = list_subtrees(o, p, descent, share, memory);
   auto ours = [&](const Octant& root) { return rank_of_subtree(o, share, root) == o.shard; };
   std::deque<std::unique_ptr<Slot>> in_flight;  // Z-order
-  // Written slots, taken again: their vectors keep their capacity, so a
-  // subtree's leaves are not grown afresh (reallocated, copied) each time.
-  std::vector<std::unique_ptr<Slot>> spare;
   auto add = [&](const Octant& root, bool front) {
-    std::unique_ptr<Slot> slot;
-    if (spare.empty()) {
-      slot = std::make_unique<Slot>();
-    } else {
-      slot = std::move(spare.back());
-      spare.pop_back();
-      slot->reset();
-    }
-    slot->root = root;
+    std::unique_ptr<Slot> slot = slots.take(root);
     if (threads > 1) queue.push(slot.get(), front);
     if (front) {
       in_flight.push_front(std::move(slot));
@@ -250,7 +243,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     if (head->leaves.overflow) {
       ++r->subtrees_over;
       const Octant big = head->root;
-      spare.push_back(std::move(in_flight.front()));
+      slots.put(std::move(in_flight.front()));
       in_flight.pop_front();
       for (int c = 7; c >= 0; --c) add(octant_child(big, c), true);  // child 0 first
       continue;
@@ -268,7 +261,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     if (o.progress && !leaves.keys.empty()) {
       o.progress(r->elements, share.fraction_before(leaves.keys.back()));
     }
-    spare.push_back(std::move(in_flight.front()));
+    slots.put(std::move(in_flight.front()));
     in_flight.pop_front();
   }
   // Let running visits finish before their slots go away.

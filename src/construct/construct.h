@@ -64,6 +64,9 @@ struct ConstructOptions {
   // its 8 children (0: as the budget allows); the table is the same for
   // any (the tests make it small).
   uint64_t subtree_leaves = 0;
+  // With subtree_leaves: a pool of this many leaves that subtrees past it
+  // may take from (construct/leaf_room.h; 0: none).  The table is the same.
+  uint64_t subtree_pool = 0;
   // Packed leaf pages (storage/packed_leaf.h); false writes plain ones.
   bool packed = true;
   // Write the minimal face+edge 2:1 balanced refinement of the octree

@@ -213,11 +213,11 @@ void Descent::judge_children(const Octant& o, const Judgement& parent, const boo
   }
 }
 
-void Descent::visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const {
+void Descent::visit_subtree(const Octant& o, LeafRoom& room, SubtreeLeaves* out) const {
   out->clear();
   out->root = o;
   const Judgement j = focus_on(o);
-  out->overflow = !visit(o, j, cap, out);
+  out->overflow = !visit(o, j, room, out);
   if (!out->overflow) add_figures(out);
 }
 
@@ -262,24 +262,24 @@ Judgement Descent::focus_on(const Octant& o) const {
   return j;
 }
 
-// False once the subtree has more than cap leaves.
-bool Descent::visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const {
+// False once room does not allow another leaf.
+bool Descent::visit(const Octant& o, const Judgement& j, LeafRoom& room, SubtreeLeaves* out) const {
   if (j.split) {
     // A block of one level whose floor cannot lower the level's least Vs
     // is written whole; otherwise its leaves are judged one by one.
     const int level = uniform_leaf_level(o, j);
-    if (level > 0 && out->least_vs[level] <= j.floor) return emit_block(o, level, cap, out);
+    if (level > 0 && out->least_vs[level] <= j.floor) return emit_block(o, level, room, out);
     Judgement children[8];
     judge_children(o, j, nullptr, children);
     bool leaves = true;
     for (const Judgement& c : children) leaves = leaves && !c.split;
-    if (leaves) return emit_siblings(o, children, cap, out);
+    if (leaves) return emit_siblings(o, children, room, out);
     for (int c = 0; c < 8; ++c) {
-      if (!visit(octant_child(o, c), children[c], cap, out)) return false;
+      if (!visit(octant_child(o, c), children[c], room, out)) return false;
     }
     return true;
   }
-  if (out->elements == cap) return false;
+  if (!room.allows(out->elements + 1)) return false;
   out->payloads.resize(out->payloads.size() + payload_bytes_);
   emit(o, octant_key(o), j, material_at_centre(o), true, out);
   return true;

@@ -31,6 +31,7 @@
 
 #include "construct/carve.h"
 #include "construct/construct.h"
+#include "construct/leaf_room.h"
 #include "model/velocity_model.h"
 #include "schema/octant.h"
 
@@ -115,8 +116,9 @@ class Descent {
   // is a leaf at the floor.  0 where they do not, or where the leaves would
   // be o's children alone (emit_siblings' case).
   int uniform_leaf_level(const Octant& o, const Judgement& j) const;
-  // The leaves of o's subtree into *out; stops, with out->overflow, past cap.
-  void visit_subtree(const Octant& o, size_t cap, SubtreeLeaves* out) const;
+  // The leaves of o's subtree into *out; stops, with out->overflow, where
+  // room does not allow another.
+  void visit_subtree(const Octant& o, LeafRoom& room, SubtreeLeaves* out) const;
   // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as
   // f32), payload_bytes() of them into out.
   void material(const Octant& o, std::byte* out) const;
@@ -155,11 +157,12 @@ class Descent {
   }
 
   // The leaves of `level` under o (uniform_leaf_level's), in Z-order, their
-  // materials from lattices of 8 (or 4) centres a side; false past cap.
+  // materials from lattices of 8 (or 4) centres a side; false where room
+  // does not allow them.
   // REQUIRES: the subtree's least Vs of `level` is at most the floor of o's
   // judgement (so no leaf's samples could lower it).
-  bool emit_block(const Octant& o, int level, size_t cap, SubtreeLeaves* out) const;
-  bool visit(const Octant& o, const Judgement& j, size_t cap, SubtreeLeaves* out) const;
+  bool emit_block(const Octant& o, int level, LeafRoom& room, SubtreeLeaves* out) const;
+  bool visit(const Octant& o, const Judgement& j, LeafRoom& room, SubtreeLeaves* out) const;
   // Focuses the model on subtree o's box and the margin its balance asks
   // for; o's judgement.
   Judgement focus_on(const Octant& o) const;
@@ -169,7 +172,7 @@ class Descent {
   // judge() with o's side of the ground known (kSolid when not carved).
   Judgement judge_on(const Octant& o, GroundSide side) const;
   GroundSide ground_side(const Octant& o) const;
-  bool emit_siblings(const Octant& o, const Judgement* children, size_t cap,
+  bool emit_siblings(const Octant& o, const Judgement* children, LeafRoom& room,
                      SubtreeLeaves* out) const;
   // o's leaf (key: its key) into out, its payload in the room the caller
   // made for it; at_border false: o touches no side of the subtree

@@ -73,10 +73,10 @@ constexpr auto kLatticeOf8 = lattice_of_z_order<3>();
 
 }  // namespace
 
-bool Descent::emit_block(const Octant& o, int level, size_t cap, SubtreeLeaves* out) const {
+bool Descent::emit_block(const Octant& o, int level, LeafRoom& room, SubtreeLeaves* out) const {
   const int depth = level - o.level;
   const size_t count = size_t{1} << (3 * depth);
-  if (out->elements + count > cap) return false;
+  if (!room.allows(out->elements + count)) return false;
   const size_t first = out->keys.size();
   out->keys.resize(first + count);
   out->payloads.resize((first + count) * payload_bytes_);
@@ -127,9 +127,9 @@ void Descent::children_materials(const Octant& o, std::byte* out) const {
 
 // o's eight children, all leaves, with their materials from one lattice of
 // their centres.
-bool Descent::emit_siblings(const Octant& o, const Judgement* children, size_t cap,
+bool Descent::emit_siblings(const Octant& o, const Judgement* children, LeafRoom& room,
                             SubtreeLeaves* out) const {
-  if (out->elements + 8 > cap) return false;
+  if (!room.allows(out->elements + 8)) return false;
   // Storage the model fills (every model assigns each Material whole), not
   // eight Materials zeroed first: that zeroing was a `rep stos`, a fifth of
   // this function.  (An array of bytes implicitly creates the Materials.)
