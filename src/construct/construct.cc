@@ -38,14 +38,15 @@ constexpr double kLeavesPerSubtree = 4096;
 // leaves the cache: at 1 Hz, subtrees of 32K to 256K estimated leaves
 // descended 27% again against 36% for 4K to 32K, and took 10-20% longer.
 // So its subtrees hold 4K to 32K estimated leaves (the model's small
-// features add up to 3x; past the cap a subtree is visited again as its 8
+// features add up to 3x; past its room a subtree is visited again as its 8
 // children).
 constexpr double kLeastLeavesPerBalancedSubtree = 4096;
 // Where the estimate puts at most this many leaves in an octant coarser
 // than the subtrees' level, a balanced construct takes it whole as one
 // subtree: fewer leaves around the subtrees are descended again (at 1 Hz
 // 9.5% of the leaves instead of 19.3%).  Not more: at 2 Hz, where the
-// estimate is a third of the leaves, larger ones gained nothing.
+// estimate is a third of the leaves, larger ones gained nothing (128K:
+// 1.00x the time, with the pool of leaves that lets them finish).
 constexpr double kMostLeavesPerWholeSubtree = 65536;
 // The least even share of the subtrees' room (leaves) at which they share a
 // pool (subtree_rooms): --memory 512M and up on two threads, 256M on one.
@@ -189,7 +190,7 @@ ShardPlace place_of_shard(const ConstructOptions& o, const ConstructPlan& p, con
 
 // Visits the domain's subtrees on o.threads workers (or on this thread for
 // one) and appends their leaves in Z-order.  A subtree with more leaves
-// than the cap is visited again as its 8 children, so memory stays bounded
+// than its room allows is visited again as its 8 children, so memory stays bounded
 // wherever the model is dense.
 Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const Descent& descent,
                       const ConstructMemory& memory, const ZOrderShare& share, BTree& out,

@@ -60,9 +60,9 @@ struct ConstructOptions {
   MemoryBudget memory;
   // Worker threads visiting subtrees (descent.h); the table is the same for any count.
   int threads = 1;
-  // The most leaves a subtree's visit holds before it is visited again as
-  // its 8 children (0: as the budget allows); the table is the same for
-  // any (the tests make it small).
+  // The leaves a subtree's visit holds (its own room) before it is visited
+  // again as its 8 children (0: as the budget allows); the table is the
+  // same for any (the tests make it small).
   uint64_t subtree_leaves = 0;
   // With subtree_leaves: a pool of this many leaves that subtrees past it
   // may take from (construct/leaf_room.h; 0: none).  The table is the same.
@@ -142,7 +142,7 @@ struct ConstructResult {
   double worst_ppw = 0;  // the fewest points per wavelength at any leaf (by its Vs_min)
   uint64_t table_bytes = 0;
   uint64_t subtrees = 0;       // visited by the workers (descent.h), and of those
-  uint64_t subtrees_over = 0;  // the ones past the leaf cap, visited again as 8 children
+  uint64_t subtrees_over = 0;  // the ones past their leaf room, visited again as 8 children
   // Balanced: the descent's leaves before the balance split some, and the
   // leaves outside the subtrees descended again to balance them against.
   uint64_t descended = 0, neighbours = 0;

@@ -57,7 +57,7 @@ struct SubtreeLeaves {
   Octant root;
   std::array<uint32_t, 3> border_lo{}, border_hi{};
   LeafSpan span;          // carved: what the kept leaves span (carve.h)
-  bool overflow = false;  // more leaves than the cap: visit the children instead
+  bool overflow = false;  // more leaves than its room allows: visit the children instead
 
   void clear();
   // Adds these leaves' figures to r (in Z-order, as the serial descent would).
