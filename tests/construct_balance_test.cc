@@ -196,7 +196,9 @@ TEST(BalancedConstruct, WritesWhatConstructThenBalanceWriteByteForByte) {
 // Subtrees that take leaves from a shared pool past their own rooms
 // (construct/leaf_room.h) write the same table, and pass their rooms less
 // often than fixed rooms of the same size: at rooms of 64 leaves, with a
-// pool and without, and at the budget that pools (1G).
+// pool and without (where subtrees do take from it), and at the budget
+// that pools (1G: the pooled rooms' set-up, though these small cases'
+// subtrees stay within their own rooms of 256K leaves there).
 TEST(BalancedConstruct, APoolOfLeavesChangesNothingButTheSubtreesVisitedAgain) {
   testing::TempDir dir;
   uint64_t fewer = 0;
