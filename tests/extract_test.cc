@@ -131,8 +131,11 @@ TEST_F(ExtractTest, SphereAndPointGeneratorsAreBalancedByConstruction) {
   }
 }
 
+// Level 4 is a block of 4096 leaves, the deepest whose corners the
+// workers make as a lattice (bucket_worker.cc's kMostBlockDepth), and level
+// 5 eight of them.
 TEST_F(ExtractTest, SingleElementAndUniformGrids) {
-  for (int level : {0, 1, 2, 3}) {
+  for (int level : {0, 1, 2, 3, 4, 5}) {
     GenOptions g;
     g.kind = GenOptions::Kind::kUniform;
     g.level = level;
@@ -244,6 +247,39 @@ TEST_F(ExtractTest, GradedAroundASphereWithManyBucketsAndSpillFiles) {
     EXPECT_GT(r.buckets, 100u);  // 282 and more on the sanitizers' small scale
     EXPECT_GT(r.spilled_to_disk, 0u);
     EXPECT_GT(r.edge + r.face, 0u);
+  }
+}
+
+// Blocks of 4096 leaves (the deepest the workers make as lattices) next to
+// finer leaves: a uniform level-5 grid refined two levels more around a
+// corner, so that the level-1 octants far from it stay whole blocks of 8^4
+// leaves and those near it are cut by the grading, at buckets that do and
+// do not hold a whole block.
+TEST_F(ExtractTest, BlocksOf4096LeavesBesideFinerOnes) {
+  std::vector<Octant> leaves;
+  std::vector<Octant> todo = {octant_root()};
+  const double c = 0.8 * kRootEdge, r = 0.1 * kRootEdge;
+  while (!todo.empty()) {
+    const Octant o = todo.back();
+    todo.pop_back();
+    const double e = octant_edge(o);
+    double d2 = 0;  // the squared distance from (c, c, c) to the octant's box
+    for (double lo : {double(o.x), double(o.y), double(o.z)}) {
+      const double gap = std::max(0.0, std::max(lo - c, c - (lo + e)));
+      d2 += gap * gap;
+    }
+    if (o.level < 5 || (o.level < 7 && d2 <= r * r)) {
+      for (int k = 0; k < 8; ++k) todo.push_back(octant_child(o, k));
+    } else {
+      leaves.push_back(o);
+    }
+  }
+  leaves = reference::balance(leaves);
+  for (uint64_t bucket_leaves : {0, 3000, 20000}) {
+    ExtractOptions o;
+    o.bucket_leaves = bucket_leaves;
+    SCOPED_TRACE("bucket leaves " + std::to_string(bucket_leaves));
+    ASSERT_NO_FATAL_FAILURE(compare_with_reference(leaves, o));
   }
 }
 
