@@ -209,7 +209,7 @@ void BucketWorker::add_block_lattice(uint64_t first, int j, uint64_t end) {
   const int side = 1 << j;
   blocks_.push_back({octant_key_morton(first), j, bit});
   auto add = [&](uint64_t key, uint8_t cells) {
-    if (key < end) hash_.add(key, cells);
+    if (key < end) add_node(key, cells);
   };
   uint64_t plane = octant_key_morton(first);
   for (int c = 0; c <= side; ++c, plane = morton_step(plane, 2, bit)) {
@@ -255,13 +255,33 @@ void sort_records(std::vector<SpillRecord>& records, std::vector<uint64_t>& pack
   }
 }
 
+// Every key added is a corner of a leaf (a multiple of the finest leaf's
+// size, as the start is of its own leaf's) or a spilled one, at or past the
+// start and before the end.
+bool BucketWorker::offsets_fit(const BucketTask& t) {
+  int finest = 0;
+  for (uint64_t key : t.leaf_keys) finest = std::max(finest, octant_key_level(key));
+  uint64_t differ = t.start;
+  for (const SpillRecord& r : t.incoming) differ |= r.key - t.start;
+  zeros_ = std::min(3 * (kMaxLevel - finest), differ == 0 ? 64 : std::countr_zero(differ));
+  start_ = t.start;
+  return t.end > t.start &&
+         std::bit_width((t.end - 1 - t.start) >> zeros_) <= NodeWords::kOffsetBits;
+}
+
 Status BucketWorker::run(BucketTask& t) {
   t.counts = ExtractResult{};
   t.counts.elements = t.leaf_keys.size();
   classifier_.set_local(&t.leaf_keys, t.start, t.end);
   // Up to about 1.5 nodes a leaf (a randomly refined octree's dangling
   // nodes); sized for them, the table never grows mid-bucket.
-  hash_.reset(t.leaf_keys.size() * 3 / 2 + t.incoming.size() + 64);
+  const size_t expected = t.leaf_keys.size() * 3 / 2 + t.incoming.size() + 64;
+  words_fit_ = offsets_fit(t);
+  if (words_fit_) {
+    words_.reset(expected);
+  } else {
+    hash_.reset(expected);
+  }
   uint64_t corners[8];
   const std::vector<uint64_t>& leaves = t.leaf_keys;
   blocks_.clear();
@@ -273,19 +293,20 @@ Status BucketWorker::run(BucketTask& t) {
     }
     leaf_corner_keys(leaves[i++], corners);
     for (int c = 0; c < 8; ++c) {
-      if (corners[c] < t.end) hash_.add(corners[c], corner_direction_bit(c));
+      if (corners[c] < t.end) add_node(corners[c], corner_direction_bit(c));
     }
   }
-  for (const SpillRecord& r : t.incoming) hash_.add(r.key, r.mask);
-  if (sort_packed()) {
+  for (const SpillRecord& r : t.incoming) add_node(r.key, r.mask);
+  if (words_fit_) {
+    radix_sort(packed_, 8, words_.take(&packed_), scratch_);
     struct Words {
       const uint64_t* w;
-      uint64_t lo;
+      uint64_t start;
       int zeros;
-      uint64_t key(size_t i) const { return ((w[i] >> 8) << zeros) + lo; }
+      uint64_t key(size_t i) const { return ((w[i] >> 8) << zeros) + start; }
       uint8_t mask(size_t i) const { return static_cast<uint8_t>(w[i]); }
     };
-    return merge_nodes(Words{packed_.data(), lo_, zeros_}, packed_.size(), t);
+    return merge_nodes(Words{packed_.data(), start_, zeros_}, packed_.size(), t);
   }
   sort_wide();
   struct Records {
@@ -372,37 +393,13 @@ Status BucketWorker::merge_nodes(const Sorted& sorted, size_t count, BucketTask&
   return Status::Ok();
 }
 
-// The hashed nodes as sort_records' words, sorted, straight from the hash
-// (their KeySpan in one read).
-// False, and packed_ empty, if the span needs more than 56 bits.
-bool BucketWorker::sort_packed() {
-  const size_t n = hash_.size();
-  lo_ = 0, zeros_ = 0;
-  KeySpan span;
-  for (size_t i = 0; i < n; ++i) span.add(hash_.key_at(i));
-  const uint64_t lo = span.lo;
-  const int zeros = span.zeros(), bits = span.bits();
-  if (n == 0 || bits > 56) {
-    packed_.clear();
-    return n == 0;
-  }
-  // Not cleared first: resize then zeroes only what the last bucket's words
-  // did not reach, and every word is written below.
-  packed_.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    packed_[i] = ((hash_.key_at(i) - lo) >> zeros) << 8 | hash_.mask_at(i);
-  }
-  radix_sort(packed_, 8, bits, scratch_);
-  lo_ = lo, zeros_ = zeros;
-  return true;
-}
-
-// A span too wide for sort_packed's words: the nodes as records in
-// sorted_, sorted by sort_records (std::sort, for such a span).
+// A span too wide for words: the nodes as records in sorted_, sorted by
+// sort_records (std::sort, for such a span, unless the keys' own span is
+// narrower).
 void BucketWorker::sort_wide() {
   sorted_.resize(hash_.size());
   for (size_t i = 0; i < hash_.size(); ++i) sorted_[i] = {hash_.key_at(i), hash_.mask_at(i)};
-  sort_records(sorted_, packed_, scratch_);  // packed_ is free: sort_packed left it empty
+  sort_records(sorted_, packed_, scratch_);
 }
 
 }  // namespace weaver

@@ -32,6 +32,7 @@
 #include "extract/extract.h"
 #include "extract/node_classifier.h"
 #include "extract/node_hash.h"
+#include "extract/node_words.h"
 #include "extract/spill_store.h"
 #include "storage/btree.h"
 
@@ -166,10 +167,20 @@ class BucketWorker {
   // the corners on its far faces.
   void add_block_lattice(uint64_t first, int j, uint64_t end);
 
-  // The hashed nodes in key order: packed_'s (offset, mask) words, an
-  // offset being (key - lo_) >> zeros_; or, for a span too wide for them,
-  // sorted_'s records.
-  bool sort_packed();
+  // Whether the bucket's keys fit words_ as offsets from its start: sets
+  // zeros_, the trailing zero bits every key less the start has.
+  bool offsets_fit(const BucketTask& t);
+  // A nodal pixel: as a word where the offsets fit, else hashed by key.
+  void add_node(uint64_t key, uint8_t bits) {
+    if (words_fit_) {
+      words_.add((key - start_) >> zeros_, bits);
+    } else {
+      hash_.add(key, bits);
+    }
+  }
+
+  // A span too wide for words: the hashed nodes as sorted_'s records, in
+  // key order.
   void sort_wide();
   // The hashed nodes (`sorted`, in key order) and the blocks' lattices
   // merged, classified and written to t.
@@ -177,11 +188,13 @@ class BucketWorker {
   Status merge_nodes(const Sorted& sorted, size_t count, BucketTask& t);
 
   NodeClassifier classifier_;
-  NodeHash hash_;
+  NodeWords words_;
+  NodeHash hash_;  // where the offsets do not fit words
+  bool words_fit_ = false;
+  uint64_t start_ = 0;
+  int zeros_ = 0;
   std::vector<Block> blocks_;  // the bucket's complete blocks, in key order
   std::vector<uint64_t> packed_, scratch_;
-  uint64_t lo_ = 0;
-  int zeros_ = 0;
   std::vector<SpillRecord> sorted_;
 };
 

@@ -1,0 +1,84 @@
+// A bucket's nodal pixels as words: a node's offset from the bucket's start
+// (key - start, less the trailing zero bits every key of the bucket shares)
+// above its 8-bit direction mask, in an open-addressing table of such
+// words.  The words are what the bucket's radix sort sorts, so none is
+// packed after hashing, and a slot is one load, not a key and a mask.
+
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <vector>
+
+namespace weaver {
+
+class NodeWords {
+ public:
+  // The widest offset a word holds beside its mask.
+  static constexpr int kOffsetBits = 55;
+
+  // Empties the table, with room for `expected` offsets without growing.
+  // A table of the same size is emptied slot by used slot.
+  void reset(size_t expected) {
+    const size_t cap = std::bit_ceil(std::max<size_t>(64, 2 * expected));
+    if (cap == slots_.size()) {
+      for (uint32_t s : used_) slots_[s] = kEmpty;
+    } else {
+      slots_.assign(cap, kEmpty);
+    }
+    used_.clear();
+    limit_ = cap / 2;
+    shift_ = 64 - std::countr_zero(cap);
+  }
+
+  // ORs bits into the offset's mask, adding the offset if new.
+  // REQUIRES: offset < 2^kOffsetBits.
+  void add(uint64_t offset, uint8_t bits) {
+    if (used_.size() >= limit_) grow();
+    const size_t mask = slots_.size() - 1;
+    size_t s = start(offset);
+    while (slots_[s] != kEmpty && (slots_[s] >> 8) != offset) s = (s + 1) & mask;
+    if (slots_[s] == kEmpty) {
+      slots_[s] = offset << 8;
+      used_.push_back(static_cast<uint32_t>(s));
+    }
+    slots_[s] |= bits;
+  }
+
+  size_t size() const { return used_.size(); }
+
+  // The words added since reset (insertion order) into *out; returns the
+  // bit width of the largest offset.
+  int take(std::vector<uint64_t>* out) const {
+    out->resize(used_.size());
+    uint64_t all = 0;
+    for (size_t i = 0; i < used_.size(); ++i) all |= (*out)[i] = slots_[used_[i]];
+    return std::bit_width(all >> 8);
+  }
+
+ private:
+  static constexpr uint64_t kEmpty = ~uint64_t{0};
+
+  // The first slot to probe: the offset's Fibonacci hash.  (Slots kept
+  // near for neighbouring points, by blocks of 64 as KeySet keeps them,
+  // took the 1 Hz extract 1.1x the time: the corners of coarse leaves
+  // crowded the few slots of their blocks' regions.)
+  size_t start(uint64_t offset) const {
+    return static_cast<size_t>((offset * 0x9E3779B97F4A7C15ULL) >> shift_);
+  }
+
+  void grow() {
+    std::vector<uint64_t> words;
+    take(&words);
+    reset(slots_.size());  // twice the slots: reset sizes for 2x
+    for (uint64_t w : words) add(w >> 8, static_cast<uint8_t>(w));
+  }
+
+  std::vector<uint64_t> slots_;
+  std::vector<uint32_t> used_;
+  size_t limit_ = 0;  // at most half the slots are used: past it, grow
+  int shift_ = 58;
+};
+
+}  // namespace weaver
