@@ -5,7 +5,6 @@
 #include <bit>
 
 #include "schema/octant.h"
-#include "util/radix_sort.h"
 
 namespace weaver {
 
@@ -32,6 +31,17 @@ uint64_t leaves_end(const std::vector<uint64_t>& leaves) {
 // The Morton code of corner 7 of the octant at code m with edge 2^bit.
 uint64_t far_corner(uint64_t m, int bit) {
   return morton_step(morton_step(morton_step(m, 0, bit), 1, bit), 2, bit);
+}
+
+// No corner of these leaves (in key order) has a larger key than this: the
+// far corner of the least aligned octant holding them all.
+uint64_t corners_bound(const std::vector<uint64_t>& leaves) {
+  if (leaves.empty()) return 0;
+  const uint64_t first = octant_key_morton(leaves.front());
+  const uint64_t last = leaves_end(leaves) - 1;            // the last leaf's last pixel
+  const int bit = (std::bit_width(first ^ last) + 2) / 3;  // the octant's edge, 2^bit (<= 20)
+  const uint64_t span = (uint64_t{1} << (3 * bit)) - 1;
+  return far_corner(first & ~span, bit);
 }
 
 }  // namespace
@@ -121,6 +131,7 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
   // coarser than it, lie inside it.
   uint64_t clear_hi = 0;
   int clear_bit = 0;
+  far_corners_.begin(task.end, corners_bound(task.leaf_keys));
   for (uint64_t key : task.leaf_keys) {
     const uint64_t m = octant_key_morton(key);
     const int bit = kMaxLevel - octant_key_level(key);
@@ -145,13 +156,13 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
 }
 
 Status SpillRun::flush(SpillStore& spills) {
-  run_.resize(hash_.size());
-  for (size_t i = 0; i < run_.size(); ++i) run_[i] = {hash_.key_at(i), hash_.mask_at(i)};
-  sort_records(run_, packed_, scratch_);
-  expected_ = std::max<size_t>(run_.size(), 1024);
-  hash_.reset(expected_);
   // In a buffer of just their size: the spill store holds thousands of runs.
-  return spills.add_run(std::vector<SpillRecord>(run_.begin(), run_.end()));
+  std::vector<SpillRecord> run(pixels_.size());
+  pixels_.sorted([&run](const auto& sorted, size_t count) {
+    for (size_t i = 0; i < count; ++i) run[i] = {sorted.key(i), sorted.mask(i)};
+  });
+  expected_ = std::max<size_t>(run.size(), 1024);
+  return spills.add_run(std::move(run));
 }
 
 namespace {
@@ -209,7 +220,7 @@ void BucketWorker::add_block_lattice(uint64_t first, int j, uint64_t end) {
   const int side = 1 << j;
   blocks_.push_back({octant_key_morton(first), j, bit});
   auto add = [&](uint64_t key, uint8_t cells) {
-    if (key < end) add_node(key, cells);
+    if (key < end) pixels_.add(key, cells);
   };
   uint64_t plane = octant_key_morton(first);
   for (int c = 0; c <= side; ++c, plane = morton_step(plane, 2, bit)) {
@@ -229,44 +240,14 @@ void BucketWorker::add_block_lattice(uint64_t first, int j, uint64_t end) {
   }
 }
 
-// Sorts records by key.  A radix sort on the keys' offsets from the
-// smallest, less their common trailing zero bits (corners are multiples of
-// the finest leaves' edge), packed with the mask into one word; std::sort if
-// they do not fit in 56 bits.
-void sort_records(std::vector<SpillRecord>& records, std::vector<uint64_t>& packed,
-                  std::vector<uint64_t>& scratch) {
-  const size_t n = records.size();
-  if (n < 2) return;
-  KeySpan span;
-  for (const SpillRecord& r : records) span.add(r.key);
-  const uint64_t lo = span.lo;
-  const int zeros = span.zeros(), bits = span.bits();
-  if (bits > 56) {
-    std::sort(records.begin(), records.end(),
-              [](const SpillRecord& a, const SpillRecord& b) { return a.key < b.key; });
-    return;
-  }
-  packed.resize(n);
-  for (size_t i = 0; i < n; ++i)
-    packed[i] = ((records[i].key - lo) >> zeros) << 8 | records[i].mask;
-  radix_sort(packed, 8, bits, scratch);
-  for (size_t i = 0; i < n; ++i) {
-    records[i] = {((packed[i] >> 8) << zeros) + lo, static_cast<uint8_t>(packed[i])};
-  }
-}
-
-// Every key added is a corner of a leaf (a multiple of the finest leaf's
-// size, as the start is of its own leaf's) or a spilled one, at or past the
-// start and before the end.
-bool BucketWorker::offsets_fit(const BucketTask& t) {
+// Every key hashed is a corner of a leaf (a multiple of the finest leaf's
+// size, as the start is of its own leaf's) or a spilled one.
+int BucketWorker::common_zeros(const BucketTask& t) {
   int finest = 0;
   for (uint64_t key : t.leaf_keys) finest = std::max(finest, octant_key_level(key));
   uint64_t differ = t.start;
   for (const SpillRecord& r : t.incoming) differ |= r.key - t.start;
-  zeros_ = std::min(3 * (kMaxLevel - finest), differ == 0 ? 64 : std::countr_zero(differ));
-  start_ = t.start;
-  return t.end > t.start &&
-         std::bit_width((t.end - 1 - t.start) >> zeros_) <= NodeWords::kOffsetBits;
+  return std::min(3 * (kMaxLevel - finest), differ == 0 ? 64 : std::countr_zero(differ));
 }
 
 Status BucketWorker::run(BucketTask& t) {
@@ -276,12 +257,7 @@ Status BucketWorker::run(BucketTask& t) {
   // Up to about 1.5 nodes a leaf (a randomly refined octree's dangling
   // nodes); sized for them, the table never grows mid-bucket.
   const size_t expected = t.leaf_keys.size() * 3 / 2 + t.incoming.size() + 64;
-  words_fit_ = offsets_fit(t);
-  if (words_fit_) {
-    words_.reset(expected);
-  } else {
-    hash_.reset(expected);
-  }
+  pixels_.reset(expected, t.start, common_zeros(t), t.end - 1);
   uint64_t corners[8];
   const std::vector<uint64_t>& leaves = t.leaf_keys;
   blocks_.clear();
@@ -293,28 +269,12 @@ Status BucketWorker::run(BucketTask& t) {
     }
     leaf_corner_keys(leaves[i++], corners);
     for (int c = 0; c < 8; ++c) {
-      if (corners[c] < t.end) add_node(corners[c], corner_direction_bit(c));
+      if (corners[c] < t.end) pixels_.add(corners[c], corner_direction_bit(c));
     }
   }
-  for (const SpillRecord& r : t.incoming) add_node(r.key, r.mask);
-  if (words_fit_) {
-    radix_sort(packed_, 8, words_.take(&packed_), scratch_);
-    struct Words {
-      const uint64_t* w;
-      uint64_t start;
-      int zeros;
-      uint64_t key(size_t i) const { return ((w[i] >> 8) << zeros) + start; }
-      uint8_t mask(size_t i) const { return static_cast<uint8_t>(w[i]); }
-    };
-    return merge_nodes(Words{packed_.data(), start_, zeros_}, packed_.size(), t);
-  }
-  sort_wide();
-  struct Records {
-    const SpillRecord* r;
-    uint64_t key(size_t i) const { return r[i].key; }
-    uint8_t mask(size_t i) const { return r[i].mask; }
-  };
-  return merge_nodes(Records{sorted_.data()}, sorted_.size(), t);
+  for (const SpillRecord& r : t.incoming) pixels_.add(r.key, r.mask);
+  return pixels_.sorted(
+      [&](const auto& sorted, size_t count) { return merge_nodes(sorted, count, t); });
 }
 
 namespace {
@@ -391,15 +351,6 @@ Status BucketWorker::merge_nodes(const Sorted& sorted, size_t count, BucketTask&
   t.counts.face = dangling[static_cast<int>(NodeKind::kFace)];
   t.counts.anchored = n - t.counts.edge - t.counts.face;
   return Status::Ok();
-}
-
-// A span too wide for words: the nodes as records in sorted_, sorted by
-// sort_records (std::sort, for such a span, unless the keys' own span is
-// narrower).
-void BucketWorker::sort_wide() {
-  sorted_.resize(hash_.size());
-  for (size_t i = 0; i < hash_.size(); ++i) sorted_[i] = {hash_.key_at(i), hash_.mask_at(i)};
-  sort_records(sorted_, packed_, scratch_);
 }
 
 }  // namespace weaver

@@ -31,8 +31,7 @@
 #include "db/leaf_reader.h"
 #include "extract/extract.h"
 #include "extract/node_classifier.h"
-#include "extract/node_hash.h"
-#include "extract/node_words.h"
+#include "extract/node_pixels.h"
 #include "extract/spill_store.h"
 #include "storage/btree.h"
 
@@ -75,17 +74,16 @@ struct BucketTask {
 // sorted run.
 class SpillRun {
  public:
-  SpillRun() { hash_.reset(expected_); }
-  void add(uint64_t key, uint8_t mask) { hash_.add(key, mask); }
-  // What was added since the last flush, sorted by key, one record a key
-  // (its bits ORed), to `spills` as one run; this is then empty.
+  // Starts a run of keys in [base, bound].
+  void begin(uint64_t base, uint64_t bound) { pixels_.reset(expected_, base, 0, bound); }
+  void add(uint64_t key, uint8_t mask) { pixels_.add(key, mask); }
+  // What was added since begin, sorted by key, one record a key (its bits
+  // ORed), to `spills` as one run.
   Status flush(SpillStore& spills);
 
  private:
-  NodeHash hash_;
+  NodePixels pixels_;
   size_t expected_ = 1024;  // the keys of the last run: the next is sized for them
-  std::vector<SpillRecord> run_;
-  std::vector<uint64_t> packed_, scratch_;
 };
 
 // Cuts the octant table into buckets, in Z-order, and routes their spills.
@@ -123,28 +121,6 @@ class BucketReader {
 // The 8 corners of the leaf with this key as node keys, corner k at [k].
 void leaf_corner_keys(uint64_t leaf_key, uint64_t out[8]);
 
-// What sort_records packs by: the least and greatest of a set of keys and
-// the bits in which any differs from the first (the lowest bit two keys
-// differ in is the lowest set bit of their difference, so its trailing
-// zeros are their offsets' common ones).
-struct KeySpan {
-  uint64_t first = 0, lo = UINT64_MAX, hi = 0, differ = 0;
-  bool any = false;
-  void add(uint64_t k) {
-    if (!any) first = k, any = true;
-    lo = k < lo ? k : lo, hi = k > hi ? k : hi;
-    differ |= k ^ first;
-  }
-  int zeros() const { return differ == 0 ? 0 : std::countr_zero(differ); }
-  // Bits of an offset (key - lo) >> zeros(); past 56 no mask fits beside it.
-  int bits() const { return any ? std::bit_width((hi - lo) >> zeros()) : 0; }
-};
-
-// Sorts records by key (a radix sort when their keys span few enough bits);
-// packed and scratch are working buffers.
-void sort_records(std::vector<SpillRecord>& records, std::vector<uint64_t>& packed,
-                  std::vector<uint64_t>& scratch);
-
 class BucketWorker {
  public:
   BucketWorker(BTree& octants, const BucketPolicy& policy)
@@ -167,35 +143,17 @@ class BucketWorker {
   // the corners on its far faces.
   void add_block_lattice(uint64_t first, int j, uint64_t end);
 
-  // Whether the bucket's keys fit words_ as offsets from its start: sets
-  // zeros_, the trailing zero bits every key less the start has.
-  bool offsets_fit(const BucketTask& t);
-  // A nodal pixel: as a word where the offsets fit, else hashed by key.
-  void add_node(uint64_t key, uint8_t bits) {
-    if (words_fit_) {
-      words_.add((key - start_) >> zeros_, bits);
-    } else {
-      hash_.add(key, bits);
-    }
-  }
-
-  // A span too wide for words: the hashed nodes as sorted_'s records, in
-  // key order.
-  void sort_wide();
+  // The trailing zero bits that every key the bucket hashes has less its
+  // start.
+  static int common_zeros(const BucketTask& t);
   // The hashed nodes (`sorted`, in key order) and the blocks' lattices
   // merged, classified and written to t.
   template <typename Sorted>
   Status merge_nodes(const Sorted& sorted, size_t count, BucketTask& t);
 
   NodeClassifier classifier_;
-  NodeWords words_;
-  NodeHash hash_;  // where the offsets do not fit words
-  bool words_fit_ = false;
-  uint64_t start_ = 0;
-  int zeros_ = 0;
+  NodePixels pixels_;
   std::vector<Block> blocks_;  // the bucket's complete blocks, in key order
-  std::vector<uint64_t> packed_, scratch_;
-  std::vector<SpillRecord> sorted_;
 };
 
 }  // namespace weaver

@@ -56,6 +56,7 @@ Status spill_ghost_corners(const std::vector<uint64_t>& ghosts, uint64_t start, 
   SpillRun run;
   uint64_t corners[8];
   for (size_t from = 0; from < ghosts.size(); from += kGhostsARun) {
+    run.begin(start, stop - 1);
     for (size_t i = from; i < std::min(ghosts.size(), from + kGhostsARun); ++i) {
       leaf_corner_keys(ghosts[i], corners);
       for (int k = 0; k < 8; ++k) {

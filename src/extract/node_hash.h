@@ -1,6 +1,8 @@
 // An open-addressing hash from node key to an 8-bit direction mask: which of
 // the 8 cells around the node hold an element that has the node as a corner.
-// This is the paper's per-bucket hash table of nodal pixels.
+// This is the paper's per-bucket hash table of nodal pixels: the reader's
+// for the corners it spills, and the workers' where a bucket's keys span too
+// many bits for NodeWords (node_words.h), which they use everywhere else.
 #pragma once
 
 #include <bit>

@@ -15,7 +15,8 @@ namespace weaver {
 
 class NodeWords {
  public:
-  // The widest offset a word holds beside its mask.
+  // The widest offset a word holds beside its mask: 55 bits, so that no
+  // word has the top bit set and none is the empty slot's all ones.
   static constexpr int kOffsetBits = 55;
 
   // Empties the table, with room for `expected` offsets without growing.
@@ -48,13 +49,13 @@ class NodeWords {
 
   size_t size() const { return used_.size(); }
 
-  // The words added since reset (insertion order) into *out; returns the
-  // bit width of the largest offset.
-  int take(std::vector<uint64_t>* out) const {
+  // The words added since reset (insertion order) into *out; returns them
+  // ORed together (whose bits above the mask bound every offset's).
+  uint64_t take(std::vector<uint64_t>* out) const {
     out->resize(used_.size());
     uint64_t all = 0;
     for (size_t i = 0; i < used_.size(); ++i) all |= (*out)[i] = slots_[used_[i]];
-    return std::bit_width(all >> 8);
+    return all;
   }
 
  private:
