@@ -251,10 +251,10 @@ TEST_F(ExtractTest, GradedAroundASphereWithManyBucketsAndSpillFiles) {
 }
 
 // Blocks of 4096 leaves (the deepest the workers make as lattices) next to
-// finer leaves: a uniform level-5 grid refined two levels more around a
-// corner, so that the level-1 octants far from it stay whole blocks of 8^4
-// leaves and those near it are cut by the grading, at buckets that do and
-// do not hold a whole block.
+// finer leaves: a uniform level-5 grid refined one level more around a
+// corner (balanced as made: neighbours differ by a level at most), so that
+// the level-1 octants far from it stay whole blocks of 8^4 leaves and those
+// near it are cut, at buckets that do and do not hold a whole block.
 TEST_F(ExtractTest, BlocksOf4096LeavesBesideFinerOnes) {
   std::vector<Octant> leaves;
   std::vector<Octant> todo = {octant_root()};
@@ -268,13 +268,14 @@ TEST_F(ExtractTest, BlocksOf4096LeavesBesideFinerOnes) {
       const double gap = std::max(0.0, std::max(lo - c, c - (lo + e)));
       d2 += gap * gap;
     }
-    if (o.level < 5 || (o.level < 7 && d2 <= r * r)) {
+    if (o.level < 5 || (o.level < 6 && d2 <= r * r)) {
       for (int k = 0; k < 8; ++k) todo.push_back(octant_child(o, k));
     } else {
       leaves.push_back(o);
     }
   }
-  leaves = reference::balance(leaves);
+  std::sort(leaves.begin(), leaves.end(),
+            [](const Octant& a, const Octant& b) { return octant_key(a) < octant_key(b); });
   for (uint64_t bucket_leaves : {0, 3000, 20000}) {
     ExtractOptions o;
     o.bucket_leaves = bucket_leaves;
