@@ -74,7 +74,7 @@ struct BucketTask {
 // sorted run.
 class SpillRun {
  public:
-  // Starts a run of keys in [base, bound].
+  // Starts a run of keys in [base, bound]; before the first add.
   void begin(uint64_t base, uint64_t bound) { pixels_.reset(expected_, base, 0, bound); }
   void add(uint64_t key, uint8_t mask) { pixels_.add(key, mask); }
   // What was added since begin, sorted by key, one record a key (its bits

@@ -24,21 +24,24 @@ namespace weaver {
 namespace {
 
 // Bytes of memory per finest-level leaf in the active bucket: its key, room
-// for 1.5 nodes in a half-full hash table (1.5 x 9 bytes / 0.5) and the sort
-// vector.
+// for 1.5 nodes in a half-full hash table (1.5 x 9 bytes / 0.5 for
+// NodeHash's key and mask; NodeWords' word is 8) and the sort vector.
 constexpr uint64_t kBytesPerLeaf = 8 + 27 + 16;
 
 // No bucket holds more than 8^kMaxBucketDepth finest leaves (kLevel) or
 // kMaxBucketLeaves leaves (kLeaves) whatever the budget: its hash table then
-// stays in the CPU caches.  Larger buckets only save spills, which cost far
-// less than cache misses on every corner.  8192 leaves (a table of 256-512
-// KiB, each task's buffers under malloc's mmap threshold, so reused rather
-// than faulted in afresh): against 32768, 0.81x the time of a 1M-leaf random
-// octree's extract, 0.73x a 1M sphere's, 0.97x 10M random, 0.96x the 2 Hz
-// basin's; 4096 was faster still on the small octrees but 1.10x the 1 Hz
-// basin's (more spills).
+// stays in the CPU caches.  Larger buckets save spills and the reader's
+// work on them, but where most corners are hashed (random octrees) they
+// cost cache misses on every corner.  When the table held a key and a mask
+// a slot, 8192 leaves was best: against 32768, 0.81x the time of a 1M-leaf
+// random octree's extract, 0.73x a 1M sphere's, 0.97x 10M random, 0.96x the
+// 2 Hz basin's.  With a word a slot (node_words.h) and blocks of up to 4096
+// leaves unhashed, 16384 against 8192 (farm-bench, this 2-core EPYC with
+// 1 MB of L2 a core): the 2 Hz basin 0.955x, 1 Hz 0.954x, random 1M 1.03x
+// (its 80 ms runs within noise); 32768 took the basins to 0.91x and 0.94x
+// but random 1M to 1.12x, and 65536 the 2 Hz basin to 1.04x of 32768.
 constexpr int kMaxBucketDepth = 6;
-constexpr uint64_t kMaxBucketLeaves = uint64_t{1} << 13;
+constexpr uint64_t kMaxBucketLeaves = uint64_t{1} << 14;
 
 // The finest level: from the counts the table's writer kept, else one pass.
 Status finest_level_of(BTree& octants, int* max_level) {

@@ -63,8 +63,9 @@ class NodeWords {
 
   // The first slot to probe: the offset's Fibonacci hash.  (Slots kept
   // near for neighbouring points, by blocks of 64 as KeySet keeps them,
-  // took the 1 Hz extract 1.1x the time: the corners of coarse leaves
-  // crowded the few slots of their blocks' regions.)
+  // took the 1 Hz extract 1.1x the time of this hash, farm-bench's 5
+  // pairs; likely the corners of coarse leaves, few to a block, crowd the
+  // same slots of their blocks' regions.)
   size_t start(uint64_t offset) const {
     return static_cast<size_t>((offset * 0x9E3779B97F4A7C15ULL) >> shift_);
   }
