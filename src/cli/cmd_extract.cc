@@ -31,7 +31,7 @@ constexpr char kUsage[] =
     "  --threads N         worker threads for sort (default: the number of cores);\n"
     "                      the node table is the same for every N\n"
     "  --buckets leaves    sort's high-level buckets hold about the same number of\n"
-    "                      leaves each (default; up to 16384, fewer if the budget\n"
+    "                      leaves each (default; up to 8192, fewer if the budget\n"
     "                      is small), cut at aligned boundaries\n"
     "  --buckets level     the paper's buckets: aligned octants of the coarsest\n"
     "                      level that would fit the budget if filled with leaves\n"

@@ -170,7 +170,7 @@ namespace {
 // The deepest block made a lattice: 8^4 = 4096 leaves.  A quarter of the
 // 2 Hz basin's leaves lie in such blocks; as blocks of 512 they hashed 0.42
 // corners a leaf, as blocks of 4096 they hash 0.2 (817 of 4913).  Deeper
-// blocks no longer fit a bucket of 16384 leaves once it is cut.
+// blocks no longer fit a bucket of 8192 leaves once it is cut.
 constexpr int kMostBlockDepth = 4;
 
 // The largest j (kMostBlockDepth down to 1) such that the 8^j leaves from `first` on, in

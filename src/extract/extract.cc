@@ -32,16 +32,16 @@ constexpr uint64_t kBytesPerLeaf = 8 + 27 + 16;
 // kMaxBucketLeaves leaves (kLeaves) whatever the budget: its hash table then
 // stays in the CPU caches.  Larger buckets save spills and the reader's
 // work on them, but where most corners are hashed (random octrees) they
-// cost cache misses on every corner.  When the table held a key and a mask
-// a slot, 8192 leaves was best: against 32768, 0.81x the time of a 1M-leaf
-// random octree's extract, 0.73x a 1M sphere's, 0.97x 10M random, 0.96x the
-// 2 Hz basin's.  With a word a slot (node_words.h) and blocks of up to 4096
-// leaves unhashed, 16384 against 8192 (farm-bench, this 2-core EPYC with
-// 1 MB of L2 a core): the 2 Hz basin 0.955x, 1 Hz 0.954x, random 1M 1.03x
-// (its 80 ms runs within noise); 32768 took the basins to 0.91x and 0.94x
-// but random 1M to 1.12x, and 65536 the 2 Hz basin to 1.04x of 32768.
+// cost cache misses on every corner.  8192 leaves: against 32768, 0.81x the
+// time of a 1M-leaf random octree's extract, 0.73x a 1M sphere's, 0.97x 10M
+// random, 0.96x the 2 Hz basin's.  With a word a slot (node_words.h) and
+// blocks of up to 4096 leaves unhashed, 16384 took the 2 Hz and 1 Hz basins'
+// extract to 0.955x of 8192 (farm-bench) but random 1M's to about 1.1x
+// (p4est_bench, lnodes over weaver 8.5x and 10.1x against 10.7x and 10.2x,
+// with a classifier cache of 4 slots a leaf), and the 2 Hz mesh's ratio to
+// 32f41e8 did not move beyond noise (0.517x, 0.522x against 0.522x).
 constexpr int kMaxBucketDepth = 6;
-constexpr uint64_t kMaxBucketLeaves = uint64_t{1} << 14;
+constexpr uint64_t kMaxBucketLeaves = uint64_t{1} << 13;
 
 // The finest level: from the counts the table's writer kept, else one pass.
 Status finest_level_of(BTree& octants, int* max_level) {

@@ -43,11 +43,8 @@ class NodeClassifier {
   // leaves (cache_) when first searched.
   void set_local(const std::vector<uint64_t>* leaf_keys, uint64_t start, uint64_t end);
   // The cache of leaves holds at most 2^kCacheBits keys, kCacheBytes, for
-  // the classifier's life: 4 slots for each of a bucket's 16384 leaves.
-  // (With 2 a leaf, buckets of 16384 took random 1M's extract about 1.05x
-  // the time of 8192; with 4, as 8192 had, the same within noise, and the
-  // 2 Hz basin's 0.97x the time of 2 a leaf: farm-bench, p4est_bench.)
-  static constexpr int kCacheBits = 16;
+  // the classifier's life: 4 slots for each of a bucket's 8192 leaves.
+  static constexpr int kCacheBits = 15;
   static constexpr uint64_t kCacheBytes = sizeof(uint64_t) << kCacheBits;
   // The largest cache in `bytes` (at least 256 keys).
   static int cache_bits_for(uint64_t bytes) {
