@@ -44,7 +44,6 @@ class NodeHash {
     masks_[s] |= bits;
   }
 
-  bool contains(uint64_t key) const { return slots_[find_slot(key)] == key; }
   size_t size() const { return used_.size(); }
   // The keys, in insertion order, and their masks.
   uint64_t key_at(size_t i) const { return slots_[used_[i]]; }
