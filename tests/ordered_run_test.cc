@@ -1,7 +1,8 @@
 // util/ordered_run.h: tasks run on several threads are written in the order
 // they were made, each once, by one thread at a time (never while one is
-// made), with never more than `in_flight` of them alive, nor more than
-// room() allows; a stop writes nothing after it.
+// made, unless make_beside_write() allows it), with never more than
+// `in_flight` of them alive, nor more than room() allows; a stop writes
+// nothing after it.
 #include "util/ordered_run.h"
 
 #include <gtest/gtest.h>
@@ -31,33 +32,50 @@ void uneven_work(Task* t) {
 struct Outcome {
   std::vector<int> written;
   int most_alive = 0;
-  bool overlapping_writes = false;
+  bool overlapping_writes = false;  // two writes, two makes, or (unless beside) one of each
+  bool make_beside_write = false;   // a make seen running while a task was written
   int wrong_values = 0;
   std::vector<std::thread::id> threads;
 };
 
 // `tasks` tasks on `threads` threads, `in_flight` at once (and at most
 // `room` alive, if given); stops after `stop_after` writes (or never).
-Outcome run(int tasks, int threads, size_t in_flight, int stop_after = -1, int room = 0) {
+// `tasks` tasks on `threads` threads, `in_flight` at once (and at most
+// `room` alive, if given); stops after `stop_after` writes (or never).
+// beside: make_beside_write(), and each write waits (up to half a second)
+// for a make to run beside it until one has.
+Outcome run(int tasks, int threads, size_t in_flight, int stop_after = -1, int room = 0,
+            bool beside = false) {
   Outcome o;
   int made = 0;
-  std::atomic<int> alive{0}, writers{0};
+  std::atomic<int> alive{0}, makers{0}, writers{0};
+  std::atomic<bool> seen{false};
+  // A make or write begins: no other of its kind runs, nor of the other
+  // kind unless beside.
+  auto begin = [&](std::atomic<int>& mine, std::atomic<int>& other) {
+    if (++mine > 1 || (!beside && other > 0)) o.overlapping_writes = true;
+  };
   OrderedRun<Task> r(
       in_flight,
       [&](Task* t) {
-        if (++writers > 1) o.overlapping_writes = true;
+        begin(makers, writers);
         std::this_thread::sleep_for(std::chrono::microseconds(50));  // a slow make
         const bool more = made < tasks;
         if (more) {
           t->index = made++;
           o.most_alive = std::max(o.most_alive, ++alive);
         }
-        --writers;
+        --makers;
         return more;
       },
       [&](int, Task* t) { uneven_work(t); },
       [&](Task* t) {
-        if (++writers > 1) o.overlapping_writes = true;
+        begin(writers, makers);
+        const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
+        while (beside && !seen && std::chrono::steady_clock::now() < until) {
+          if (makers > 0) seen = true;
+          std::this_thread::yield();
+        }
         o.written.push_back(t->index);
         if (t->value != t->index * 7 + 1) ++o.wrong_values;
         o.threads.push_back(t->ran_on);
@@ -66,7 +84,9 @@ Outcome run(int tasks, int threads, size_t in_flight, int stop_after = -1, int r
         return int(o.written.size()) != stop_after;
       },
       room > 0 ? OrderedRun<Task>::Room([&] { return alive < room; }) : nullptr);
+  if (beside) r.make_beside_write();
   r.go(threads);
+  o.make_beside_write = seen;
   return o;
 }
 
@@ -110,6 +130,23 @@ TEST(OrderedRunThreads, AStopWritesNothingAfterIt) {
     ASSERT_EQ(o.written.size(), 13u) << threads << " threads";
     for (int i = 0; i < 13; ++i) EXPECT_EQ(o.written[i], i);
   }
+}
+
+// Extract's reads and writes: a make runs while a task is written, and
+// still no two makes or two writes run at once, and every task is written
+// once in order.
+TEST(OrderedRunThreads, MakesBesideWritesWhereAllowed) {
+  for (int threads : {2, 3}) {
+    const Outcome o = run(40, threads, 4, -1, 0, true);
+    ASSERT_EQ(o.written.size(), 40u) << threads << " threads";
+    for (int i = 0; i < 40; ++i) EXPECT_EQ(o.written[i], i);
+    EXPECT_EQ(o.wrong_values, 0);
+    EXPECT_FALSE(o.overlapping_writes);
+    EXPECT_TRUE(o.make_beside_write);
+  }
+  const Outcome stopped = run(100, 2, 6, 13, 0, true);
+  ASSERT_EQ(stopped.written.size(), 13u);
+  for (int i = 0; i < 13; ++i) EXPECT_EQ(stopped.written[i], i);
 }
 
 TEST(OrderedRunThreads, NoTasksWritesNothing) {

@@ -1,6 +1,7 @@
 #include "extract/extract_parallel.h"
 
 #include <algorithm>
+#include <atomic>
 #include <memory>
 
 #include "db/octant_table.h"
@@ -55,29 +56,33 @@ Status run_parallel(const Database& db, BTree& octants, const NodeBatchSink& nod
     workers.push_back(std::make_unique<BucketWorker>(*h, policy));
   }
   LeafReader c;
-  Status st = c.open(octants, policy.first_leaf);
-  if (!st.ok()) return st;
+  Status read_st = c.open(octants, policy.first_leaf);
+  if (!read_st.ok()) return read_st;
   BucketReader reader(c, policy, spills);
-  // Buckets are read, and their nodes written, by whichever worker finishes
-  // the oldest bucket (util/ordered_run.h): there is no reader-writer
-  // thread beside the workers.  Read ahead far enough that workers never
-  // wait for the oldest (8 tasks a thread measured 1.63x on 2 cores, 2
-  // tasks only 1.41x), but within the in-flight share of the budget.
-  uint64_t in_flight_bytes = 0;
+  // Buckets are read, and their nodes written, by whichever worker is free
+  // (util/ordered_run.h): there is no reader or writer thread beside the
+  // workers.  A read (the leaves, the reader's spills) and a write (the
+  // nodes) share nothing, so one thread reads while another writes; each
+  // has its own status.  Read ahead far enough that workers never wait for
+  // the oldest (8 tasks a thread measured 1.63x on 2 cores, 2 tasks only
+  // 1.41x), but within the in-flight share of the budget.
+  std::atomic<uint64_t> in_flight_bytes{0};
+  const uint64_t elements = octants.size();  // for the writer's progress
+  Status write_st;
   const size_t slots = static_cast<size_t>(kTasksPerThread * n);
   const uint64_t keep_bytes = memory.in_flight / slots;
   auto make = [&](BucketTask* t) {
     bool more = false;
-    if (st.ok()) st = reader.next(t, &more);
-    if (!st.ok() || !more) return false;
+    if (read_st.ok()) read_st = reader.next(t, &more);
+    if (!read_st.ok() || !more) return false;
     t->status = Status::Ok();
     in_flight_bytes += task_bytes(*t);
     return true;
   };
   auto work = [&](int i, BucketTask* t) { t->status = workers[i]->run(*t); };
   auto write = [&](BucketTask* t) {
-    if (st.ok()) st = t->status;
-    if (st.ok()) st = write_bucket(*t, nodes, octants.size(), options, result);
+    if (write_st.ok()) write_st = t->status;
+    if (write_st.ok()) write_st = write_bucket(*t, nodes, elements, options, result);
     in_flight_bytes -= task_bytes(*t);
     // Its buffers stay for the next task made in this object (freed and
     // faulted in again for every bucket, they cost the second thread a
@@ -91,12 +96,15 @@ Status run_parallel(const Database& db, BTree& octants, const NodeBatchSink& nod
       t->leaf_keys.clear();
       t->incoming.clear();
     }
-    return st.ok();
+    return write_st.ok();
   };
   OrderedRun<BucketTask> run(slots, make, work, write,
                              [&] { return in_flight_bytes < memory.in_flight; });
+  run.make_beside_write();
   run.go(n);
-  return st;
+  // A failed read ends the making: the buckets before it are written, and
+  // the read's error is the run's unless a write failed first.
+  return write_st.ok() ? read_st : write_st;
 }
 
 }  // namespace weaver
