@@ -248,8 +248,8 @@ Status WindowWorker::refine(const uint64_t* keys, const std::byte* payloads, siz
   size_t last_split = SIZE_MAX;
   const Status st = resolve_leaves(
       keys, n, created,
-      [&](size_t i) {
-        add(keys[i], i);
+      [&](size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) add(keys[i], i);
         return Status::Ok();
       },
       [&](size_t i, uint64_t key, bool is_new) {

@@ -161,30 +161,28 @@ void SubtreeBalancer::refine(SubtreeLeaves* leaves) {
   const bool carved = descent_.plan().carved;
   const uint64_t* keys = leaves->keys.data();
   const std::byte* payloads = leaves->payloads.data();
-  size_t copied = 0;  // the leaves before it are in out_
-  auto copy_until = [&](size_t end) {
-    out_.keys.insert(out_.keys.end(), keys + copied, keys + end);
-    out_.payloads.insert(out_.payloads.end(), payloads + copied * bytes, payloads + end * bytes);
+  auto copy_run = [&](size_t begin, size_t end) {
+    out_.keys.insert(out_.keys.end(), keys + begin, keys + end);
+    out_.payloads.insert(out_.payloads.end(), payloads + begin * bytes, payloads + end * bytes);
     if (carved) {
-      out_.sides.insert(out_.sides.end(), leaves->sides.begin() + copied,
+      out_.sides.insert(out_.sides.end(), leaves->sides.begin() + begin,
                         leaves->sides.begin() + end);
     }
+    return Status::Ok();
   };
   out_.levels = leaves->levels;
-  resolve_leaves(
-      keys, leaves->keys.size(), created_, [](size_t) { return Status::Ok(); },
-      [&](size_t i, uint64_t key, bool is_new) {
-        if (copied <= i) {  // the first leaf of i's split
-          copy_until(i);
-          copied = i + 1;
-          --out_.levels[octant_key_level(keys[i])];
-        }
-        // A part of a leaf wholly on one side of the ground is on it too.
-        if (carved) out_.sides.push_back(leaves->sides[i]);
-        add_leaf(key, is_new, payloads + i * bytes);
-        return Status::Ok();
-      });
-  copy_until(leaves->keys.size());
+  size_t last_split = SIZE_MAX;
+  resolve_leaves(keys, leaves->keys.size(), created_, copy_run,
+                 [&](size_t i, uint64_t key, bool is_new) {
+                   if (i != last_split) {  // the first leaf of i's split
+                     last_split = i;
+                     --out_.levels[octant_key_level(keys[i])];
+                   }
+                   // A part of a leaf wholly on one side of the ground is on it too.
+                   if (carved) out_.sides.push_back(leaves->sides[i]);
+                   add_leaf(key, is_new, payloads + i * bytes);
+                   return Status::Ok();
+                 });
   fill_materials();
   out_.elements = out_.keys.size();
   int coarsest = 0;
