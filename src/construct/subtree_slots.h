@@ -28,11 +28,9 @@ struct Slot {
   Octant root;
   LeafRoom room;
   SubtreeLeaves leaves;
-  uint64_t descended = 0;      // leaves before the balance
-  uint64_t air = 0, cut = 0;   // carved: leaves dropped, leaves cut (carve.h)
-  double least_dt = HUGE_VAL;  // the least edge / vp of its leaves (s), and where
-  size_t least_dt_at = 0;
-  bool done = false;  // set by the worker (WorkQueue)
+  uint64_t descended = 0;     // leaves before the balance
+  uint64_t air = 0, cut = 0;  // carved: leaves dropped, leaves cut (carve.h)
+  bool done = false;          // set by the worker (WorkQueue)
 
   // As new, but for its room and the leaves' capacity (visit_subtree
   // clears them).
