@@ -5,15 +5,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <deque>
 #include <memory>
-#include <thread>
 #include <vector>
 
 #include "construct/carve.h"
 #include "construct/descent.h"
 #include "construct/estimate.h"
 #include "construct/subtree_balance.h"
+#include "construct/subtree_run.h"
 #include "construct/subtree_slots.h"
 #include "db/database.h"
 #include "model/geo_frame.h"
@@ -21,7 +20,6 @@
 #include "modeldb/model_identity.h"
 #include "modeldb/open_model.h"
 #include "schema/octant.h"
-#include "util/work_queue.h"
 
 namespace weaver {
 namespace {
@@ -207,77 +205,36 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
                       const ConstructMemory& memory, const ZOrderShare& share, BTree& out,
                       ConstructResult* r) {
   const int threads = std::max(1, o.threads);
-  const size_t window = kSubtreesPerThread * threads;
   const SubtreeRooms rooms = subtree_rooms(o, memory);
   SubtreeSlots slots(rooms.own, rooms.most, rooms.spare);
-  WorkQueue<Slot> queue;
-  std::vector<std::thread> workers;
   std::vector<std::unique_ptr<SubtreeVisitor>> visitors;
   for (int i = 0; i < threads; ++i) {
     visitors.push_back(std::make_unique<SubtreeVisitor>(o, descent));
   }
-  if (threads > 1) {
-    for (int i = 0; i < threads; ++i) {
-      workers.emplace_back([&, i] {
-        while (Slot* s = queue.pop()) {
-          visitors[i]->visit(s);
-          queue.finish(s);
-        }
-      });
-    }
-  }
   SubtreeList subtrees = list_subtrees(o, p, descent, share, memory);
-  auto ours = [&](const Octant& root) { return rank_of_subtree(o, share, root) == o.shard; };
-  std::deque<std::unique_ptr<Slot>> in_flight;  // Z-order
-  auto add = [&](const Octant& root, bool front) {
-    std::unique_ptr<Slot> slot = slots.take(root);
-    if (threads > 1) queue.push(slot.get(), front);
-    if (front) {
-      in_flight.push_front(std::move(slot));
-    } else {
-      in_flight.push_back(std::move(slot));
+  auto next = [&](Octant* root) {
+    while (subtrees.next(root)) {
+      if (rank_of_subtree(o, share, *root) == o.shard) return true;
     }
+    return false;
   };
-  Status st;
-  Octant root;
-  while (st.ok()) {
-    while (in_flight.size() < window && subtrees.next(&root)) {
-      if (ours(root)) add(root, false);
-    }
-    if (in_flight.empty()) break;
-    Slot* head = in_flight.front().get();
-    if (threads > 1) {
-      queue.wait_done(head);
-    } else {
-      visitors[0]->visit(head);
-    }
+  auto visit = [&](int i, Slot* s) { visitors[i]->visit(s); };
+  auto write = [&](const Slot& s) {
     ++r->subtrees;
-    if (head->leaves.overflow) {
-      ++r->subtrees_over;
-      const Octant big = head->root;
-      slots.put(std::move(in_flight.front()));
-      in_flight.pop_front();
-      for (int c = 7; c >= 0; --c) add(octant_child(big, c), true);  // child 0 first
-      continue;
-    }
-    const SubtreeLeaves& leaves = head->leaves;
-    st = append_leaves(leaves, descent.payload_bytes(), p.tick_m, out, r);
+    const SubtreeLeaves& leaves = s.leaves;
+    WEAVER_RETURN_IF_ERROR(append_leaves(leaves, descent.payload_bytes(), p.tick_m, out, r));
     leaves.add_to(r);
-    r->descended += head->descended;
-    r->air += head->air;
-    r->cut += head->cut;
+    r->descended += s.descended;
+    r->air += s.air;
+    r->cut += s.cut;
     if (o.progress && !leaves.keys.empty()) {
       o.progress(r->elements, share.fraction_before(leaves.keys.back()));
     }
-    slots.put(std::move(in_flight.front()));
-    in_flight.pop_front();
-  }
-  // Let running visits finish before their slots go away.
-  if (threads > 1) {
-    for (auto& s : in_flight) queue.wait_done(s.get());
-    queue.stop();
-    for (auto& w : workers) w.join();
-  }
+    return Status::Ok();
+  };
+  auto over = [&] { ++r->subtrees, ++r->subtrees_over; };
+  SubtreeRun run(kSubtreesPerThread * threads, slots, next, visit, write, over);
+  const Status st = run.go(threads);
   for (const auto& v : visitors) r->neighbours += v->neighbours();
   return st;
 }

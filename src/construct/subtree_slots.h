@@ -30,7 +30,7 @@ struct Slot {
   SubtreeLeaves leaves;
   uint64_t descended = 0;     // leaves before the balance
   uint64_t air = 0, cut = 0;  // carved: leaves dropped, leaves cut (carve.h)
-  bool done = false;          // set by the worker (WorkQueue)
+  bool done = false;          // visited (subtree_run.h)
 
   // As new, but for its room and the leaves' capacity (visit_subtree
   // clears them).
