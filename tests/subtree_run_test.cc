@@ -66,7 +66,7 @@ std::vector<Octant> level_two() {
   return out;
 }
 
-TEST(SubtreeRun, WritesInZOrderWithOverflowsReplacedByTheirChildren) {
+TEST(SubtreeRunThreads, WritesInZOrderWithOverflowsReplacedByTheirChildren) {
   const std::vector<Octant> roots = level_two();
   const std::vector<Octant> big = {roots[0], roots[5], roots[63],
                                    octant_child(roots[5], 3)};  // a child overflows too
@@ -96,7 +96,7 @@ TEST(SubtreeRun, WritesInZOrderWithOverflowsReplacedByTheirChildren) {
   }
 }
 
-TEST(SubtreeRun, AFailedWriteStopsTheRun) {
+TEST(SubtreeRunThreads, AFailedWriteStopsTheRun) {
   for (int threads : {1, 2}) {
     const Outcome o = run(level_two(), {}, threads, 8, 10);
     EXPECT_EQ(o.status.code(), Status::Code::kIOError);
@@ -104,7 +104,7 @@ TEST(SubtreeRun, AFailedWriteStopsTheRun) {
   }
 }
 
-TEST(SubtreeRun, NoSubtreesWritesNothing) {
+TEST(SubtreeRunThreads, NoSubtreesWritesNothing) {
   const Outcome o = run({}, {}, 2, 8);
   EXPECT_TRUE(o.status.ok());
   EXPECT_TRUE(o.written.empty());
