@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <bit>
 #include <cstdio>
 
 #include "db/database.h"
@@ -29,19 +30,35 @@ namespace {
 constexpr uint64_t kBytesPerLeaf = 8 + 27 + 16;
 
 // No bucket holds more than 8^kMaxBucketDepth finest leaves (kLevel) or
-// kMaxBucketLeaves leaves (kLeaves) whatever the budget: its hash table then
-// stays in the CPU caches.  Larger buckets save spills and the reader's
-// work on them, but where most corners are hashed (random octrees) they
-// cost cache misses on every corner.  8192 leaves: against 32768, 0.81x the
-// time of a 1M-leaf random octree's extract, 0.73x a 1M sphere's, 0.97x 10M
-// random, 0.96x the 2 Hz basin's.  With a word a slot (node_words.h) and
-// blocks of up to 4096 leaves unhashed, 16384 took the 2 Hz and 1 Hz basins'
-// extract to 0.955x of 8192 (farm-bench) but random 1M's to about 1.1x
-// (p4est_bench, lnodes over weaver 8.5x and 10.1x against 10.7x and 10.2x,
-// with a classifier cache of 4 slots a leaf), and the 2 Hz mesh's ratio to
-// 32f41e8 did not move beyond noise (0.517x, 0.522x against 0.522x).
+// most_bucket_leaves() leaves (kLeaves) whatever the budget: its hash table
+// then stays in the core's own cache.  Larger buckets save spills and the
+// reader's work on them, but where most corners are hashed (random octrees)
+// they cost cache misses on every corner once the table leaves the L2.
+//   - With a 1 MiB L2 (the AMD EPYC machine of stops 70-76): 8192 leaves
+//     against 32768 took 0.81x the time of a 1M-leaf random octree's
+//     extract, 0.73x a 1M sphere's, 0.97x 10M random, 0.96x the 2 Hz
+//     basin's.  With a word a slot (node_words.h) and blocks of up to 4096
+//     leaves unhashed, 16384 took the 2 Hz and 1 Hz basins' extract to
+//     0.955x of 8192 (farm-bench) but random 1M's to about 1.1x
+//     (p4est_bench, lnodes over weaver 8.5x and 10.1x against 10.7x and
+//     10.2x).
+//   - With a 2 MiB L2 (the Intel machine of stop 77): 16384 took the 2 Hz
+//     extract to 0.90x of 8192 (farm-bench, 3 pairs) and random 1M's
+//     lnodes over weaver to 10.07x against 9.73x and 9.89x.
+// So 8192 leaves a MiB of L2, 8192 to 16384 (8192 where the system does
+// not say).
 constexpr int kMaxBucketDepth = 6;
-constexpr uint64_t kMaxBucketLeaves = uint64_t{1} << 13;
+constexpr uint64_t kLeavesPerL2MiB = uint64_t{1} << 13;
+constexpr uint64_t kMostBucketLeaves = uint64_t{1} << 14;
+
+uint64_t most_bucket_leaves() {
+  static const uint64_t most = [] {
+    const long l2 = ::sysconf(_SC_LEVEL2_CACHE_SIZE);
+    const uint64_t mib = l2 > 0 ? static_cast<uint64_t>(l2) >> 20 : 1;
+    return std::clamp<uint64_t>(mib * kLeavesPerL2MiB, kLeavesPerL2MiB, kMostBucketLeaves);
+  }();
+  return most;
+}
 
 // The finest level: from the counts the table's writer kept, else one pass.
 Status finest_level_of(BTree& octants, int* max_level) {
@@ -83,9 +100,11 @@ ExtractMemory::ExtractMemory(const ExtractOptions& o) : plan(o.memory) {
   // search or of one thread.
   const bool search = o.algorithm == ExtractOptions::Algorithm::kSearch;
   const uint64_t classifiers = search || o.threads <= 1 ? 1 : static_cast<uint64_t>(o.threads);
-  classifier_cache =
-      plan.take("classifier caches", 1, 64, classifiers * NodeClassifier::kCacheBytes) /
-      classifiers;
+  // (4 slots for each leaf of the largest bucket: with 2 for buckets of
+  // 16384, random 1M's extract took 1.05x the time.)
+  const uint64_t cache_bytes =
+      NodeClassifier::kSlotsPerLeaf * sizeof(uint64_t) * std::bit_ceil(most_bucket_leaves());
+  classifier_cache = plan.take("classifier caches", 1, 64, classifiers * cache_bytes) / classifiers;
   if (search) {
     // Every vertex searches the store: the larger its cache, the fewer
     // searches go to disk.
@@ -124,7 +143,7 @@ Status plan_extract(BTree& octants, const ExtractOptions& options, const Extract
     result->bucket_leaves =
         options.bucket_leaves > 0
             ? options.bucket_leaves
-            : std::clamp<uint64_t>(memory.bucket / kBytesPerLeaf, 1, kMaxBucketLeaves);
+            : std::clamp<uint64_t>(memory.bucket / kBytesPerLeaf, 1, most_bucket_leaves());
   }
   topt->key_kind = KeyKind::kNode;
   std::string error;

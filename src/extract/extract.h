@@ -45,7 +45,8 @@ struct ExtractOptions {
   int threads = 1;
   // How the sort cuts the leaves into high-level buckets (bucket_worker.h).
   // kLeaves: runs of about bucket_leaves leaves each (0: as many as the
-  // bucket share of the budget holds, up to kMaxBucketLeaves), cut at
+  // bucket share of the budget holds, up to 8192 a MiB of the core's L2
+  // cache and 16384 at most: extract.cc), cut at
   // aligned boundaries; buckets then hold the same number of leaves however
   // the octree is graded.  kLevel: the paper's aligned octants of
   // bucket_level (-1: the coarsest level whose bucket, filled with leaves of

@@ -42,14 +42,17 @@ class NodeClassifier {
   // leaf can hold those (bucket_worker.h).  They go into the cache of
   // leaves (cache_) when first searched.
   void set_local(const std::vector<uint64_t>* leaf_keys, uint64_t start, uint64_t end);
-  // The cache of leaves holds at most 2^kCacheBits keys, kCacheBytes, for
-  // the classifier's life: 4 slots for each of a bucket's 8192 leaves.
+  // The cache of leaves holds 2^cache_bits keys for the classifier's life:
+  // by default 4 slots for each of a bucket's 8192 leaves; extract sizes
+  // it by its largest bucket (kSlotsPerLeaf slots a leaf), up to
+  // 2^kMostCacheBits keys.
   static constexpr int kCacheBits = 15;
-  static constexpr uint64_t kCacheBytes = sizeof(uint64_t) << kCacheBits;
+  static constexpr int kMostCacheBits = 16;
+  static constexpr uint64_t kSlotsPerLeaf = 4;
   // The largest cache in `bytes` (at least 256 keys).
   static int cache_bits_for(uint64_t bytes) {
     int bits = 8;
-    while (bits < kCacheBits && (sizeof(uint64_t) << (bits + 1)) <= bytes) ++bits;
+    while (bits < kMostCacheBits && (sizeof(uint64_t) << (bits + 1)) <= bytes) ++bits;
     return bits;
   }
 
