@@ -182,6 +182,7 @@ Status append_leaves(const SubtreeLeaves& leaves, size_t bytes, double tick_m, B
                      ConstructResult* r) {
   constexpr size_t kRun = 4096;
   const size_t n = leaves.keys.size();
+  // (An empty subtree still tells the table it changed, as it always has.)
   if (n == 0) return out.append_batch(leaves.keys.data(), leaves.payloads.data(), 0);
   for (size_t at = 0; at < n; at += kRun) {
     const size_t end = std::min(n, at + kRun);

@@ -101,7 +101,8 @@ ExtractMemory::ExtractMemory(const ExtractOptions& o) : plan(o.memory) {
   const bool search = o.algorithm == ExtractOptions::Algorithm::kSearch;
   const uint64_t classifiers = search || o.threads <= 1 ? 1 : static_cast<uint64_t>(o.threads);
   // (4 slots for each leaf of the largest bucket: with 2 for buckets of
-  // 16384, random 1M's extract took 1.05x the time.)
+  // 16384, random 1M's extract took 1.05x the time on stop 76's AMD
+  // machine, p4est_bench.)
   const uint64_t cache_bytes =
       NodeClassifier::kSlotsPerLeaf * sizeof(uint64_t) * std::bit_ceil(most_bucket_leaves());
   classifier_cache = plan.take("classifier caches", 1, 64, classifiers * cache_bytes) / classifiers;

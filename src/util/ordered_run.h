@@ -107,7 +107,10 @@ class OrderedRun {
   bool can_make() const { return !making_ && (beside_ || !writing_) && may_make(); }
 
   // Writes the oldest tasks while they are done, the lock released while
-  // each is written (other workers go on taking tasks meanwhile).
+  // each is written (other workers go on taking tasks meanwhile).  Each
+  // object a write frees is made into at once: by another thread beside
+  // this one's next write, or (one role) by this thread before it, so that
+  // a run of writes does not leave the other workers without tasks.
   void write_done(std::unique_lock<std::mutex>& lock) {
     writing_ = true;
     while (!stopped_ && !flight_.empty() && flight_.front().done) {
@@ -118,7 +121,11 @@ class OrderedRun {
       lock.lock();
       free_.push_back(head);
       if (!go_on) stopped_ = true;
-      if (beside_) cv_.notify_all();  // a thread may make into it now
+      if (beside_) {
+        cv_.notify_all();
+      } else {
+        fill(lock);
+      }
     }
     writing_ = false;
     cv_.notify_all();
