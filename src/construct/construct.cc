@@ -11,6 +11,7 @@
 #include "construct/carve.h"
 #include "construct/descent.h"
 #include "construct/estimate.h"
+#include "construct/least_step.h"
 #include "construct/subtree_balance.h"
 #include "construct/subtree_run.h"
 #include "construct/subtree_slots.h"
@@ -173,11 +174,9 @@ ShardPlace place_of_shard(const ConstructOptions& o, const ConstructPlan& p, con
 }
 
 // Appends a subtree's leaves to the table a run at a time, and notes the
-// least edge / vp among them (vp: the payload's first f32) in *r, the
-// first of equals: what an explicit solver's time step is a Courant
-// number times.  Each run is read for both while it is in the cache: a
-// pass of its own over the leaves, after the balance, waited on memory
-// (5% of the 2 Hz construct).
+// least edge / vp among them in *r: what an explicit solver's time step is
+// a Courant number times.  Each run is read for it while it is in the
+// cache for the append.
 Status append_leaves(const SubtreeLeaves& leaves, size_t bytes, double tick_m, BTree& out,
                      ConstructResult* r) {
   constexpr size_t kRun = 4096;
@@ -186,14 +185,11 @@ Status append_leaves(const SubtreeLeaves& leaves, size_t bytes, double tick_m, B
   if (n == 0) return out.append_batch(leaves.keys.data(), leaves.payloads.data(), 0);
   for (size_t at = 0; at < n; at += kRun) {
     const size_t end = std::min(n, at + kRun);
-    for (size_t i = at; i < end; ++i) {
-      float vp;
-      std::memcpy(&vp, leaves.payloads.data() + i * bytes, 4);
-      const double dt = octant_edge(octant_key_level(leaves.keys[i])) * tick_m / vp;
-      if (dt < r->least_dt) r->least_dt = dt, r->least_dt_element = r->elements + i;
-    }
-    WEAVER_RETURN_IF_ERROR(
-        out.append_batch(leaves.keys.data() + at, leaves.payloads.data() + at * bytes, end - at));
+    const uint64_t* keys = leaves.keys.data() + at;
+    const std::byte* payloads = leaves.payloads.data() + at * bytes;
+    note_least_step(keys, payloads, end - at, bytes, tick_m, r->elements + at, &r->least_dt,
+                    &r->least_dt_element);
+    WEAVER_RETURN_IF_ERROR(out.append_batch(keys, payloads, end - at));
   }
   return Status::Ok();
 }
