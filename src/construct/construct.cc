@@ -77,6 +77,7 @@ class SubtreeVisitor {
     // among the remaining elements alone, a dangling node's anchor may
     // dangle too where air fills the space between).
     if (carved) {
+      s->leaves.flatten(descent_.payload_bytes());
       carve_leaves(descent_.plan(), descent_.payload_bytes(), &s->leaves, &s->air, &s->cut);
     }
   }
@@ -176,22 +177,47 @@ ShardPlace place_of_shard(const ConstructOptions& o, const ConstructPlan& p, con
 // Appends a subtree's leaves to the table a run at a time, and notes the
 // least edge / vp among them in *r: what an explicit solver's time step is
 // a Courant number times.  Each run is read for it while it is in the
-// cache for the append.
+// cache for the append.  Leaves in pieces (a balance split some) are
+// copied a run at a time into a buffer that stays in the cache.
 Status append_leaves(const SubtreeLeaves& leaves, size_t bytes, double tick_m, BTree& out,
                      ConstructResult* r) {
   constexpr size_t kRun = 4096;
-  const size_t n = leaves.keys.size();
   // (An empty subtree still tells the table it changed, as it always has.)
-  if (n == 0) return out.append_batch(leaves.keys.data(), leaves.payloads.data(), 0);
-  for (size_t at = 0; at < n; at += kRun) {
-    const size_t end = std::min(n, at + kRun);
-    const uint64_t* keys = leaves.keys.data() + at;
-    const std::byte* payloads = leaves.payloads.data() + at * bytes;
-    note_least_step(keys, payloads, end - at, bytes, tick_m, r->elements + at, &r->least_dt,
+  if (leaves.elements == 0) return out.append_batch(leaves.keys.data(), leaves.payloads.data(), 0);
+  uint64_t done = 0;
+  auto append = [&](const uint64_t* keys, const std::byte* payloads, size_t n) {
+    note_least_step(keys, payloads, n, bytes, tick_m, r->elements + done, &r->least_dt,
                     &r->least_dt_element);
-    WEAVER_RETURN_IF_ERROR(out.append_batch(keys, payloads, end - at));
+    done += n;
+    return out.append_batch(keys, payloads, n);
+  };
+  if (leaves.pieces.empty()) {
+    for (size_t at = 0; at < leaves.keys.size(); at += kRun) {
+      const size_t n = std::min(leaves.keys.size() - at, kRun);
+      WEAVER_RETURN_IF_ERROR(
+          append(leaves.keys.data() + at, leaves.payloads.data() + at * bytes, n));
+    }
+    return Status::Ok();
   }
-  return Status::Ok();
+  thread_local std::vector<uint64_t> keys;
+  thread_local std::vector<std::byte> payloads;
+  keys.resize(kRun), payloads.resize(kRun * bytes);
+  size_t staged = 0;
+  WEAVER_RETURN_IF_ERROR(
+      leaves.for_each_run(bytes, [&](const uint64_t* k, const std::byte* b, size_t n) -> Status {
+        while (n > 0) {
+          const size_t take = std::min(n, kRun - staged);
+          std::memcpy(keys.data() + staged, k, take * sizeof *k);
+          std::memcpy(payloads.data() + staged * bytes, b, take * bytes);
+          staged += take, k += take, b += take * bytes, n -= take;
+          if (staged == kRun) {
+            WEAVER_RETURN_IF_ERROR(append(keys.data(), payloads.data(), staged));
+            staged = 0;
+          }
+        }
+        return Status::Ok();
+      }));
+  return staged == 0 ? Status::Ok() : append(keys.data(), payloads.data(), staged);
 }
 
 // Visits the domain's subtrees on o.threads workers (or on this thread for
@@ -224,8 +250,8 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     r->descended += s.descended;
     r->air += s.air;
     r->cut += s.cut;
-    if (o.progress && !leaves.keys.empty()) {
-      o.progress(r->elements, share.fraction_before(leaves.keys.back()));
+    if (o.progress && leaves.elements > 0) {
+      o.progress(r->elements, share.fraction_before(leaves.last_key()));
     }
     return Status::Ok();
   };

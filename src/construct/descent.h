@@ -34,6 +34,7 @@
 #include "construct/leaf_room.h"
 #include "model/velocity_model.h"
 #include "schema/octant.h"
+#include "schema/status.h"
 
 namespace weaver {
 
@@ -58,8 +59,38 @@ struct SubtreeLeaves {
   std::array<uint32_t, 3> border_lo{}, border_hi{};
   LeafSpan span;          // carved: what the kept leaves span (carve.h)
   bool overflow = false;  // more leaves than its room allows: visit the children instead
+  // Where the balance split leaves (subtree_balance.h), the leaves in key
+  // order are runs of keys / payloads / sides and of the leaves it added
+  // (added_*), in turn, as `pieces` say; with no pieces, keys and payloads
+  // are the leaves.  The writer reads them so: copying the whole subtree
+  // to splice the new leaves in was 3.4% of the 2 Hz construct's samples.
+  struct Piece {
+    bool added;  // of added_*, not of keys
+    size_t begin, end;
+  };
+  std::vector<Piece> pieces;
+  std::vector<uint64_t> added_keys;
+  std::vector<std::byte> added_payloads;
+  std::vector<GroundSide> added_sides;
 
   void clear();
+  // run(keys, payloads, n) for each run of the leaves in key order
+  // (payloads of `bytes` each); its first error stops them.
+  template <class Run>
+  Status for_each_run(size_t bytes, const Run& run) const {
+    if (pieces.empty()) return run(keys.data(), payloads.data(), keys.size());
+    for (const Piece& p : pieces) {
+      const uint64_t* k = (p.added ? added_keys : keys).data() + p.begin;
+      const std::byte* b = (p.added ? added_payloads : payloads).data() + p.begin * bytes;
+      WEAVER_RETURN_IF_ERROR(run(k, b, p.end - p.begin));
+    }
+    return Status::Ok();
+  }
+  // The last leaf's key.  REQUIRES: a leaf.
+  uint64_t last_key() const;
+  // The pieces copied into keys, payloads and sides, for those who read
+  // them whole (the carve).
+  void flatten(size_t bytes);
   // Adds these leaves' figures to r (in Z-order, as the serial descent would).
   void add_to(ConstructResult* r) const;
 };

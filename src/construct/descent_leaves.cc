@@ -22,6 +22,38 @@ void SubtreeLeaves::clear() {
   border_lo = border_hi = {};
   span = LeafSpan{};
   overflow = false;
+  pieces.clear();
+  added_keys.clear();
+  added_payloads.clear();
+  added_sides.clear();
+}
+
+uint64_t SubtreeLeaves::last_key() const {
+  if (pieces.empty()) return keys.back();
+  const Piece& p = pieces.back();
+  return (p.added ? added_keys : keys)[p.end - 1];
+}
+
+void SubtreeLeaves::flatten(size_t bytes) {
+  if (pieces.empty()) return;
+  std::vector<uint64_t> k;
+  std::vector<std::byte> b;
+  std::vector<GroundSide> s;
+  k.reserve(elements), b.reserve(elements * bytes);
+  const bool sided = !sides.empty() || !added_sides.empty();
+  for (const Piece& p : pieces) {
+    const auto& from_k = p.added ? added_keys : keys;
+    const auto& from_b = p.added ? added_payloads : payloads;
+    k.insert(k.end(), from_k.begin() + p.begin, from_k.begin() + p.end);
+    b.insert(b.end(), from_b.begin() + p.begin * bytes, from_b.begin() + p.end * bytes);
+    if (sided) {
+      const auto& from_s = p.added ? added_sides : sides;
+      s.insert(s.end(), from_s.begin() + p.begin, from_s.begin() + p.end);
+    }
+  }
+  keys.swap(k), payloads.swap(b), sides.swap(s);
+  pieces.clear();
+  added_keys.clear(), added_payloads.clear(), added_sides.clear();
 }
 
 void SubtreeLeaves::add_to(ConstructResult* r) const {

@@ -150,73 +150,76 @@ void SubtreeBalancer::collect_level(const Octant& x, int level, const Octant& ro
 }
 
 // Each own leaf split just enough to resolve the created octants inside it.
-// The leaves between two split ones are copied as a run; a new leaf first
-// takes its parent leaf's record, and, where the model fills new leaves,
+// The leaves between two split ones stay where they are, a piece of the
+// subtree's leaves (descent.h); a split's leaves are added, each first
+// with its parent leaf's record, and, where the model fills new leaves,
 // its material after the walk: eight siblings from one lattice of their
 // centres (most splits make whole sibling groups), any other leaf alone.
 void SubtreeBalancer::refine(SubtreeLeaves* leaves) {
-  out_.clear();
   fresh_.clear();
   const size_t bytes = descent_.payload_bytes();
   const bool carved = descent_.plan().carved;
   const uint64_t* keys = leaves->keys.data();
   const std::byte* payloads = leaves->payloads.data();
-  auto copy_run = [&](size_t begin, size_t end) {
-    out_.keys.insert(out_.keys.end(), keys + begin, keys + end);
-    out_.payloads.insert(out_.payloads.end(), payloads + begin * bytes, payloads + end * bytes);
-    if (carved) {
-      out_.sides.insert(out_.sides.end(), leaves->sides.begin() + begin,
-                        leaves->sides.begin() + end);
+  auto piece = [leaves](bool added, size_t begin, size_t end) {
+    auto& p = leaves->pieces;
+    if (!p.empty() && p.back().added == added && p.back().end == begin) {
+      p.back().end = end;
+    } else {
+      p.push_back({added, begin, end});
     }
+  };
+  auto keep_run = [&](size_t begin, size_t end) {
+    if (begin < end) piece(false, begin, end);
     return Status::Ok();
   };
-  out_.levels = leaves->levels;
   size_t last_split = SIZE_MAX;
-  resolve_leaves(keys, leaves->keys.size(), created_, copy_run,
+  resolve_leaves(keys, leaves->keys.size(), created_, keep_run,
                  [&](size_t i, uint64_t key, bool is_new) {
                    if (i != last_split) {  // the first leaf of i's split
                      last_split = i;
-                     --out_.levels[octant_key_level(keys[i])];
+                     --leaves->levels[octant_key_level(keys[i])];
+                     --leaves->elements;
                    }
                    // A part of a leaf wholly on one side of the ground is on it too.
-                   if (carved) out_.sides.push_back(leaves->sides[i]);
-                   add_leaf(key, is_new, payloads + i * bytes);
+                   if (carved) leaves->added_sides.push_back(leaves->sides[i]);
+                   const size_t at = leaves->added_keys.size();
+                   add_leaf(leaves, key, is_new, payloads + i * bytes);
+                   piece(true, at, at + 1);
                    return Status::Ok();
                  });
-  fill_materials();
-  out_.elements = out_.keys.size();
+  fill_materials(leaves);
   int coarsest = 0;
-  while (out_.levels[coarsest] == 0) ++coarsest;
-  leaves->keys.swap(out_.keys);
-  leaves->payloads.swap(out_.payloads);
-  leaves->sides.swap(out_.sides);
-  leaves->levels = out_.levels;
-  leaves->elements = out_.elements;
+  while (leaves->levels[coarsest] == 0) ++coarsest;
   leaves->largest_edge_m = octant_edge(coarsest) * descent_.plan().tick_m;
 }
 
-// A leaf of a split into out_, with its parent's record (a new one is
-// noted, to take the model's material at its centre where it fills).
-void SubtreeBalancer::add_leaf(uint64_t key, bool is_new, const std::byte* parent_payload) {
+// A leaf of a split onto the added leaves, with its parent's record (a new
+// one is noted, to take the model's material at its centre where it fills).
+void SubtreeBalancer::add_leaf(SubtreeLeaves* leaves, uint64_t key, bool is_new,
+                               const std::byte* parent_payload) {
   const size_t bytes = descent_.payload_bytes();
-  if (is_new && fill_) fresh_.push_back(out_.keys.size());
-  out_.keys.push_back(key);
-  out_.payloads.insert(out_.payloads.end(), parent_payload, parent_payload + bytes);
-  ++out_.levels[octant_key_level(key)];
+  if (is_new && fill_) fresh_.push_back(leaves->added_keys.size());
+  leaves->added_keys.push_back(key);
+  leaves->added_payloads.insert(leaves->added_payloads.end(), parent_payload,
+                                parent_payload + bytes);
+  ++leaves->levels[octant_key_level(key)];
+  ++leaves->elements;
 }
 
 // The model's material for each new leaf noted, by sibling groups where
 // all eight are new and one after another.
-void SubtreeBalancer::fill_materials() {
+void SubtreeBalancer::fill_materials(SubtreeLeaves* leaves) {
   const size_t bytes = descent_.payload_bytes();
+  const std::vector<uint64_t>& keys = leaves->added_keys;
   for (size_t f = 0; f < fresh_.size();) {
     const size_t at = fresh_[f];
-    const uint64_t key = out_.keys[at];
-    std::byte* payload = out_.payloads.data() + at * bytes;
+    const uint64_t key = keys[at];
+    std::byte* payload = leaves->added_payloads.data() + at * bytes;
     // fresh_ rises by one at least an entry: eight entries spanning eight
     // places are those places, and eight leaves of one parent its children.
     if (f + 8 <= fresh_.size() && fresh_[f + 7] == at + 7 && octant_key_child_id(key) == 0 &&
-        octant_key_parent(out_.keys[at + 7]) == octant_key_parent(key)) {
+        octant_key_parent(keys[at + 7]) == octant_key_parent(key)) {
       descent_.children_materials(octant_from_key(octant_key_parent(key)), payload);
       f += 8;
     } else {

@@ -49,9 +49,11 @@ class SubtreeBalancer {
   // else a copy of the leaf they split.
   SubtreeBalancer(const Descent& descent, bool fill_material);
 
-  // Replaces *leaves (root's subtree, in key order, as visit_subtree gives
-  // them) with their refinement in the balanced octree; levels and
-  // elements follow, the edge and ppw figures of the descent stay.
+  // Makes *leaves (root's subtree, in key order, as visit_subtree gives
+  // them) their refinement in the balanced octree: the leaves it splits
+  // are left out of its pieces, their parts added (SubtreeLeaves::pieces);
+  // levels and elements follow, the edge and ppw figures of the descent
+  // stay.
   void balance(const Octant& root, SubtreeLeaves* leaves);
 
   // Leaves outside the subtrees collected, summed over the calls.
@@ -68,8 +70,8 @@ class SubtreeBalancer {
   void collect_level(const Octant& x, int level, const Octant& root);
   bool wanted(const Octant& x, const Octant& root) const;
   void refine(SubtreeLeaves* leaves);
-  void add_leaf(uint64_t key, bool is_new, const std::byte* parent_payload);
-  void fill_materials();
+  void add_leaf(SubtreeLeaves* leaves, uint64_t key, bool is_new, const std::byte* parent_payload);
+  void fill_materials(SubtreeLeaves* leaves);
 
   const Descent& descent_;
   const bool fill_;
@@ -79,8 +81,7 @@ class SubtreeBalancer {
   std::vector<uint64_t> local_;              // those and the subtree's leaves, in key order
   LocalRipple ripple_;
   std::vector<uint64_t> created_;
-  std::vector<size_t> fresh_;  // where refine's new leaves are in out_, to fill
-  SubtreeLeaves out_;
+  std::vector<size_t> fresh_;  // where refine's new leaves are among the added, to fill
   uint64_t collected_count_ = 0;
 };
 
