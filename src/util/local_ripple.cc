@@ -93,11 +93,12 @@ bool whole_siblings(const uint64_t* keys, uint64_t stride) {
 bool LocalRipple::run(const std::vector<uint64_t>& local, std::vector<uint64_t>* created,
                       size_t max_bytes) {
   created->clear();
-  std::array<uint64_t, kMaxLevel + 1> count{};  // leaves by level
-  for (uint64_t key : local) ++count[octant_key_level(key)];
-  int coarsest = 0, finest = kMaxLevel;
-  while (coarsest <= kMaxLevel && count[coarsest] == 0) ++coarsest;
-  while (finest >= 0 && count[finest] == 0) --finest;
+  // The levels present, a bit each: counting the leaves of each level
+  // waited on each count's last increment (3% of the 2 Hz construct).
+  uint32_t present = 0;
+  for (uint64_t key : local) present |= uint32_t{1} << octant_key_level(key);
+  if (present == 0) return true;
+  const int coarsest = std::countr_zero(present), finest = 31 - std::countl_zero(present);
   if (finest - coarsest < 2) return true;
   gather(local, coarsest, finest);
   made_from_ = 0;
