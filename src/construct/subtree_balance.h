@@ -35,6 +35,7 @@
 
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "construct/descent.h"
@@ -82,6 +83,8 @@ class SubtreeBalancer {
   LocalRipple ripple_;
   std::vector<uint64_t> created_;
   std::vector<size_t> fresh_;  // where refine's new leaves are among the added, to fill
+  // The others: where, and their parent leaf's record.
+  std::vector<std::pair<size_t, const std::byte*>> copied_;
   uint64_t collected_count_ = 0;
 };
 

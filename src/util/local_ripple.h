@@ -65,6 +65,7 @@ class LocalRipple {
   void merge_asks(int level, const std::vector<uint64_t>& created);
   bool ask_level(int level, std::vector<uint64_t>* created, size_t max_bytes);
   void merge_runs(std::vector<uint64_t>* created);
+  void merge_pairs(std::vector<uint64_t>* created);
 
   const size_t lanes_;
   std::array<std::vector<Ask>, kMaxLevel + 1> leaf_asks_;  // by the level of the children
