@@ -145,7 +145,8 @@ Status build_boundary(const std::string& db_dir, const BoundaryOptions& o, Bound
 }
 
 Status check_boundary(const std::vector<BTree*>& octants, BTree& stored, MemoryBudget surface,
-                      uint64_t held, size_t max_problems, std::vector<std::string>* problems) {
+                      uint64_t held, size_t max_problems, const LeafSpan* span,
+                      std::vector<std::string>* problems) {
   std::unique_ptr<Cursor> c;
   WEAVER_RETURN_IF_ERROR(stored.seek(0, &c));
   auto where = [](uint64_t key) {
@@ -174,6 +175,10 @@ Status check_boundary(const std::vector<BTree*>& octants, BTree& stored, MemoryB
   };
   BoundaryOptions o;
   o.known_least_dt = 1;  // the time step is not the table's: keys alone
+  if (span != nullptr) {
+    o.known_box = true;
+    o.box_lo = span->lo, o.box_hi = span->hi, o.box_filled = span->filled;
+  }
   BoundaryResult r;
   WEAVER_RETURN_IF_ERROR(derive_boundary(octants, compare, o, surface, held, &r));
   while (c->valid()) {

@@ -33,6 +33,7 @@
 #include "db/database.h"
 #include "db/table_files.h"
 #include "schema/status.h"
+#include "util/leaf_span.h"
 #include "util/memory_budget.h"
 #include "util/progress.h"
 
@@ -106,8 +107,11 @@ Status boundary_shard(const std::string& db_dir, const BoundaryOptions& options,
 // to max_problems) named by element, face and part in *problems.  One
 // thread a handle of the octant table in `octants` (as build_boundary's
 // threads, the later ones holding up to `held` records each).  A carved
-// mesh's surface is read within `surface`.
+// mesh's surface is read within `surface`.  `span`: what the octant
+// table's leaves span, settled, where the caller found it reading them
+// (null: a pass of their own finds it).
 Status check_boundary(const std::vector<BTree*>& octants, BTree& stored, MemoryBudget surface,
-                      uint64_t held, size_t max_problems, std::vector<std::string>* problems);
+                      uint64_t held, size_t max_problems, const LeafSpan* span,
+                      std::vector<std::string>* problems);
 
 }  // namespace weaver

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstring>
 #include <filesystem>
@@ -23,6 +24,7 @@
 #include "modeldb/model_table.h"
 #include "query/aggregates.h"
 #include "storage/btree.h"
+#include "util/leaf_span.h"
 #include "util/ordered_run.h"
 #include "util/parallel.h"
 #include "verify/mesh_check.h"
@@ -32,11 +34,30 @@ namespace {
 
 std::string count_text(uint64_t n, const char* what) { return std::to_string(n) + " " + what; }
 
+// The levels of keys into counted, and what they span into *span: four
+// counts a level, taken in turn (one count a level waited on its last
+// increment for every key), and their box and volume.
+void count_and_span(const std::vector<uint64_t>& keys, LevelCounts* counted, LeafSpan* span) {
+  std::array<LevelCounts, 4> counts{};
+  const size_t n = keys.size();
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    for (int k = 0; k < 4; ++k) ++counts[k][octant_key_level(keys[i + k])];
+  }
+  for (; i < n; ++i) ++counts[0][octant_key_level(keys[i])];
+  for (const LevelCounts& c : counts) {
+    for (int l = 0; l <= kMaxLevel; ++l) (*counted)[l] += c[l];
+  }
+  for (uint64_t k : keys) span->add(octant_from_key(k));
+}
+
 // Octant keys: valid, non-overlapping (LeafReader), and counted per level as
-// the metadata says.
-Status scan_octants(BTree& t, const std::string& name, Problems& problems) {
+// the metadata says; what they span into *span, settled (the boundary's
+// check needs it, and would read the table again to find it).
+Status scan_octants(BTree& t, const std::string& name, Problems& problems, LeafSpan* span) {
   LeafReader reader;
   LevelCounts counted{};
+  *span = LeafSpan{};
   Status st = reader.open(t);
   // A leaf page's keys at a time, checked without a branch each (take), not
   // a call and a Status a key.
@@ -44,8 +65,9 @@ Status scan_octants(BTree& t, const std::string& name, Problems& problems) {
   while (st.ok() && reader.valid()) {
     keys.clear();
     st = reader.take(4096, UINT64_MAX, &keys);
-    for (uint64_t k : keys) ++counted[octant_key_level(k)];
+    count_and_span(keys, &counted, span);
   }
+  span->settle();
   if (!st.ok()) {
     if (st.code() == Status::Code::kIOError) return st;
     problems.add("table " + name + ": " + st.message());
@@ -116,7 +138,8 @@ Status scan_nodes(BTree& t, const std::string& name, Problems& problems) {
 // Pages and keys of one table.  *usable is false when the table is too
 // damaged for the mesh checks; *line is its progress line.
 Status check_table(const Database& db, const std::string& name, uint64_t pool_bytes,
-                   Problems& problems, VerifyReport* r, bool* usable, std::string* line) {
+                   Problems& problems, VerifyReport* r, bool* usable, std::string* line,
+                   LeafSpan* span) {
   *usable = false;
   std::unique_ptr<BTree> t;
   Status st = db.open_table(name, pool_bytes, &t);
@@ -132,7 +155,7 @@ Status check_table(const Database& db, const std::string& name, uint64_t pool_by
   if (name == kAggregateTable) {
     // Nested octants, not leaves: checked against the octant table below.
   } else if (t->options().key_kind == KeyKind::kOctant) {
-    WEAVER_RETURN_IF_ERROR(scan_octants(*t, name, problems));
+    WEAVER_RETURN_IF_ERROR(scan_octants(*t, name, problems, span));
     if (name == kModelTable) WEAVER_RETURN_IF_ERROR(scan_model(*t, name, problems));
   } else if (name == kNodeTable) {
     WEAVER_RETURN_IF_ERROR(scan_nodes(*t, name, problems));
@@ -148,6 +171,7 @@ struct TableCheck {
   size_t table = 0;     // its index in the names
   VerifyReport report;  // its counts and problems
   std::string line;     // its progress line
+  LeafSpan span;        // an octant table's leaves' (scan_octants)
   bool usable = false;
   Status status;
 };
@@ -158,12 +182,13 @@ struct TableCheck {
 // thread would (util/ordered_run.h): the same problems, lines and counts on
 // any count.  A table whose check failed (an I/O error) ends the report, as
 // it ended one thread's loop.  *usable[i]: whether table i can serve the
-// mesh checks.
+// mesh checks; *spans[i]: what its leaves span, for an octant table.
 Status check_tables(const Database& db, const std::vector<std::string>& names, uint64_t pool_bytes,
                     const VerifyOptions& o, Problems& problems, VerifyReport* r,
-                    std::vector<bool>* usable) {
+                    std::vector<bool>* usable, std::vector<LeafSpan>* spans) {
   const int threads = std::max(1, std::min(o.threads, static_cast<int>(names.size())));
   usable->assign(names.size(), false);
+  spans->assign(names.size(), LeafSpan{});
   size_t next = 0;
   Status st;
   auto make = [&](TableCheck* c) {
@@ -175,7 +200,7 @@ Status check_tables(const Database& db, const std::vector<std::string>& names, u
   auto work = [&](int, TableCheck* c) {
     Problems found(o, &c->report);  // (check_table hands its line back, never prints it)
     c->status = check_table(db, names[c->table], pool_bytes / threads, found, &c->report,
-                            &c->usable, &c->line);
+                            &c->usable, &c->line, &c->span);
   };
   auto write = [&](TableCheck* c) {
     st = c->status;
@@ -185,6 +210,7 @@ Status check_tables(const Database& db, const std::vector<std::string>& names, u
     r->records += c->report.records;
     r->pages += c->report.pages;
     (*usable)[c->table] = c->usable;
+    (*spans)[c->table] = c->span;
     if (!c->line.empty()) problems.progress(c->line);
     return true;
   };
@@ -297,9 +323,10 @@ Status check_aggregate_table(const Database& db, const VerifyMemory& memory, Pro
 // The boundary table against the records derived again from the octants,
 // on o.threads threads (a handle of the octant table each; the later ones
 // hold their records, 16 bytes each and room for a vector's growth, in the
-// node check's share, not yet in use).
+// node check's share, not yet in use).  span: the octant table's leaves',
+// as its storage check found it.
 Status check_boundary_table(const Database& db, const VerifyMemory& memory, const VerifyOptions& o,
-                            Problems& problems) {
+                            const LeafSpan& span, Problems& problems) {
   const int threads = std::max(1, o.threads);
   std::vector<std::unique_ptr<BTree>> handles(static_cast<size_t>(threads));
   std::vector<BTree*> octants;
@@ -313,7 +340,7 @@ Status check_boundary_table(const Database& db, const VerifyMemory& memory, cons
       threads > 1 ? std::max<uint64_t>(1, memory.derive.bytes() / 32 / uint64_t(threads - 1)) : 0;
   std::vector<std::string> found;
   WEAVER_RETURN_IF_ERROR(
-      check_boundary(octants, *stored, MemoryBudget(memory.surface), held, 20, &found));
+      check_boundary(octants, *stored, MemoryBudget(memory.surface), held, 20, &span, &found));
   for (std::string& p : found) problems.add(std::move(p));
   problems.progress(std::string("table boundary: the faces derived again: ") +
                     (found.empty() ? "ok" : "PROBLEMS"));
@@ -431,8 +458,12 @@ Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyRep
   bool octants_usable = db->has_table(kOctantTable);
   const std::vector<std::string> names = db->table_names();
   std::vector<bool> usable;
-  WEAVER_RETURN_IF_ERROR(check_tables(*db, names, memory.table_pool, o, problems, r, &usable));
+  std::vector<LeafSpan> spans;
+  WEAVER_RETURN_IF_ERROR(
+      check_tables(*db, names, memory.table_pool, o, problems, r, &usable, &spans));
+  LeafSpan octant_span;
   for (size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == kOctantTable) octant_span = spans[i];
     if (!usable[i] && (names[i] == kOctantTable || names[i] == kNodeTable)) mesh_usable = false;
     if (!usable[i] && names[i] == kOctantTable) octants_usable = false;
   }
@@ -443,7 +474,7 @@ Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyRep
     WEAVER_RETURN_IF_ERROR(check_ground(*db, memory, problems));
   }
   if (octants_usable && o.mesh && db->has_table(kBoundaryTable) && !problems.full()) {
-    WEAVER_RETURN_IF_ERROR(check_boundary_table(*db, memory, o, problems));
+    WEAVER_RETURN_IF_ERROR(check_boundary_table(*db, memory, o, octant_span, problems));
   }
   if (mesh_usable) WEAVER_RETURN_IF_ERROR(check_mesh(*db, memory, o, problems, r));
   return Status::Ok();
