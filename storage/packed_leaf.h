@@ -119,7 +119,8 @@ class PackedLeafBuilder {
   // Fields of one size, up to this many, take widen_columns' fast path.
   static constexpr size_t kMaxUniformFields = 8;
   void widen_columns(const std::byte* vals, uint32_t count);
-  static void extend(OpenBlock& b, uint64_t key, KeyKind kind);
+  // Adds keys[0, count) to block b.  REQUIRES: b.count + count <= kPackedBlock.
+  static void extend(OpenBlock& b, const uint64_t* keys, uint32_t count, KeyKind kind);
   static BlockCode choose(const OpenBlock& b, KeyKind kind);
   uint64_t bytes_for(size_t n, uint64_t key_bytes_closed, const OpenBlock& open,
                      const std::vector<Column>& cols, size_t dict_rows) const;

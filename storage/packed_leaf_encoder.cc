@@ -54,25 +54,39 @@ void PackedLeafBuilder::clear() {
   dict_over_ = shape_.payload < kDictMinPayload;
 }
 
-inline void PackedLeafBuilder::extend(OpenBlock& b, uint64_t key, KeyKind kind) {
-  if (b.count == 0) {
-    b.base = b.prev = key;
-    b.count = 1;
-    return;
+// The block's figures over keys[0, count), all in the block: kept in
+// locals across the run, not in the OpenBlock between keys (a store and a
+// load a figure a key was most of add_group's time).  The deltas' common
+// trailing zeros are those of their OR.  Past the first key that breaks
+// the successor model, max_residual is never read (choose).
+void PackedLeafBuilder::extend(OpenBlock& b, const uint64_t* keys, uint32_t count, KeyKind kind) {
+  if (count == 0) return;
+  uint32_t i = 0;
+  if (b.count == 0) b.base = b.prev = keys[i++], b.count = 1;
+  uint64_t prev = b.prev, any = 0, most = b.max_delta;
+  for (uint32_t j = i; j < count; ++j) {
+    const uint64_t d = keys[j] - prev;
+    any |= d;
+    most = std::max(most, d);
+    prev = keys[j];
   }
-  const uint64_t d = key - b.prev;
-  b.shift = std::min(b.shift, std::countr_zero(d));
-  b.max_delta = std::max(b.max_delta, d);
   if (kind == KeyKind::kOctant && b.successor_ok) {
-    const uint64_t e = successor(b.prev);
-    if (e == UINT64_MAX || key < e) {
-      b.successor_ok = false;
-    } else {
-      b.max_residual = std::max(b.max_residual, key - e);
+    bool ok = true;
+    uint64_t residual = b.max_residual;
+    prev = b.prev;
+    for (uint32_t j = i; j < count; ++j) {
+      const uint64_t e = successor(prev);
+      ok &= e != UINT64_MAX && keys[j] >= e;
+      residual = std::max(residual, keys[j] - e);
+      prev = keys[j];
     }
+    b.successor_ok = ok;
+    b.max_residual = residual;
   }
-  b.prev = key;
-  ++b.count;
+  if (any != 0) b.shift = std::min(b.shift, std::countr_zero(any));
+  b.max_delta = most;
+  b.prev = prev;
+  b.count += count - i;
 }
 
 PackedLeafBuilder::BlockCode PackedLeafBuilder::choose(const OpenBlock& b, KeyKind kind) {
@@ -112,13 +126,15 @@ bool PackedLeafBuilder::add_group(const uint64_t* keys, const std::byte* vals, u
   uint64_t closed_bytes = key_bytes_closed_;
   OpenBlock open = open_;
   scratch_cols_ = cols_;
-  for (uint32_t i = 0; i < count; ++i) {
+  for (uint32_t i = 0; i < count;) {
     if (open.count == kPackedBlock) {
       closed_.push_back(choose(open, shape_.key_kind));
       closed_bytes += block_bytes(open.count, closed_.back().width);
       open = OpenBlock{};
     }
-    extend(open, keys[i], shape_.key_kind);
+    const uint32_t take = std::min(count - i, kPackedBlock - open.count);
+    extend(open, keys + i, take, shape_.key_kind);
+    i += take;
   }
   // Past the dictionary's room the page is column-wise from here on: it
   // stops counting rows (and a dictionary can never come back).  A group
