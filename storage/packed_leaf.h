@@ -136,6 +136,10 @@ class PackedLeafBuilder {
   bool dict_add(const std::byte* vals, uint32_t count);
   void dict_rollback();
   void encode_dictionary(std::byte* page, std::byte* col) const;
+  // Writes a field's column from n rows `stride` apart, its values `size`
+  // bytes (1, 2, 4 or 8), less c.min, w bits each.
+  static void put_column(const std::byte* p, size_t stride, uint32_t n, uint32_t size,
+                         const Column& c, uint32_t w, std::byte* out);
 
   PackedShape shape_;
   std::vector<uint64_t> keys_;

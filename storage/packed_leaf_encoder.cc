@@ -229,6 +229,31 @@ uint32_t PackedLeafBuilder::add_range(const uint64_t* keys, const std::byte* val
   return i;
 }
 
+namespace {
+
+// One field's column: n values of `Size` bytes, `stride` apart from p, less
+// min, w bits each.  The size known when compiled: a load of it, not a
+// switch on it, for each value.
+template <uint32_t Size>
+void put_values(const std::byte* p, size_t stride, uint32_t n, uint64_t min, uint32_t w,
+                std::byte* out) {
+  BitWriter bits(out);
+  for (uint32_t i = 0; i < n; ++i, p += stride) bits.put(load_field(p, Size) - min, w);
+  bits.finish();
+}
+
+}  // namespace
+
+void PackedLeafBuilder::put_column(const std::byte* p, size_t stride, uint32_t n, uint32_t size,
+                                   const Column& c, uint32_t w, std::byte* out) {
+  switch (size) {
+    case 1: return put_values<1>(p, stride, n, c.min, w, out);
+    case 2: return put_values<2>(p, stride, n, c.min, w, out);
+    case 4: return put_values<4>(p, stride, n, c.min, w, out);
+    default: return put_values<8>(p, stride, n, c.min, w, out);
+  }
+}
+
 void PackedLeafBuilder::encode(std::byte* pg) const {
   const auto n = static_cast<uint32_t>(keys_.size());
   const auto m = static_cast<uint32_t>(blocks_for(n));
@@ -271,11 +296,8 @@ void PackedLeafBuilder::encode(std::byte* pg) const {
     const auto w = static_cast<uint32_t>(std::bit_width(c.max - c.min));
     store64(pg + kFieldsStart + kFieldBytes * f, c.min);
     pg[kFieldsStart + kFieldBytes * f + 8] = static_cast<std::byte>(w);
-    BitWriter bits(col);
-    for (uint32_t i = 0; i < n; ++i) {
-      bits.put(load_field(payload(i) + field_off, shape_.field_sizes[f]) - c.min, w);
-    }
-    bits.finish();
+    if (w > 0)
+      put_column(vals_.data() + field_off, shape_.payload, n, shape_.field_sizes[f], c, w, col);
     col += bits_to_bytes(uint64_t{n} * w);
     field_off += shape_.field_sizes[f];
   }
