@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "schema/octant.h"
+#include "storage/packed_bits.h"
 #include "storage/page_format.h"
 #include "test_util.h"
 
@@ -355,6 +356,63 @@ TEST(PackedLeaf, DamagedPagesNeverReadOutOfBounds) {
     EXPECT_GT(refused, 0) << "some damage must be caught by the layout checks";
     EXPECT_EQ(static_cast<int>(good[19]), dictionary ? 1 : 0);
   }
+}
+
+// Mode 1's keys are successor() chained over the residuals, whatever the
+// bits: block_keys takes a shorter path where no key is of level 20 or the
+// root and no subtree reaches the root's end, and must agree with the chain
+// everywhere, on damaged or crafted blocks too.
+TEST(PackedLeaf, SuccessorBlocksDecodeAsTheChainOfSuccessors) {
+  std::mt19937_64 rng(11);
+  const PackedShape shape = PackedShape::of(4096, KeyKind::kOctant, schema_of(""));
+  std::vector<uint64_t> keys;
+  octree_leaves({0, 0, 0, 0}, rng, {3, 9, 0.3, 0}, &keys);
+  PackedLeafBuilder b(shape);
+  ASSERT_GT(b.add_range(keys.data(), nullptr, 0, static_cast<uint32_t>(keys.size())), 64u);
+  std::vector<std::byte> good(shape.page_size);
+  b.encode(good.data());
+  const uint32_t m = load16(good.data() + packed::kPgBlocks);
+  std::byte* const blocks_at = good.data() + packed::kFieldsStart + 8 * size_t{m};
+  const size_t bits_at = packed::kFieldsStart + 12 * size_t{m};
+  int level_20 = 0, root = 0, root_end = 0, compared = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    std::vector<std::byte> page = good;
+    std::byte* bases = page.data() + packed::kFieldsStart;
+    std::byte* blocks = page.data() + (blocks_at - good.data());
+    for (size_t i = bits_at; i + kPackedSlack < page.size(); ++i) page[i] = std::byte(rng() & 0xff);
+    for (uint32_t j = 0; j < m; ++j) {
+      // The residuals' width (the last block's is kept: open() checks it).
+      if (j + 1 < m) blocks[4 * size_t{j} + 2] = std::byte(rng() % 12);
+      blocks[4 * size_t{j} + 3] = std::byte(packed::kModeSuccessor);
+      // Bases of every kind: the root, level 20, near the root's end, any.
+      const uint64_t r = rng(), slot = rng() % 28;
+      const uint64_t high = trial % 3 == 0 ? ~uint64_t{0} << (7 + rng() % 8) : r;
+      store64(bases + 8 * size_t{j}, (high & ~uint64_t{127}) | (trial % 5 == 0 ? 0 : slot));
+    }
+    PackedLeaf leaf;
+    ASSERT_TRUE(leaf.open(page.data(), shape));
+    for (uint32_t j = 0; j < m; ++j) {
+      uint64_t got[kPackedBlock];
+      uint32_t cnt = 0;
+      if (!leaf.block_keys(j, got, &cnt)) continue;
+      const std::byte* bits = page.data() + bits_at + load16(blocks + 4 * size_t{j});
+      const uint32_t w = static_cast<uint32_t>(blocks[4 * size_t{j} + 2]);
+      uint64_t k = load64(bases + 8 * size_t{j});
+      ASSERT_EQ(got[0], k);
+      for (uint32_t i = 1; i < cnt; ++i) {
+        level_20 += (k & 127) >= kKeyLevel20Slot;
+        root += (k & 127) == 0;
+        root_end += packed::successor(k) == UINT64_MAX;
+        k = packed::successor(k) + packed::read_bits(bits, uint64_t{i - 1} * w, w);
+        ASSERT_EQ(got[i], k) << "block " << j << ", key " << i;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(compared, 10000);
+  EXPECT_GT(level_20, 0);
+  EXPECT_GT(root, 0);
+  EXPECT_GT(root_end, 0);
 }
 
 }  // namespace
