@@ -77,12 +77,12 @@ bool successor_run(const std::byte* bits, uint32_t w, uint32_t cnt, uint64_t* ou
   bool ok = true;
   for (uint32_t i = 1; i < cnt; ++i) {
     const uint64_t r = read_bits(bits, uint64_t{i - 1} * w, w);
-    ok &= slot >= 1 && slot < kKeyLevel20Slot;  // the root's span would not fit a shift
-    // The subtree's span in Morton code, moved to the key's bits (<< 4
-    // of successor's ((key >> 7) << 3) + span, then >> 3 << 7).
-    const int level = static_cast<int>(std::clamp<uint64_t>(slot, 1, kKeyLevel20Slot - 1));
-    const uint64_t end = high + (uint64_t{1} << (3 * (kMaxLevel - level) + 4));
-    ok &= end > high;  // else the span reached the root's end (successor's UINT64_MAX)
+    // (A level 20 key's successor is the key plus one, not a new slot.)
+    ok &= slot < kKeyLevel20Slot;
+    // Neither the root's step (0) nor a span past the root's end (it
+    // wraps) moves past the key: successor()'s UINT64_MAX.
+    const uint64_t end = high + kSuccessorStep[slot];
+    ok &= end > high;
     high = end + (r & ~kSlot);
     slot = r & kSlot;
     out[i] = high | slot;

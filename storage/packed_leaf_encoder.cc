@@ -2,7 +2,6 @@
 // payloads column-wise; the row dictionary's half is in
 // packed_row_dictionary.cc (format: storage/packed_leaf.h).
 #include <algorithm>
-#include <array>
 #include <bit>
 #include <cstring>
 
@@ -54,37 +53,6 @@ void PackedLeafBuilder::clear() {
   dict_ordinal_.clear();
   dict_over_ = shape_.payload < kDictMinPayload;
 }
-
-namespace {
-
-// successor(key) less the key's high bits (all but its 7-bit level slot),
-// by slot: a level's subtree span, moved to the key's bits; for a level 20
-// slot, the slot plus one (successor() is then key + 1); for the root, 0.
-// A lookup, not successor()'s shift by a count in a register, which is
-// several micro-ops on the processors we run on, for every octant appended.
-constexpr std::array<uint64_t, 128> successor_steps() {
-  std::array<uint64_t, 128> step{};
-  for (uint64_t slot = 1; slot < 128; ++slot) {
-    step[slot] = slot >= kKeyLevel20Slot ? slot + 1 : uint64_t{1} << (3 * (kMaxLevel - slot) + 4);
-  }
-  return step;
-}
-constexpr std::array<uint64_t, 128> kSuccessorStep = successor_steps();
-
-// The steps are successor()'s, where it does not give UINT64_MAX.
-constexpr bool steps_agree() {
-  for (uint64_t slot = 0; slot < 128; ++slot) {
-    for (const uint64_t high : {uint64_t{0}, uint64_t{0x1234567} << 20, ~uint64_t{0} << 8}) {
-      const uint64_t key = (high & ~uint64_t{127}) | slot;
-      const uint64_t e = octant_key_subtree_end_of_any(key);
-      if (e != UINT64_MAX && e != (high & ~uint64_t{127}) + kSuccessorStep[slot]) return false;
-    }
-  }
-  return true;
-}
-static_assert(steps_agree());
-
-}  // namespace
 
 // The block's figures over keys[0, count), all in the block: kept in
 // locals across the run, not in the OpenBlock between keys (a store and a
