@@ -173,7 +173,7 @@ struct TableCheck {
   size_t table = 0;     // its index in the names
   VerifyReport report;  // its counts and problems
   std::string line;     // its progress line
-  LeafSpan span;        // an octant table's leaves' (scan_octants)
+  LeafSpan span;        // the octant table's leaves' (scan_octants)
   bool usable = false;
   Status status;
 };
@@ -184,13 +184,12 @@ struct TableCheck {
 // thread would (util/ordered_run.h): the same problems, lines and counts on
 // any count.  A table whose check failed (an I/O error) ends the report, as
 // it ended one thread's loop.  *usable[i]: whether table i can serve the
-// mesh checks; *spans[i]: what its leaves span, for an octant table.
+// mesh checks; *octant_span: what the octant table's leaves span.
 Status check_tables(const Database& db, const std::vector<std::string>& names, uint64_t pool_bytes,
                     const VerifyOptions& o, Problems& problems, VerifyReport* r,
-                    std::vector<bool>* usable, std::vector<LeafSpan>* spans) {
+                    std::vector<bool>* usable, LeafSpan* octant_span) {
   const int threads = std::max(1, std::min(o.threads, static_cast<int>(names.size())));
   usable->assign(names.size(), false);
-  spans->assign(names.size(), LeafSpan{});
   size_t next = 0;
   Status st;
   auto make = [&](TableCheck* c) {
@@ -212,7 +211,7 @@ Status check_tables(const Database& db, const std::vector<std::string>& names, u
     r->records += c->report.records;
     r->pages += c->report.pages;
     (*usable)[c->table] = c->usable;
-    (*spans)[c->table] = c->span;
+    if (names[c->table] == kOctantTable) *octant_span = c->span;
     if (!c->line.empty()) problems.progress(c->line);
     return true;
   };
@@ -460,12 +459,10 @@ Status verify_database(const std::string& dir, const VerifyOptions& o, VerifyRep
   bool octants_usable = db->has_table(kOctantTable);
   const std::vector<std::string> names = db->table_names();
   std::vector<bool> usable;
-  std::vector<LeafSpan> spans;
-  WEAVER_RETURN_IF_ERROR(
-      check_tables(*db, names, memory.table_pool, o, problems, r, &usable, &spans));
   LeafSpan octant_span;
+  WEAVER_RETURN_IF_ERROR(
+      check_tables(*db, names, memory.table_pool, o, problems, r, &usable, &octant_span));
   for (size_t i = 0; i < names.size(); ++i) {
-    if (names[i] == kOctantTable) octant_span = spans[i];
     if (!usable[i] && (names[i] == kOctantTable || names[i] == kNodeTable)) mesh_usable = false;
     if (!usable[i] && names[i] == kOctantTable) octants_usable = false;
   }
