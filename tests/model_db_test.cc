@@ -483,7 +483,7 @@ void expect_lattices_sample_as_lookups(const std::string& model, MemoryBudget me
     return std::uniform_real_distribution<double>(a, b)(rng);
   };
   m->focus(focus_lo, focus_hi);
-  int across = 0;
+  int across = 0, inside = 0;
   for (int t = 0; t < 3000; ++t) {
     constexpr int kSizes[5] = {3, 5, 2, 4, 8};  // construct's lattices
     const int n = kSizes[t % 5];
@@ -499,6 +499,7 @@ void expect_lattices_sample_as_lookups(const std::string& model, MemoryBudget me
       }
     }
     across += !in && !out;
+    inside += in;
     float got[512];
     Material materials[512];
     m->vs_on_lattice(axes[0], axes[1], axes[2], n, got);
@@ -520,6 +521,8 @@ void expect_lattices_sample_as_lookups(const std::string& model, MemoryBudget me
         }
   }
   EXPECT_GT(across, 300) << "lattices across the region's side";
+  // Wholly inside, a lattice is answered as one (ModelRegion::Lattice).
+  EXPECT_GT(inside, 300) << "lattices inside the region";
 }
 
 TEST(ModelDb, LatticesAcrossTheRegionsSideSampleAsLookups) {

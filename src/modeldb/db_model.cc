@@ -310,13 +310,14 @@ void DbModel::each_on_lattice(const double* xs, const double* ys, const double* 
     covered = covered && g.covers({px[i], py[i], pz[i]});
     if (g.loaded()) cx[i] = g.cell_x(px[i]), cy[i] = g.cell_y(py[i]), cz[i] = g.cell_z(pz[i]);
   }
+  if (covered) return put.whole(g, ModelRegion::Lattice{{px, py, pz}, {cx, cy, cz}, n});
   ModelHit h;
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
         const Coord p{px[i], py[j], pz[k]};
         const int index = (k * n + j) * n + i;
-        if (covered || g.covers(p)) {
+        if (g.covers(p)) {
           put.in_region(g, index, p, cx[i], cy[j], cz[k]);
         } else {
           const bool clamped = clamped_x[i] || clamped_y[j] || clamped_z[k];
@@ -331,6 +332,7 @@ namespace {
 // range where that is one value (ModelRegion::vs_at).
 struct PutVs {
   float* out;
+  void whole(const ModelRegion& g, const ModelRegion::Lattice& l) const { g.vs_on_lattice(l, out); }
   void in_region(const ModelRegion& g, int index, Coord p, uint32_t cx, uint32_t cy,
                  uint32_t cz) const {
     out[index] = g.vs_at(p, cx, cy, cz);
@@ -343,6 +345,15 @@ struct PutVs {
 // ... and as materials: every value of the octant holding the point.
 struct PutMaterials {
   Material* out;
+  void whole(const ModelRegion& g, const ModelRegion::Lattice& l) const {
+    int32_t
+        found[ModelRegion::kLatticeMost * ModelRegion::kLatticeMost * ModelRegion::kLatticeMost];
+    g.find_on_lattice(l, found);
+    const int points = l.n * l.n * l.n;
+    for (int i = 0; i < points; ++i) {
+      (*this)(i, found[i] == ModelRegion::kHole ? nullptr : &g.values(found[i]));
+    }
+  }
   void in_region(const ModelRegion& g, int index, Coord p, uint32_t cx, uint32_t cy,
                  uint32_t cz) const {
     const int32_t o = g.find(p, cx, cy, cz);

@@ -108,11 +108,12 @@ class DbModel final : public VelocityModel {
                     ModelHit* hit) const;
   Status hole_at(double x, double y, double z) const;
   // Answers each point of the n x n x n lattice (n <= kLatticeMost; index
-  // (k * n + j) * n + i): put.in_region(region, index, pixel, its cells)
-  // where the focused region holds it, else put(index, values), values
-  // null for a hole.
+  // (k * n + j) * n + i): put.whole(region, lattice) where the focused
+  // region holds every point, else point by point: put.in_region(region,
+  // index, pixel, its cells) where the region holds it, else put(index,
+  // values), values null for a hole.
   // Construct asks 5 a side of a split and 4 or 8 of a block of leaves.
-  static constexpr int kLatticeMost = 8;
+  static constexpr int kLatticeMost = ModelRegion::kLatticeMost;
   template <class Put>
   void each_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                        const Put& put) const;

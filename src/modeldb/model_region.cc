@@ -415,6 +415,39 @@ bool ModelRegion::vs_bounds(Coord lo, Coord hi, float* vs_lo, float* vs_hi) cons
   return true;
 }
 
+// The cell index split by axis: x's part, y's times a row, z's times a
+// plane, added for each point (a multiply-add a point, and the raster's
+// members kept in registers, where vs_at reloaded them for every store).
+template <class Answer>
+void ModelRegion::each_cell(const Lattice& l, const Answer& answer) const {
+  const int n = l.n;
+  size_t part_y[kLatticeMost], part_z[kLatticeMost];
+  const size_t row = dims_[0], plane = size_t{dims_[0]} * dims_[1];
+  for (int i = 0; i < n; ++i) part_y[i] = l.c[1][i] * row, part_z[i] = l.c[2][i] * plane;
+  const uint32_t* cx = l.c[0];
+  int index = 0;
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j) {
+      const size_t base = part_z[k] + part_y[j];
+      for (int i = 0; i < n; ++i, ++index) answer(index, base + cx[i], i, j, k);
+    }
+}
+
+void ModelRegion::vs_on_lattice(const Lattice& l, float* out) const {
+  const VsRange* ranges = pyramid_[0].ranges.data();
+  each_cell(l, [&](int index, size_t c, int i, int j, int k) {
+    const VsRange r = ranges[c];
+    out[index] =
+        r.lo == r.hi ? r.lo : octant_vs(find_in_cell(c, {l.p[0][i], l.p[1][j], l.p[2][k]}));
+  });
+}
+
+void ModelRegion::find_on_lattice(const Lattice& l, int32_t* out) const {
+  each_cell(l, [&](int index, size_t c, int i, int j, int k) {
+    out[index] = find_in_cell(c, {l.p[0][i], l.p[1][j], l.p[2][k]});
+  });
+}
+
 int32_t ModelRegion::search(Coord p) const {
   const auto it = std::upper_bound(keys_.begin(), keys_.end(), pixel_key(p));
   if (it == keys_.begin()) return kHole;

@@ -78,8 +78,7 @@ class ModelRegion {
   uint32_t cell_z(uint32_t z) const { return (z >> shift_) - base_[2]; }
   // The octant holding pixel p, given its cells: an index, or kHole.
   int32_t find(Coord p, uint32_t cx, uint32_t cy, uint32_t cz) const {
-    const int32_t v = raster_[cell_index(cx, cy, cz)];
-    return v != kMixed ? v : search(p);
+    return find_in_cell(cell_index(cx, cy, cz), p);
   }
   int32_t find(Coord p) const { return find(p, cell_x(p.x), cell_y(p.y), cell_z(p.z)); }
   // The Vs at pixel p (0 in a hole), given its cells: the cell's Vs range
@@ -90,10 +89,22 @@ class ModelRegion {
   float vs_at(Coord p, uint32_t cx, uint32_t cy, uint32_t cz) const {
     const size_t c = cell_index(cx, cy, cz);
     const VsRange& r = pyramid_[0].ranges[c];
-    if (r.lo == r.hi) return r.lo;
-    const int32_t o = raster_[c] != kMixed ? raster_[c] : search(p);
-    return o == kHole ? 0.0f : values_[o][1];
+    return r.lo == r.hi ? r.lo : octant_vs(find_in_cell(c, p));
   }
+
+  // A lattice of pixels, every point covered: its points' pixels (p[a][i]
+  // on axis a) and raster cells (c[a][i]), n a side; point (i, j, k) is
+  // answered at index (k * n + j) * n + i.  vs_at, or find, of every
+  // point with the raster's layout read once a lattice, not once a point
+  // (construct asks a lattice for every octant it judges).
+  static constexpr int kLatticeMost = 8;  // the most points a side
+  struct Lattice {
+    const uint32_t* p[3];
+    const uint32_t* c[3];
+    int n;
+  };
+  void vs_on_lattice(const Lattice& l, float* out) const;
+  void find_on_lattice(const Lattice& l, int32_t* out) const;
 
   // Where cell (cx, cy, cz) is in the raster and the pyramid's level 0.
   size_t cell_index(uint32_t cx, uint32_t cy, uint32_t cz) const {
@@ -111,6 +122,15 @@ class ModelRegion {
 
  private:
   int32_t search(Coord p) const;
+  // The octant holding pixel p of raster cell c, or kHole.
+  int32_t find_in_cell(size_t c, Coord p) const {
+    const int32_t v = raster_[c];
+    return v != kMixed ? v : search(p);
+  }
+  float octant_vs(int32_t i) const { return i == kHole ? 0.0f : values_[i][1]; }
+  // Each point's cell index (i, j, k as in Lattice) from its axes' parts.
+  template <class Answer>
+  void each_cell(const Lattice& l, const Answer& answer) const;
   // The cursor over the table, kept from load to load (the table is read
   // only while regions load from it): a cell whose records lie in the leaf
   // it holds is found there.
