@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "storage/buffer_pool.h"
+#include "storage/decoded_leaves.h"
 #include "storage/page_format.h"
 #include "storage/store.h"
 
@@ -71,12 +73,13 @@ class BTreeCursor final : public Cursor {
     i_ = static_cast<uint32_t>(std::lower_bound(keys_, keys_ + n_, k) - keys_);
     return true;
   }
-  // Keeps up to `bytes` of decoded packed leaves (at least the last one),
-  // by page, for when the cursor comes back to them: a model region's scans
-  // read each leaf of the model table about nine times over, and decoding
-  // it was a tenth of a construct from a model database.  Only for a tree
-  // nobody writes while the cursor lives; 0 keeps none.
-  void keep_decoded(size_t bytes) { kept_budget_ = bytes; }
+  // Keeps decoded packed leaves in `leaves` (shared with other cursors, of
+  // this tree or of other handles of its table), and finds them there when
+  // it comes back to them: a model region's scans read each leaf of the
+  // model table about nine times over, and decoding it was a tenth of a
+  // construct from a model database.  Only for a tree nobody writes while
+  // the cursor lives; null keeps none.  `leaves` outlives the cursor.
+  void keep_decoded(DecodedLeaves* leaves) { kept_ = leaves; }
   // The record before the current one in the leaf it holds: false at the
   // leaf's first record, or when not valid().
   bool before_in_leaf(uint64_t* key, const std::byte** payload) const {
@@ -108,17 +111,8 @@ class BTreeCursor final : public Cursor {
   std::vector<std::byte> val_buf_;
   bool valid_ = false;
   bool keys_only_ = false;  // see BTree::seek_keys
-  struct KeptLeaf {
-    const BTree* tree = nullptr;  // a sharded table's leaves are another tree's pages
-    uint32_t page_no = 0;
-    uint64_t used = 0;  // kept_clock_ when last loaded
-    std::vector<uint64_t> keys;
-    std::vector<std::byte> vals;
-  };
-  std::vector<KeptLeaf> kept_;
-  size_t kept_budget_ = 0;
-  size_t kept_bytes_ = 0;
-  uint64_t kept_clock_ = 0;
+  DecodedLeaves* kept_ = nullptr;
+  std::shared_ptr<const DecodedLeaves::Leaf> kept_leaf_;  // the kept leaf keys_ points into
 };
 
 }  // namespace weaver

@@ -408,7 +408,7 @@ Status BTreeCursor::load_leaf() {
     vals_ = leaf_.data() + page::kPageHeaderBytes + 8 * size_t{t.leaf_cap_};
     return Status::Ok();
   }
-  if (kept_budget_ > 0 && !keys_only_) return load_kept();
+  if (kept_ != nullptr && !keys_only_) return load_kept();
   key_buf_.resize(n_);
   if (!keys_only_) val_buf_.resize(size_t{n_} * payload_);
   WEAVER_RETURN_IF_ERROR(decode_leaf(key_buf_.data(), keys_only_ ? nullptr : val_buf_.data()));
@@ -429,38 +429,17 @@ Status BTreeCursor::decode_leaf(uint64_t* keys, std::byte* vals) {
 // The pinned leaf from the kept ones, else decoded into the buffers of the
 // least recently loaded ones evicted to make room.
 Status BTreeCursor::load_kept() {
+  // A sharded table's leaves are its shards' pages: tree_ is the shard's.
+  const std::string& file = tree_->file_name();
   const uint32_t page = leaf_.page_no();
-  const uint64_t now = ++kept_clock_;
-  for (KeptLeaf& k : kept_) {
-    if (k.tree == tree_ && k.page_no == page) {
-      k.used = now;
-      keys_ = k.keys.data();
-      vals_ = k.vals.data();
-      return Status::Ok();
-    }
+  kept_leaf_ = kept_->find(file, page);
+  if (kept_leaf_ == nullptr) {
+    auto leaf = std::make_shared<DecodedLeaves::Leaf>(n_, payload_);
+    WEAVER_RETURN_IF_ERROR(decode_leaf(leaf->keys.get(), leaf->vals.get()));
+    kept_leaf_ = kept_->add(file, page, std::move(leaf));
   }
-  const size_t bytes = size_t{n_} * (8 + payload_);
-  KeptLeaf leaf;
-  while (!kept_.empty() && kept_bytes_ + bytes > kept_budget_) {
-    auto lru =
-        std::min_element(kept_.begin(), kept_.end(),
-                         [](const KeptLeaf& a, const KeptLeaf& b) { return a.used < b.used; });
-    kept_bytes_ -= lru->keys.size() * 8 + lru->vals.size();
-    leaf = std::move(*lru);  // its buffers serve the new leaf
-    if (lru != kept_.end() - 1) *lru = std::move(kept_.back());
-    kept_.pop_back();
-  }
-  leaf.keys.resize(n_);
-  leaf.vals.resize(size_t{n_} * payload_);
-  WEAVER_RETURN_IF_ERROR(decode_leaf(leaf.keys.data(), leaf.vals.data()));
-  leaf.tree = tree_;
-  leaf.page_no = page;
-  leaf.used = now;
-  kept_bytes_ += bytes;
-  // Moving a KeptLeaf keeps its vectors' buffers where they are.
-  kept_.push_back(std::move(leaf));
-  keys_ = kept_.back().keys.data();
-  vals_ = kept_.back().vals.data();
+  keys_ = kept_leaf_->keys.get();
+  vals_ = kept_leaf_->vals.get();
   return Status::Ok();
 }
 

@@ -238,8 +238,9 @@ class BTreeModel : public ::testing::TestWithParam<Params> {
     std::mt19937_64 rng(model_.size() + 2);
     const uint64_t top = std::prev(model_.end())->first + 2;
     for (size_t budget : {size_t{1}, size_t{256} << 10}) {
+      DecodedLeaves leaves(budget);
       BTreeCursor c;
-      c.keep_decoded(budget);
+      c.keep_decoded(&leaves);
       for (int n = 0; n < 24; ++n) {
         const uint64_t from = rng() % top;
         ASSERT_OK(tree_->seek_cursor(from, &c));

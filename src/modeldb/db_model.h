@@ -124,13 +124,13 @@ class DbModel final : public VelocityModel {
   uint64_t octants_ = 0;
   uint64_t serial_ = 0;  // tells this model's readers from an earlier one's at the same address
   uint64_t pool_bytes_ = 0;
-  uint64_t kept_leaf_bytes_ = 0;       // a reader's region's scans keep this much decoded
-  size_t region_octants_ = 0;          // the most octants a reader's region holds
-  uint64_t region_cells_ = 0;          // the most cells of a reader's region's raster
-  std::array<uint32_t, 3> limit_{};    // ticks: the last pixel inside the box, per axis
-  double inv_tick_ = 1;                // 1 / info_.tick_m
-  std::array<double, 3> origin_{};     // info_.origin_m
-  std::array<double, 3> inner_top_{};  // limit_, as a double; 0 where the model is flat
+  std::unique_ptr<DecodedLeaves> decoded_;  // the readers' regions' scans keep leaves here
+  size_t region_octants_ = 0;               // the most octants a reader's region holds
+  uint64_t region_cells_ = 0;               // the most cells of a reader's region's raster
+  std::array<uint32_t, 3> limit_{};         // ticks: the last pixel inside the box, per axis
+  double inv_tick_ = 1;                     // 1 / info_.tick_m
+  std::array<double, 3> origin_{};          // info_.origin_m
+  std::array<double, 3> inner_top_{};       // limit_, as a double; 0 where the model is flat
   mutable std::mutex mu_;
   mutable std::unordered_map<std::thread::id, std::unique_ptr<Reader>> readers_;
 };

@@ -53,7 +53,7 @@ Status ModelRegion::load(BTree& table, Coord lo, Coord hi, size_t record_bytes,
   if (scan_.table != &table) {
     scan_ = Scan();
     scan_.table = &table;
-    scan_.cursor.keep_decoded(kept_leaf_bytes_);
+    scan_.cursor.keep_decoded(decoded_);
   }
   // Room for the most octants a region holds, made once: the vectors never
   // grow (and so never hold twice what they use while they copy).

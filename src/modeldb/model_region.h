@@ -54,9 +54,10 @@ class ModelRegion {
   // A finer raster answers more points without searching a mixed cell's
   // octants, but costs more to build at every load.
   void set_max_cells(uint64_t cells) { max_cells_ = cells; }
-  // Up to `bytes` of the model table's leaves kept decoded between loads
-  // (BTreeCursor::keep_decoded): neighbouring boxes read the same leaves.
-  void set_kept_leaf_bytes(size_t bytes) { kept_leaf_bytes_ = bytes; }
+  // The model table's leaves kept decoded between loads, shared with the
+  // other threads' regions (BTreeCursor::keep_decoded): neighbouring boxes
+  // read the same leaves.  Null keeps none.
+  void set_decoded_leaves(DecodedLeaves* leaves) { decoded_ = leaves; }
 
   // Loads the octants of `table` (model records of record_bytes) that meet
   // the pixel box [lo, hi] (bounds included).  Gives up (loaded() false,
@@ -174,7 +175,7 @@ class ModelRegion {
   int finest_ = 0;           // the finest octant's level
   int shift_ = 0;
   uint64_t max_cells_ = kMinCells;
-  size_t kept_leaf_bytes_ = 0;
+  DecodedLeaves* decoded_ = nullptr;
   uint32_t base_[3] = {0, 0, 0};  // lo >> shift_
   uint32_t dims_[3] = {0, 0, 0};
   std::vector<int32_t> raster_;
