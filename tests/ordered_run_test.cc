@@ -29,7 +29,7 @@ void uneven_work(Task* t) {
   t->ran_on = std::this_thread::get_id();
 }
 
-struct Outcome {
+struct TaskOutcome {
   std::vector<int> written;
   int most_alive = 0;
   bool overlapping_writes = false;  // two writes, two makes, or (unless beside) one of each
@@ -44,9 +44,9 @@ struct Outcome {
 // `room` alive, if given); stops after `stop_after` writes (or never).
 // beside: make_beside_write(), and each write waits (up to half a second)
 // for a make to run beside it until one has.
-Outcome run(int tasks, int threads, size_t in_flight, int stop_after = -1, int room = 0,
-            bool beside = false) {
-  Outcome o;
+TaskOutcome run(int tasks, int threads, size_t in_flight, int stop_after = -1, int room = 0,
+                bool beside = false) {
+  TaskOutcome o;
   int made = 0;
   std::atomic<int> alive{0}, makers{0}, writers{0};
   std::atomic<bool> seen{false};
@@ -93,7 +93,7 @@ Outcome run(int tasks, int threads, size_t in_flight, int stop_after = -1, int r
 TEST(OrderedRunThreads, WritesEveryTaskOnceInOrder) {
   for (int threads : {1, 2, 3, 4}) {
     for (size_t in_flight : {1, 2, 5, 8}) {
-      const Outcome o = run(60, threads, in_flight);
+      const TaskOutcome o = run(60, threads, in_flight);
       ASSERT_EQ(o.written.size(), 60u) << threads << " threads, " << in_flight << " in flight";
       for (int i = 0; i < 60; ++i) EXPECT_EQ(o.written[i], i);
       EXPECT_EQ(o.wrong_values, 0);
@@ -104,9 +104,9 @@ TEST(OrderedRunThreads, WritesEveryTaskOnceInOrder) {
 }
 
 TEST(OrderedRunThreads, TheCallerIsAWorkerAndTheOthersShareTheWork) {
-  const Outcome alone = run(20, 1, 4);
+  const TaskOutcome alone = run(20, 1, 4);
   for (const auto& id : alone.threads) EXPECT_EQ(id, std::this_thread::get_id());
-  const Outcome shared = run(200, 3, 6);
+  const TaskOutcome shared = run(200, 3, 6);
   std::vector<std::thread::id> seen;
   for (const auto& id : shared.threads) {
     if (std::find(seen.begin(), seen.end(), id) == seen.end()) seen.push_back(id);
@@ -116,7 +116,7 @@ TEST(OrderedRunThreads, TheCallerIsAWorkerAndTheOthersShareTheWork) {
 
 TEST(OrderedRunThreads, NoMoreTasksAliveThanRoomAllows) {
   for (int threads : {1, 2, 3}) {
-    const Outcome o = run(50, threads, 8, -1, 2);
+    const TaskOutcome o = run(50, threads, 8, -1, 2);
     ASSERT_EQ(o.written.size(), 50u) << threads << " threads";
     for (int i = 0; i < 50; ++i) EXPECT_EQ(o.written[i], i);
     EXPECT_LE(o.most_alive, 2);
@@ -126,7 +126,7 @@ TEST(OrderedRunThreads, NoMoreTasksAliveThanRoomAllows) {
 
 TEST(OrderedRunThreads, AStopWritesNothingAfterIt) {
   for (int threads : {1, 2, 4}) {
-    const Outcome o = run(100, threads, 6, 13);
+    const TaskOutcome o = run(100, threads, 6, 13);
     ASSERT_EQ(o.written.size(), 13u) << threads << " threads";
     for (int i = 0; i < 13; ++i) EXPECT_EQ(o.written[i], i);
   }
@@ -137,14 +137,14 @@ TEST(OrderedRunThreads, AStopWritesNothingAfterIt) {
 // once in order.
 TEST(OrderedRunThreads, MakesBesideWritesWhereAllowed) {
   for (int threads : {2, 3}) {
-    const Outcome o = run(40, threads, 4, -1, 0, true);
+    const TaskOutcome o = run(40, threads, 4, -1, 0, true);
     ASSERT_EQ(o.written.size(), 40u) << threads << " threads";
     for (int i = 0; i < 40; ++i) EXPECT_EQ(o.written[i], i);
     EXPECT_EQ(o.wrong_values, 0);
     EXPECT_FALSE(o.overlapping_writes);
     EXPECT_TRUE(o.make_beside_write);
   }
-  const Outcome stopped = run(100, 2, 6, 13, 0, true);
+  const TaskOutcome stopped = run(100, 2, 6, 13, 0, true);
   ASSERT_EQ(stopped.written.size(), 13u);
   for (int i = 0; i < 13; ++i) EXPECT_EQ(stopped.written[i], i);
 }
