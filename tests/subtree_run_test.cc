@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <memory>
 #include <random>
 #include <thread>
 #include <vector>
@@ -29,7 +30,7 @@ struct Outcome {
 Outcome run(const std::vector<Octant>& roots, const std::vector<Octant>& big, int threads,
             size_t window, int fail_at = -1) {
   Outcome o;
-  SubtreeSlots slots(64, 64, 0);
+  SubtreeSlots slots(64, 64, 0, 12);
   size_t next = 0;
   std::atomic<int> writers{0};
   SubtreeRun r(
@@ -108,6 +109,38 @@ TEST(SubtreeRunThreads, NoSubtreesWritesNothing) {
   const Outcome o = run({}, {}, 2, 8);
   EXPECT_TRUE(o.status.ok());
   EXPECT_TRUE(o.written.empty());
+}
+
+// A slot holds its own room's leaves where it was made, and again after
+// a subtree that took from the pool was written: its vectors never move
+// (no growth copies, no freed copies left behind in the allocator).
+TEST(SubtreeSlots, LeavesUpToTheOwnRoomNeverMoveTheVectors) {
+  constexpr size_t kOwn = 1000, kBytes = 12;
+  SubtreeSlots slots(kOwn, 4 * kOwn, 8 * kOwn, kBytes);
+  auto fill = [](Slot* s, size_t n) {
+    const uint64_t* keys = nullptr;
+    const std::byte* payloads = nullptr;
+    bool moved = false;
+    for (size_t i = 0; i < n; ++i) {
+      if (!s->room.allows(i + 1)) return false;
+      s->leaves.keys.push_back(i);
+      s->leaves.payloads.resize(s->leaves.payloads.size() + kBytes);
+      if (i == 0) keys = s->leaves.keys.data(), payloads = s->leaves.payloads.data();
+      moved |= keys != s->leaves.keys.data() || payloads != s->leaves.payloads.data();
+    }
+    return !moved;
+  };
+  std::unique_ptr<Slot> s = slots.take(Octant{0, 0, 0, 1});
+  EXPECT_TRUE(fill(s.get(), kOwn));
+  s->leaves.clear();
+  // Past the own room the pool lends leaves, and the vectors grow.
+  s->room.allows(3 * kOwn);
+  fill(s.get(), 3 * kOwn);
+  ASSERT_GT(s->room.taken(), 0u);
+  slots.put(std::move(s));
+  s = slots.take(Octant{0, 0, 0, 1});
+  EXPECT_TRUE(s->leaves.keys.empty());
+  EXPECT_TRUE(fill(s.get(), kOwn));
 }
 
 }  // namespace

@@ -35,13 +35,15 @@
 #include "model/velocity_model.h"
 #include "schema/octant.h"
 #include "schema/status.h"
+#include "util/uninit_vector.h"
 
 namespace weaver {
 
 // The leaves of one subtree, in key order, and what construct reports of them.
 struct SubtreeLeaves {
-  std::vector<uint64_t> keys;
-  std::vector<std::byte> payloads;  // vp, vs, rho [, qp, qs] as f32 (material_schema)
+  // (Grown, then written: uninit_vector.h.)
+  UninitVector<uint64_t> keys;
+  UninitVector<std::byte> payloads;  // vp, vs, rho [, qp, qs] as f32 (material_schema)
   // Carved: each leaf's side of the ground as the descent found it (kCut
   // also for a leaf nobody judged, to be found by the carve).
   std::vector<GroundSide> sides;
@@ -69,8 +71,8 @@ struct SubtreeLeaves {
     size_t begin, end;
   };
   std::vector<Piece> pieces;
-  std::vector<uint64_t> added_keys;
-  std::vector<std::byte> added_payloads;
+  UninitVector<uint64_t> added_keys;
+  UninitVector<std::byte> added_payloads;
   std::vector<GroundSide> added_sides;
 
   void clear();

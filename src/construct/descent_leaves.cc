@@ -36,8 +36,8 @@ uint64_t SubtreeLeaves::last_key() const {
 
 void SubtreeLeaves::flatten(size_t bytes) {
   if (pieces.empty()) return;
-  std::vector<uint64_t> k;
-  std::vector<std::byte> b;
+  UninitVector<uint64_t> k;
+  UninitVector<std::byte> b;
   std::vector<GroundSide> s;
   k.reserve(elements), b.reserve(elements * bytes);
   const bool sided = !sides.empty() || !added_sides.empty();

@@ -218,7 +218,7 @@ void SubtreeBalancer::add_leaf(SubtreeLeaves* leaves, uint64_t key, bool is_new,
 // all eight are new and one after another.
 void SubtreeBalancer::fill_materials(SubtreeLeaves* leaves) {
   const size_t bytes = descent_.payload_bytes();
-  const std::vector<uint64_t>& keys = leaves->added_keys;
+  const auto& keys = leaves->added_keys;
   leaves->added_payloads.resize(keys.size() * bytes);
   for (const auto& [at, parent] : copied_) {
     std::memcpy(leaves->added_payloads.data() + at * bytes, parent, bytes);
