@@ -7,13 +7,14 @@
 // the own room when made: grown by doubling instead, they could hold twice
 // the room, and the copies of each growth freed behind them stayed in the
 // allocator (construct from the 100 m model database at --memory 64M on
-// two threads peaked at 68,468 KiB, over the budget; reserved, 65,092).  A slot whose subtree took
-// leaves from the pool frees its vectors and gives them back once written:
-// kept, they would hold memory the pool lends again (so the pool counts
-// all the subtrees' memory).  Kept instead, the pool counting them and
-// freeing them where it ran short, the 2 Hz construct was no faster (0.924x
-// of the fixed rooms' time against 0.919x, separate runs) and peaked at 485
-// MB against 335 MB.
+// two threads peaked at 67,840 and 68,616 KiB; reserved, 66,496 and
+// 65,056, the rest of the way under 65,536 made by construct's plan).
+// A slot whose subtree took leaves from the pool frees its vectors and
+// gives them back once written: kept, they would hold memory the pool
+// lends again (so the pool counts all the subtrees' memory).  Kept
+// instead, the pool counting them and freeing them where it ran short, the
+// 2 Hz construct was no faster (0.924x of the fixed rooms' time against
+// 0.919x, separate runs) and peaked at 485 MB against 335 MB.
 #pragma once
 
 #include <cmath>
