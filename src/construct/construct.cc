@@ -45,8 +45,9 @@ constexpr double kLeastLeavesPerBalancedSubtree = 4096;
 // over where subtrees are small: where the subtrees' rooms are pooled (so a
 // large one does not overflow its room and is not descended again as its
 // eighths), its subtrees are a level coarser.  At 1 Hz from the 100 m model
-// database: 0.957x the time on one thread at the default --memory, 0.930x
-// on two at --memory 1G (on two at 256M, unpooled, 1.24x).
+// database: 0.929x the time on one thread at the default --memory (0.957x
+// in an earlier run), 0.930x on two at --memory 1G (on two at 256M,
+// unpooled, 1.24x).
 constexpr double kLeastLeavesPerFocusedSubtree = 8 * kLeastLeavesPerBalancedSubtree;
 // Where the estimate puts at most this many leaves in an octant coarser
 // than the subtrees' level, a balanced construct takes it whole as one
@@ -429,11 +430,12 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
 }
 
 ConstructMemory::ConstructMemory(MemoryBudget budget) : plan(budget) {
-  // A sorted append touches only the right spine of the table.  (An
-  // eighth, not a sixteenth, left construct from a model database at
-  // --memory 64M on two threads nothing for what the plan does not count:
-  // it peaked at 64,744 and 65,888 KiB of the budget's 65,536; now 61,032
-  // and 61,632, and no slower.)
+  // A sorted append touches only the right spine of the table.  (With an
+  // eighth, not a sixteenth, the shares that fill left only the flat
+  // ground's unused eighth for what the plan does not count, and construct
+  // from a model database at --memory 64M on two threads peaked at 64,744
+  // and 65,888 KiB of the budget's 65,536; now 61,032 and 61,632, and no
+  // slower.)
   table_pool = plan.take("octant table pool", 1, 16, 8ull << 20);
   // Leaves of the subtrees visited ahead of the writer (kSubtreesPerThread
   // a thread); each is capped, so a small share only means smaller caps.
