@@ -37,7 +37,9 @@ constexpr char kUsage[] =
     "                   local time stepping (default none: every element 1)\n"
     "  --compare        also report the other method's partition (not stored)\n"
     "  --memory BYTES   memory budget (default 256M): the octant table's cache (a\n"
-    "                   quarter, at most 64M), the node table's (a quarter) and the\n"
+    "                   quarter, at most 64M), the node table's (a quarter), the\n"
+    "                   partition table's (a sixteenth, at most 4M), the face\n"
+    "                   neighbours' table leaves (an eighth, at most 8M) and the\n"
     "                   sort of (node, part) pairs of the report (the rest)\n"
     "  --quiet          no progress line on stderr\n";
 

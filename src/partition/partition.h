@@ -52,7 +52,8 @@ struct PartitionMemory {
   explicit PartitionMemory(MemoryBudget budget);
   MemoryPlan plan;
   uint64_t octant_pool = 0, node_pool = 0;
-  uint64_t node_sort = 0;  // (node, part) pairs of the report
+  uint64_t table_pool = 0;  // the stored partition's table
+  uint64_t node_sort = 0;   // (node, part) pairs of the report
 };
 
 // Computes the partition, stores it unless !options.store, and reports it.

@@ -67,8 +67,7 @@ Status ExternalSorter::open_run(Run* run) {
 }
 
 void ExternalSorter::sort_buffer() {
-  std::vector<KeyTag> scratch;
-  sort_key_tags(buffer_, scratch);
+  sort_key_tags(buffer_, scratch_);
   if (repeats_ == Repeats::kFirstOnly) {
     buffer_.erase(std::unique(buffer_.begin(), buffer_.end(),
                               [](const KeyTag& a, const KeyTag& b) { return a.key == b.key; }),
@@ -171,6 +170,7 @@ Status ExternalSorter::merge_prefix(size_t count) {
 Status ExternalSorter::finish() {
   finished_ = true;
   sort_buffer();
+  scratch_ = {};  // the merge's half of the budget from here on
   if (runs_.empty()) return Status::Ok();
   // Each pass merges just enough runs that the rest fit the fan-in.
   while (runs_.size() > max_fan_in_) {

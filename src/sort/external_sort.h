@@ -56,7 +56,7 @@ class ExternalSorter : public KeyTagSource {
     size_t pos = 0;
   };
   Status spill();
-  // Sorts buffer_ (and drops repeats if asked), then frees the scratch.
+  // Sorts buffer_ (and drops repeats if asked).
   void sort_buffer();
   Status open_run(Run* run);
   Status refill(Run& run);
@@ -70,6 +70,11 @@ class ExternalSorter : public KeyTagSource {
   Repeats repeats_;
   size_t capacity_;
   std::vector<KeyTag> buffer_;
+  // The radix sort's other buffer, kept from one spill to the next and
+  // freed by finish(): the merge's half of the budget until then.  (Made
+  // and freed at each spill, partition's report at --memory 64M peaked at
+  // 86.9 MB, 80.6 MB of it anonymous; kept, 79.2 and 73.8 MB.)
+  std::vector<KeyTag> scratch_;
   size_t buffer_pos_ = 0;  // next unread item of buffer_ during the merge
   std::vector<Run> runs_;
   uint64_t runs_spilled_ = 0, run_files_ = 0;
