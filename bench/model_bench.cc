@@ -5,7 +5,7 @@
 // a table of medians.
 //
 //   model_bench [--grid NX,NY,NZ] [--spacing M] [--freq F] [--repeat N] [--dir DIR]
-//               [--keep-model]
+//               [--keep-model] [--memory BYTES]
 //
 // The grid (default 1000 x 1000 x 375 points at 100 m, 4.5 GB as float32)
 // is written once into DIR: the analytic basin (--model basin) sampled at
@@ -13,7 +13,8 @@
 // and from the analytic basin itself in turn, on 1 and 2 threads; their
 // ratio of time a leaf (issue 51's goal: at most 1.2) is taken pair by
 // pair.  --keep-model constructs from DIR's model database where there is
-// one, not imported again each run.
+// one, not imported again each run.  --memory is construct's (default: its
+// own, 256M).
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -65,6 +66,7 @@ int main(int argc, char** argv) {
   bool keep_model = false;  // construct from the model database there, not imported again
   double spacing = 100, freq = 1;
   std::string dir = "/tmp/weaver-model-bench", weaver = WEAVER_BINARY;
+  std::string memory;  // construct's --memory ("": its default)
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--grid" && i + 1 < argc) {
@@ -79,10 +81,12 @@ int main(int argc, char** argv) {
       dir = argv[++i];
     } else if (a == "--keep-model") {
       keep_model = true;
+    } else if (a == "--memory" && i + 1 < argc) {
+      memory = argv[++i];
     } else {
       std::fprintf(stderr,
                    "usage: model_bench [--grid NX,NY,NZ] [--spacing M] [--freq F] [--repeat N] "
-                   "[--dir DIR] [--keep-model]\n");
+                   "[--dir DIR] [--keep-model] [--memory BYTES]\n");
       return 2;
     }
   }
@@ -124,10 +128,11 @@ int main(int argc, char** argv) {
         const std::string db = dir + "/construct.db";
         std::filesystem::remove_all(db);
         const double c0 = now_seconds();
-        const std::string c =
-            run_program({weaver, "construct", db, "--model", source, "--freq", std::to_string(freq),
-                         "--domain", domain, "--threads", threads, "--quiet"},
-                        &peak);
+        std::vector<std::string> args = {weaver, "construct", db, "--model", source, "--freq"};
+        args.insert(args.end(), {std::to_string(freq), "--domain", domain, "--threads", threads});
+        args.push_back("--quiet");
+        if (!memory.empty()) args.insert(args.end(), {"--memory", memory});
+        const std::string c = run_program(args, &peak);
         if (c.empty()) return 1;
         const double leaves_per_s = number_after(c, "constructed") / (now_seconds() - c0);
         per_leaf[b] = 1 / leaves_per_s;
@@ -188,8 +193,10 @@ int main(int argc, char** argv) {
     }
   }
   std::printf(
-      "\nmodel_bench: grid %d x %d x %d at %g m (%.2f GB), construct at %g Hz, medians of %d\n\n",
-      nx, ny, nz, spacing, 12.0 * nx * ny * nz / 1e9, freq, repeat);
+      "\nmodel_bench: grid %d x %d x %d at %g m (%.2f GB), construct at %g Hz, --memory %s, "
+      "medians of %d\n\n",
+      nx, ny, nz, spacing, 12.0 * nx * ny * nz / 1e9, freq,
+      memory.empty() ? "256M" : memory.c_str(), repeat);
   std::vector<std::map<std::string, std::string>> rows;
   for (const auto& [what, r] : rate) {
     rows.push_back(
