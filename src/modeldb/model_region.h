@@ -45,9 +45,9 @@ class ModelRegion {
   static constexpr int32_t kHole = -1;
   static constexpr int32_t kMixed = -2;
   // The raster's most cells: kMinCells unless set_max_cells says more (up
-  // to kMaxCells, as DbModel's budget allows: the least it gives).  A cell costs about
-  // kBytesPerCell: its raster entry (4), its Vs range (8) and the pyramid's
-  // share above it (8/7).
+  // to kMaxCells, as DbModel's budget allows; kMinCells is the least it
+  // gives).  A cell costs about kBytesPerCell: its raster entry (4), its Vs
+  // range (8) and the pyramid's share above it (8/7).
   static constexpr uint64_t kMinCells = uint64_t{1} << 15;
   static constexpr uint64_t kMaxCells = uint64_t{1} << 20;
   static constexpr uint64_t kBytesPerCell = 14;
