@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <fstream>
@@ -175,6 +176,49 @@ TEST(Cli, ProgressLinesPerStageWithHonestPercentsAndQuietSilencesThem) {
     const CommandRun help = run(std::string(command) + " --help");
     EXPECT_NE(help.out.find("--quiet"), std::string::npos) << command;
   }
+}
+
+// model import of a grid whose every point differs (32K octants stored, a
+// batch of 4096 at a time): a progress line per batch stored, the octants
+// never fewer than the line before; none with --quiet.
+TEST(Cli, ModelImportShowsProgressAndQuietSilencesIt) {
+  testing::TempDir d;
+  const std::string grid = d.file("g.grid");
+  {
+    std::ofstream f(grid, std::ios::binary);
+    f << "weaver-grid 1\n32 32 32\n0 0 0\n100 100 100\n";
+    for (int i = 0; i < 32 * 32 * 32; ++i) {
+      const float v[3] = {3000.0f + i, 1500.0f + i, 2000.0f};
+      f.write(reinterpret_cast<const char*>(v), sizeof v);
+    }
+  }
+  const CommandRun import =
+      run("model import " + d.file("m.db") + " --from grid:" + grid, "WEAVER_PROGRESS_SECONDS=0 ");
+  ASSERT_EQ(import.code, 0) << import.err;
+  std::istringstream in(import.err);
+  std::string line;
+  uint64_t last = 0;
+  int shown = 0;
+  while (std::getline(in, line)) {
+    ASSERT_EQ(line.rfind("model import: ", 0), 0u) << line;
+    // The count, its digits grouped by spaces: "model import: 12 288 octants  ...".
+    const size_t unit = line.find(" octants");
+    ASSERT_NE(unit, std::string::npos) << line;
+    std::string digits = line.substr(14, unit - 14);
+    digits.erase(std::remove(digits.begin(), digits.end(), ' '), digits.end());
+    const uint64_t octants = std::stoull(digits);
+    EXPECT_GE(octants, last) << line;
+    last = octants;
+    ++shown;
+  }
+  EXPECT_GE(shown, 2) << import.err;
+  EXPECT_EQ(last, 32u * 32 * 32) << import.err;  // the last batch: every point stored
+  const CommandRun quiet =
+      run("model import " + d.file("m2.db") + " --from grid:" + grid + " --quiet",
+          "WEAVER_PROGRESS_SECONDS=0 ");
+  ASSERT_EQ(quiet.code, 0) << quiet.err;
+  EXPECT_EQ(quiet.err, "");
+  EXPECT_NE(run("model --help").out.find("--quiet"), std::string::npos);
 }
 
 // The same mesh with packed pages (the default) and with --plain: the stat

@@ -7,6 +7,7 @@
 #include "cli/cli.h"
 #include "modeldb/db_model.h"
 #include "modeldb/model_import.h"
+#include "util/progress.h"
 
 namespace weaver::cli {
 namespace {
@@ -15,7 +16,7 @@ constexpr char kUsage[] =
     "usage: weaver model import MODEL.db --from "
     "etree:FILE|grid:FILE|layers:FILE|xyz:FILE|rfile:FILE\n"
     "                           [--tolerance REL] [--root-edge METRES] [--memory BYTES]\n"
-    "                           [--threads N] [--plain]\n"
+    "                           [--threads N] [--plain] [--quiet]\n"
     "       weaver model material MODEL.db X Y Z | --points FILE [--outside clamp|error]\n"
     "                             [--memory BYTES]\n"
     "\n"
@@ -52,6 +53,9 @@ constexpr char kUsage[] =
     "                     written in key order (default: the number of cores);\n"
     "                     the same table for every N\n"
     "  --plain            plain leaf pages (default: packed)\n"
+    "  --quiet            no progress line on stderr (default: one that updates\n"
+    "                     itself on a terminal, a line every 10 s otherwise: the\n"
+    "                     octants stored so far)\n"
     "\n"
     "material: the model's values at X Y Z (metres in the model's frame, z depth\n"
     "down), one line 'x y z vp vs rho [qp qs]' a point; --points FILE reads\n"
@@ -169,7 +173,12 @@ int import(const ParsedArgs& args) {
   if (!st.ok()) return usage_error("model", st.message(), kUsage);
   const auto t0 = std::chrono::steady_clock::now();
   ModelImportResult r;
-  st = import_model(args.positional[1], o, &r);
+  {
+    ProgressLine line(ProgressLine::style_for_stderr(args.flags.count("quiet")), "model import",
+                      "octants");
+    o.progress = line.fn();
+    st = import_model(args.positional[1], o, &r);
+  }
   if (!st.ok()) return report("model", st);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const ModelInfo& i = r.info;
@@ -205,7 +214,7 @@ int cmd_model(int argc, char** argv) {
   ParsedArgs args;
   Status st = parse_args(
       argc, argv, 2, {"from", "tolerance", "root-edge", "memory", "points", "outside", "threads"},
-      {"plain"}, &args);
+      {"plain", "quiet"}, &args);
   if (args.help) return std::fputs(kUsage, stdout), 0;
   if (!st.ok()) return usage_error("model", st.message(), kUsage);
   const std::string sub = args.positional.empty() ? "" : args.positional[0];

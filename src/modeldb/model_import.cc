@@ -177,8 +177,11 @@ Status import_model(const std::string& db_dir, const ModelImportOptions& o, Mode
   const size_t record = topt.schema.record_size();
   std::vector<uint64_t> keys;
   std::vector<std::byte> records;
+  uint64_t stored = 0;
   auto flush = [&]() {
     const Status s = table->append_batch(keys.data(), records.data(), keys.size());
+    stored += keys.size();
+    if (o.progress) o.progress(stored, -1);
     keys.clear();
     records.clear();
     return s;

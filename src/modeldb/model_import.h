@@ -26,6 +26,7 @@
 #include "modeldb/model_table.h"
 #include "schema/status.h"
 #include "util/memory_budget.h"
+#include "util/progress.h"
 
 namespace weaver {
 
@@ -39,6 +40,8 @@ struct ModelImportOptions {
   // and the most cells a subtree of the work holds (0: from the budget).
   int threads = 1;
   uint64_t rfile_task_cells = 0;
+  // Octants stored so far (the fraction unknown: -1), now and then.
+  ProgressFn progress;
 };
 
 struct ModelImportResult {
