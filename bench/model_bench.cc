@@ -14,7 +14,7 @@
 // ratio of time a leaf (issue 51's goal: at most 1.2) is taken pair by
 // pair.  --keep-model constructs from DIR's model database where there is
 // one, not imported again each run.  --memory is construct's (default: its
-// own, 256M).
+// own).
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -196,7 +196,9 @@ int main(int argc, char** argv) {
       "\nmodel_bench: grid %d x %d x %d at %g m (%.2f GB), construct at %g Hz, --memory %s, "
       "medians of %d\n\n",
       nx, ny, nz, spacing, 12.0 * nx * ny * nz / 1e9, freq,
-      memory.empty() ? "256M" : memory.c_str(), repeat);
+      memory.empty() ? (std::to_string(MemoryBudget::kDefaultBytes >> 20) + "M").c_str()
+                     : memory.c_str(),
+      repeat);
   std::vector<std::map<std::string, std::string>> rows;
   for (const auto& [what, r] : rate) {
     rows.push_back(
