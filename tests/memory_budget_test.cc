@@ -87,6 +87,31 @@ TEST(MemoryBudgetTest, VerifySharesAndItsBalanceCheckFitEveryBudget) {
   }
 }
 
+// A balanced construct from a model database pools its subtrees' rooms
+// from 256M on two threads (others from 512M), and its plan then counts the
+// balance's buffers: room for four even shares of leaves a worker.
+TEST(MemoryBudgetTest, ConstructFromAModelDatabaseCountsTheBalanceWhereItPools) {
+  for (const uint64_t bytes : kBudgets) {
+    for (const int threads : {1, 2, 3, 8}) {
+      const ConstructMemory m(MemoryBudget(bytes), threads, true);
+      expect_fits(m.plan);
+      EXPECT_EQ(m.balance > 0, m.pooled) << describe(m.plan);
+      EXPECT_LE(m.balance, bytes / 16 * 3) << describe(m.plan);
+    }
+  }
+  const ConstructMemory db(MemoryBudget(), 2, true);
+  const ConstructMemory analytic(MemoryBudget(), 2, false);
+  EXPECT_TRUE(db.pooled);
+  EXPECT_FALSE(analytic.pooled);
+  EXPECT_EQ(analytic.balance, 0u);
+  // 4 even shares of 2^17 leaves a worker, 48 bytes each.
+  EXPECT_EQ(db.balance, 2 * 4 * (uint64_t{1} << 17) * 48);
+  EXPECT_FALSE(ConstructMemory(MemoryBudget(128ull << 20), 2, true).pooled);
+  EXPECT_TRUE(ConstructMemory(MemoryBudget(128ull << 20), 1, true).pooled);
+  EXPECT_FALSE(ConstructMemory(MemoryBudget(128ull << 20), 1, false).pooled);
+  EXPECT_TRUE(ConstructMemory(MemoryBudget(512ull << 20), 2, false).pooled);
+}
+
 TEST(MemoryBudgetTest, ConstructImportExportAndQuerySharesFitEveryBudget) {
   for (const uint64_t bytes : kBudgets) {
     const MemoryBudget budget(bytes);

@@ -59,6 +59,19 @@ constexpr double kMostLeavesPerWholeSubtree = 65536;
 // The least even share of the subtrees' room (leaves) at which they share a
 // pool (subtree_rooms): --memory 512M and up on two threads, 256M on one.
 constexpr uint64_t kLeastPooledRoom = uint64_t{1} << 18;
+// The same for a balanced construct from a model database, whose plan counts
+// the balance's buffers where it pools (ConstructMemory): 256M and up on
+// two threads, 128M on one.  Its pooled subtrees are a level coarser
+// (list_subtrees): at 1 Hz from the 100 m model database at 256M on two
+// threads, 0.905x the time (7 pairs) with the readers' share cut from a
+// half to 5/16 to make room for the balance.
+constexpr uint64_t kLeastFocusedPooledRoom = uint64_t{1} << 17;
+// The balance's buffers a worker holds (subtree_balance.h: the leaves
+// collected around its subtree, their merge with its own, the ripple's asks
+// and candidates), bytes a leaf of the largest subtree it balanced: up to
+// 44 measured at 1 Hz from the 100 m model database (22.5 MB a thread
+// beside a subtree of 519K leaves).
+constexpr uint64_t kBalanceBytesPerLeaf = 48;
 // Subtrees in flight per thread: workers run ahead of the writer.
 constexpr size_t kSubtreesPerThread = 8;
 
@@ -124,6 +137,14 @@ int rank_of_subtree(const ConstructOptions& o, const ZOrderShare& share, const O
   return std::min(static_cast<int>(f), o.shards - 1);
 }
 
+// The even share of the subtrees' room (leaves): `bytes` over the subtrees
+// in flight, a leaf taking its key and the largest payload.
+uint64_t even_room(uint64_t bytes, int threads) {
+  const size_t window = kSubtreesPerThread * std::max(1, threads);
+  return std::clamp<uint64_t>(bytes / window / (8 + Descent::kMaxPayloadBytes), 64,
+                              uint64_t{1} << 19);
+}
+
 // The leaves a subtree's visit may hold (leaf_room.h; past them it is
 // visited again as its 8 children).
 struct SubtreeRooms {
@@ -146,10 +167,16 @@ SubtreeRooms subtree_rooms(const ConstructOptions& o, const ConstructMemory& mem
     return {o.subtree_leaves, 4 * o.subtree_leaves, o.subtree_pool, o.subtree_leaves};
   }
   const size_t window = kSubtreesPerThread * std::max(1, o.threads);
-  const uint64_t even = std::clamp<uint64_t>(
-      memory.subtrees / window / (8 + Descent::kMaxPayloadBytes), 64, uint64_t{1} << 19);
-  if (even < kLeastPooledRoom) return {even, even, 0, even};
+  const uint64_t even = even_room(memory.subtrees, o.threads);
+  if (!memory.pooled) return {even, even, 0, even};
   return {even / 2, 4 * even, window * (even - even / 2), even};
+}
+
+// Whether the subtrees' rooms are pooled: a model database's subtrees are
+// then a level coarser.  (The tests' fixed rooms: where they are as large
+// as a budget's that pools.)
+bool pooled_rooms(const ConstructOptions& o, const ConstructMemory& memory) {
+  return o.subtree_leaves > 0 ? o.subtree_leaves >= kLeastPooledRoom : memory.pooled;
 }
 
 // The estimated leaves of a subtree taken whole: kMostLeavesPerWholeSubtree,
@@ -167,8 +194,7 @@ SubtreeList list_subtrees(const ConstructOptions& o, const ConstructPlan& p, con
                           const ZOrderShare& share, const ConstructMemory& memory) {
   if (!o.balanced) return SubtreeList(descent, p, subtree_level(o, p, false));
   if (descent.model().loads_focus()) {
-    const bool pooled = subtree_rooms(o, memory).even >= kLeastPooledRoom;
-    return SubtreeList(descent, p, subtree_level(o, p, pooled));
+    return SubtreeList(descent, p, subtree_level(o, p, pooled_rooms(o, memory)));
   }
   const double total = p.estimated_elements, most = most_whole_leaves(o, memory);
   return SubtreeList(
@@ -404,7 +430,7 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
     return Status::InvalidArgument("the domain needs blocks of level " +
                                    std::to_string(p->block_level) + ", finer than --max-level");
   }
-  const ConstructMemory memory(o.memory);
+  const ConstructMemory memory(o);
   std::unique_ptr<VelocityModel> model;
   WEAVER_RETURN_IF_ERROR(
       open_velocity_model(o.model, o.grid_file, memory.model, std::max(1, o.threads), &model));
@@ -429,7 +455,11 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
   return Status::Ok();
 }
 
-ConstructMemory::ConstructMemory(MemoryBudget budget) : plan(budget) {
+ConstructMemory::ConstructMemory(const ConstructOptions& o)
+    : ConstructMemory(o.memory, o.threads, o.balanced && o.model.rfind("db:", 0) == 0) {}
+
+ConstructMemory::ConstructMemory(MemoryBudget budget, int threads, bool focused_balance)
+    : plan(budget) {
   // A sorted append touches only the right spine of the table.  (With an
   // eighth, not a sixteenth, the shares that fill left only the flat
   // ground's unused eighth for what the plan does not count, and construct
@@ -440,9 +470,25 @@ ConstructMemory::ConstructMemory(MemoryBudget budget) : plan(budget) {
   // Leaves of the subtrees visited ahead of the writer (kSubtreesPerThread
   // a thread); each is capped, so a small share only means smaller caps.
   subtrees = plan.take("subtrees in flight", 1, 4, 256ull << 20);
-  // A model read from storage (modeldb/db_model.h): each worker's table
-  // cache and the decoded model octants around its subtree.
-  model = plan.take_budget("model readers", 1, 2);
+  const uint64_t even = even_room(subtrees, threads);
+  if (focused_balance && even >= kLeastFocusedPooledRoom) {
+    // The balance's buffers grow with the largest subtree, 4 even shares
+    // where pooled: counted here, at most 3/16 of the budget.  (Outside the
+    // plan, the pooled subtrees took a construct from a model database to
+    // 270 MB at --memory 256M on two threads; an analytic model leaves the
+    // readers' half unused, where they lie.)  The readers keep 5/16 (at a
+    // quarter, their regions could not hold the coarser subtrees' boxes and
+    // the 1 Hz construct took 4x the time).
+    pooled = true;
+    balance = plan.record("subtree balance",
+                          uint64_t(std::max(1, threads)) * 4 * even * kBalanceBytesPerLeaf);
+    model = plan.take_budget("model readers", 5, 16);
+  } else {
+    pooled = even >= kLeastPooledRoom;
+    // A model read from storage (modeldb/db_model.h): each worker's table
+    // cache and the decoded model octants around its subtree.
+    model = plan.take_budget("model readers", 1, 2);
+  }
   // The ground's grid, whole, with its pyramid: 12 bytes a point (a 1000
   // x 1000 DEM takes 12 MB of the 128 MB this leaves at --memory 1G).
   surface = plan.take("surface", 1, 8);
@@ -527,7 +573,7 @@ Status plan_and_open(const ConstructOptions& o, const ConstructMemory& memory, C
 Status construct_octree(const std::string& db_dir, const ConstructOptions& o, ConstructPlan* p,
                         ConstructResult* r) {
   *r = ConstructResult{};
-  const ConstructMemory memory(o.memory);
+  const ConstructMemory memory(o);
   std::unique_ptr<VelocityModel> model;
   WEAVER_RETURN_IF_ERROR(plan_and_open(o, memory, p, &model));
   WEAVER_RETURN_IF_ERROR(check_construct_fits(o, planned_estimate(*p), db_dir));
@@ -553,7 +599,7 @@ Status construct_shard(const std::string& db_dir, const ConstructOptions& o,
                        ShardEntry* entry) {
   *r = ConstructResult{};
   *entry = ShardEntry{file};
-  const ConstructMemory memory(o.memory);
+  const ConstructMemory memory(o);
   std::unique_ptr<VelocityModel> model;
   WEAVER_RETURN_IF_ERROR(plan_and_open(o, memory, p, &model));
   std::unique_ptr<BTree> table;

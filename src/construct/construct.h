@@ -103,11 +103,17 @@ struct ConstructOptions {
 // Where construct's memory goes: the shares of options.memory.  The descent
 // itself holds one path of octants, whatever the mesh.
 struct ConstructMemory {
-  explicit ConstructMemory(MemoryBudget budget);
+  // threads: the workers; focused_balance: a balanced construct from a
+  // model read from storage (a model database, "db:..."), whose plan counts
+  // the balance's buffers where its subtrees are pooled (construct.cc).
+  explicit ConstructMemory(MemoryBudget budget, int threads = 1, bool focused_balance = false);
+  explicit ConstructMemory(const ConstructOptions& o);
 
   MemoryPlan plan;
   uint64_t table_pool = 0;  // the octant table, written by sorted append
   uint64_t subtrees = 0;    // leaves of the subtrees in flight (descent.h)
+  bool pooled = false;      // the subtrees in flight lend half their rooms to a pool
+  uint64_t balance = 0;     // the balance's buffers, a set a worker (subtree_balance.h)
   MemoryBudget model;       // a model database's readers (modeldb/db_model.h)
   uint64_t surface = 0;     // the ground's grid and its pyramid (model/surface.h)
 };

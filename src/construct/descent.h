@@ -150,7 +150,8 @@ class Descent {
   // be o's children alone (emit_siblings' case).
   int uniform_leaf_level(const Octant& o, const Judgement& j) const;
   // The leaves of o's subtree into *out; stops, with out->overflow, where
-  // room does not allow another.
+  // room does not allow another, or at once where a model read from
+  // storage could not hold o's box in memory (o not of the finest level).
   void visit_subtree(const Octant& o, LeafRoom& room, SubtreeLeaves* out) const;
   // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as
   // f32), payload_bytes() of them into out.
@@ -197,8 +198,8 @@ class Descent {
   bool emit_block(const Octant& o, int level, LeafRoom& room, SubtreeLeaves* out) const;
   bool visit(const Octant& o, const Judgement& j, LeafRoom& room, SubtreeLeaves* out) const;
   // Focuses the model on subtree o's box and the margin its balance asks
-  // for; o's judgement.
-  Judgement focus_on(const Octant& o) const;
+  // for; o's judgement, and in *held whether the model holds the box.
+  Judgement focus_on(const Octant& o, bool* held) const;
   // Where the ground decides: air is never split (but for --min-level), a
   // leaf it crosses is split down to --surface-edge.
   void apply_ground(const Octant& o, GroundSide side, Judgement* j) const;

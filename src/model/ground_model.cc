@@ -181,10 +181,10 @@ bool GroundedModel::vs_bounds(const double lo[3], const double hi[3], float* vs_
   return inner_.vs_bounds(mlo, mhi, vs_lo, vs_hi);
 }
 
-void GroundedModel::focus(const double lo[3], const double hi[3]) const {
+bool GroundedModel::focus(const double lo[3], const double hi[3]) const {
   double mlo[3], mhi[3];
   model_box(lo, hi, mlo, mhi);
-  inner_.focus(mlo, mhi);
+  return inner_.focus(mlo, mhi);
 }
 
 std::string GroundedModel::outside(const std::array<double, 3>& domain_m) const {

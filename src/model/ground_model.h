@@ -69,7 +69,7 @@ class GroundedModel final : public VelocityModel {
   void materials_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                             Material* out) const override;
   bool vs_bounds(const double lo[3], const double hi[3], float* vs_lo, float* vs_hi) const override;
-  void focus(const double lo[3], const double hi[3]) const override;
+  bool focus(const double lo[3], const double hi[3]) const override;
   bool loads_focus() const override { return inner_.loads_focus(); }
   bool has_q() const override { return inner_.has_q(); }
   std::string outside(const std::array<double, 3>& domain_m) const override;

@@ -101,10 +101,13 @@ class VelocityModel {
   }
   // The points asked next (until the next focus, on this thread) lie in the
   // box [lo, hi] (metres, bounds included): construct says so before each
-  // subtree.  A model read from storage loads the box once; others ignore it.
-  virtual void focus(const double lo[3], const double hi[3]) const {
+  // subtree.  A model read from storage loads the box once, and says false
+  // where its memory could not hold it (each point is then searched for in
+  // storage); others ignore it.
+  virtual bool focus(const double lo[3], const double hi[3]) const {
     (void)lo;
     (void)hi;
+    return true;
   }
   // Whether focus() loads the box (a model read from storage): construct
   // then keeps its subtrees at their level, since a larger box costs that

@@ -198,9 +198,9 @@ Status DbModel::hole_at(double x, double y, double z) const {
   return Status::NotFound(buf);
 }
 
-void DbModel::focus(const double lo[3], const double hi[3]) const {
+bool DbModel::focus(const double lo[3], const double hi[3]) const {
   Reader& r = reader();
-  if (!r.opened.ok()) return;
+  if (!r.opened.ok()) return false;
   bool clamped = false;
   const Coord a = pixel_of(lo[0], lo[1], lo[2], &clamped);
   const Coord b = pixel_of(hi[0], hi[1], hi[2], &clamped);
@@ -208,13 +208,14 @@ void DbModel::focus(const double lo[3], const double hi[3]) const {
   // wherever it holds the point, so a larger one changes none of them.
   // (Construct's balance asks a box inside the one its descent asked: see
   // Descent::visit_subtree.)
-  if (r.region.covers(a) && r.region.covers(b)) return;
+  if (r.region.covers(a) && r.region.covers(b)) return true;
   // On a read error the region stays empty and the table answers (and
   // reports the error) point by point.
   if (!r.region.load(*r.table, a, b, r.table->options().schema.record_size(), region_octants_)
            .ok()) {
     r.region.clear();
   }
+  return r.region.loaded();
 }
 
 Coord DbModel::pixel_of(double x, double y, double z, bool* clamped) const {

@@ -57,7 +57,7 @@ class DbModel final : public VelocityModel {
   std::string outside(const std::array<double, 3>& domain_m) const override;
 
   Material at(double x, double y, double z) const override;
-  void focus(const double lo[3], const double hi[3]) const override;
+  bool focus(const double lo[3], const double hi[3]) const override;
   bool loads_focus() const override { return true; }
   void vs_on_lattice(const double* xs, const double* ys, const double* zs, int n,
                      float* out) const override;
