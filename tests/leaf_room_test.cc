@@ -24,9 +24,12 @@ TEST(LeafRoom, TakesFromThePoolUpToItsMostAndGivesItBack) {
   LeafRoom room(64, 256, &pool);
   EXPECT_TRUE(room.allows(64));
   EXPECT_EQ(pool.spare(), 1000u);  // its own room takes nothing
-  EXPECT_TRUE(room.allows(65));    // at least an eighth of its own room at a time
-  EXPECT_EQ(room.taken(), 8u);
-  EXPECT_EQ(pool.spare(), 992u);
+  EXPECT_TRUE(room.allows(65));    // half its room again at a time
+  EXPECT_EQ(room.taken(), 32u);
+  EXPECT_EQ(room.room(), 96u);
+  EXPECT_EQ(pool.spare(), 968u);
+  EXPECT_TRUE(room.allows(96));  // within the room: nothing more taken
+  EXPECT_EQ(room.taken(), 32u);
   EXPECT_TRUE(room.allows(200));
   EXPECT_EQ(room.taken(), 136u);
   EXPECT_TRUE(room.allows(256));
@@ -35,6 +38,18 @@ TEST(LeafRoom, TakesFromThePoolUpToItsMostAndGivesItBack) {
   room.give_back();
   EXPECT_EQ(room.taken(), 0u);
   EXPECT_EQ(pool.spare(), 1000u);
+}
+
+// Where the pool has less than half the room again, it lends just what the
+// subtree asks.
+TEST(LeafRoom, APoolShortOfAStepLendsWhatIsAsked) {
+  LeafPool pool(10);
+  LeafRoom room(64, 256, &pool);
+  EXPECT_TRUE(room.allows(70));
+  EXPECT_EQ(room.room(), 70u);
+  EXPECT_EQ(pool.spare(), 4u);
+  EXPECT_FALSE(room.allows(75));
+  EXPECT_EQ(room.room(), 70u);
 }
 
 TEST(LeafRoom, AnEmptyPoolRefusesAndRoomsShareIt) {

@@ -142,5 +142,27 @@ TEST(SubtreeSlots, LeavesUpToTheOwnRoomNeverMoveTheVectors) {
   EXPECT_TRUE(fill(s.get(), kOwn));
 }
 
+// Past its own room a subtree's vectors grow to the room the pool lends
+// (SubtreeLeaves::fit), never to twice the leaves, as doubling would.
+TEST(SubtreeSlots, LeavesPastTheOwnRoomHoldTheRoomLentAndNoMore) {
+  constexpr size_t kOwn = 1000, kBytes = 12;
+  SubtreeSlots slots(kOwn, 4 * kOwn, 8 * kOwn, kBytes);
+  std::unique_ptr<Slot> s = slots.take(Octant{0, 0, 0, 1});
+  SubtreeLeaves& l = s->leaves;
+  size_t grants = 0, last_room = kOwn;
+  for (size_t i = 0; i < 4 * kOwn; ++i) {
+    ASSERT_TRUE(s->room.allows(i + 1));
+    l.fit(s->room.room(), kBytes);
+    l.keys.push_back(i);
+    l.payloads.resize(l.payloads.size() + kBytes);
+    ASSERT_EQ(l.keys.capacity(), s->room.room()) << i;
+    ASSERT_EQ(l.payloads.capacity(), s->room.room() * kBytes) << i;
+    grants += s->room.room() != last_room;
+    last_room = s->room.room();
+  }
+  // 1000 -> 1500 -> 2250 -> 3375 -> 4000: a few moves, not one an eighth.
+  EXPECT_EQ(grants, 4u);
+}
+
 }  // namespace
 }  // namespace weaver

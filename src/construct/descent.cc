@@ -290,7 +290,7 @@ bool Descent::visit(const Octant& o, const Judgement& j, LeafRoom& room, Subtree
     }
     return true;
   }
-  if (!room.allows(out->elements + 1)) return false;
+  if (!room_for(room, out->elements + 1, out)) return false;
   out->payloads.resize(out->payloads.size() + payload_bytes_);
   emit(o, octant_key(o), j, material_at_centre(o), true, out);
   return true;

@@ -76,6 +76,14 @@ struct SubtreeLeaves {
   std::vector<GroundSide> added_sides;
 
   void clear();
+  // The keys and payloads reserved for `leaves` where they have less: a
+  // room grown from the pool (leaf_room.h) grows them by its grants, not by
+  // doubling, which held up to twice the leaves the pool lent.
+  void fit(size_t leaves, size_t payload_bytes) {
+    if (keys.capacity() >= leaves) return;
+    keys.reserve(leaves);
+    payloads.reserve(leaves * payload_bytes);
+  }
   // run(keys, payloads, n) for each run of the leaves in key order
   // (payloads of `bytes` each); its first error stops them.
   template <class Run>
@@ -197,6 +205,12 @@ class Descent {
   // judgement (so no leaf's samples could lower it).
   bool emit_block(const Octant& o, int level, LeafRoom& room, SubtreeLeaves* out) const;
   bool visit(const Octant& o, const Judgement& j, LeafRoom& room, SubtreeLeaves* out) const;
+  // room.allows(n), out's vectors then reserved at the room it grants.
+  bool room_for(LeafRoom& room, size_t n, SubtreeLeaves* out) const {
+    if (!room.allows(n)) return false;
+    out->fit(room.room(), payload_bytes_);
+    return true;
+  }
   // Focuses the model on subtree o's box and the margin its balance asks
   // for; o's judgement, and in *held whether the model holds the box.
   Judgement focus_on(const Octant& o, bool* held) const;

@@ -108,7 +108,7 @@ constexpr auto kLatticeOf8 = lattice_of_z_order<3>();
 bool Descent::emit_block(const Octant& o, int level, LeafRoom& room, SubtreeLeaves* out) const {
   const int depth = level - o.level;
   const size_t count = size_t{1} << (3 * depth);
-  if (!room.allows(out->elements + count)) return false;
+  if (!room_for(room, out->elements + count, out)) return false;
   const size_t first = out->keys.size();
   out->keys.resize(first + count);
   out->payloads.resize((first + count) * payload_bytes_);
@@ -161,7 +161,7 @@ void Descent::children_materials(const Octant& o, std::byte* out) const {
 // their centres.
 bool Descent::emit_siblings(const Octant& o, const Judgement* children, LeafRoom& room,
                             SubtreeLeaves* out) const {
-  if (!room.allows(out->elements + 8)) return false;
+  if (!room_for(room, out->elements + 8, out)) return false;
   // Storage the model fills (every model assigns each Material whole), not
   // eight Materials zeroed first: that zeroing was a `rep stos`, a fifth of
   // this function.  (An array of bytes implicitly creates the Materials.)

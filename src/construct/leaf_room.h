@@ -51,16 +51,22 @@ class LeafRoom {
       : own_(own), most_(pool ? std::max(own, most) : own), room_(own), pool_(pool) {}
 
   // Whether the subtree may hold n leaves (taken from the pool past its own
-  // room: at least an eighth of its own room at a time, so that the pool
-  // is asked rarely).
+  // room: half its room again at a time where the pool has it, else n, so
+  // that the pool is asked rarely and the leaves' vectors, reserved at the
+  // room, move a few times, not once for every eighth of the own room).
   bool allows(size_t n) {
     if (n <= room_) return true;
     if (n > most_) return false;
-    const size_t want = std::min(most_, std::max(n, room_ + own_ / 8));
-    if (!pool_->take(want - room_)) return false;
+    size_t want = std::min(most_, std::max(n, room_ + std::max(own_ / 8, room_ / 2)));
+    if (!pool_->take(want - room_)) {
+      if (want == n || !pool_->take(n - room_)) return false;
+      want = n;
+    }
     room_ = want;
     return true;
   }
+  // The leaves it may hold without asking the pool.
+  size_t room() const { return room_; }
   // What it took from the pool, returned.
   void give_back() {
     if (room_ > own_) pool_->give(room_ - own_);
