@@ -88,8 +88,9 @@ TEST(MemoryBudgetTest, VerifySharesAndItsBalanceCheckFitEveryBudget) {
 }
 
 // A balanced construct from a model database pools its subtrees' rooms
-// from 256M on two threads (others from 512M), and its plan then counts the
-// balance's buffers: room for four even shares of leaves a worker.
+// from 256M on two threads (others from 512M), never below 256M, and its
+// plan then counts the balance's buffers: room for four even shares of
+// leaves a worker.
 TEST(MemoryBudgetTest, ConstructFromAModelDatabaseCountsTheBalanceWhereItPools) {
   for (const uint64_t bytes : kBudgets) {
     for (const int threads : {1, 2, 3, 8}) {
@@ -107,7 +108,9 @@ TEST(MemoryBudgetTest, ConstructFromAModelDatabaseCountsTheBalanceWhereItPools) 
   // 4 even shares of 2^17 leaves a worker, 48 bytes each.
   EXPECT_EQ(db.balance, 2 * 4 * (uint64_t{1} << 17) * 48);
   EXPECT_FALSE(ConstructMemory(MemoryBudget(128ull << 20), 2, true).pooled);
-  EXPECT_TRUE(ConstructMemory(MemoryBudget(128ull << 20), 1, true).pooled);
+  EXPECT_FALSE(ConstructMemory(MemoryBudget(128ull << 20), 1, true).pooled);
+  EXPECT_TRUE(ConstructMemory(MemoryBudget(256ull << 20), 1, true).pooled);
+  EXPECT_GT(ConstructMemory(MemoryBudget(256ull << 20), 1, true).balance, 0u);
   EXPECT_FALSE(ConstructMemory(MemoryBudget(128ull << 20), 1, false).pooled);
   EXPECT_TRUE(ConstructMemory(MemoryBudget(512ull << 20), 2, false).pooled);
 }

@@ -61,11 +61,17 @@ constexpr double kMostLeavesPerWholeSubtree = 65536;
 constexpr uint64_t kLeastPooledRoom = uint64_t{1} << 18;
 // The same for a balanced construct from a model database, whose plan counts
 // the balance's buffers where it pools (ConstructMemory): 256M and up on
-// two threads, 128M on one.  Its pooled subtrees are a level coarser
-// (list_subtrees): at 1 Hz from the 100 m model database at 256M on two
-// threads, 0.905x the time (7 pairs) with the readers' share cut from a
-// half to 5/16 to make room for the balance.
+// two threads, and never below kLeastFocusedPooledBudget.  Its pooled
+// subtrees are a level coarser (list_subtrees): at 1 Hz from the 100 m
+// model database at 256M on two threads, 0.905x the time (7 pairs) with
+// the readers' share cut from a half to 5/16 to make room for the balance.
 constexpr uint64_t kLeastFocusedPooledRoom = uint64_t{1} << 17;
+// Below it the parts outside the plan (the code, the stacks, the allocator's
+// free blocks) and the octant table's pool, the same at any budget, left
+// too little: pooled at 128M on one thread, the 1 Hz construct peaked at
+// 124,660 to 130,492 KiB of the 131,072 (at 256M on two, 228,568 to
+// 237,396 of 262,144).
+constexpr uint64_t kLeastFocusedPooledBudget = 256ull << 20;
 // The balance's buffers a worker holds (subtree_balance.h: the leaves
 // collected around its subtree, their merge with its own, the ripple's asks
 // and candidates), bytes a leaf of the largest subtree it balanced: up to
@@ -471,7 +477,8 @@ ConstructMemory::ConstructMemory(MemoryBudget budget, int threads, bool focused_
   // a thread); each is capped, so a small share only means smaller caps.
   subtrees = plan.take("subtrees in flight", 1, 4, 256ull << 20);
   const uint64_t even = even_room(subtrees, threads);
-  if (focused_balance && even >= kLeastFocusedPooledRoom) {
+  if (focused_balance && even >= kLeastFocusedPooledRoom &&
+      budget.bytes() >= kLeastFocusedPooledBudget) {
     // The balance's buffers grow with the largest subtree, 4 even shares
     // where pooled: counted here, at most 3/16 of the budget.  (Outside the
     // plan, the pooled subtrees took a construct from a model database to
