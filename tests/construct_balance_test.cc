@@ -294,16 +294,24 @@ TEST(BalancedConstruct, ASubtreeItsModelRegionCannotHoldIsVisitedAsItsChildren) 
   ModelImportResult ir;
   ASSERT_OK(import_model_source(dir.file("model"), MemoryBudget(), &c.options.model, &ir));
   ASSERT_GT(ir.octants, 4096u * 8);
-  Reference ref;
-  ASSERT_NO_FATAL_FAILURE(build_reference(c, dir.file("ref"), &ref));
-  for (int t : {1, 2}) {
-    SCOPED_TRACE(std::to_string(t) + " threads");
-    const std::string got = dir.file("got-" + std::to_string(t));
-    ConstructResult r;
-    ASSERT_NO_FATAL_FAILURE(
-        build_balanced(c, ref, got, t, MemoryBudget::kMinBytes, &r, uint64_t{1} << 20, 0));
-    ASSERT_EQ(testing::table_bytes(got), testing::table_bytes(ref.path));
-    EXPECT_GT(r.subtrees_over, 0u);
+  // At 0.2 Hz the subtrees split; at 0.008 Hz each block of 12 km is one
+  // leaf, whose box holds 13.8K model octants: its children are no part of
+  // the octree, and it stays whole.
+  for (const double freq : {0.2, 0.008}) {
+    c.options.freq = freq;
+    Reference ref;
+    ASSERT_NO_FATAL_FAILURE(build_reference(c, dir.file("ref"), &ref));
+    for (int t : {1, 2}) {
+      SCOPED_TRACE(std::to_string(freq) + " Hz, " + std::to_string(t) + " threads");
+      const std::string got = dir.file("got-" + std::to_string(t));
+      ConstructResult r;
+      ASSERT_NO_FATAL_FAILURE(
+          build_balanced(c, ref, got, t, MemoryBudget::kMinBytes, &r, uint64_t{1} << 20, 0));
+      ASSERT_EQ(testing::table_bytes(got), testing::table_bytes(ref.path));
+      EXPECT_EQ(r.subtrees_over > 0, freq > 0.1);
+      std::filesystem::remove_all(got);
+    }
+    std::filesystem::remove_all(ref.path);
   }
 }
 

@@ -224,7 +224,8 @@ void Descent::visit_subtree(const Octant& o, LeafRoom& room, SubtreeLeaves* out)
   // memory, each of its points would be searched for in storage (at 1 Hz
   // from the 100 m model database, 4x the time): its eight children are
   // visited instead, as for a subtree past its room, each box an eighth.
-  if (!held && may_split_[o.level]) {
+  // Only where o splits: a leaf's children are no subtrees of the octree.
+  if (!held && j.split) {
     out->overflow = true;
     return;
   }

@@ -159,7 +159,7 @@ class Descent {
   int uniform_leaf_level(const Octant& o, const Judgement& j) const;
   // The leaves of o's subtree into *out; stops, with out->overflow, where
   // room does not allow another, or at once where a model read from
-  // storage could not hold o's box in memory (o not of the finest level).
+  // storage could not hold o's box in memory (where o splits).
   void visit_subtree(const Octant& o, LeafRoom& room, SubtreeLeaves* out) const;
   // A leaf's record: the material at o's centre (vp, vs, rho [, qp, qs] as
   // f32), payload_bytes() of them into out.

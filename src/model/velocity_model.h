@@ -103,7 +103,7 @@ class VelocityModel {
   // box [lo, hi] (metres, bounds included): construct says so before each
   // subtree.  A model read from storage loads the box once, and says false
   // where its memory could not hold it (each point is then searched for in
-  // storage); others ignore it.
+  // storage; a read error says true: the points report it); others ignore it.
   virtual bool focus(const double lo[3], const double hi[3]) const {
     (void)lo;
     (void)hi;

@@ -200,7 +200,7 @@ Status DbModel::hole_at(double x, double y, double z) const {
 
 bool DbModel::focus(const double lo[3], const double hi[3]) const {
   Reader& r = reader();
-  if (!r.opened.ok()) return false;
+  if (!r.opened.ok()) return true;  // each point reports the error
   bool clamped = false;
   const Coord a = pixel_of(lo[0], lo[1], lo[2], &clamped);
   const Coord b = pixel_of(hi[0], hi[1], hi[2], &clamped);
@@ -210,12 +210,13 @@ bool DbModel::focus(const double lo[3], const double hi[3]) const {
   // Descent::visit_subtree.)
   if (r.region.covers(a) && r.region.covers(b)) return true;
   // On a read error the region stays empty and the table answers (and
-  // reports the error) point by point.
+  // reports the error) point by point; a smaller box would fail alike.
   if (!r.region.load(*r.table, a, b, r.table->options().schema.record_size(), region_octants_)
            .ok()) {
     r.region.clear();
+    return true;
   }
-  return r.region.loaded();
+  return r.region.loaded();  // false: more octants than its room
 }
 
 Coord DbModel::pixel_of(double x, double y, double z, bool* clamped) const {
