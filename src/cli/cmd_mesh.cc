@@ -185,7 +185,7 @@ int cmd_mesh(int argc, char** argv) {
     BalanceOptions bo;
     bo.memory = co.memory;
     bo.threads = eo.threads;
-    if (co.model.rfind("db:", 0) == 0) bo.model_dirs.push_back(co.model.substr(3));
+    if (names_model_database(co.model)) bo.model_dirs.push_back(co.model.substr(3));
     ProgressLine balance_line(style, "balance", "leaves");
     bo.progress = balance_line.fn();
     BalanceResult br;

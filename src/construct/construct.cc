@@ -63,8 +63,9 @@ constexpr uint64_t kLeastPooledRoom = uint64_t{1} << 18;
 // the balance's buffers where it pools (ConstructMemory): 256M and up on
 // two threads, and never below kLeastFocusedPooledBudget.  Its pooled
 // subtrees are a level coarser (list_subtrees): at 1 Hz from the 100 m
-// model database at 256M on two threads, 0.905x the time (7 pairs) with
-// the readers' share cut from a half to 5/16 to make room for the balance.
+// model database at 256M on two threads, 0.91x the time (farm-bench, 9
+// pairs) with the readers' share cut from a half to 5/16 to make room for
+// the balance.
 constexpr uint64_t kLeastFocusedPooledRoom = uint64_t{1} << 17;
 // Below it the parts outside the plan (the code, the stacks, the allocator's
 // free blocks) and the octant table's pool, the same at any budget, left
@@ -143,11 +144,13 @@ int rank_of_subtree(const ConstructOptions& o, const ZOrderShare& share, const O
   return std::min(static_cast<int>(f), o.shards - 1);
 }
 
+// The subtrees in flight on `threads` workers.
+size_t window_of(int threads) { return kSubtreesPerThread * std::max(1, threads); }
+
 // The even share of the subtrees' room (leaves): `bytes` over the subtrees
 // in flight, a leaf taking its key and the largest payload.
 uint64_t even_room(uint64_t bytes, int threads) {
-  const size_t window = kSubtreesPerThread * std::max(1, threads);
-  return std::clamp<uint64_t>(bytes / window / (8 + Descent::kMaxPayloadBytes), 64,
+  return std::clamp<uint64_t>(bytes / window_of(threads) / (8 + Descent::kMaxPayloadBytes), 64,
                               uint64_t{1} << 19);
 }
 
@@ -172,10 +175,9 @@ SubtreeRooms subtree_rooms(const ConstructOptions& o, const ConstructMemory& mem
   if (o.subtree_leaves > 0) {
     return {o.subtree_leaves, 4 * o.subtree_leaves, o.subtree_pool, o.subtree_leaves};
   }
-  const size_t window = kSubtreesPerThread * std::max(1, o.threads);
   const uint64_t even = even_room(memory.subtrees, o.threads);
   if (!memory.pooled) return {even, even, 0, even};
-  return {even / 2, 4 * even, window * (even - even / 2), even};
+  return {even / 2, 4 * even, window_of(o.threads) * (even - even / 2), even};
 }
 
 // Whether the subtrees' rooms are pooled: a model database's subtrees are
@@ -312,7 +314,7 @@ Status write_subtrees(const ConstructOptions& o, const ConstructPlan& p, const D
     return Status::Ok();
   };
   auto over = [&] { ++r->subtrees, ++r->subtrees_over; };
-  SubtreeRun run(kSubtreesPerThread * threads, slots, next, visit, write, over);
+  SubtreeRun run(window_of(threads), slots, next, visit, write, over);
   const Status st = run.go(threads);
   for (const auto& v : visitors) r->neighbours += v->neighbours();
   return st;
@@ -462,7 +464,7 @@ Status plan_construct(const ConstructOptions& o, ConstructPlan* p) {
 }
 
 ConstructMemory::ConstructMemory(const ConstructOptions& o)
-    : ConstructMemory(o.memory, o.threads, o.balanced && o.model.rfind("db:", 0) == 0) {}
+    : ConstructMemory(o.memory, o.threads, o.balanced && names_model_database(o.model)) {}
 
 ConstructMemory::ConstructMemory(MemoryBudget budget, int threads, bool focused_balance)
     : plan(budget) {
@@ -483,9 +485,10 @@ ConstructMemory::ConstructMemory(MemoryBudget budget, int threads, bool focused_
     // where pooled: counted here, at most 3/16 of the budget.  (Outside the
     // plan, the pooled subtrees took a construct from a model database to
     // 270 MB at --memory 256M on two threads; an analytic model leaves the
-    // readers' half unused, where they lie.)  The readers keep 5/16 (at a
-    // quarter, their regions could not hold the coarser subtrees' boxes and
-    // the 1 Hz construct took 4x the time).
+    // readers' half unused, where they lie.)  The readers keep 5/16: at a
+    // quarter, their regions could not hold the coarser subtrees' boxes
+    // (every point then searched the table: the 1 Hz construct took 4x the
+    // time; visited as their children instead, 1.2x).
     pooled = true;
     balance = plan.record("subtree balance",
                           uint64_t(std::max(1, threads)) * 4 * even * kBalanceBytesPerLeaf);
@@ -542,7 +545,7 @@ Status write_octree(const ConstructOptions& o, const ConstructPlan& p, const Vel
   // A model database is named by its identity (read once, here: a plan is
   // made twice), never by its path.
   std::string model_name = o.model;
-  if (o.model.rfind("db:", 0) == 0) {
+  if (names_model_database(o.model)) {
     WEAVER_RETURN_IF_ERROR(model_table_identity(o.model.substr(3), &model_name));
   }
   const std::string model_meta = ";model=" + model_name + rule;

@@ -7,7 +7,7 @@ namespace weaver {
 
 Status open_velocity_model(const std::string& name, const std::string& grid_file,
                            MemoryBudget memory, int threads, std::unique_ptr<VelocityModel>* out) {
-  if (name.rfind("db:", 0) == 0) {
+  if (names_model_database(name)) {
     std::unique_ptr<DbModel> m;
     WEAVER_RETURN_IF_ERROR(DbModel::open(name.substr(3), memory, threads, &m));
     *out = std::move(m);

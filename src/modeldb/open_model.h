@@ -13,6 +13,9 @@
 
 namespace weaver {
 
+// Whether `name` names a model database ("db:DIR").
+inline bool names_model_database(const std::string& name) { return name.rfind("db:", 0) == 0; }
+
 // `memory` bounds what a model read from storage holds, for up to `threads`
 // threads asking it at once.
 Status open_velocity_model(const std::string& name, const std::string& grid_file,

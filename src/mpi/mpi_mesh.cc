@@ -8,6 +8,7 @@
 
 #include "cli/cli.h"
 #include "construct/construct.h"
+#include "modeldb/open_model.h"
 #include "mpi/mpi_commands.h"
 
 namespace weaver::mpi {
@@ -26,7 +27,7 @@ int mesh(const Comm& comm, int argc, char** argv) {
     b.memory = o.memory;
     b.threads = o.threads;
     b.staged_octants = staged.shards;
-    if (o.model.rfind("db:", 0) == 0) b.model_dirs.push_back(o.model.substr(3));
+    if (names_model_database(o.model)) b.model_dirs.push_back(o.model.substr(3));
     if (const int c = run_balance(comm, dir, b, staged.db.get(), &staged.shards)) return c;
   }
   ExtractOptions x;
