@@ -33,6 +33,7 @@
 #include "extract/node_classifier.h"
 #include "extract/node_pixels.h"
 #include "extract/spill_store.h"
+#include "schema/octant.h"
 #include "storage/btree.h"
 
 namespace weaver {
@@ -118,8 +119,20 @@ class BucketReader {
   uint64_t next_start_ = 0;
 };
 
-// The 8 corners of the leaf with this key as node keys, corner k at [k].
-void leaf_corner_keys(uint64_t leaf_key, uint64_t out[8]);
+// The 8 corners of the leaf with this key as node keys, corner k at [k]:
+// each axis's bits of the near and the far corner, put together.  Made in
+// registers, never read back from `out` (the loop that stepped corners 0-3
+// into 4-7 in memory was vectorised, and its 16-byte loads of two 8-byte
+// stores waited for them: most of its time).
+inline void leaf_corner_keys(uint64_t leaf_key, uint64_t out[8]) {
+  constexpr uint64_t x_bits = 0x1249249249249249;
+  const int bit = kMaxLevel - octant_key_level(leaf_key);
+  const uint64_t m = octant_key_morton(leaf_key);
+  const uint64_t x[2] = {m & x_bits, morton_step(m, 0, bit) & x_bits};
+  const uint64_t y[2] = {m & x_bits << 1, morton_step(m, 1, bit) & x_bits << 1};
+  const uint64_t z[2] = {m & x_bits << 2, morton_step(m, 2, bit) & x_bits << 2};
+  for (int k = 0; k < 8; ++k) out[k] = x[k & 1] | y[k >> 1 & 1] | z[k >> 2];
+}
 
 class BucketWorker {
  public:
