@@ -298,30 +298,20 @@ constexpr std::array<uint8_t, kBlockPoints> kNearCells = near_cells_table();
 
 // Both inputs are in key order and the blocks' lattices are disjoint, so one
 // pass merges them; a point in both (a near face's corner that an earlier
-// leaf or a spill has too) is one node with both masks.
+// leaf or a spill has too) is one node with both masks.  The merge writes
+// each node's mask where its kind goes, and a second pass classifies: with
+// the classifier's calls in the merge, its counters lived on the stack, and
+// each node waited on their stores (a fifth of its samples).
 template <typename Sorted>
-Status BucketWorker::merge_nodes(const Sorted& sorted, size_t count, BucketTask& t) {
+Status BucketWorker::merge_nodes(const Sorted& view, size_t count, BucketTask& t) {
+  const Sorted sorted = view;  // a copy in registers: the masks' byte stores may alias the view
   size_t bound = count;
   for (const Block& b : blocks_) bound += size_t{1} << (3 * b.j);
   t.node_keys.resize(bound);
   t.node_kinds.resize(bound);
+  uint64_t* keys = t.node_keys.data();
+  auto* masks = reinterpret_cast<uint8_t*>(t.node_kinds.data());
   size_t n = 0, h = 0;
-  // False on a classifier's error (in `error`): a Status for every node
-  // cost more than the rest of its merge.
-  Status error;
-  // Dangling nodes by kind (the rest are anchored).
-  uint64_t dangling[3] = {0, 0, 0};
-  auto emit = [&](uint64_t key, uint8_t mask) {
-    NodeKind kind = NodeKind::kAnchored;
-    // A full mask is anchored (most nodes): no call.
-    if (mask != 0xFF) {
-      if (!(error = classifier_.classify(key, mask, &kind)).ok()) return false;
-      ++dangling[static_cast<int>(kind)];
-    }
-    t.node_keys[n] = key;
-    t.node_kinds[n++] = static_cast<std::byte>(kind);
-    return true;
-  };
   // The next hashed node's key, UINT64_MAX past the last (no node's).
   auto key_at = [&](size_t i) { return i < count ? sorted.key(i) : UINT64_MAX; };
   uint64_t next = key_at(0);
@@ -329,19 +319,34 @@ Status BucketWorker::merge_nodes(const Sorted& sorted, size_t count, BucketTask&
     const uint64_t points = uint64_t{1} << (3 * b.j);
     for (uint64_t i = 0; i < points; ++i) {
       const uint64_t key = b.first + (i << (3 * b.bit));
-      for (; next < key; next = key_at(++h)) {
-        if (!emit(next, sorted.mask(h))) return error;
-      }
+      for (; next < key; next = key_at(++h), ++n) keys[n] = next, masks[n] = sorted.mask(h);
       uint8_t mask = kNearCells[i];
       if (next == key) mask |= sorted.mask(h), next = key_at(++h);
-      if (!emit(key, mask)) return error;
+      keys[n] = key, masks[n++] = mask;
     }
   }
-  for (; h < count; ++h) {
-    if (!emit(sorted.key(h), sorted.mask(h))) return error;
-  }
+  for (; h < count; ++h, ++n) keys[n] = sorted.key(h), masks[n] = sorted.mask(h);
   t.node_keys.resize(n);
   t.node_kinds.resize(n);
+  return classify_nodes(t);
+}
+
+// Each node's mask (in node_kinds) made its kind: a full mask is anchored
+// (most nodes, no call), the classifier decides the rest.
+Status BucketWorker::classify_nodes(BucketTask& t) {
+  uint64_t dangling[3] = {0, 0, 0};  // by kind (the rest are anchored)
+  const size_t n = t.node_keys.size();
+  for (size_t i = 0; i < n; ++i) {
+    const auto mask = static_cast<uint8_t>(t.node_kinds[i]);
+    if (mask == 0xFF) {
+      t.node_kinds[i] = static_cast<std::byte>(NodeKind::kAnchored);
+      continue;
+    }
+    NodeKind kind = NodeKind::kAnchored;
+    WEAVER_RETURN_IF_ERROR(classifier_.classify(t.node_keys[i], mask, &kind));
+    t.node_kinds[i] = static_cast<std::byte>(kind);
+    ++dangling[static_cast<int>(kind)];
+  }
   t.counts.nodes = n;
   t.counts.edge = dangling[static_cast<int>(NodeKind::kEdge)];
   t.counts.face = dangling[static_cast<int>(NodeKind::kFace)];

@@ -162,7 +162,9 @@ class BucketWorker {
   // The hashed nodes (`sorted`, in key order) and the blocks' lattices
   // merged, classified and written to t.
   template <typename Sorted>
-  Status merge_nodes(const Sorted& sorted, size_t count, BucketTask& t);
+  Status merge_nodes(const Sorted& view, size_t count, BucketTask& t);
+  // The kinds of t's nodes, from the masks merge_nodes left in node_kinds.
+  Status classify_nodes(BucketTask& t);
 
   NodeClassifier classifier_;
   NodePixels pixels_;
