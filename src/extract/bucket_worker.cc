@@ -35,6 +35,13 @@ uint64_t corners_bound(const std::vector<uint64_t>& leaves) {
   return far_corner(first & ~span, bit);
 }
 
+// The finest level among these leaves (0 for none).
+int finest_leaf_level(const std::vector<uint64_t>& leaves) {
+  int finest = 0;
+  for (uint64_t key : leaves) finest = std::max(finest, octant_key_level(key));
+  return finest;
+}
+
 // The first of leaves[from, size) with a key at or past `bound`, from
 // `from` on in steps that double: the runs skipped are mostly short.
 size_t first_at_or_past(const std::vector<uint64_t>& leaves, size_t from, uint64_t bound) {
@@ -126,7 +133,7 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
   // none overlapping: LeafReader refuses that) are the next ones up to its
   // subtree's end key, found by a search, not a test of each.
   const std::vector<uint64_t>& leaves = task.leaf_keys;
-  far_corners_.begin(task.end, corners_bound(leaves));
+  far_corners_.begin(task.end, corners_bound(leaves), 3 * (kMaxLevel - finest_leaf_level(leaves)));
   for (size_t i = 0; i < leaves.size();) {
     const uint64_t key = leaves[i];
     const uint64_t m = octant_key_morton(key);
@@ -239,8 +246,7 @@ void BucketWorker::add_block_lattice(uint64_t first, int j, uint64_t end) {
 // Every key hashed is a corner of a leaf (a multiple of the finest leaf's
 // size, as the start is of its own leaf's) or a spilled one.
 int BucketWorker::common_zeros(const BucketTask& t) {
-  int finest = 0;
-  for (uint64_t key : t.leaf_keys) finest = std::max(finest, octant_key_level(key));
+  const int finest = finest_leaf_level(t.leaf_keys);
   uint64_t differ = t.start;
   for (const SpillRecord& r : t.incoming) differ |= r.key - t.start;
   return std::min(3 * (kMaxLevel - finest), differ == 0 ? 64 : std::countr_zero(differ));

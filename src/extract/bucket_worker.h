@@ -75,8 +75,13 @@ struct BucketTask {
 // sorted run.
 class SpillRun {
  public:
-  // Starts a run of keys in [base, bound]; before the first add.
-  void begin(uint64_t base, uint64_t bound) { pixels_.reset(expected_, base, 0, bound); }
+  // Starts a run of keys in [base, bound], each a multiple of 2^zeros;
+  // before the first add.  (The zeros let a run's offsets fit a word where
+  // its bound is far past its base, as past the end of a bucket that
+  // crosses a coarse boundary: a quarter of the 1 Hz basin's runs.)
+  void begin(uint64_t base, uint64_t bound, int zeros = 0) {
+    pixels_.reset(expected_, base & ~((uint64_t{1} << zeros) - 1), zeros, bound);
+  }
   void add(uint64_t key, uint8_t mask) { pixels_.add(key, mask); }
   // What was added since begin, sorted by key, one record a key (its bits
   // ORed), to `spills` as one run.
