@@ -42,8 +42,9 @@ int finest_leaf_level(const std::vector<uint64_t>& leaves) {
   return finest;
 }
 
-// The first of leaves[from, size) with a key at or past `bound`, from
-// `from` on in steps that double: the runs skipped are mostly short.
+// The first of leaves[from, size) with a key at or past `bound`: steps
+// that double from `from`, then a binary search within the last, so a run
+// of r leaves costs about 2 log2(r) comparisons, one leaf just one.
 size_t first_at_or_past(const std::vector<uint64_t>& leaves, size_t from, uint64_t bound) {
   size_t step = 1, low = from;
   while (low + step < leaves.size() && leaves[low + step] < bound) low += step, step *= 2;
