@@ -185,7 +185,7 @@ int cmd_mesh(int argc, char** argv) {
     BalanceOptions bo;
     bo.memory = co.memory;
     bo.threads = eo.threads;
-    if (names_model_database(co.model)) bo.model_dirs.push_back(co.model.substr(3));
+    if (names_model_database(co.model)) bo.model_dirs.push_back(model_database_dir(co.model));
     ProgressLine balance_line(style, "balance", "leaves");
     bo.progress = balance_line.fn();
     BalanceResult br;

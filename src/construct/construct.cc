@@ -546,7 +546,7 @@ Status write_octree(const ConstructOptions& o, const ConstructPlan& p, const Vel
   // made twice), never by its path.
   std::string model_name = o.model;
   if (names_model_database(o.model)) {
-    WEAVER_RETURN_IF_ERROR(model_table_identity(o.model.substr(3), &model_name));
+    WEAVER_RETURN_IF_ERROR(model_table_identity(model_database_dir(o.model), &model_name));
   }
   const std::string model_meta = ";model=" + model_name + rule;
   std::string ground_meta;

@@ -57,7 +57,7 @@ class LeafRoom {
   bool allows(size_t n) {
     if (n <= room_) return true;
     if (n > most_) return false;
-    size_t want = std::min(most_, std::max(n, room_ + std::max(own_ / 8, room_ / 2)));
+    size_t want = std::min(most_, std::max(n, room_ + room_ / 2));  // room_ >= own_
     if (!pool_->take(want - room_)) {
       if (want == n || !pool_->take(n - room_)) return false;
       want = n;

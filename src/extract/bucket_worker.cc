@@ -66,10 +66,12 @@ Status BucketReader::next(BucketTask* task, bool* more) {
   *more = leaves_left || (policy_.stop == UINT64_MAX && !spills_.empty());
   if (!*more) return Status::Ok();
   task->leaf_keys.clear();
+  task->finest_level = 0;
   task->incoming.clear();
   task->start = next_start_;
   if (!leaves_left) return gather_tail(task);
   WEAVER_RETURN_IF_ERROR(policy_.level >= 0 ? gather_aligned(task) : gather_counted(task));
+  task->finest_level = finest_leaf_level(task->leaf_keys);
   next_start_ = task->end;
   WEAVER_RETURN_IF_ERROR(spills_.take_below(task->end, &task->incoming));
   return spill_far_corners(*task);
@@ -134,7 +136,7 @@ Status BucketReader::spill_far_corners(const BucketTask& task) {
   // none overlapping: LeafReader refuses that) are the next ones up to its
   // subtree's end key, found by a search, not a test of each.
   const std::vector<uint64_t>& leaves = task.leaf_keys;
-  far_corners_.begin(task.end, corners_bound(leaves), 3 * (kMaxLevel - finest_leaf_level(leaves)));
+  far_corners_.begin(task.end, corners_bound(leaves), 3 * (kMaxLevel - task.finest_level));
   for (size_t i = 0; i < leaves.size();) {
     const uint64_t key = leaves[i];
     const uint64_t m = octant_key_morton(key);
@@ -247,10 +249,9 @@ void BucketWorker::add_block_lattice(uint64_t first, int j, uint64_t end) {
 // Every key hashed is a corner of a leaf (a multiple of the finest leaf's
 // size, as the start is of its own leaf's) or a spilled one.
 int BucketWorker::common_zeros(const BucketTask& t) {
-  const int finest = finest_leaf_level(t.leaf_keys);
   uint64_t differ = t.start;
   for (const SpillRecord& r : t.incoming) differ |= r.key - t.start;
-  return std::min(3 * (kMaxLevel - finest), differ == 0 ? 64 : std::countr_zero(differ));
+  return std::min(3 * (kMaxLevel - t.finest_level), differ == 0 ? 64 : std::countr_zero(differ));
 }
 
 Status BucketWorker::run(BucketTask& t) {

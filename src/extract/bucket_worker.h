@@ -62,6 +62,7 @@ struct BucketPolicy {
 struct BucketTask {
   uint64_t start = 0, end = 0;        // the node keys the bucket owns
   std::vector<uint64_t> leaf_keys;    // the bucket's leaves, key order
+  int finest_level = 0;               // of its leaves (0 for none)
   std::vector<SpillRecord> incoming;  // nodal pixels spilled here by earlier buckets
   std::vector<uint64_t> node_keys;    // result: the bucket's nodes, key order
   std::vector<std::byte> node_kinds;  // result: their NodeKind, one byte each

@@ -9,7 +9,7 @@ Status open_velocity_model(const std::string& name, const std::string& grid_file
                            MemoryBudget memory, int threads, std::unique_ptr<VelocityModel>* out) {
   if (names_model_database(name)) {
     std::unique_ptr<DbModel> m;
-    WEAVER_RETURN_IF_ERROR(DbModel::open(name.substr(3), memory, threads, &m));
+    WEAVER_RETURN_IF_ERROR(DbModel::open(model_database_dir(name), memory, threads, &m));
     *out = std::move(m);
     return Status::Ok();
   }

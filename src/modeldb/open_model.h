@@ -15,6 +15,8 @@ namespace weaver {
 
 // Whether `name` names a model database ("db:DIR").
 inline bool names_model_database(const std::string& name) { return name.rfind("db:", 0) == 0; }
+// The directory a model database's name gives.  REQUIRES: names_model_database(name).
+inline std::string model_database_dir(const std::string& name) { return name.substr(3); }
 
 // `memory` bounds what a model read from storage holds, for up to `threads`
 // threads asking it at once.

@@ -27,7 +27,7 @@ int mesh(const Comm& comm, int argc, char** argv) {
     b.memory = o.memory;
     b.threads = o.threads;
     b.staged_octants = staged.shards;
-    if (names_model_database(o.model)) b.model_dirs.push_back(o.model.substr(3));
+    if (names_model_database(o.model)) b.model_dirs.push_back(model_database_dir(o.model));
     if (const int c = run_balance(comm, dir, b, staged.db.get(), &staged.shards)) return c;
   }
   ExtractOptions x;
