@@ -8,6 +8,7 @@
 #include <system_error>
 
 #include "cli/cli.h"
+#include "util/keep_freed_memory.h"
 
 namespace {
 
@@ -80,6 +81,7 @@ int dispatch(int argc, char** argv);
 }  // namespace
 
 int main(int argc, char** argv) {
+  weaver::keep_freed_memory();
   std::set_terminate(on_terminate);
   if (argc >= 2) g_command = argv[1];
   try {
