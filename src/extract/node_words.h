@@ -24,37 +24,44 @@ class NodeWords {
   void reset(size_t expected) {
     const size_t cap = std::bit_ceil(std::max<size_t>(64, 2 * expected));
     if (cap == slots_.size()) {
-      for (uint32_t s : used_) slots_[s] = kEmpty;
+      for (size_t i = 0; i < count_; ++i) slots_[used_[i]] = kEmpty;
     } else {
       slots_.assign(cap, kEmpty);
+      used_.resize(cap / 2 + 1);
     }
-    used_.clear();
+    count_ = 0;
     limit_ = cap / 2;
     shift_ = 64 - std::countr_zero(cap);
   }
 
-  // ORs bits into the offset's mask, adding the offset if new.
-  // REQUIRES: offset < 2^kOffsetBits.
+  // ORs bits into the offset's mask, adding the offset if new.  Without a
+  // branch on whether it is: about half the corners on a block's far faces
+  // are new (the rest its neighbours' too), and that branch missed about
+  // every other time.  REQUIRES: offset < 2^kOffsetBits.
   void add(uint64_t offset, uint8_t bits) {
-    if (used_.size() >= limit_) grow();
+    if (count_ >= limit_) grow();
     const size_t mask = slots_.size() - 1;
     size_t s = start(offset);
-    while (slots_[s] != kEmpty && (slots_[s] >> 8) != offset) s = (s + 1) & mask;
-    if (slots_[s] == kEmpty) {
-      slots_[s] = offset << 8;
-      used_.push_back(static_cast<uint32_t>(s));
-    }
-    slots_[s] |= bits;
+    uint64_t w = slots_[s];
+    // Empty (~w zero) or this offset's ((w >> 8) ^ offset zero): one test,
+    // so one branch, which misses only on a collision (written as two
+    // tests, the compiler branched on each, and the first missed half the
+    // time).
+    while (std::min((w >> 8) ^ offset, ~w) != 0) s = (s + 1) & mask, w = slots_[s];
+    const bool fresh = w == kEmpty;
+    slots_[s] = (fresh ? offset << 8 : w) | bits;
+    used_[count_] = static_cast<uint32_t>(s);  // kept only if fresh
+    count_ += fresh;
   }
 
-  size_t size() const { return used_.size(); }
+  size_t size() const { return count_; }
 
   // The words added since reset (insertion order) into *out; returns them
   // ORed together (whose bits above the mask bound every offset's).
   uint64_t take(std::vector<uint64_t>* out) const {
-    out->resize(used_.size());
+    out->resize(count_);
     uint64_t all = 0;
-    for (size_t i = 0; i < used_.size(); ++i) all |= (*out)[i] = slots_[used_[i]];
+    for (size_t i = 0; i < count_; ++i) all |= (*out)[i] = slots_[used_[i]];
     return all;
   }
 
@@ -78,8 +85,11 @@ class NodeWords {
   }
 
   std::vector<uint64_t> slots_;
-  std::vector<uint32_t> used_;
-  size_t limit_ = 0;  // at most half the slots are used: past it, grow
+  std::vector<uint32_t> used_;  // the slots holding words: [0, count_)
+  // Neither a uint64_t nor a uint32_t (an unsigned long and an unsigned
+  // int here): a store to a slot or to used_ could alias them, and each
+  // would be loaded again after every add.
+  unsigned long long count_ = 0, limit_ = 0;  // at most half the slots are used: past it, grow
   int shift_ = 58;
 };
 
