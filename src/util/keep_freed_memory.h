@@ -4,14 +4,15 @@
 // glibc serves a large block (from 128 KiB, rising to the largest freed
 // one) by a mapping of its own, unmapped when freed, and trims the top of
 // a heap once it has twice that free.  A construct fills, writes and frees
-// a subtree's vectors of leaves (megabytes) tens of thousands of times, and
+// a subtree's vectors of leaves (megabytes) for each subtree, and
 // each new one was faulted in again page by page: the 2 Hz basin's
-// construct took 891K page faults, 7.3 s of system time and about a fifth
-// of its wall time (on a virtual machine a fault costs microseconds).
+// construct at --memory 1G took 891K page faults and 5.6-7.3 s of system
+// time (on a virtual machine a fault costs microseconds).
 // With blocks of up to 32 MiB taken from the heap and its top trimmed only
-// past 64 MiB free (the most glibc's own rule ever sets), it took 83K.  The
-// memory kept is what the program held a moment before: the peak is the
-// same (docs/performance.md).
+// past 64 MiB free (the most glibc's own rule ever sets), it took 67K and
+// 0.953x the wall (docs/performance.md, stop 85).  The
+// memory kept is what the program held a moment before: the peak stayed
+// within a few MB of before at 64M, 256M and 1G.
 #pragma once
 
 #include <cstdlib>  // defines __GLIBC__ where it is glibc
