@@ -8,7 +8,6 @@
 #include <system_error>
 
 #include "cli/cli.h"
-#include "util/keep_freed_memory.h"
 
 namespace {
 
@@ -81,7 +80,6 @@ int dispatch(int argc, char** argv);
 }  // namespace
 
 int main(int argc, char** argv) {
-  weaver::keep_freed_memory();
   std::set_terminate(on_terminate);
   if (argc >= 2) g_command = argv[1];
   try {

@@ -10,7 +10,6 @@
 
 #include "mpi/comm.h"
 #include "mpi/mpi_commands.h"
-#include "util/keep_freed_memory.h"
 
 namespace {
 
@@ -41,7 +40,6 @@ std::string joined(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  weaver::keep_freed_memory();  // before MPI starts its threads
   weaver::mpi::Comm comm(&argc, &argv);
   const std::string mine = joined(argc - 1, argv + 1);
   if (!comm.all(comm.broadcast(mine) == mine)) {
